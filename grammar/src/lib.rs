@@ -1,0 +1,13 @@
+//! leeway-grammar: `.som` text → typed syntax tree with spans, and the
+//! diagnostics every later pass reports (plain data with one renderer).
+//!
+//! The grammar lives in `som.pest`; pest's types never leave this crate.
+//! [`parse`] never panics: it returns the tree or one located syntax error.
+
+pub mod ast;
+pub mod diagnostic;
+mod parse;
+
+pub use ast::*;
+pub use diagnostic::{Diagnostic, Label, RenderStyle, Severity, line_col, render, render_short};
+pub use parse::{MAX_NESTING, MAX_SOURCE_BYTES, parse};

@@ -1,0 +1,1 @@
+//! leeway-macros

@@ -1,0 +1,1 @@
+//! leeway facade (filled in later).

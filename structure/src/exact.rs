@@ -1,0 +1,320 @@
+//! Exact scalars and exact linear algebra (no float tolerance anywhere).
+//!
+//! Elimination runs first over `i128` fractions with checked arithmetic and,
+//! should any intermediate overflow, again over arbitrary-precision rationals:
+//! the result is exact either way, and fast in the common case of small
+//! integer coefficients.
+
+use num_bigint::BigInt;
+use num_integer::Integer;
+use num_rational::BigRational;
+use num_traits::{One, Signed, ToPrimitive, Zero};
+
+/// The exact rational type used throughout the structure compiler.
+pub type Q = BigRational;
+
+/// Parses a decimal literal (`-0.015`, `1e-3`, `.5`) into an exact rational.
+pub fn parse_decimal(text: &str) -> Option<Q> {
+    let t = text.trim();
+    let (neg, t) = match t.strip_prefix('-') {
+        Some(r) => (true, r),
+        None => (false, t.strip_prefix('+').unwrap_or(t)),
+    };
+    let (mantissa, exp) = match t.find(['e', 'E']) {
+        Some(i) => (&t[..i], t[i + 1..].parse::<i64>().ok()?),
+        None => (t, 0),
+    };
+    let (int, frac) = match mantissa.find('.') {
+        Some(i) => (&mantissa[..i], &mantissa[i + 1..]),
+        None => (mantissa, ""),
+    };
+    if int.is_empty() && frac.is_empty() {
+        return None;
+    }
+    if !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit()) {
+        return None;
+    }
+    let digits = format!("{int}{frac}");
+    let mut num: BigInt = if digits.is_empty() { BigInt::zero() } else { digits.parse().ok()? };
+    if neg {
+        num = -num;
+    }
+    let scale = exp - frac.len() as i64;
+    if scale.abs() > 400 {
+        return None;
+    }
+    let ten = BigInt::from(10);
+    let p = num_traits::pow(ten, scale.unsigned_abs() as usize);
+    Some(if scale >= 0 { Q::from_integer(num * p) } else { Q::new(num, p) })
+}
+
+/// The nearest `f64` to an exact rational (ties to even), so generated code
+/// and the interpreter start from the same bits.
+pub fn to_f64(q: &Q) -> f64 {
+    if Zero::is_zero(q) {
+        return 0.0;
+    }
+    // Scale to a 64-bit-plus integer quotient, then let the float division of
+    // two exactly representable halves round once. For the coefficients a model
+    // holds (short decimals) numerator and denominator fit 2^53 and one division
+    // is correctly rounded.
+    if let (Some(n), Some(d)) = (q.numer().to_i64(), q.denom().to_i64())
+        && n.unsigned_abs() <= (1 << 53)
+        && d.unsigned_abs() <= (1 << 53)
+    {
+        return n as f64 / d as f64;
+    }
+    // Long rationals: 128 significant bits, then one rounding.
+    let neg = q.is_negative();
+    let a = q.abs();
+    let (n, d) = (a.numer().clone(), a.denom().clone());
+    let shift = 128i64 - (n.bits() as i64 - d.bits() as i64);
+    let scaled = if shift >= 0 { (n << shift as usize) / d } else { n / (d << (-shift) as usize) };
+    let v = scaled.to_f64().unwrap_or(f64::INFINITY) * 2f64.powi(-shift as i32);
+    if neg { -v } else { v }
+}
+
+/// Exact rational rendering: `3`, `-1/2`.
+pub fn fmt_q(q: &Q) -> String {
+    if q.is_integer() { q.numer().to_string() } else { format!("{}/{}", q.numer(), q.denom()) }
+}
+
+/// Parses [`fmt_q`]'s output.
+pub fn parse_q(s: &str) -> Option<Q> {
+    match s.split_once('/') {
+        Some((n, d)) => {
+            let d: BigInt = d.parse().ok()?;
+            if d.is_zero() {
+                return None;
+            }
+            Some(Q::new(n.parse().ok()?, d))
+        }
+        None => Some(Q::from_integer(s.parse().ok()?)),
+    }
+}
+
+/// A field with fallible operations (overflow returns `None`).
+trait Field: Clone + PartialEq {
+    fn is_zero(&self) -> bool;
+    fn sub(&self, o: &Self) -> Option<Self>;
+    fn mul(&self, o: &Self) -> Option<Self>;
+    fn div(&self, o: &Self) -> Option<Self>;
+    fn from_q(q: &Q) -> Option<Self>;
+    fn to_q(&self) -> Q;
+}
+
+/// An `i128` fraction in lowest terms with a positive denominator.
+#[derive(Clone, Debug, PartialEq)]
+struct Small {
+    n: i128,
+    d: i128,
+}
+
+impl Small {
+    fn make(n: i128, d: i128) -> Option<Small> {
+        if d == 0 {
+            return None;
+        }
+        let g = n.gcd(&d);
+        let (mut n, mut d) = if g == 0 { (0, 1) } else { (n / g, d / g) };
+        if d < 0 {
+            n = n.checked_neg()?;
+            d = d.checked_neg()?;
+        }
+        Some(Small { n, d })
+    }
+}
+
+impl Field for Small {
+    fn is_zero(&self) -> bool {
+        self.n == 0
+    }
+    fn sub(&self, o: &Self) -> Option<Self> {
+        let g = self.d.gcd(&o.d);
+        let l = (self.d / g).checked_mul(o.d)?;
+        let a = self.n.checked_mul(l / self.d)?;
+        let b = o.n.checked_mul(l / o.d)?;
+        Small::make(a.checked_sub(b)?, l)
+    }
+    fn mul(&self, o: &Self) -> Option<Self> {
+        let g1 = self.n.gcd(&o.d).max(1);
+        let g2 = o.n.gcd(&self.d).max(1);
+        Small::make((self.n / g1).checked_mul(o.n / g2)?, (self.d / g2).checked_mul(o.d / g1)?)
+    }
+    fn div(&self, o: &Self) -> Option<Self> {
+        if o.n == 0 {
+            return None;
+        }
+        self.mul(&Small::make(o.d, o.n)?)
+    }
+    fn from_q(q: &Q) -> Option<Self> {
+        Small::make(q.numer().to_i128()?, q.denom().to_i128()?)
+    }
+    fn to_q(&self) -> Q {
+        Q::new(BigInt::from(self.n), BigInt::from(self.d))
+    }
+}
+
+impl Field for Q {
+    fn is_zero(&self) -> bool {
+        Zero::is_zero(self)
+    }
+    fn sub(&self, o: &Self) -> Option<Self> {
+        Some(self - o)
+    }
+    fn mul(&self, o: &Self) -> Option<Self> {
+        Some(self * o)
+    }
+    fn div(&self, o: &Self) -> Option<Self> {
+        if Zero::is_zero(o) { None } else { Some(self / o) }
+    }
+    fn from_q(q: &Q) -> Option<Self> {
+        Some(q.clone())
+    }
+    fn to_q(&self) -> Q {
+        self.clone()
+    }
+}
+
+/// Reduced row-echelon form of a matrix whose columns are taken in the given
+/// order: which columns are pivots (linearly independent of the columns
+/// before them), and for every other column its exact expression as a
+/// combination of the pivot columns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Echelon {
+    /// `pivot[j]`: column `j` is independent of columns `0..j`.
+    pub pivot: Vec<bool>,
+    /// For each non-pivot column `j`: `col_j = Σ q · col_k` over pivot columns `k`.
+    pub combination: Vec<Vec<(usize, Q)>>,
+}
+
+impl Echelon {
+    /// The rank.
+    pub fn rank(&self) -> usize {
+        self.pivot.iter().filter(|p| **p).count()
+    }
+    /// A basis of the null space: one vector per non-pivot column,
+    /// `e_j − Σ q e_k`, as sparse `(column, value)` lists.
+    pub fn null_space(&self) -> Vec<Vec<(usize, Q)>> {
+        (0..self.pivot.len())
+            .filter(|j| !self.pivot[*j])
+            .map(|j| {
+                let mut v = vec![(j, Q::one())];
+                v.extend(self.combination[j].iter().map(|(k, q)| (*k, -q.clone())));
+                v.sort_by_key(|(k, _)| *k);
+                v
+            })
+            .collect()
+    }
+}
+
+/// Exact RREF of a dense matrix given as rows (all of length `n_cols`).
+pub fn echelon(rows: &[Vec<Q>], n_cols: usize) -> Echelon {
+    if let Some(e) = echelon_in::<Small>(rows, n_cols) {
+        return e;
+    }
+    // Overflow in the fast path: redo exactly with big rationals (cannot fail).
+    echelon_in::<Q>(rows, n_cols).unwrap_or(Echelon { pivot: vec![false; n_cols], combination: vec![Vec::new(); n_cols] })
+}
+
+fn echelon_in<F: Field>(rows: &[Vec<Q>], n_cols: usize) -> Option<Echelon> {
+    let mut m: Vec<Vec<F>> = Vec::with_capacity(rows.len());
+    for r in rows {
+        let row: Option<Vec<F>> = r.iter().map(F::from_q).collect();
+        m.push(row?);
+    }
+    let mut pivot = vec![false; n_cols];
+    let mut pivot_row_of: Vec<Option<usize>> = vec![None; n_cols];
+    let mut next_row = 0;
+    for col in 0..n_cols {
+        let Some(p) = (next_row..m.len()).find(|&i| !m[i][col].is_zero()) else { continue };
+        m.swap(next_row, p);
+        let inv = m[next_row][col].clone();
+        for j in col..n_cols {
+            let v = m[next_row][j].div(&inv)?;
+            m[next_row][j] = v;
+        }
+        for i in 0..m.len() {
+            if i != next_row && !m[i][col].is_zero() {
+                let f = m[i][col].clone();
+                for j in col..n_cols {
+                    if !m[next_row][j].is_zero() {
+                        let v = m[i][j].sub(&f.mul(&m[next_row][j])?)?;
+                        m[i][j] = v;
+                    }
+                }
+            }
+        }
+        pivot[col] = true;
+        pivot_row_of[col] = Some(next_row);
+        next_row += 1;
+        if next_row == m.len() {
+            break;
+        }
+    }
+    let mut combination = vec![Vec::new(); n_cols];
+    for (j, comb) in combination.iter_mut().enumerate() {
+        if pivot[j] {
+            continue;
+        }
+        for (k, pr) in pivot_row_of.iter().enumerate() {
+            if let Some(r) = pr
+                && !m[*r][j].is_zero()
+            {
+                comb.push((k, m[*r][j].to_q()));
+            }
+        }
+    }
+    Some(Echelon { pivot, combination })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn q(n: i64, d: i64) -> Q {
+        Q::new(n.into(), d.into())
+    }
+
+    #[test]
+    fn decimals_are_exact() {
+        assert_eq!(parse_decimal("0.00015"), Some(q(3, 20000)));
+        assert_eq!(parse_decimal("-1e-3"), Some(q(-1, 1000)));
+        assert_eq!(parse_decimal(".5"), Some(q(1, 2)));
+        assert_eq!(parse_decimal("2.5E2"), Some(q(250, 1)));
+        assert_eq!(parse_decimal("1."), Some(q(1, 1)));
+        assert_eq!(parse_decimal("."), None);
+        assert_eq!(parse_decimal("1e99999"), None);
+    }
+
+    #[test]
+    fn f64_conversion_rounds_once() {
+        assert_eq!(to_f64(&q(1, 10)), 0.1);
+        assert_eq!(to_f64(&q(-3, 20000)), -0.00015);
+        assert_eq!(to_f64(&parse_decimal("0.0000000000000000000001").unwrap_or_default()), 1e-22);
+    }
+
+    #[test]
+    fn echelon_finds_dependencies_in_order() {
+        // c0 = (1,0,1), c1 = (2,0,2) = 2 c0, c2 = (0,1,0), c3 = c0 + c2.
+        let rows = vec![
+            vec![q(1, 1), q(2, 1), q(0, 1), q(1, 1)],
+            vec![q(0, 1), q(0, 1), q(1, 1), q(1, 1)],
+            vec![q(1, 1), q(2, 1), q(0, 1), q(1, 1)],
+        ];
+        let e = echelon(&rows, 4);
+        assert_eq!(e.pivot, vec![true, false, true, false]);
+        assert_eq!(e.combination[1], vec![(0, q(2, 1))]);
+        assert_eq!(e.combination[3], vec![(0, q(1, 1)), (2, q(1, 1))]);
+        assert_eq!(e.rank(), 2);
+    }
+
+    #[test]
+    fn overflow_falls_back_to_big_rationals() {
+        let big = Q::from_integer(BigInt::from(i128::MAX) * BigInt::from(4));
+        let rows = vec![vec![big.clone(), big.clone() * q(3, 1)], vec![q(1, 1), q(3, 1)]];
+        let e = echelon(&rows, 2);
+        assert_eq!(e.pivot, vec![true, false]);
+        assert_eq!(e.combination[1], vec![(0, q(3, 1))]);
+    }
+}

@@ -1,0 +1,475 @@
+//! The model-structure IR: plain data, enough both to emit Rust code and to
+//! evaluate regressors at run time, and to re-run the exact identifiability
+//! analysis for the sign patterns found in data.
+//!
+//! Evaluation order is part of the contract: generated code and the run-time
+//! interpreter evaluate every column as described on [`Entry`], so they agree
+//! bit for bit.
+
+use leeway_grammar::{EquationKind, Span};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// A compiled model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Ir {
+    /// `model Name`.
+    pub name: String,
+    /// The declared sample time `h` of `der` equations (else read from data).
+    pub step: Option<f64>,
+    /// Measured states, in declaration order (the outputs, one equation each).
+    pub states: Vec<String>,
+    /// Exact inputs.
+    pub inputs: Vec<String>,
+    /// How `R` is obtained.
+    pub rotation: Rotation,
+    /// Names of the rotation variables: `cos(psi)`, `sin(psi)` for a planar
+    /// heading, the data columns of a measured rotation.
+    pub rotation_vars: Vec<String>,
+    /// Disturbances (media).
+    pub disturbances: Vec<Disturbance>,
+    /// All disturbance components, flattened; indices are global.
+    pub components: Vec<Component>,
+    /// Named relative velocities.
+    pub relatives: Vec<Relative>,
+    /// One equation per state, in state order.
+    pub equations: Vec<Equation>,
+    /// θ: every parameter, in order of first appearance.
+    pub parameters: Vec<Parameter>,
+    /// The model's terms `coefficient · parameter · factors`, as written.
+    pub terms: Vec<Term>,
+    /// Arguments under a modulus that need a fixed sign within an experiment.
+    pub sign_args: Vec<SignArg>,
+    /// The regressor columns of each predictor.
+    pub predictors: Predictors,
+    /// Data column for each signal whose column name differs (`data { }`).
+    pub data_columns: BTreeMap<String, String>,
+    /// The identifiability report computed at compile time.
+    pub report: Report,
+}
+
+/// Where the rotation matrix `R` (body ← earth) comes from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Rotation {
+    /// No earth-frame disturbance: no rotation.
+    None,
+    /// `R = Rz(ψ)ᵀ` acting on `axes`; `ψ` is measured and integrates a yaw rate.
+    Planar {
+        /// The heading signal (a data column).
+        heading: String,
+        /// The yaw-rate state it integrates.
+        integrates: usize,
+        /// The (surge, sway) states.
+        axes: [usize; 2],
+    },
+    /// `R` read from data columns: `rows[state][component]` is a rotation
+    /// variable index, or `None` for zero.
+    Measured {
+        /// One row per state.
+        rows: Vec<Vec<Option<usize>>>,
+    },
+}
+
+/// A disturbance (medium).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Disturbance {
+    /// Its name, e.g. `current`.
+    pub name: String,
+    /// Measured (IV3's `y_aux`) or not.
+    pub measured: bool,
+    /// Earth frame (rotated by `R`) or body frame.
+    pub earth: bool,
+    /// Global indices of its components.
+    pub components: Vec<usize>,
+}
+
+/// One component of a disturbance.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Component {
+    /// Its name (a data column when measured), e.g. `north`.
+    pub name: String,
+    /// The disturbance it belongs to.
+    pub disturbance: usize,
+    /// For a body-frame component, the state it acts on.
+    pub state: Option<usize>,
+}
+
+/// `name = relative(disturbance)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Relative {
+    /// E.g. `water`.
+    pub name: String,
+    /// The medium.
+    pub disturbance: usize,
+}
+
+/// The equation of one state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Equation {
+    /// The state (output) index.
+    pub state: usize,
+    /// `der` (x⁺ = x + h f) or `next` (x⁺ = f).
+    pub kind: EquationKind,
+}
+
+/// A physical parameter (an entry of θ).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Parameter {
+    /// As written in the model.
+    pub name: String,
+    /// From `nominal { }` (0 when unlisted).
+    pub nominal: f64,
+    /// The medium of its terms, if any (`None`: terms in states and inputs only).
+    pub medium: Option<usize>,
+    /// True when that medium is measured (IV3's `θ2`, regressors `Φ2`).
+    pub measured: bool,
+    /// The outputs it appears in.
+    pub outputs: Vec<usize>,
+}
+
+/// A signal a factor is built from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum Signal {
+    /// A state.
+    State(usize),
+    /// An input.
+    Input(usize),
+}
+
+/// An argument of a second-order modulus function: a signal, possibly relative
+/// to a medium (`water.u` = `u − (R·v_current)_u`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct Arg {
+    /// The signal.
+    pub signal: Signal,
+    /// The relative velocity (index into [`Ir::relatives`]), for states.
+    pub relative: Option<usize>,
+}
+
+/// `arg` or `|arg|`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub struct Factor {
+    /// The argument.
+    pub arg: Arg,
+    /// Under a modulus.
+    pub modulus: bool,
+}
+
+/// One term of an equation: `coefficient · θ_parameter · Π factors`, with one
+/// of the class's shapes `a`, `|a|`, `a·b`, `a·|b|`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Term {
+    /// The output (state) whose equation holds the term.
+    pub output: usize,
+    /// The numeric coefficient, rounded once from the exact value.
+    pub coefficient: f64,
+    /// The exact coefficient, `p/q`.
+    pub coefficient_exact: String,
+    /// The parameter.
+    pub parameter: usize,
+    /// One or two factors; a modulus factor comes last.
+    pub factors: Vec<Factor>,
+    /// The term as the user's names write it, e.g. `water.u*|water.u|`.
+    pub text: String,
+    /// Where it was written.
+    pub span: Span,
+}
+
+/// An argument under a modulus whose sign is fixed within an experiment.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SignArg {
+    /// `water.u`, `r`.
+    pub name: String,
+    /// The argument.
+    pub arg: Arg,
+    /// True when the argument is relative to a measured medium: IV3 evaluates
+    /// it pointwise, IV2 (all media unmeasured) needs its sign fixed.
+    pub measured: bool,
+}
+
+/// The three predictors of the paper.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum PredictorKind {
+    /// `Φ(y, u)ᵀθ`, every modulus pointwise, disturbances ignored (IV1).
+    Basic,
+    /// `[Φ; Φ_ρ; Φ_λ]ᵀ[θ; ρ; λ]` with every disturbance unmeasured (IV2).
+    Augmented,
+    /// Augmented for unmeasured media, `Φ2(y − R y_aux)` for measured ones (IV3, LS).
+    Measured,
+}
+
+/// Regressor columns of each predictor.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Predictors {
+    /// IV1: θ columns only.
+    pub basic: Vec<Column>,
+    /// IV2: θ columns, then every ρ, then every λ (unreduced).
+    pub augmented: Vec<Column>,
+    /// IV3: θ columns, then ρ and λ of the unmeasured media (unreduced).
+    pub measured: Vec<Column>,
+}
+
+impl Predictors {
+    /// The columns of one predictor.
+    pub fn get(&self, kind: PredictorKind) -> &[Column] {
+        match kind {
+            PredictorKind::Basic => &self.basic,
+            PredictorKind::Augmented => &self.augmented,
+            PredictorKind::Measured => &self.measured,
+        }
+    }
+}
+
+/// What a column's coefficient is.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum ColumnKind {
+    /// A physical parameter θ_p.
+    Theta {
+        /// Index into [`Ir::parameters`].
+        parameter: usize,
+    },
+    /// `ρ = E[v_j]·θ_p`.
+    Rho {
+        /// Global component index `j`.
+        component: usize,
+        /// `p`.
+        parameter: usize,
+    },
+    /// `λ = E[v_j v_m]·θ_p`, `j ≤ m`.
+    Lambda {
+        /// `(j, m)`.
+        components: [usize; 2],
+        /// `p`.
+        parameter: usize,
+    },
+}
+
+impl ColumnKind {
+    /// True for nuisance columns.
+    pub fn is_nuisance(&self) -> bool {
+        !matches!(self, ColumnKind::Theta { .. })
+    }
+    /// The physical parameter involved.
+    pub fn parameter(&self) -> usize {
+        match self {
+            ColumnKind::Theta { parameter } | ColumnKind::Rho { parameter, .. } | ColumnKind::Lambda { parameter, .. } => {
+                *parameter
+            }
+        }
+    }
+}
+
+/// A regressor column: the coefficient it multiplies, how to evaluate it
+/// (per output), and its structural polynomial for the exact rank analysis.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Column {
+    /// `X_uu`, `rho[north,X_uu]`, `lambda[north*east,X_uu]`.
+    pub name: String,
+    /// What it multiplies.
+    pub kind: ColumnKind,
+    /// Evaluation: the column's value in output `o` is the sum, in order, of
+    /// its entries with `output == o`.
+    pub entries: Vec<Entry>,
+    /// Structural polynomial per output, constants dropped (zero-mean
+    /// instruments annihilate them), sign variables symbolic.
+    pub structural: Vec<StructuralEntry>,
+}
+
+impl Column {
+    /// The outputs this column has entries in.
+    pub fn outputs(&self) -> Vec<usize> {
+        let mut o: Vec<usize> = self.entries.iter().map(Entry::output).collect();
+        o.sort_unstable();
+        o.dedup();
+        o
+    }
+}
+
+/// A variable of an evaluated monomial.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum EvalVar {
+    /// `x[i]`.
+    State(usize),
+    /// `u[i]`.
+    Input(usize),
+    /// `|u[i]|`.
+    AbsInput(usize),
+    /// `rot[i]`.
+    Rot(usize),
+}
+
+/// Which disturbance values a pointwise term is evaluated with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Pointwise {
+    /// Disturbances taken as zero (the basic predictor: `Φ(y, u)`).
+    Undisturbed,
+    /// Measured disturbance components from the data (`Φ2(y − R y_aux)`).
+    Measured,
+}
+
+/// One summand of a column in one output.
+///
+/// Evaluation order (shared by codegen and the interpreter):
+/// * `Poly`: `t = coefficient; for i in signs { t = t * sign[i] }; for v in vars { t = t * v }`.
+/// * `Term`: the term's arguments are evaluated as `x − ((R_l0·d_0 + R_l1·d_1) + …)`
+///   over the non-zero rotation entries in component order (plain `x` when
+///   undisturbed); then `a`: `k*a`, `|a|`: `k*|a|`, `a·b`: `(k*a)*b`,
+///   `a·|b|`: `(k*a)*|b|` with `k` the term's coefficient.
+/// * The column value is `((e0 + e1) + e2) + …` over its entries in one output.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Entry {
+    /// A monomial with a sign factor.
+    Poly {
+        /// The output.
+        output: usize,
+        /// The exact coefficient rounded once.
+        coefficient: f64,
+        /// The exact coefficient `p/q`.
+        coefficient_exact: String,
+        /// Sign arguments whose signs multiply the entry.
+        signs: Vec<usize>,
+        /// Variables, with repetition for powers, in sorted order.
+        vars: Vec<EvalVar>,
+    },
+    /// A whole term evaluated pointwise (modulus taken of the value).
+    Term {
+        /// The output.
+        output: usize,
+        /// Index into [`Ir::terms`].
+        term: usize,
+        /// With which disturbance values.
+        pointwise: Pointwise,
+    },
+}
+
+impl Entry {
+    /// The output of the entry.
+    pub fn output(&self) -> usize {
+        match self {
+            Entry::Poly { output, .. } | Entry::Term { output, .. } => *output,
+        }
+    }
+}
+
+/// A variable of a structural polynomial.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum StructVar {
+    /// A sign variable (`s² = 1`).
+    Sign(usize),
+    /// A state.
+    State(usize),
+    /// An input.
+    Input(usize),
+    /// `|input|`.
+    AbsInput(usize),
+    /// A rotation variable.
+    Rot(usize),
+    /// A measured disturbance component.
+    Measured(usize),
+}
+
+/// A structural monomial `coefficient · Π var^power` in one output.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct StructuralEntry {
+    /// The output.
+    pub output: usize,
+    /// Exact coefficient `p/q`.
+    pub coefficient: String,
+    /// Variables with powers, sorted.
+    pub vars: Vec<(StructVar, u32)>,
+}
+
+/// A sign pattern: one `±1` per sign argument.
+pub type SignPattern = Vec<i8>;
+
+/// The compile-time identifiability report of the model as declared
+/// (the measured predictor, IV3; equal to IV2's when nothing is measured).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// θ identifiable from the required sign patterns.
+    pub identifiable: bool,
+    /// θ identifiable from one experiment whatever its sign pattern.
+    pub any_single_pattern: bool,
+    /// The smallest set of sign patterns found that identifies θ (empty if none).
+    pub required_patterns: Vec<SignPattern>,
+    /// The sign patterns the verdicts below were computed for.
+    pub patterns: Vec<SignPattern>,
+    /// Unidentifiable combinations at `patterns`.
+    pub unidentifiable: Vec<Combination>,
+    /// What separates each unidentifiable group, if anything does.
+    pub separations: Vec<Separation>,
+    /// Nuisance reduction at `patterns`.
+    pub nuisance: NuisanceReport,
+    /// With aggregation: what each kept parameter estimates.
+    pub aggregates: Vec<Aggregate>,
+    /// Notes for the user (common state-dependent terms, ...).
+    pub notes: Vec<String>,
+}
+
+/// A set of parameters that enter only through combinations.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Combination {
+    /// The θ indices involved.
+    pub parameters: Vec<usize>,
+    /// The identifiable combinations, e.g. `X_uu + W_uu`.
+    pub identifiable: Vec<String>,
+    /// One sentence: `X_uu and W_uu enter only as X_uu + W_uu`.
+    pub message: String,
+}
+
+/// Whether and how experiments separate a group.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Separation {
+    /// The θ indices of the group.
+    pub parameters: Vec<usize>,
+    /// The smallest set of sign patterns that separates them, if one exists.
+    pub patterns: Option<Vec<SignPattern>>,
+    /// One sentence.
+    pub message: String,
+}
+
+/// The nuisance parameters before and after reduction to an identifiable basis.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NuisanceReport {
+    /// Unreduced count.
+    pub before: usize,
+    /// Kept count.
+    pub after: usize,
+    /// Kept columns (indices into the predictor's columns) and what each estimates.
+    pub kept: Vec<KeptNuisance>,
+    /// Dropped columns and why.
+    pub dropped: Vec<DroppedNuisance>,
+}
+
+/// A kept nuisance column.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct KeptNuisance {
+    /// Column index in the predictor.
+    pub column: usize,
+    /// Its name.
+    pub name: String,
+    /// What it estimates, e.g. `E[north]·X_u` or a combination.
+    pub estimates: String,
+}
+
+/// A dropped nuisance column.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct DroppedNuisance {
+    /// Column index in the predictor.
+    pub column: usize,
+    /// Its name.
+    pub name: String,
+    /// `= 2·rho[..] − lambda[..]`, or `constant within an experiment`.
+    pub reason: String,
+}
+
+/// A kept θ column that estimates an aggregate.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Aggregate {
+    /// θ index of the kept parameter.
+    pub parameter: usize,
+    /// What it estimates, e.g. `X_uu + W_uu`.
+    pub estimates: String,
+    /// θ indices held at their nominal values and absorbed here.
+    pub absorbed: Vec<usize>,
+}

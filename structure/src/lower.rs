@@ -1,0 +1,104 @@
+//! Pass 7, lower: resolved declarations, terms and columns → the IR.
+
+use crate::exact::{fmt_q, to_f64};
+use crate::ir::{self, Ir, Predictors, Report, SignArg};
+use crate::resolve::{Resolved, RotationDecl};
+use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
+use leeway_grammar::{Diagnostic, EquationKind};
+use std::collections::BTreeMap;
+
+/// Builds the IR (without the report, which [`crate::identify::report`] fills).
+pub fn lower(
+    r: &Resolved,
+    params: &[ParamDecl],
+    terms: &[TermDecl],
+    sign_args: Vec<SignArg>,
+    predictors: Predictors,
+    diags: &mut Vec<Diagnostic>,
+) -> Ir {
+    let (rotation, rotation_vars) = match &r.rotation {
+        RotationDecl::None => (ir::Rotation::None, Vec::new()),
+        RotationDecl::Planar { heading, integrates, axes } => (
+            ir::Rotation::Planar { heading: heading.name.clone(), integrates: *integrates, axes: *axes },
+            vec![format!("cos({})", heading.name), format!("sin({})", heading.name)],
+        ),
+        RotationDecl::Measured { columns, rows, .. } => {
+            (ir::Rotation::Measured { rows: rows.clone() }, columns.iter().map(|c| c.name.clone()).collect())
+        }
+    };
+    let mut nominal: BTreeMap<&str, f64> = BTreeMap::new();
+    for (id, q, span) in &r.nominal {
+        if params.iter().any(|p| p.name == id.name) {
+            nominal.insert(&id.name, to_f64(q));
+        } else {
+            diags.push(
+                Diagnostic::error("unknown-parameter", format!("`{}` is not a parameter of this model", id.name))
+                    .with_primary(*span, "no term uses it")
+                    .with_help(format!("parameters: {}", params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "))),
+            );
+        }
+    }
+    let parameters = params
+        .iter()
+        .enumerate()
+        .map(|(pi, p)| {
+            let mine: Vec<&TermDecl> = terms.iter().filter(|t| t.parameter == pi).collect();
+            let media: Vec<usize> = {
+                let mut m: Vec<usize> = mine.iter().filter_map(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg))).collect();
+                m.sort_unstable();
+                m.dedup();
+                m
+            };
+            let medium = if media.len() == 1 { Some(media[0]) } else { None };
+            let measured = !mine.is_empty()
+                && mine.iter().all(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg)).is_some_and(|d| r.disturbances[d].measured));
+            let mut outputs: Vec<usize> = mine.iter().map(|t| t.output).collect();
+            outputs.sort_unstable();
+            outputs.dedup();
+            ir::Parameter { name: p.name.clone(), nominal: nominal.get(p.name.as_str()).copied().unwrap_or(0.0), medium, measured, outputs }
+        })
+        .collect();
+    let ir_terms = terms
+        .iter()
+        .map(|t| ir::Term {
+            output: t.output,
+            coefficient: to_f64(&t.coefficient),
+            coefficient_exact: fmt_q(&t.coefficient),
+            parameter: t.parameter,
+            factors: t.factors.clone(),
+            text: factors_text(r, &t.factors),
+            span: t.span,
+        })
+        .collect();
+    Ir {
+        name: r.name.name.clone(),
+        step: r.step.as_ref().map(|(q, _)| to_f64(q)),
+        states: r.states.iter().map(|s| s.name.clone()).collect(),
+        inputs: r.inputs.iter().map(|s| s.name.clone()).collect(),
+        rotation,
+        rotation_vars,
+        disturbances: r
+            .disturbances
+            .iter()
+            .map(|d| ir::Disturbance { name: d.name.name.clone(), measured: d.measured, earth: d.earth, components: d.components.clone() })
+            .collect(),
+        components: r
+            .components
+            .iter()
+            .map(|c| ir::Component { name: c.name.name.clone(), disturbance: c.disturbance, state: c.state })
+            .collect(),
+        relatives: r.relatives.iter().map(|(n, d)| ir::Relative { name: n.name.clone(), disturbance: *d }).collect(),
+        equations: r
+            .equations
+            .iter()
+            .enumerate()
+            .map(|(i, e)| ir::Equation { state: i, kind: e.as_ref().map_or(EquationKind::Der, |e| e.kind) })
+            .collect(),
+        parameters,
+        terms: ir_terms,
+        sign_args,
+        predictors,
+        data_columns: r.data.iter().map(|(id, col, _)| (id.name.clone(), col.clone())).collect(),
+        report: Report::default(),
+    }
+}

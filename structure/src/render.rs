@@ -1,0 +1,220 @@
+//! Human-readable rendering of a compiled structure: the text of
+//! `leeway check` and of the snapshot tests. Plain text, no terminal codes.
+
+use crate::identify::{pattern_text, patterns_text};
+use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation};
+use leeway_grammar::EquationKind;
+use std::fmt::Write;
+
+/// The name of an evaluation variable.
+pub fn var_name(ir: &Ir, v: &EvalVar) -> String {
+    match v {
+        EvalVar::State(i) => ir.states[*i].clone(),
+        EvalVar::Input(i) => ir.inputs[*i].clone(),
+        EvalVar::AbsInput(i) => format!("|{}|", ir.inputs[*i]),
+        EvalVar::Rot(i) => ir.rotation_vars[*i].clone(),
+    }
+}
+
+/// One output's part of a column, e.g. `s[water.u]*u^2` or `air.u*|air.u| (Φ2, pointwise)`.
+pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
+    let mut parts: Vec<(bool, String)> = Vec::new();
+    for e in col.entries.iter().filter(|e| e.output() == output) {
+        match e {
+            Entry::Poly { coefficient_exact, signs, vars, .. } => {
+                let neg = coefficient_exact.starts_with('-');
+                let mag = coefficient_exact.trim_start_matches('-');
+                let mut factors: Vec<String> = signs.iter().map(|s| format!("s[{}]", ir.sign_args[*s].name)).collect();
+                let mut i = 0;
+                while i < vars.len() {
+                    let mut j = i;
+                    while j < vars.len() && vars[j] == vars[i] {
+                        j += 1;
+                    }
+                    let name = var_name(ir, &vars[i]);
+                    factors.push(if j - i == 1 { name } else { format!("{name}^{}", j - i) });
+                    i = j;
+                }
+                let body = factors.join("*");
+                let text = match (mag, body.is_empty()) {
+                    (m, true) => m.to_string(),
+                    ("1", false) => body,
+                    (m, false) => format!("{m}*{body}"),
+                };
+                parts.push((neg, text));
+            }
+            Entry::Term { term, .. } => {
+                let t = &ir.terms[*term];
+                let k = t.coefficient_exact.trim_start_matches('-');
+                let text = if k == "1" { t.text.clone() } else { format!("{k}*{}", t.text) };
+                parts.push((t.coefficient_exact.starts_with('-'), format!("{text} (pointwise)")));
+            }
+        }
+    }
+    let mut out = String::new();
+    for (i, (neg, t)) in parts.iter().enumerate() {
+        if i == 0 {
+            if *neg {
+                out.push('-');
+            }
+        } else {
+            out.push_str(if *neg { " - " } else { " + " });
+        }
+        out.push_str(t);
+    }
+    if out.is_empty() { "0".to_string() } else { out }
+}
+
+/// The full structure report.
+pub fn render(ir: &Ir) -> String {
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "model {}: {} states ({}), {} inputs ({}), {} parameters",
+        ir.name,
+        ir.states.len(),
+        ir.states.join(", "),
+        ir.inputs.len(),
+        ir.inputs.join(", "),
+        ir.parameters.len()
+    );
+    let kinds: Vec<String> = ir
+        .equations
+        .iter()
+        .map(|e| format!("{} {}", if e.kind == EquationKind::Der { "der" } else { "next" }, ir.states[e.state]))
+        .collect();
+    let _ = writeln!(
+        o,
+        "  equations: {}; step {}",
+        kinds.join(", "),
+        ir.step.map_or("from the data's sample time".to_string(), |h| format!("{h}"))
+    );
+    match &ir.rotation {
+        Rotation::None => {}
+        Rotation::Planar { heading, integrates, axes } => {
+            let _ = writeln!(
+                o,
+                "  R = Rz({heading})^T on ({}, {}); {heading} integrates {}",
+                ir.states[axes[0]], ir.states[axes[1]], ir.states[*integrates]
+            );
+        }
+        Rotation::Measured { .. } => {
+            let _ = writeln!(o, "  R measured from data columns {}", ir.rotation_vars.join(", "));
+        }
+    }
+    for d in &ir.disturbances {
+        let comps: Vec<String> = d
+            .components
+            .iter()
+            .map(|c| {
+                let comp = &ir.components[*c];
+                match comp.state {
+                    Some(s) => format!("{}: {}", ir.states[s], comp.name),
+                    None => comp.name.clone(),
+                }
+            })
+            .collect();
+        let rel: Vec<&str> =
+            ir.relatives.iter().filter(|r| ir.disturbances[r.disturbance].name == d.name).map(|r| r.name.as_str()).collect();
+        let _ = writeln!(
+            o,
+            "  disturbance {} {} {}({}){}",
+            d.name,
+            if d.measured { "measured" } else { "unmeasured" },
+            if d.earth { "earth" } else { "body" },
+            comps.join(", "),
+            if rel.is_empty() { String::new() } else { format!(", seen through {}", rel.join(", ")) }
+        );
+    }
+    let fixed: Vec<&str> = ir.sign_args.iter().filter(|s| !s.measured).map(|s| s.name.as_str()).collect();
+    let pointwise: Vec<&str> = ir.sign_args.iter().filter(|s| s.measured).map(|s| s.name.as_str()).collect();
+    let _ = writeln!(
+        o,
+        "  sign arguments: {}{}",
+        if fixed.is_empty() { "none".to_string() } else { fixed.join(", ") },
+        if pointwise.is_empty() { String::new() } else { format!(" (measured medium, pointwise in IV3, fixed in IV2: {})", pointwise.join(", ")) }
+    );
+
+    let cols = &ir.predictors.measured;
+    let _ = writeln!(o, "\nΦ: θ regressors ({} parameters)", ir.parameters.len());
+    for (out, state) in ir.states.iter().enumerate() {
+        let theta: Vec<&Column> = cols.iter().filter(|c| !c.kind.is_nuisance() && c.outputs().contains(&out)).collect();
+        let kind = if ir.equations[out].kind == EquationKind::Der { "der" } else { "next" };
+        let _ = writeln!(o, "  {kind} {state} ({} terms)", theta.len());
+        for c in theta {
+            let p = c.kind.parameter();
+            let text: Vec<String> = ir.terms.iter().filter(|t| t.parameter == p && t.output == out).map(|t| t.text.clone()).collect();
+            let tag = if ir.parameters[p].measured { "  [Φ2]" } else { "" };
+            let _ = writeln!(o, "    {:<8} {:<22} = {}{tag}", c.name, text.join(" + "), column_text(ir, c, out));
+        }
+    }
+    let nuis: Vec<&Column> = cols.iter().filter(|c| c.kind.is_nuisance()).collect();
+    let unmeasured: Vec<&str> = ir.disturbances.iter().filter(|d| !d.measured).map(|d| d.name.as_str()).collect();
+    let _ = writeln!(
+        o,
+        "\nNuisance regressors ({} unreduced; moments of {})",
+        nuis.len(),
+        if unmeasured.is_empty() { "no unmeasured disturbance".to_string() } else { unmeasured.join(", ") }
+    );
+    for (out, state) in ir.states.iter().enumerate() {
+        let mine: Vec<&&Column> = nuis.iter().filter(|c| c.outputs().contains(&out)).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let _ = writeln!(o, "  {state}");
+        for c in mine {
+            let _ = writeln!(o, "    {:<24} {}", c.name, column_text(ir, c, out));
+        }
+    }
+    let r = &ir.report;
+    let _ = writeln!(
+        o,
+        "\nNuisance reduction at {}: {} -> {}",
+        patterns_text(ir, &r.patterns, PredictorKind::Measured),
+        r.nuisance.before,
+        r.nuisance.after
+    );
+    for k in &r.nuisance.kept {
+        let _ = writeln!(o, "  kept    {:<24} estimates {}", k.name, k.estimates);
+    }
+    for d in &r.nuisance.dropped {
+        let _ = writeln!(o, "  dropped {:<24} {}", d.name, d.reason);
+    }
+    let _ = writeln!(o, "\nIdentifiability of θ");
+    if r.identifiable && r.required_patterns.len() <= 1 {
+        if r.any_single_pattern {
+            let _ = writeln!(o, "  identifiable from one experiment of any sign pattern");
+        } else {
+            let _ = writeln!(o, "  identifiable from one experiment with sign pattern {}", patterns_text(ir, &r.required_patterns, PredictorKind::Measured));
+        }
+    } else if r.identifiable {
+        let _ = writeln!(
+            o,
+            "  identifiable from {} experiments with sign patterns {}",
+            r.required_patterns.len(),
+            patterns_text(ir, &r.required_patterns, PredictorKind::Measured)
+        );
+    } else {
+        let _ = writeln!(o, "  NOT identifiable from any set of experiments");
+    }
+    if !r.unidentifiable.is_empty() {
+        let base = r.patterns.first().map(|p| pattern_text(ir, p, PredictorKind::Measured)).unwrap_or_default();
+        let _ = writeln!(o, "  from one experiment {base}:");
+        for c in &r.unidentifiable {
+            let _ = writeln!(o, "    {}", c.message);
+        }
+    }
+    for s in &r.separations {
+        let _ = writeln!(o, "    {}", s.message);
+    }
+    if !r.aggregates.is_empty() {
+        let _ = writeln!(o, "  aggregated (absorbed parameters held at their nominal values):");
+        for a in &r.aggregates {
+            let _ = writeln!(o, "    {} estimates {}", ir.parameters[a.parameter].name, a.estimates);
+        }
+    }
+    for n in &r.notes {
+        let _ = writeln!(o, "  note: {n}");
+    }
+    o
+}

@@ -1,0 +1,485 @@
+//! Pass 2, terms: every right-hand side → a sum of class terms
+//! `coefficient · θ_p · (a | |a| | a·b | a·|b|)`, rejecting everything outside
+//! the second-order modulus class with a located error.
+
+use crate::exact::{Q, fmt_q, parse_decimal};
+use crate::ir::{Arg, Factor, Signal};
+use crate::resolve::{Resolved, Symbol, names};
+use leeway_grammar::{BinOp, Diagnostic, Expr, Ident, Path, Span};
+use num_traits::{One, Zero};
+use std::collections::BTreeMap;
+
+/// Largest number of products one equation may expand to.
+pub const MAX_PRODUCTS: usize = 4096;
+
+/// A validated term.
+#[derive(Clone, Debug)]
+pub struct TermDecl {
+    /// Output index.
+    pub output: usize,
+    /// Exact coefficient.
+    pub coefficient: Q,
+    /// Parameter index.
+    pub parameter: usize,
+    /// Canonical factors (modulus factor last).
+    pub factors: Vec<Factor>,
+    /// Source span.
+    pub span: Span,
+}
+
+/// A parameter and where it is first used.
+#[derive(Clone, Debug)]
+pub struct ParamDecl {
+    /// Name.
+    pub name: String,
+    /// First use.
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+enum Atom {
+    Param(Ident),
+    Signal(Arg),
+    Abs(Arg),
+}
+
+#[derive(Clone, Debug)]
+struct Product {
+    coeff: Q,
+    atoms: Vec<Atom>,
+    span: Span,
+}
+
+struct Ctx<'a> {
+    r: &'a Resolved,
+    diags: &'a mut Vec<Diagnostic>,
+}
+
+/// Lowers every equation. Returns the parameters (first-use order) and terms.
+pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>, Vec<TermDecl>) {
+    let mut params: Vec<ParamDecl> = Vec::new();
+    let mut terms: Vec<TermDecl> = Vec::new();
+    let mut ctx = Ctx { r, diags };
+    for eq in r.equations.iter().flatten() {
+        let Some(products) = sum_of_products(&eq.rhs, &mut ctx) else { continue };
+        // Combine equal terms (same parameter and factors) by adding coefficients.
+        let mut combined: BTreeMap<(usize, Vec<Factor>), usize> = BTreeMap::new();
+        let mut local: Vec<TermDecl> = Vec::new();
+        for p in products {
+            let Some((pname, factors)) = classify(&p, &mut ctx) else { continue };
+            let pi = match params.iter().position(|q| q.name == pname.name) {
+                Some(i) => i,
+                None => {
+                    params.push(ParamDecl { name: pname.name.clone(), span: pname.span });
+                    params.len() - 1
+                }
+            };
+            match combined.get(&(pi, factors.clone())) {
+                Some(&k) => {
+                    local[k].coefficient += &p.coeff;
+                    local[k].span = local[k].span.join(p.span);
+                }
+                None => {
+                    combined.insert((pi, factors.clone()), local.len());
+                    local.push(TermDecl { output: eq.state, coefficient: p.coeff, parameter: pi, factors, span: p.span });
+                }
+            }
+        }
+        for t in local {
+            if t.coefficient.is_zero() {
+                ctx.diags.push(
+                    Diagnostic::warning("terms-cancel", format!("the terms of `{}` in this equation cancel", params[t.parameter].name))
+                        .with_primary(t.span, "sums to zero")
+                        .with_help("remove them, or check the signs"),
+                );
+            } else {
+                terms.push(t);
+            }
+        }
+    }
+    // Only parameters that survived in some term.
+    let used: Vec<bool> = (0..params.len()).map(|i| terms.iter().any(|t| t.parameter == i)).collect();
+    let mut remap = vec![usize::MAX; params.len()];
+    let mut kept = Vec::new();
+    for (i, p) in params.into_iter().enumerate() {
+        if used[i] {
+            remap[i] = kept.len();
+            kept.push(p);
+        }
+    }
+    for t in &mut terms {
+        t.parameter = remap[t.parameter];
+    }
+    common_terms(r, &kept, &terms, ctx.diags);
+    (kept, terms)
+}
+
+fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
+    match e {
+        Expr::Number(n) => match parse_decimal(&n.text) {
+            Some(q) => Some(vec![Product { coeff: q, atoms: Vec::new(), span: n.span }]),
+            None => {
+                ctx.diags.push(
+                    Diagnostic::error("invalid-number", format!("`{}` is not a number leeway can represent", n.text))
+                        .with_primary(n.span, "here")
+                        .with_help("write a decimal such as 0.5 or 1e-3"),
+                );
+                None
+            }
+        },
+        Expr::Path(p) => {
+            let atom = resolve_path(p, ctx)?;
+            Some(vec![Product { coeff: Q::one(), atoms: vec![atom], span: p.span }])
+        }
+        Expr::Abs(inner, span) => {
+            let arg = modulus_arg(inner, *span, ctx)?;
+            Some(vec![Product { coeff: Q::one(), atoms: vec![Atom::Abs(arg)], span: *span }])
+        }
+        Expr::Neg(inner, span) => {
+            let mut v = sum_of_products(inner, ctx)?;
+            for p in &mut v {
+                p.coeff = -p.coeff.clone();
+                p.span = p.span.join(*span);
+            }
+            Some(v)
+        }
+        Expr::Paren(inner, _) => sum_of_products(inner, ctx),
+        Expr::Binary { op, lhs, rhs, span } => {
+            let l = sum_of_products(lhs, ctx);
+            let r = sum_of_products(rhs, ctx);
+            let (l, r) = (l?, r?);
+            match op {
+                BinOp::Add => Some([l, r].concat()),
+                BinOp::Sub => {
+                    let mut v = l;
+                    v.extend(r.into_iter().map(|mut p| {
+                        p.coeff = -p.coeff;
+                        p
+                    }));
+                    Some(v)
+                }
+                BinOp::Mul => {
+                    if l.len().saturating_mul(r.len()) > MAX_PRODUCTS {
+                        ctx.diags.push(
+                            Diagnostic::error("expression-too-large", format!("this product expands to more than {MAX_PRODUCTS} terms"))
+                                .with_primary(*span, "too many terms")
+                                .with_help("write the terms out; a second-order model has a handful per equation"),
+                        );
+                        return None;
+                    }
+                    let mut v = Vec::with_capacity(l.len() * r.len());
+                    for a in &l {
+                        for b in &r {
+                            let mut atoms = a.atoms.clone();
+                            atoms.extend(b.atoms.iter().cloned());
+                            v.push(Product { coeff: &a.coeff * &b.coeff, atoms, span: a.span.join(b.span) });
+                        }
+                    }
+                    Some(v)
+                }
+                BinOp::Div => {
+                    if r.iter().any(|p| !p.atoms.is_empty()) {
+                        ctx.diags.push(
+                            Diagnostic::error("division-by-signal", "only division by a number is allowed")
+                                .with_primary(rhs.span(), "not a number")
+                                .with_help("a regressor divided by a signal or parameter is outside the second-order modulus class; fold known constants into a number"),
+                        );
+                        return None;
+                    }
+                    let d: Q = r.iter().map(|p| p.coeff.clone()).fold(Q::zero(), |a, b| a + b);
+                    if d.is_zero() {
+                        ctx.diags.push(
+                            Diagnostic::error("division-by-zero", "division by zero")
+                                .with_primary(rhs.span(), "equals 0")
+                                .with_help("check the coefficient"),
+                        );
+                        return None;
+                    }
+                    Some(
+                        l.into_iter()
+                            .map(|mut p| {
+                                p.coeff = p.coeff / d.clone();
+                                p.span = p.span.join(rhs.span());
+                                p
+                            })
+                            .collect(),
+                    )
+                }
+            }
+        }
+    }
+}
+
+fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
+    let r = ctx.r;
+    let base = r.symbols.get(&p.base.name).map(|(s, _)| *s);
+    match (&p.field, base) {
+        (None, None) => Some(Atom::Param(p.base.clone())),
+        (None, Some(Symbol::State(i))) => Some(Atom::Signal(Arg { signal: Signal::State(i), relative: None })),
+        (None, Some(Symbol::Input(i))) => Some(Atom::Signal(Arg { signal: Signal::Input(i), relative: None })),
+        (None, Some(Symbol::Heading | Symbol::RotationColumn(_))) => {
+            ctx.diags.push(
+                Diagnostic::error("not-a-regressor-signal", format!("`{}` belongs to the rotation R and cannot appear in a term", p.base.name))
+                    .with_primary(p.span, "part of R")
+                    .with_help("R enters only through relative velocities such as `water.u`; terms use states, inputs and relative-velocity components"),
+            );
+            None
+        }
+        (None, Some(Symbol::Disturbance(_) | Symbol::Component(_))) => {
+            ctx.diags.push(
+                Diagnostic::error("disturbance-used-directly", format!("`{}` is a disturbance; it enters only through a relative velocity", p.base.name))
+                    .with_primary(p.span, "a disturbance")
+                    .with_help("declare `water = relative(current)` and write components such as `water.u`"),
+            );
+            None
+        }
+        (None, Some(Symbol::Relative(_))) => {
+            ctx.diags.push(
+                Diagnostic::error("relative-needs-component", format!("`{}` is a relative velocity; name one of its components", p.base.name))
+                    .with_primary(p.span, "which component?")
+                    .with_help(format!("write `{}.{}`", p.base.name, r.states.first().map(|s| s.name.as_str()).unwrap_or("u"))),
+            );
+            None
+        }
+        (Some(field), Some(Symbol::Relative(ri))) => match r.symbols.get(&field.name) {
+            Some((Symbol::State(i), _)) => Some(Atom::Signal(Arg { signal: Signal::State(*i), relative: Some(ri) })),
+            _ => {
+                ctx.diags.push(
+                    Diagnostic::error("unknown-name", format!("`{}` has no component `{}`", p.base.name, field.name))
+                        .with_primary(field.span, "not a state")
+                        .with_help(format!("components of a relative velocity are states: {}", names(&r.states))),
+                );
+                None
+            }
+        },
+        (Some(_), Some(_)) => {
+            ctx.diags.push(
+                Diagnostic::error("unknown-name", format!("`{}` has no components", p.base.name))
+                    .with_primary(p.span, "only relative velocities have components")
+                    .with_help("write the signal alone, or declare a relative velocity `name = relative(disturbance)`"),
+            );
+            None
+        }
+        (Some(_), None) => {
+            ctx.diags.push(
+                Diagnostic::error("unknown-name", format!("`{}` is not a declared relative velocity", p.base.name))
+                    .with_primary(p.base.span, "not declared")
+                    .with_help(format!(
+                        "declared relative velocities: {}",
+                        names(&r.relatives.iter().map(|(i, _)| i.clone()).collect::<Vec<_>>())
+                    )),
+            );
+            None
+        }
+    }
+}
+
+fn modulus_arg(inner: &Expr, span: Span, ctx: &mut Ctx) -> Option<Arg> {
+    let mut e = inner;
+    while let Expr::Paren(i, _) = e {
+        e = i;
+    }
+    match e {
+        Expr::Path(p) => match resolve_path(p, ctx)? {
+            Atom::Signal(arg) => Some(arg),
+            _ => {
+                ctx.diags.push(
+                    Diagnostic::error("parameter-in-modulus", format!("`{}` would be a parameter inside a modulus", p.base.name))
+                        .with_primary(p.span, "parameter (not a declared signal)")
+                        .with_help("parameters multiply a modulus, e.g. X*|u|; if this is a signal, declare it as a state or input"),
+                );
+                None
+            }
+        },
+        Expr::Binary { op: BinOp::Add | BinOp::Sub, .. } => {
+            ctx.diags.push(
+                Diagnostic::error("modulus-of-sum", "a modulus of a sum is not in the model class")
+                    .with_primary(span, "sum inside |..|")
+                    .with_help("declare the medium once (`water = relative(current)`) and write `|water.u|`; that is the only sum a modulus may hold"),
+            );
+            None
+        }
+        Expr::Abs(..) => {
+            ctx.diags.push(
+                Diagnostic::error("nested-modulus", "a modulus inside a modulus is not in the model class")
+                    .with_primary(span, "nested |..|")
+                    .with_help("||a|| is |a|: write it once"),
+            );
+            None
+        }
+        _ => {
+            ctx.diags.push(
+                Diagnostic::error("modulus-of-product", "a modulus may hold one signal only")
+                    .with_primary(span, "more than one signal or a number inside |..|")
+                    .with_help("move numbers and parameters outside (2*X*|u|); |a*b| = |a|*|b| is outside the class"),
+            );
+            None
+        }
+    }
+}
+
+fn arg_text(r: &Resolved, a: &Arg) -> String {
+    let base = match a.signal {
+        Signal::State(i) => r.states[i].name.clone(),
+        Signal::Input(i) => r.inputs[i].name.clone(),
+    };
+    match a.relative {
+        Some(ri) => format!("{}.{}", r.relatives[ri].0.name, base),
+        None => base,
+    }
+}
+
+/// The factor text of a term in the user's names, e.g. `water.u*|water.u|`.
+pub fn factors_text(r: &Resolved, factors: &[Factor]) -> String {
+    factors
+        .iter()
+        .map(|f| if f.modulus { format!("|{}|", arg_text(r, &f.arg)) } else { arg_text(r, &f.arg) })
+        .collect::<Vec<_>>()
+        .join("*")
+}
+
+/// The medium (disturbance) of an argument.
+pub fn arg_medium(r: &Resolved, a: &Arg) -> Option<usize> {
+    a.relative.map(|ri| r.relatives[ri].1)
+}
+
+fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
+    let r = ctx.r;
+    let params: Vec<&Ident> = p.atoms.iter().filter_map(|a| if let Atom::Param(i) = a { Some(i) } else { None }).collect();
+    let mut factors: Vec<Factor> = p
+        .atoms
+        .iter()
+        .filter_map(|a| match a {
+            Atom::Signal(arg) => Some(Factor { arg: *arg, modulus: false }),
+            Atom::Abs(arg) => Some(Factor { arg: *arg, modulus: true }),
+            Atom::Param(_) => None,
+        })
+        .collect();
+    let mut ok = true;
+    if params.is_empty() {
+        let text = if factors.is_empty() { "a constant".to_string() } else { factors_text(r, &factors) };
+        ctx.diags.push(
+            Diagnostic::error("missing-parameter", format!("the term {text} has no parameter"))
+                .with_primary(p.span, "no parameter")
+                .with_help("every term is `parameter * regressor`; give it a parameter (e.g. K*r*v) and list its known value in `nominal { }`"),
+        );
+        ok = false;
+    } else if params.len() > 1 {
+        let mut list: Vec<&str> = params.iter().map(|i| i.name.as_str()).collect();
+        let same = list.windows(2).all(|w| w[0] == w[1]);
+        list.dedup();
+        let msg = if same {
+            format!("parameter `{}` appears {} times in one term: the model would not be linear in θ", list[0], params.len())
+        } else {
+            format!("`{}` are all parameters here: the model would not be linear in θ", list.join("`, `"))
+        };
+        let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(p.span, "one term, several parameters");
+        for extra in params.iter().skip(1) {
+            d = d.with_secondary(extra.span, "");
+        }
+        ctx.diags.push(d.with_help(
+            "each term has exactly one parameter; names not declared as signals are parameters, so declare misspelt or missing signals",
+        ));
+        ok = false;
+    }
+    if ok && factors.is_empty() {
+        ctx.diags.push(
+            Diagnostic::error("constant-regressor", format!("`{}` multiplies a constant", params[0].name))
+                .with_primary(p.span, "no signal in this term")
+                .with_help("zero-mean instruments annihilate a constant regressor, so this parameter cannot be identified; remove the term (a constant force is absorbed as the mean of w)"),
+        );
+        ok = false;
+    }
+    if factors.len() > 2 {
+        ctx.diags.push(
+            Diagnostic::error("order-too-high", format!("the term {} is beyond second order", factors_text(r, &factors)))
+                .with_primary(p.span, format!("{} signals in one term", factors.len()))
+                .with_help("second-order modulus terms are a, |a|, a*b and a*|b|"),
+        );
+        ok = false;
+    } else if factors.len() == 2 && factors.iter().all(|f| f.modulus) {
+        ctx.diags.push(
+            Diagnostic::error("modulus-product", format!("{} is not in the model class", factors_text(r, &factors)))
+                .with_primary(p.span, "two moduli in one term")
+                .with_help("the class allows a*|b|; for |a|*|a| write a*a"),
+        );
+        ok = false;
+    }
+    let media: Vec<usize> = {
+        let mut m: Vec<usize> = factors.iter().filter_map(|f| arg_medium(r, &f.arg)).collect();
+        m.sort_unstable();
+        m.dedup();
+        m
+    };
+    if media.len() > 1 {
+        let list: Vec<String> = media.iter().map(|d| r.disturbances[*d].name.name.clone()).collect();
+        ctx.diags.push(
+            Diagnostic::error("mixed-media", format!("one term mixes velocities relative to {}", list.join(" and ")))
+                .with_primary(p.span, "two media in one term")
+                .with_help("each term belongs to one medium (f_som1 or f_som2); split the physics into one term per medium"),
+        );
+        ok = false;
+    }
+    if !ok {
+        return None;
+    }
+    factors.sort_by_key(|f| (f.modulus, f.arg));
+    Some((params[0].clone(), factors))
+}
+
+/// The common-term rules of paper A11/A12.
+fn common_terms(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], diags: &mut Vec<Diagnostic>) {
+    type Shape = Vec<(Signal, bool)>;
+    let shape = |t: &TermDecl| -> Shape { t.factors.iter().map(|f| (f.arg.signal, f.modulus)).collect() };
+    let medium = |t: &TermDecl| -> Option<usize> { t.factors.iter().find_map(|f| arg_medium(r, &f.arg)) };
+    for (i, a) in terms.iter().enumerate() {
+        for b in terms.iter().skip(i + 1) {
+            if a.output != b.output || a.parameter == b.parameter || shape(a) != shape(b) {
+                continue;
+            }
+            let (pa, pb) = (&params[a.parameter].name, &params[b.parameter].name);
+            let input_only = a.factors.iter().all(|f| matches!(f.arg.signal, Signal::Input(_)));
+            if input_only {
+                diags.push(
+                    Diagnostic::error(
+                        "common-input-term",
+                        format!(
+                            "`{pa}` and `{pb}` multiply the same input-only term {} in `{}`: they enter only as {pa} + {pb}",
+                            factors_text(r, &a.factors),
+                            r.states[a.output].name
+                        ),
+                    )
+                    .with_primary(b.span, format!("`{pb}` here"))
+                    .with_secondary(a.span, format!("`{pa}` here"))
+                    .with_help(format!("merge them into one parameter (paper A11: the two media may not share a term that depends only on inputs), e.g. keep `{pa}` alone")),
+                );
+            } else if medium(a) != medium(b) {
+                let name = |m: Option<usize>| m.map_or("no medium".to_string(), |d| r.disturbances[d].name.name.clone());
+                diags.push(
+                    Diagnostic::note(
+                        "common-state-term",
+                        format!(
+                            "`{pa}` ({}) and `{pb}` ({}) share the state-dependent term {} in `{}`",
+                            name(medium(a)),
+                            name(medium(b)),
+                            factors_text(r, &strip(&a.factors)),
+                            r.states[a.output].name
+                        ),
+                    )
+                    .with_primary(b.span, "")
+                    .with_secondary(a.span, "")
+                    .with_help("they are told apart only if R·v1 ≠ R·v2 in the data (paper A12): the media must move differently"),
+                );
+            }
+        }
+    }
+}
+
+fn strip(f: &[Factor]) -> Vec<Factor> {
+    f.iter().map(|x| Factor { arg: Arg { signal: x.arg.signal, relative: None }, modulus: x.modulus }).collect()
+}
+
+/// The exact coefficient as a short string.
+pub fn coefficient_text(q: &Q) -> String {
+    fmt_q(q)
+}
