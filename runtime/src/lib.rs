@@ -8,3 +8,13 @@ pub mod model;
 pub use interp::Interpreter;
 pub use leeway_structure as structure;
 pub use model::{Model, Signals, next_heading, planar_rotation};
+pub mod data;
+pub mod estimate;
+pub mod moments;
+pub mod signs;
+pub mod simulate;
+pub mod study;
+pub mod synth;
+
+pub use data::{DataError, Experiment, Row, Source, load_csv};
+pub use estimate::{Centring, Estimate, EstimateError, Instruments, Method, Options, estimate};

@@ -68,6 +68,20 @@ pub enum Patterns<'a> {
     All,
     /// These experiments.
     Set(&'a [SignPattern]),
+    /// Experiments as recorded: each with its sign pattern and, when its
+    /// rotation barely varied, the constant values of the rotation variables
+    /// (paper Remark 2: with `R` constant the rotation no longer separates
+    /// the disturbance terms from the others).
+    Experiments(&'a [ExperimentStructure]),
+}
+
+/// One recorded experiment, for the run-time structural analysis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExperimentStructure {
+    /// Its sign pattern.
+    pub pattern: SignPattern,
+    /// Constant rotation variables (exact values), if `R` did not vary.
+    pub frozen_rotation: Option<Vec<Q>>,
 }
 
 /// The exact reduction of a predictor's columns.
@@ -164,25 +178,12 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                     }
                     Patterns::Set(set) => {
                         for (pi, pat) in set.iter().enumerate() {
-                            let mut sign = 1i8;
-                            let mut rest = Vec::with_capacity(vars.len());
-                            for (v, e) in vars {
-                                match v {
-                                    StructVar::Sign(i) => {
-                                        if e % 2 == 1 && pat.get(*i).copied().unwrap_or(1) < 0 {
-                                            sign = -sign;
-                                        }
-                                    }
-                                    _ => rest.push((*v, *e)),
-                                }
-                            }
-                            let key = (pi, *o, rest);
-                            let slot = &mut rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j];
-                            if sign > 0 {
-                                *slot += q;
-                            } else {
-                                *slot -= q;
-                            }
+                            add_row(&mut rows, pi, *o, q, vars, pat, None, j, width);
+                        }
+                    }
+                    Patterns::Experiments(list) => {
+                        for (pi, e) in list.iter().enumerate() {
+                            add_row(&mut rows, pi, *o, q, vars, &e.pattern, e.frozen_rotation.as_deref(), j, width);
                         }
                     }
                 }
@@ -199,6 +200,46 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
         pivot[c] = false;
     }
     Reduction { order: order.to_vec(), pivot, combination }
+}
+
+/// Adds one structural monomial of column `j` to the rows of experiment `pi`:
+/// signs evaluated, frozen rotation variables multiplied into the coefficient.
+#[allow(clippy::too_many_arguments)]
+fn add_row(
+    rows: &mut BTreeMap<RowKey, Vec<Q>>,
+    pi: usize,
+    output: usize,
+    q: &Q,
+    vars: &[(StructVar, u32)],
+    pattern: &[i8],
+    frozen: Option<&[Q]>,
+    j: usize,
+    width: usize,
+) {
+    let mut coef = q.clone();
+    let mut rest = Vec::with_capacity(vars.len());
+    for (v, e) in vars {
+        match v {
+            StructVar::Sign(i) => {
+                if e % 2 == 1 && pattern.get(*i).copied().unwrap_or(1) < 0 {
+                    coef = -coef;
+                }
+            }
+            StructVar::Rot(i) if frozen.is_some() => {
+                let value = frozen.and_then(|f| f.get(*i)).cloned().unwrap_or_else(Q::zero);
+                for _ in 0..*e {
+                    coef *= &value;
+                }
+            }
+            _ => rest.push((*v, *e)),
+        }
+    }
+    // A monomial that became constant is annihilated by zero-mean instruments.
+    if rest.is_empty() {
+        return;
+    }
+    let slot = &mut rows.entry((pi, output, rest)).or_insert_with(|| vec![Q::zero(); width])[j];
+    *slot += coef;
 }
 
 /// Context for messages: names of parameters, columns and components.

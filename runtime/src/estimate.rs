@@ -1,0 +1,1523 @@
+//! The estimators of the paper: `ls`, `iv1`, `iv2`, `iv3`.
+//!
+//! Each experiment is visited in order; per pass the regressors `Φ(k−1)`
+//! (from data), the instruments `Z(k−1)` and the target (`(y(k) − y(k−1))/h`
+//! for `der`, `y(k)` for `next`) feed shifted moment sums per output, so
+//! memory is `O(n_ϑ²)` whatever N. Columns split into blocks of outputs that
+//! share no parameter (usually one block per output), each solved on its own.
+//!
+//! Instruments (paper §V-B, SPEC §5): the nominal model is simulated with the
+//! known input; its noise-free regressors are the instruments, centred per
+//! experiment (default), pooled, or not. Rotation entries come from a heading
+//! anchored to the previous measurement, `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`
+//! (with a measured `R`: the measurement one sample earlier); measured
+//! disturbances enter as their experiment mean. The estimate is refined by
+//! re-simulating with it (Young's refined IV) until it settles. Equations
+//! start at k = 2 so no instrument uses a same-sample measurement.
+
+use crate::data::Source;
+use crate::model::{Model, Signals, planar_rotation};
+use crate::moments::{CrossMoments, LongRun};
+use crate::signs::{ExperimentSigns, detect};
+use leeway_structure::exact::Q;
+use leeway_structure::grammar::EquationKind;
+use leeway_structure::identify::{Analysis, ExperimentStructure, Patterns, linear_text, patterns_text, verdict};
+use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, Rotation};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Which estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Least squares on IV3's predictor, with an intercept per output and experiment.
+    Ls,
+    /// IV on the basic predictor `Φ(y, u)`.
+    Iv1,
+    /// IV on the augmented predictor, every medium unmeasured.
+    Iv2,
+    /// IV on the augmented predictor plus `Φ2(y + y_aux)` for measured media.
+    Iv3,
+}
+
+impl Method {
+    /// The predictor the method uses.
+    pub fn predictor(self) -> PredictorKind {
+        match self {
+            Method::Iv1 => PredictorKind::Basic,
+            Method::Iv2 => PredictorKind::Augmented,
+            Method::Ls | Method::Iv3 => PredictorKind::Measured,
+        }
+    }
+    /// `ls`, `iv1`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ls => "ls",
+            Method::Iv1 => "iv1",
+            Method::Iv2 => "iv2",
+            Method::Iv3 => "iv3",
+        }
+    }
+    /// All four, in the paper's order.
+    pub const ALL: [Method; 4] = [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3];
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Method, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "ls" => Ok(Method::Ls),
+            "iv1" => Ok(Method::Iv1),
+            "iv2" => Ok(Method::Iv2),
+            "iv3" => Ok(Method::Iv3),
+            other => Err(format!("unknown method `{other}`: use ls, iv1, iv2 or iv3")),
+        }
+    }
+}
+
+/// Where instruments come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Instruments {
+    /// Simulated nominal model, refined (default).
+    Simulated,
+    /// Regressors of the measurement one sample earlier.
+    Delayed,
+}
+
+/// How instruments are centred.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Centring {
+    /// Zero mean per experiment (consistent when disturbances have a mean).
+    Experiment,
+    /// Zero mean over all experiments pooled.
+    Pooled,
+    /// No centring.
+    None,
+}
+
+/// Estimation options.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The estimator.
+    pub method: Method,
+    /// Instrument kind.
+    pub instruments: Instruments,
+    /// Instrument centring.
+    pub centring: Centring,
+    /// θ of the nominal model (default: the model's `nominal { }`).
+    pub nominal: Option<Vec<f64>>,
+    /// Most re-simulations of the refined IV.
+    pub max_refinements: usize,
+    /// The refinement has settled when a new instrument simulation moves less
+    /// than this fraction of the simulated states' variation (RMS).
+    pub tolerance: f64,
+    /// Estimate identifiable combinations when θ is not identifiable.
+    pub aggregate: bool,
+    /// A7 violations (wrong signs) are errors instead of warnings.
+    pub strict: bool,
+    /// Lags of the long-run covariance (≥ 1: the Euler residual is MA(1)).
+    pub lags: usize,
+    /// Relative residual below which a column is numerically dependent.
+    pub rank_tolerance: f64,
+    /// Heading spread (circular std, rad) below which `R` counts as constant.
+    pub heading_spread: f64,
+    /// Compute standard errors and disturbance moments (one more pass).
+    pub covariance: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            method: Method::Iv3,
+            instruments: Instruments::Simulated,
+            centring: Centring::Experiment,
+            nominal: None,
+            max_refinements: 8,
+            tolerance: 1e-3,
+            aggregate: false,
+            strict: false,
+            lags: 1,
+            rank_tolerance: 1e-9,
+            heading_spread: 0.05,
+            covariance: true,
+        }
+    }
+}
+
+/// One column's estimate (θ or nuisance).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ColumnEstimate {
+    /// Column name.
+    pub name: String,
+    /// `theta`, `rho` or `lambda`.
+    pub kind: &'static str,
+    /// The estimate (held value for held columns, `None` when dropped).
+    pub value: Option<f64>,
+    /// Standard error (estimated columns only).
+    pub std_error: Option<f64>,
+    /// `estimated`, `held at nominal`, `held at 0`, `dropped`.
+    pub status: String,
+    /// What the value estimates, in moments and parameter names.
+    pub estimates: String,
+}
+
+/// The mean of an unmeasured disturbance component (paper Corollary 1).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DisturbanceMoment {
+    /// The disturbance.
+    pub disturbance: String,
+    /// The component.
+    pub component: String,
+    /// Estimated mean.
+    pub mean: f64,
+    /// Its standard error (delta method).
+    pub std_error: Option<f64>,
+}
+
+/// How the estimate was computed and how well the data support it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// `basic`, `augmented`, `measured`.
+    pub predictor: String,
+    /// Experiments.
+    pub experiments: usize,
+    /// Equations used (samples − 2 per experiment).
+    pub equations: usize,
+    /// Columns of the predictor (unreduced).
+    pub columns: usize,
+    /// Columns estimated after structural and numeric reduction.
+    pub estimated: usize,
+    /// Numerical rank of the stacked moment matrix over the structurally kept columns.
+    pub rank: usize,
+    /// Condition number of the column-equilibrated stacked matrix (largest block).
+    pub condition_number: f64,
+    /// Refinements (re-simulations with an estimate).
+    pub refinements: usize,
+    /// The refined estimate settled within the tolerance.
+    pub converged: bool,
+    /// Instruments used.
+    pub instruments: String,
+    /// Centring used, and why it is valid.
+    pub centring: String,
+    /// Lags of the long-run covariance.
+    pub lags: usize,
+    /// Combinations the data did not excite, in the model's names.
+    pub unexcited: Vec<String>,
+    /// What kept parameters estimate when others were held.
+    pub aggregates: Vec<String>,
+}
+
+/// The result of an estimation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// The method.
+    pub method: Method,
+    /// θ names.
+    pub parameters: Vec<String>,
+    /// θ (held parameters at their nominal values).
+    pub theta: Vec<f64>,
+    /// Standard errors of θ (`None` for held parameters).
+    pub std_errors: Vec<Option<f64>>,
+    /// Every column of the predictor.
+    pub columns: Vec<ColumnEstimate>,
+    /// Means of the unmeasured disturbances.
+    pub disturbances: Vec<DisturbanceMoment>,
+    /// Sign pattern per experiment.
+    pub sign_patterns: Vec<ExperimentSigns>,
+    /// Diagnostics.
+    pub diagnostics: Diagnostics,
+    /// Warnings.
+    pub warnings: Vec<String>,
+}
+
+impl Estimate {
+    /// θ by name.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.parameters.iter().position(|p| p == name).map(|i| self.theta[i])
+    }
+}
+
+/// Why an estimate could not be computed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct EstimateError {
+    /// Stable kebab-case code (`unidentifiable`, `rank-deficient`, `sign-violation`, ...).
+    pub code: &'static str,
+    /// What is wrong.
+    pub message: String,
+    /// How to fix it.
+    pub hint: String,
+}
+
+fn err(code: &'static str, message: impl Into<String>, hint: impl Into<String>) -> EstimateError {
+    EstimateError { code, message: message.into(), hint: hint.into() }
+}
+
+/// A measured-medium (`Φ2`) column whose modulus arguments keep their sign
+/// in the data: its instrument is the noise-free `s·a_sim·…` rather than a
+/// pointwise `|a_sim|` of a possibly crude simulation.
+#[derive(Clone, Debug)]
+struct FixedSignColumn {
+    column: usize,
+    /// `(term, output, sign of each factor's modulus argument)`.
+    terms: Vec<(usize, usize, Vec<f64>)>,
+}
+
+/// Per-experiment facts read before estimating.
+#[derive(Clone, Debug)]
+struct ExperimentInfo {
+    signs: Vec<f64>,
+    fixed_sign_columns: Vec<FixedSignColumn>,
+    measured_mean: Vec<f64>,
+    bound: Vec<f64>,
+    spread: f64,
+    frozen: Option<Vec<f64>>,
+}
+
+#[derive(Clone, Debug)]
+struct Block {
+    outputs: Vec<usize>,
+    /// Structurally kept predictor columns of the block, in column order.
+    cols: Vec<usize>,
+}
+
+/// The per-block outcome of a solve.
+#[derive(Clone, Debug)]
+struct BlockSolution {
+    /// Columns (predictor indices) estimated.
+    kept: Vec<usize>,
+    /// Numerically dropped columns with their held value.
+    held: Vec<(usize, f64)>,
+    /// Estimates of `kept`.
+    values: Vec<f64>,
+    /// `ϑ_K = Σ_i B_i · (Σ_k ζ_k of experiment i)` over the block's instrument rows.
+    b: Vec<DMatrix<f64>>,
+    /// Instrument rows (predictor columns) of ζ.
+    rows: Vec<usize>,
+    condition: f64,
+}
+
+/// Visits every equation of an experiment: `f(z, φ, t)` with dense buffers
+/// (`n_out × n_cols`) of instruments and regressors and the targets.
+struct EquationWalker<'a> {
+    model: &'a dyn Model,
+    ir: &'a Ir,
+    terms: &'a [crate::interp::TermPlan],
+    kind: PredictorKind,
+    instruments: Option<Instruments>,
+    n_cols: usize,
+}
+
+#[derive(Debug)]
+struct Diverged;
+
+/// How far an instrument simulation moved from a reference one, per output:
+/// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
+#[derive(Clone, Debug, Default)]
+struct SimChange {
+    diff2: Vec<f64>,
+    sum: Vec<f64>,
+    sum2: Vec<f64>,
+    n: usize,
+}
+
+impl SimChange {
+    fn relative(&self) -> f64 {
+        let n = self.n.max(1) as f64;
+        (0..self.diff2.len())
+            .map(|o| {
+                let var = (self.sum2[o] / n - (self.sum[o] / n).powi(2)).max(0.0) * n;
+                if var > 0.0 { (self.diff2[o] / var).sqrt() } else { 0.0 }
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+impl EquationWalker<'_> {
+    fn walk(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        theta_sim: &[f64],
+        mu: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+        f: &mut dyn FnMut(&[f64], &[f64], &[f64]),
+    ) -> Result<SimChange, Diverged> {
+        let ir = self.ir;
+        let n_out = ir.states.len();
+        let n_in = ir.inputs.len();
+        // Measured rotation columns travel with the data; a planar heading does not.
+        let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) { ir.rotation_vars.len() } else { 0 };
+        let n_comp = ir.components.len();
+        let planar = match &ir.rotation {
+            Rotation::Planar { integrates, .. } => Some(*integrates),
+            _ => None,
+        };
+        let h = e.step();
+        let len = n_out * self.n_cols;
+        let mut phi = vec![0.0; len];
+        let mut z = vec![0.0; len];
+        let mut t = vec![0.0; n_out];
+        let (mut y1, mut u1, mut rot1, mut d1, mut psi1) = (vec![0.0; n_out], vec![0.0; n_in], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
+        let (mut y2, mut rot2, mut d2, mut psi2) = (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
+        let mut x_sim = vec![0.0; n_out];
+        let mut x_next = vec![0.0; n_out];
+        let mut fbuf = vec![0.0; n_out];
+        let mut psi_z = 0.0;
+        let mut sim_dist = vec![0.0; n_comp];
+        let mut k = 0usize;
+        let mut diverged = false;
+        // The reference simulation (previous instruments), stepped in lockstep.
+        let mut x_ref = vec![0.0; n_out];
+        let mut x_ref_next = vec![0.0; n_out];
+        let mut psi_ref = 0.0;
+        let mut ref_dist = vec![0.0; n_comp];
+        let mut change = SimChange { diff2: vec![0.0; n_out], sum: vec![0.0; n_out], sum2: vec![0.0; n_out], n: 0 };
+        e.visit(&mut |row| {
+            if diverged {
+                return;
+            }
+            if k == 0 {
+                x_sim.copy_from_slice(row.states);
+                x_ref.copy_from_slice(row.states);
+                psi_z = row.heading;
+                psi_ref = row.heading;
+            } else {
+                if k >= 2 {
+                    let rot_data = rotation_at(planar.is_some(), psi1, &rot1);
+                    let sig = Signals { states: &y1, inputs: &u1, rotation: rot_data.as_slice(), disturbances: &d1 };
+                    self.model.regressors(self.kind, &sig, &info.signs, &mut phi);
+                    match self.instruments {
+                        None => z.copy_from_slice(&phi),
+                        Some(Instruments::Simulated) => {
+                            let rot_z = rotation_at(planar.is_some(), psi_z, &rot2);
+                            let sig = Signals { states: &x_sim, inputs: &u1, rotation: rot_z.as_slice(), disturbances: &info.measured_mean };
+                            self.model.regressors(self.kind, &sig, &info.signs, &mut z);
+                            for fixed in &info.fixed_sign_columns {
+                                let mut acc = vec![None; n_out];
+                                for (term, o, signs) in &fixed.terms {
+                                    let plan = &self.terms[*term];
+                                    let mut t = plan.coefficient;
+                                    for ((arg, modulus), s) in plan.factors.iter().zip(signs) {
+                                        let v = arg.eval(&sig, true);
+                                        t *= if *modulus { s * v } else { v };
+                                    }
+                                    acc[*o] = Some(acc[*o].map_or(t, |a: f64| a + t));
+                                }
+                                for (o, v) in acc.into_iter().enumerate() {
+                                    if let Some(v) = v {
+                                        z[o * self.n_cols + fixed.column] = v;
+                                    }
+                                }
+                            }
+                        }
+                        Some(Instruments::Delayed) => {
+                            let rot_z = rotation_at(planar.is_some(), psi2, &rot2);
+                            let sig = Signals { states: &y2, inputs: &u1, rotation: rot_z.as_slice(), disturbances: &d2 };
+                            self.model.regressors(self.kind, &sig, &info.signs, &mut z);
+                        }
+                    }
+                    for (o, eq) in ir.equations.iter().enumerate() {
+                        t[o] = match eq.kind {
+                            EquationKind::Der => (row.states[o] - y1[o]) / h,
+                            EquationKind::Next => row.states[o],
+                        };
+                    }
+                    f(&z, &phi, &t);
+                }
+                if self.instruments == Some(Instruments::Simulated) {
+                    // Advance the instrument simulation from k−1 to k.
+                    let rot_sim = rotation_at(planar.is_some(), psi_z, &rot1);
+                    for c in 0..n_comp {
+                        sim_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured { d1[c] } else { mu[c] };
+                    }
+                    let sig = Signals { states: &x_sim, inputs: &u1, rotation: rot_sim.as_slice(), disturbances: &sim_dist };
+                    self.model.step(theta_sim, h, &sig, &mut fbuf, &mut x_next);
+                    if x_next.iter().zip(&info.bound).any(|(x, b)| !x.is_finite() || x.abs() > *b) {
+                        diverged = true;
+                        return;
+                    }
+                    if let Some(yaw) = planar {
+                        psi_z = psi1 + h * x_sim[yaw];
+                    }
+                    x_sim.copy_from_slice(&x_next);
+                    if let Some((theta_ref, mu_ref)) = reference {
+                        let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
+                        for c in 0..n_comp {
+                            ref_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured { d1[c] } else { mu_ref[c] };
+                        }
+                        let sig = Signals { states: &x_ref, inputs: &u1, rotation: rot_ref.as_slice(), disturbances: &ref_dist };
+                        self.model.step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
+                        if let Some(yaw) = planar {
+                            psi_ref = psi1 + h * x_ref[yaw];
+                        }
+                        x_ref.copy_from_slice(&x_ref_next);
+                        for o in 0..n_out {
+                            let d = x_sim[o] - x_ref[o];
+                            change.diff2[o] += d * d;
+                            change.sum[o] += x_ref[o];
+                            change.sum2[o] += x_ref[o] * x_ref[o];
+                        }
+                        change.n += 1;
+                    }
+                }
+            }
+            // Shift the history: (k−2) ← (k−1) ← k.
+            y2.copy_from_slice(&y1);
+            rot2.copy_from_slice(&rot1);
+            d2.copy_from_slice(&d1);
+            psi2 = psi1;
+            y1.copy_from_slice(row.states);
+            u1.copy_from_slice(row.inputs);
+            rot1.copy_from_slice(row.rotation);
+            d1.copy_from_slice(row.disturbances);
+            psi1 = row.heading;
+            k += 1;
+        });
+        if diverged { Err(Diverged) } else { Ok(change) }
+    }
+}
+
+/// Rotation variables from a heading (planar) or measured columns.
+enum RotationValues<'a> {
+    Planar([f64; 2]),
+    Measured(&'a [f64]),
+}
+
+impl RotationValues<'_> {
+    fn as_slice(&self) -> &[f64] {
+        match self {
+            RotationValues::Planar(a) => a,
+            RotationValues::Measured(s) => s,
+        }
+    }
+}
+
+fn rotation_at(planar: bool, psi: f64, measured: &[f64]) -> RotationValues<'_> {
+    if planar { RotationValues::Planar(planar_rotation(psi)) } else { RotationValues::Measured(measured) }
+}
+
+/// The estimator for one model, method and set of experiments.
+struct Estimator<'a> {
+    model: &'a dyn Model,
+    ir: &'a Ir,
+    options: &'a Options,
+    kind: PredictorKind,
+    n_cols: usize,
+    blocks: Vec<Block>,
+    block_of_output: Vec<usize>,
+    /// Structurally dropped θ held at nominal (aggregation).
+    held: Vec<(usize, f64)>,
+    /// Preference rank of each column (lower = kept first).
+    preference: Vec<usize>,
+    nominal: Vec<f64>,
+    infos: Vec<ExperimentInfo>,
+    /// What each kept column estimates, as (column, coefficient) in predictor columns.
+    meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    warnings: Vec<String>,
+    unexcited: Vec<String>,
+    aggregates: Vec<String>,
+    terms: Vec<crate::interp::TermPlan>,
+}
+
+/// Estimates θ (and nuisance parameters) of `model` from the experiments.
+pub fn estimate(model: &dyn Model, experiments: &[&dyn Source], options: &Options) -> Result<Estimate, EstimateError> {
+    let ir = model.ir();
+    if experiments.is_empty() {
+        return Err(err("no-data", "no experiment given", "pass at least one --data file"));
+    }
+    if options.method == Method::Ls && options.centring == Centring::None {
+        return Err(err(
+            "invalid-option",
+            "least squares needs an intercept: --centring none is not available for ls",
+            "use --centring experiment (an intercept per output and experiment) or pooled",
+        ));
+    }
+    let nominal = match &options.nominal {
+        Some(v) if v.len() == ir.parameters.len() => v.clone(),
+        Some(v) => {
+            return Err(err(
+                "invalid-nominal",
+                format!("the nominal model has {} values, the model {} parameters", v.len(), ir.parameters.len()),
+                "give one value per parameter",
+            ));
+        }
+        None => ir.parameters.iter().map(|p| p.nominal).collect(),
+    };
+    let kind = options.method.predictor();
+    let mut warnings = Vec::new();
+    // Sign patterns, measured means, bounds and heading spread, in one visit each.
+    let mut sign_patterns = Vec::new();
+    let mut infos = Vec::new();
+    for e in experiments {
+        if e.len() < crate::data::MIN_SAMPLES {
+            return Err(err(
+                "too-few-samples",
+                format!("experiment `{}` has {} samples; at least {} are needed", e.name(), e.len(), crate::data::MIN_SAMPLES),
+                "record a longer experiment",
+            ));
+        }
+        let s = detect(ir, kind, *e);
+        for a in &s.arguments {
+            if a.minority_fraction > 0.0 {
+                let msg = format!(
+                    "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
+                    s.experiment,
+                    a.argument,
+                    if a.sign > 0 { "+" } else { "-" },
+                    100.0 * (1.0 - a.minority_fraction),
+                    100.0 * a.minority_fraction
+                );
+                if options.strict {
+                    return Err(err(
+                        "sign-violation",
+                        msg,
+                        "run experiments with a static offset large enough that the argument keeps its sign, or drop --strict to estimate anyway",
+                    ));
+                }
+                warnings.push(msg);
+            }
+        }
+        infos.push(experiment_info(ir, *e, &s, options));
+        sign_patterns.push(s);
+    }
+    for (e, info) in experiments.iter().zip(&infos) {
+        if info.frozen.is_some() {
+            warnings.push(format!(
+                "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
+                e.name(),
+                info.spread
+            ));
+        }
+    }
+    let mut est = Estimator::new(model, options, kind, nominal, infos, &sign_patterns, warnings)?;
+    est.run(experiments, sign_patterns)
+}
+
+fn experiment_info(ir: &Ir, e: &dyn Source, s: &ExperimentSigns, options: &Options) -> ExperimentInfo {
+    let n_comp = ir.components.len();
+    let n_out = ir.states.len();
+    let mut sum = vec![0.0; n_comp];
+    let mut max_abs = vec![0.0f64; n_out];
+    let (mut sc, mut ss, mut n) = (0.0, 0.0, 0usize);
+    let n_rot = ir.rotation_vars.len();
+    let mut rot_sum = vec![0.0; n_rot];
+    let mut rot_sq = vec![0.0; n_rot];
+    e.visit(&mut |row| {
+        for (a, v) in sum.iter_mut().zip(row.disturbances) {
+            *a += v;
+        }
+        for (m, v) in max_abs.iter_mut().zip(row.states) {
+            *m = m.max(v.abs());
+        }
+        sc += row.heading.cos();
+        ss += row.heading.sin();
+        for i in 0..row.rotation.len().min(n_rot) {
+            rot_sum[i] += row.rotation[i];
+            rot_sq[i] += row.rotation[i] * row.rotation[i];
+        }
+        n += 1;
+    });
+    let nf = n.max(1) as f64;
+    let measured_mean: Vec<f64> = (0..n_comp)
+        .map(|c| if ir.disturbances[ir.components[c].disturbance].measured { sum[c] / nf } else { 0.0 })
+        .collect();
+    let (spread, frozen) = match &ir.rotation {
+        Rotation::Planar { .. } => {
+            let r = ((sc / nf).powi(2) + (ss / nf).powi(2)).sqrt().min(1.0);
+            let spread = (-2.0 * r.max(1e-300).ln()).sqrt();
+            let frozen = (spread < options.heading_spread).then(|| vec![sc / nf / r.max(1e-300), ss / nf / r.max(1e-300)]);
+            (spread, frozen)
+        }
+        Rotation::Measured { .. } => {
+            let spread = (0..n_rot).map(|i| (rot_sq[i] / nf - (rot_sum[i] / nf).powi(2)).max(0.0).sqrt()).fold(0.0, f64::max);
+            (spread, (spread < options.heading_spread).then(|| rot_sum.iter().map(|v| v / nf).collect()))
+        }
+        Rotation::None => (f64::INFINITY, None),
+    };
+    // Φ2 columns whose modulus arguments never change sign in these data.
+    let mut fixed_sign_columns = Vec::new();
+    if options.method.predictor() == PredictorKind::Measured {
+        let sign_of = |arg: &leeway_structure::ir::Arg| -> Option<f64> {
+            let i = ir.sign_args.iter().position(|a| a.arg == *arg)?;
+            let found = s.pointwise.iter().find(|a| a.argument == ir.sign_args[i].name)?;
+            (found.minority_fraction == 0.0).then_some(f64::from(found.sign))
+        };
+        for (c, col) in ir.predictors.measured.iter().enumerate() {
+            let mut terms = Vec::new();
+            let mut ok = !col.entries.is_empty();
+            for e in &col.entries {
+                match e {
+                    leeway_structure::ir::Entry::Term { term, output, .. } => {
+                        let t = &ir.terms[*term];
+                        let signs: Option<Vec<f64>> =
+                            t.factors.iter().map(|f| if f.modulus { sign_of(&f.arg) } else { Some(1.0) }).collect();
+                        match signs {
+                            Some(v) => terms.push((*term, *output, v)),
+                            None => ok = false,
+                        }
+                    }
+                    leeway_structure::ir::Entry::Poly { .. } => ok = false,
+                }
+            }
+            if ok {
+                fixed_sign_columns.push(FixedSignColumn { column: c, terms });
+            }
+        }
+    }
+    ExperimentInfo {
+        signs: s.pattern.iter().map(|v| f64::from(*v)).collect(),
+        fixed_sign_columns,
+        measured_mean,
+        bound: max_abs.iter().map(|m| 100.0 * (1.0 + m)).collect(),
+        spread,
+        frozen,
+    }
+}
+
+impl<'a> Estimator<'a> {
+    fn new(
+        model: &'a dyn Model,
+        options: &'a Options,
+        kind: PredictorKind,
+        nominal: Vec<f64>,
+        infos: Vec<ExperimentInfo>,
+        signs: &[ExperimentSigns],
+        warnings: Vec<String>,
+    ) -> Result<Estimator<'a>, EstimateError> {
+        let ir = model.ir();
+        let columns = ir.predictors.get(kind);
+        let n_cols = columns.len();
+        let analysis = Analysis::new(ir, kind);
+        let exps: Vec<ExperimentStructure> = signs
+            .iter()
+            .zip(&infos)
+            .map(|(s, info)| ExperimentStructure {
+                pattern: s.pattern.clone(),
+                frozen_rotation: info.frozen.as_ref().map(|v| v.iter().map(|x| Q::from_float(*x).unwrap_or_default()).collect()),
+            })
+            .collect();
+        let red = analysis.reduce(Patterns::Experiments(&exps));
+        let v = verdict(&analysis.names, &red);
+        let mut held = Vec::new();
+        let mut aggregates = Vec::new();
+        if !v.identifiable {
+            let distinct: Vec<Vec<i8>> = {
+                let mut p: Vec<Vec<i8>> = signs.iter().map(|s| s.pattern.clone()).collect();
+                p.sort();
+                p.dedup();
+                p
+            };
+            let combos: Vec<String> = v.combinations.iter().map(|c| c.message.clone()).collect();
+            let remark2 = infos.iter().any(|i| i.frozen.is_some());
+            if !options.aggregate {
+                let required = analysis.required_patterns();
+                let hint = match (&required, remark2) {
+                    (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
+                    (Some(r), false) if !r.is_empty() => format!(
+                        "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",
+                        patterns_text(ir, r, kind)
+                    ),
+                    _ => "no set of experiments identifies θ with this predictor; estimate the identifiable combinations with --aggregate".to_string(),
+                };
+                return Err(err(
+                    "unidentifiable",
+                    format!(
+                        "θ is not identifiable from these experiments (sign patterns {}): {}",
+                        patterns_text(ir, &distinct, kind),
+                        combos.join("; ")
+                    ),
+                    hint,
+                ));
+            }
+            for a in &v.aggregates {
+                aggregates.push(format!("{} estimates {} (absorbed parameters held at their nominal values)", ir.parameters[a.parameter].name, a.estimates));
+            }
+            for (c, col) in columns.iter().enumerate() {
+                if let ColumnKind::Theta { parameter } = col.kind
+                    && !red.pivot[c]
+                {
+                    held.push((c, nominal[parameter]));
+                }
+            }
+        }
+        // What each kept column estimates: itself plus the structurally dropped
+        // columns expressed through it.
+        let mut meaning: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
+        for c in 0..n_cols {
+            if red.pivot[c] {
+                meaning.entry(c).or_default().push((c, 1.0));
+            }
+        }
+        for d in 0..n_cols {
+            if !red.pivot[d] {
+                for (k, q) in &red.combination[d] {
+                    meaning.entry(*k).or_default().push((d, leeway_structure::exact::to_f64(q)));
+                }
+            }
+        }
+        // Blocks: outputs connected through shared columns.
+        let n_out = ir.states.len();
+        let mut parent: Vec<usize> = (0..n_out).collect();
+        fn find(p: &mut [usize], x: usize) -> usize {
+            let mut r = x;
+            while p[r] != r {
+                r = p[r];
+            }
+            p[x] = r;
+            r
+        }
+        for col in columns {
+            let outs = col.outputs();
+            for w in outs.windows(2) {
+                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+                parent[b] = a;
+            }
+        }
+        let mut blocks: Vec<Block> = Vec::new();
+        let mut block_of_output = vec![0; n_out];
+        for o in 0..n_out {
+            let root = find(&mut parent, o);
+            let b = match blocks.iter().position(|b| find(&mut parent, b.outputs[0]) == root) {
+                Some(b) => b,
+                None => {
+                    blocks.push(Block { outputs: Vec::new(), cols: Vec::new() });
+                    blocks.len() - 1
+                }
+            };
+            blocks[b].outputs.push(o);
+            block_of_output[o] = b;
+        }
+        for (c, col) in columns.iter().enumerate() {
+            if red.pivot[c]
+                && let Some(o) = col.outputs().first()
+            {
+                blocks[block_of_output[*o]].cols.push(c);
+            }
+        }
+        let mut preference = vec![0; n_cols];
+        for (rank, c) in analysis.order.iter().enumerate() {
+            preference[*c] = rank;
+        }
+        Ok(Estimator {
+            model,
+            ir,
+            options,
+            kind,
+            n_cols,
+            blocks,
+            block_of_output,
+            held,
+            preference,
+            nominal,
+            infos,
+            meaning,
+            warnings,
+            unexcited: Vec::new(),
+            aggregates,
+            terms: crate::interp::term_plans(ir),
+        })
+    }
+
+    fn walker(&self) -> EquationWalker<'_> {
+        let instruments = if self.options.method == Method::Ls { None } else { Some(self.options.instruments) };
+        EquationWalker { model: self.model, ir: self.ir, terms: &self.terms, kind: self.kind, instruments, n_cols: self.n_cols }
+    }
+
+    /// One accumulation pass: `[experiment][output]` moment sums over the block's columns.
+    fn accumulate(
+        &self,
+        experiments: &[&dyn Source],
+        theta_sim: &[f64],
+        mu: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+    ) -> Result<(Vec<Vec<CrossMoments>>, f64), Diverged> {
+        let walker = self.walker();
+        let n = self.n_cols;
+        let mut all = Vec::with_capacity(experiments.len());
+        let mut change = 0.0f64;
+        for (e, info) in experiments.iter().zip(&self.infos) {
+            let mut acc: Vec<CrossMoments> = (0..self.ir.states.len())
+                .map(|o| {
+                    let m = self.blocks[self.block_of_output[o]].cols.len();
+                    CrossMoments::new(m, m)
+                })
+                .collect();
+            let mut zb: Vec<Vec<f64>> = self.blocks.iter().map(|b| vec![0.0; b.cols.len()]).collect();
+            let mut pb: Vec<Vec<f64>> = zb.clone();
+            let c = walker.walk(*e, info, theta_sim, mu, reference, &mut |z, phi, t| {
+                for (o, a) in acc.iter_mut().enumerate() {
+                    let b = self.block_of_output[o];
+                    let cols = &self.blocks[b].cols;
+                    let (zv, pv) = (&mut zb[b], &mut pb[b]);
+                    for (j, c) in cols.iter().enumerate() {
+                        zv[j] = z[o * n + c];
+                        pv[j] = phi[o * n + c];
+                    }
+                    let mut target = t[o];
+                    for (c, v) in &self.held {
+                        target -= phi[o * n + c] * v;
+                    }
+                    a.push(zv, pv, target);
+                }
+            })?;
+            change = change.max(c.relative());
+            all.push(acc);
+        }
+        Ok((all, change))
+    }
+
+    /// Moment equations `(H_i, g_i)` of experiment `i`, block `b` (sums, not means).
+    fn equations(&self, moments: &[Vec<CrossMoments>], i: usize, b: usize) -> (DMatrix<f64>, DVector<f64>) {
+        let block = &self.blocks[b];
+        let m = block.cols.len();
+        let mut h = DMatrix::zeros(m, m);
+        let mut g = DVector::zeros(m);
+        for &o in &block.outputs {
+            let acc = &moments[i][o];
+            let (ho, go) = match self.options.centring {
+                Centring::Experiment => acc.centred(),
+                Centring::None => acc.about(&DVector::zeros(m)),
+                Centring::Pooled => {
+                    let total: usize = moments.iter().map(|e| e[o].n).sum();
+                    let pooled = moments.iter().fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64) / total.max(1) as f64;
+                    acc.about(&pooled)
+                }
+            };
+            h += ho;
+            g += go;
+        }
+        (h, g)
+    }
+
+    /// Solves every block; collects numeric rank findings.
+    fn solve(&mut self, moments: &[Vec<CrossMoments>], record: bool) -> Result<Vec<BlockSolution>, EstimateError> {
+        let mut out = Vec::with_capacity(self.blocks.len());
+        let mut errors = Vec::new();
+        for b in 0..self.blocks.len() {
+            let cols = self.blocks[b].cols.clone();
+            let m = cols.len();
+            let e_count = moments.len();
+            // The stacked system M ϑ = g (IV), or pooled normal equations (LS).
+            let (mat, rhs, scale_rows): (DMatrix<f64>, DVector<f64>, Vec<f64>) = if self.options.method == Method::Ls {
+                let mut a = DMatrix::zeros(m, m);
+                let mut g = DVector::zeros(m);
+                for i in 0..e_count {
+                    let (h, gi) = self.equations(moments, i, b);
+                    a += h;
+                    g += gi;
+                }
+                (a, g, vec![1.0; e_count])
+            } else {
+                let mut a = DMatrix::zeros(m * e_count, m);
+                let mut g = DVector::zeros(m * e_count);
+                let mut scales = Vec::new();
+                for i in 0..e_count {
+                    let (h, gi) = self.equations(moments, i, b);
+                    let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
+                    a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
+                    g.rows_mut(i * m, m).copy_from(&(gi / n));
+                    scales.push(1.0 / n);
+                }
+                (a, g, scales)
+            };
+            let mut order: Vec<usize> = (0..m).collect();
+            order.sort_by_key(|j| self.preference[cols[*j]]);
+            let sel = select_columns(&mat, &order, self.options.rank_tolerance);
+            let mut held = Vec::new();
+            for (j, combo) in &sel.dropped {
+                let c = cols[*j];
+                let col = &self.ir.predictors.get(self.kind)[c];
+                let text = if combo.is_empty() {
+                    format!("{} is not excited by these data (its moments vanish)", col.name)
+                } else {
+                    let mut items: Vec<(String, Q)> = vec![];
+                    for (k, a) in combo {
+                        items.push((self.ir.predictors.get(self.kind)[cols[*k]].name.clone(), Q::from_float(round_sig(*a)).unwrap_or_default()));
+                    }
+                    format!("{} is not separately excited: its column equals {}", col.name, linear_text_f(&items))
+                };
+                match col.kind {
+                    ColumnKind::Theta { parameter } => {
+                        let p = &self.ir.parameters[parameter];
+                        let value = self.nominal[parameter];
+                        if p.measured && self.kind == PredictorKind::Measured {
+                            if record {
+                                self.warnings.push(format!(
+                                    "{text}: the measured {} barely varies relative to the craft, so `{}` is not separately excited by these data; it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+                                    self.ir.disturbances[p.medium.unwrap_or(0)].name, p.name, value
+                                ));
+                                self.unexcited.push(text.clone());
+                                for (k, a) in combo {
+                                    self.aggregates.push(format!(
+                                        "{} estimates {} + {:.4}*({} - {})",
+                                        self.ir.predictors.get(self.kind)[cols[*k]].name,
+                                        self.ir.predictors.get(self.kind)[cols[*k]].name,
+                                        a,
+                                        p.name,
+                                        value
+                                    ));
+                                }
+                            }
+                            held.push((c, value));
+                        } else if self.options.aggregate {
+                            if record {
+                                self.warnings.push(format!("{text}; held at its nominal value {value} (--aggregate)"));
+                                self.unexcited.push(text.clone());
+                            }
+                            held.push((c, value));
+                        } else {
+                            errors.push(text);
+                        }
+                    }
+                    _ => {
+                        if record {
+                            self.unexcited.push(format!("{text} (nuisance; held at 0)"));
+                        }
+                        held.push((c, 0.0));
+                    }
+                }
+            }
+            let kept: Vec<usize> = sel.kept.iter().map(|j| cols[*j]).collect();
+            // Right-hand side without the held columns' contribution.
+            let mut g = rhs.clone();
+            for (c, v) in &held {
+                if let Some(j) = cols.iter().position(|x| x == c) {
+                    g -= mat.column(j) * *v;
+                }
+            }
+            let kj: Vec<usize> = sel.kept.clone();
+            let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
+            let (values, pinv, condition) = solve_equilibrated(&mk, &g);
+            // B_i: ϑ_K = pinv · g, with g's experiment-i rows = (Σ_k ζ_k)·scale_i.
+            let b_list = if self.options.method == Method::Ls {
+                // ϑ = A⁻¹ Σ ζ restricted to the kept rows.
+                let rows_idx = kj.clone();
+                let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
+                vec![sub; e_count]
+            } else {
+                (0..e_count).map(|i| pinv.columns(i * m, m) * scale_rows[i]).collect()
+            };
+            let rows = if self.options.method == Method::Ls { kept.clone() } else { cols.clone() };
+            out.push(BlockSolution { kept, held, values: values.iter().copied().collect(), b: b_list, rows, condition });
+        }
+        if !errors.is_empty() {
+            let remark2 = self.infos.iter().any(|i| i.spread < 4.0 * self.options.heading_spread);
+            return Err(err(
+                "rank-deficient",
+                format!("the data did not excite every parameter: {}", errors.join("; ")),
+                if remark2 {
+                    "the heading barely varied, which leaves the disturbance terms collinear with the others (paper Remark 2): turn the craft during the experiment; or estimate the identifiable combinations with --aggregate".to_string()
+                } else {
+                    "excite the named terms (richer input, experiments with other sign patterns), or estimate the identifiable combinations with --aggregate".to_string()
+                },
+            ));
+        }
+        Ok(out)
+    }
+
+    /// θ from block solutions (held parameters at nominal).
+    fn theta_of(&self, sol: &[BlockSolution]) -> Vec<f64> {
+        let mut theta = self.nominal.clone();
+        let cols = self.ir.predictors.get(self.kind);
+        for (c, v) in self.all_values(sol) {
+            if let ColumnKind::Theta { parameter } = cols[c].kind {
+                theta[parameter] = v;
+            }
+        }
+        theta
+    }
+
+    fn all_values(&self, sol: &[BlockSolution]) -> Vec<(usize, f64)> {
+        let mut v: Vec<(usize, f64)> = self.held.clone();
+        for s in sol {
+            v.extend(s.kept.iter().copied().zip(s.values.iter().copied()));
+            v.extend(s.held.iter().copied());
+        }
+        v.sort_by_key(|(c, _)| *c);
+        v
+    }
+
+    /// Unmeasured disturbance means from ρ̂ and θ̂ (paper Corollary 1), with
+    /// standard errors by the delta method when a covariance is given.
+    fn disturbance_means(&self, values: &BTreeMap<usize, f64>, theta: &[f64], cov: Option<&BTreeMap<(usize, usize), f64>>) -> Vec<DisturbanceMoment> {
+        let cols = self.ir.predictors.get(self.kind);
+        let unmeasured: Vec<usize> = (0..self.ir.components.len())
+            .filter(|c| {
+                let d = &self.ir.disturbances[self.ir.components[*c].disturbance];
+                !d.measured || self.kind == PredictorKind::Augmented
+            })
+            .collect();
+        if unmeasured.is_empty() || self.kind == PredictorKind::Basic {
+            return Vec::new();
+        }
+        // Equations: value_k = Σ_{(d, q) ∈ meaning_k} q · μ_comp(d) · θ_param(d), for kept ρ-only columns.
+        let mut eqs: Vec<(usize, Vec<(usize, usize, f64)>)> = Vec::new();
+        for (k, items) in &self.meaning {
+            if !values.contains_key(k) {
+                continue;
+            }
+            let mut terms = Vec::new();
+            let mut ok = true;
+            for (d, q) in items {
+                match cols[*d].kind {
+                    ColumnKind::Rho { component, parameter } => terms.push((component, parameter, *q)),
+                    _ => ok = false,
+                }
+            }
+            if ok && !terms.is_empty() {
+                eqs.push((*k, terms));
+            }
+        }
+        if eqs.is_empty() {
+            return Vec::new();
+        }
+        let solve_mu = |vals: &BTreeMap<usize, f64>, th: &[f64]| -> Option<Vec<f64>> {
+            let a = DMatrix::from_fn(eqs.len(), unmeasured.len(), |r, j| {
+                eqs[r].1.iter().filter(|(c, _, _)| *c == unmeasured[j]).map(|(_, p, q)| q * th[*p]).sum()
+            });
+            let y = DVector::from_iterator(eqs.len(), eqs.iter().map(|(k, _)| vals.get(k).copied().unwrap_or(0.0)));
+            let svd = a.svd(true, true);
+            let smax = svd.singular_values.max();
+            if svd.singular_values.min() <= 1e-10 * smax || smax == 0.0 {
+                return None;
+            }
+            svd.solve(&y, 0.0).ok().map(|v| v.iter().copied().collect())
+        };
+        let Some(mu) = solve_mu(values, theta) else { return Vec::new() };
+        // Delta method over the estimated θ and ρ columns involved.
+        let mut se = vec![None; unmeasured.len()];
+        if let Some(cov) = cov {
+            let mut vars: Vec<usize> = eqs.iter().map(|(k, _)| *k).collect();
+            for (c, col) in cols.iter().enumerate() {
+                if matches!(col.kind, ColumnKind::Theta { .. }) && cov.contains_key(&(c, c)) {
+                    vars.push(c);
+                }
+            }
+            vars.sort_unstable();
+            vars.dedup();
+            let mut jac = DMatrix::zeros(unmeasured.len(), vars.len());
+            let mut ok = true;
+            for (vi, &c) in vars.iter().enumerate() {
+                let base = values.get(&c).copied().unwrap_or(0.0);
+                let step = 1e-6 * base.abs().max(1e-8);
+                let mut plus = values.clone();
+                let mut minus = values.clone();
+                plus.insert(c, base + step);
+                minus.insert(c, base - step);
+                let (mut tp, mut tm) = (theta.to_vec(), theta.to_vec());
+                if let ColumnKind::Theta { parameter } = cols[c].kind {
+                    tp[parameter] = base + step;
+                    tm[parameter] = base - step;
+                }
+                match (solve_mu(&plus, &tp), solve_mu(&minus, &tm)) {
+                    (Some(a), Some(b)) => {
+                        for j in 0..unmeasured.len() {
+                            jac[(j, vi)] = (a[j] - b[j]) / (2.0 * step);
+                        }
+                    }
+                    _ => ok = false,
+                }
+            }
+            if ok {
+                let cm = DMatrix::from_fn(vars.len(), vars.len(), |a, b| cov.get(&(vars[a], vars[b])).copied().unwrap_or(0.0));
+                let cmu = &jac * cm * jac.transpose();
+                for j in 0..unmeasured.len() {
+                    se[j] = Some(cmu[(j, j)].max(0.0).sqrt());
+                }
+            }
+        }
+        unmeasured
+            .iter()
+            .enumerate()
+            .map(|(j, c)| {
+                let comp = &self.ir.components[*c];
+                DisturbanceMoment {
+                    disturbance: self.ir.disturbances[comp.disturbance].name.clone(),
+                    component: comp.name.clone(),
+                    mean: mu[j],
+                    std_error: se[j],
+                }
+            })
+            .collect()
+    }
+
+    fn run(&mut self, experiments: &[&dyn Source], sign_patterns: Vec<ExperimentSigns>) -> Result<Estimate, EstimateError> {
+        let n_comp = self.ir.components.len();
+        let mut theta_sim = self.nominal.clone();
+        let mut mu = vec![0.0; n_comp];
+        let refine = self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
+        let mut refinements = 0usize;
+        let mut converged = !refine;
+        let mut moments = match self.accumulate(experiments, &theta_sim, &mu, None) {
+            Ok((m, _)) => m,
+            Err(Diverged) => {
+                return Err(err(
+                    "nominal-diverges",
+                    "the simulation of the nominal model diverges on the input of these experiments",
+                    "give nominal values closer to the craft (nominal { } in the model, or --nominal FILE)",
+                ));
+            }
+        };
+        let mut sol = self.solve(&moments, !refine)?;
+        let mut theta = self.theta_of(&sol);
+        while refine && refinements < self.options.max_refinements {
+            // Re-simulate with the estimate (and the disturbance means it implies),
+            // damping towards the previous simulation if it diverges. The new
+            // simulation is compared with the previous one in the same pass:
+            // once the instruments stop moving, so does the estimate.
+            let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
+            let new_mu = self.mean_vector(&values, &theta);
+            let mut step = 1.0;
+            let mut accepted = None;
+            for _ in 0..6 {
+                let trial: Vec<f64> = theta_sim.iter().zip(&theta).map(|(a, b)| a + step * (b - a)).collect();
+                let trial_mu: Vec<f64> = mu.iter().zip(&new_mu).map(|(a, b)| a + step * (b - a)).collect();
+                if let Ok((m, change)) = self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu))) {
+                    accepted = Some((trial, trial_mu, m, change));
+                    break;
+                }
+                step *= 0.5;
+            }
+            let Some((trial, trial_mu, m, change)) = accepted else {
+                self.warnings.push("refinement stopped: the simulation with the refined estimate diverges even when damped".to_string());
+                break;
+            };
+            if step < 1.0 {
+                self.warnings.push(format!("refinement {} damped by {step} (the simulation with the full step diverged)", refinements + 1));
+            }
+            theta_sim = trial;
+            mu = trial_mu;
+            moments = m;
+            refinements += 1;
+            sol = self.solve(&moments, false)?;
+            theta = self.theta_of(&sol);
+            if std::env::var("LEEWAY_DEBUG").is_ok() {
+                eprintln!("refinement {refinements}: change {change:.3e} theta {:?}", theta.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>());
+            }
+            if change < self.options.tolerance {
+                converged = true;
+                break;
+            }
+        }
+        if refine {
+            // Record the numeric findings of the final solve.
+            sol = self.solve(&moments, true)?;
+            theta = self.theta_of(&sol);
+            if !converged {
+                self.warnings.push(format!(
+                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the last estimate is reported",
+                    self.options.max_refinements, self.options.tolerance
+                ));
+            }
+        }
+        let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
+        let cov = if self.options.covariance { self.covariance(experiments, &moments, &sol, &theta_sim, &mu) } else { None };
+        self.finish(sign_patterns, &sol, values, theta, cov, refinements, converged, experiments)
+    }
+
+    fn mean_vector(&self, values: &BTreeMap<usize, f64>, theta: &[f64]) -> Vec<f64> {
+        let mut mu = vec![0.0; self.ir.components.len()];
+        for m in self.disturbance_means(values, theta, None) {
+            if let Some(c) = self.ir.components.iter().position(|c| c.name == m.component) {
+                mu[c] = m.mean;
+            }
+        }
+        mu
+    }
+
+    /// The sandwich covariance of the estimated columns: `Σ_i B_i G_i B_iᵀ`,
+    /// `G_i` the long-run sum of `ζ_k = Σ_o z̃_o (ε_o − ε̄_o)` truncated at `lags`.
+    fn covariance(
+        &self,
+        experiments: &[&dyn Source],
+        moments: &[Vec<CrossMoments>],
+        sol: &[BlockSolution],
+        theta_sim: &[f64],
+        mu: &[f64],
+    ) -> Option<BTreeMap<(usize, usize), f64>> {
+        let walker = self.walker();
+        let n = self.n_cols;
+        let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();
+        // ζ rows: the instrument rows of every block, concatenated.
+        let mut offsets = Vec::new();
+        let mut total = 0;
+        for s in sol {
+            offsets.push(total);
+            total += s.rows.len();
+        }
+        let pooled: Vec<DVector<f64>> = (0..self.ir.states.len())
+            .map(|o| {
+                let m = self.blocks[self.block_of_output[o]].cols.len();
+                let count: usize = moments.iter().map(|e| e[o].n).sum();
+                moments.iter().fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64) / count.max(1) as f64
+            })
+            .collect();
+        let mut cov = DMatrix::zeros(sol.iter().map(|s| s.kept.len()).sum(), sol.iter().map(|s| s.kept.len()).sum());
+        for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
+            // Centres and mean residuals per output.
+            let centres: Vec<DVector<f64>> = (0..self.ir.states.len())
+                .map(|o| match self.options.centring {
+                    Centring::Experiment => moments[i][o].mean_z(),
+                    Centring::Pooled => pooled[o].clone(),
+                    Centring::None => DVector::zeros(moments[i][o].mean_z().len()),
+                })
+                .collect();
+            let mean_res: Vec<f64> = (0..self.ir.states.len())
+                .map(|o| {
+                    let b = &self.blocks[self.block_of_output[o]];
+                    let mp = moments[i][o].mean_phi();
+                    moments[i][o].mean_t() - b.cols.iter().enumerate().map(|(j, c)| mp[j] * values.get(c).copied().unwrap_or(0.0)).sum::<f64>()
+                })
+                .collect();
+            let mut lr = LongRun::new(total, self.options.lags);
+            let mut zeta = DVector::zeros(total);
+            let ok = walker.walk(*e, info, theta_sim, mu, None, &mut |z, phi, t| {
+                zeta.fill(0.0);
+                for o in 0..self.ir.states.len() {
+                    let bi = self.block_of_output[o];
+                    let block = &self.blocks[bi];
+                    let mut target = t[o];
+                    for (c, v) in &self.held {
+                        target -= phi[o * n + c] * v;
+                    }
+                    let mut res = target;
+                    for c in &block.cols {
+                        res -= phi[o * n + c] * values.get(c).copied().unwrap_or(0.0);
+                    }
+                    res -= mean_res[o];
+                    let s = &sol[bi];
+                    for (r, c) in s.rows.iter().enumerate() {
+                        let j = block.cols.iter().position(|x| x == c).unwrap_or(0);
+                        let zc = if self.options.method == Method::Ls { phi[o * n + c] } else { z[o * n + c] };
+                        zeta[offsets[bi] + r] += (zc - centres[o][j]) * res;
+                    }
+                }
+                lr.push(&zeta);
+            });
+            if ok.is_err() {
+                return None;
+            }
+            let g = lr.sum_psd();
+            // Assemble B_i (kept × rows) over blocks.
+            let nk: usize = sol.iter().map(|s| s.kept.len()).sum();
+            let mut b_all = DMatrix::zeros(nk, total);
+            let mut row = 0;
+            for (bi, s) in sol.iter().enumerate() {
+                b_all.view_mut((row, offsets[bi]), (s.kept.len(), s.rows.len())).copy_from(&s.b[i]);
+                row += s.kept.len();
+            }
+            cov += &b_all * g * b_all.transpose();
+        }
+        let kept: Vec<usize> = sol.iter().flat_map(|s| s.kept.iter().copied()).collect();
+        let mut out = BTreeMap::new();
+        for (a, ca) in kept.iter().enumerate() {
+            for (b, cb) in kept.iter().enumerate() {
+                out.insert((*ca, *cb), cov[(a, b)]);
+            }
+        }
+        Some(out)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &mut self,
+        sign_patterns: Vec<ExperimentSigns>,
+        sol: &[BlockSolution],
+        values: BTreeMap<usize, f64>,
+        theta: Vec<f64>,
+        cov: Option<BTreeMap<(usize, usize), f64>>,
+        refinements: usize,
+        converged: bool,
+        experiments: &[&dyn Source],
+    ) -> Result<Estimate, EstimateError> {
+        let cols = self.ir.predictors.get(self.kind);
+        let se = |c: usize| cov.as_ref().and_then(|m| m.get(&(c, c))).map(|v| v.max(0.0).sqrt());
+        let estimated: Vec<usize> = sol.iter().flat_map(|s| s.kept.iter().copied()).collect();
+        let numeric_held: BTreeMap<usize, f64> = sol.iter().flat_map(|s| s.held.iter().copied()).collect();
+        let structural_held: BTreeMap<usize, f64> = self.held.iter().copied().collect();
+        let names = leeway_structure::identify::Names { ir: self.ir, columns: cols };
+        let columns: Vec<ColumnEstimate> = cols
+            .iter()
+            .enumerate()
+            .map(|(c, col)| {
+                let kind = match col.kind {
+                    ColumnKind::Theta { .. } => "theta",
+                    ColumnKind::Rho { .. } => "rho",
+                    ColumnKind::Lambda { .. } => "lambda",
+                };
+                let meaning = self.meaning.get(&c).map(|items| {
+                    let q: Vec<(String, Q)> = items.iter().map(|(d, v)| (names.moment(*d), Q::from_float(*v).unwrap_or_default())).collect();
+                    linear_text(&q)
+                });
+                let (value, status) = if estimated.contains(&c) {
+                    (values.get(&c).copied(), "estimated".to_string())
+                } else if let Some(v) = structural_held.get(&c) {
+                    (Some(*v), "held at nominal (not identifiable; aggregated)".to_string())
+                } else if let Some(v) = numeric_held.get(&c) {
+                    (Some(*v), if col.kind.is_nuisance() { "held at 0 (not excited)".to_string() } else { "held at nominal (not excited)".to_string() })
+                } else {
+                    (None, "dropped (structurally dependent: absorbed by kept columns)".to_string())
+                };
+                ColumnEstimate {
+                    name: col.name.clone(),
+                    kind,
+                    value,
+                    std_error: if estimated.contains(&c) { se(c) } else { None },
+                    status,
+                    estimates: meaning.unwrap_or_else(|| names.moment(c)),
+                }
+            })
+            .collect();
+        let theta_cols: Vec<Option<usize>> =
+            (0..self.ir.parameters.len()).map(|p| cols.iter().position(|c| c.kind == ColumnKind::Theta { parameter: p })).collect();
+        let std_errors = theta_cols.iter().map(|c| c.filter(|c| estimated.contains(c)).and_then(se)).collect();
+        let disturbances = if self.kind == PredictorKind::Basic { Vec::new() } else { self.disturbance_means(&values, &theta, cov.as_ref()) };
+        let condition = sol.iter().map(|s| s.condition).fold(0.0, f64::max);
+        if condition > 1e8 {
+            self.warnings.push(format!("the moment matrix is ill-conditioned (condition number {condition:.2e}): some directions are weakly excited"));
+        }
+        let structural_kept: usize = self.blocks.iter().map(|b| b.cols.len()).sum();
+        let centring = match (self.options.method, self.options.centring) {
+            (Method::Ls, Centring::Experiment) => "intercept per output and experiment (least squares keeps the constants that cos² = 1 − sin² and the disturbance means create)".to_string(),
+            (Method::Ls, _) => "one intercept per output over all experiments".to_string(),
+            (_, Centring::Experiment) => "instruments centred per experiment: they annihilate constant regressors and the means of w and v, which keeps IV consistent when disturbances have a mean (paper A9)".to_string(),
+            (_, Centring::Pooled) => "instruments centred over all experiments pooled: keeps between-experiment information of regressors nearly constant within a run; valid when the disturbance means and constant regressors are the same in every experiment".to_string(),
+            (_, Centring::None) => "instruments not centred: valid only when every disturbance and every constant regressor has zero mean".to_string(),
+        };
+        let instruments = match (self.options.method, self.options.instruments) {
+            (Method::Ls, _) => "none (least squares: the regressors themselves)".to_string(),
+            (_, Instruments::Simulated) => "simulated nominal model, refined with the estimate; rotation from the heading anchored to the previous measurement; measured disturbances as their experiment mean".to_string(),
+            (_, Instruments::Delayed) => "regressors of the measurements one sample earlier".to_string(),
+        };
+        let equations = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
+        Ok(Estimate {
+            method: self.options.method,
+            parameters: self.ir.parameters.iter().map(|p| p.name.clone()).collect(),
+            theta,
+            std_errors,
+            columns,
+            disturbances,
+            sign_patterns,
+            diagnostics: Diagnostics {
+                predictor: format!("{:?}", self.kind).to_lowercase(),
+                experiments: experiments.len(),
+                equations,
+                columns: cols.len(),
+                estimated: estimated.len(),
+                rank: estimated.len().min(structural_kept),
+                condition_number: condition,
+                refinements,
+                converged,
+                instruments,
+                centring,
+                lags: self.options.lags,
+                unexcited: self.unexcited.clone(),
+                aggregates: self.aggregates.clone(),
+            },
+            warnings: self.warnings.clone(),
+        })
+    }
+}
+
+/// Significant digits for messages.
+fn round_sig(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let mag = 10f64.powi(3 - v.abs().log10().ceil() as i32);
+    (v * mag).round() / mag
+}
+
+fn linear_text_f(items: &[(String, Q)]) -> String {
+    let mut out = String::new();
+    for (i, (name, q)) in items.iter().enumerate() {
+        let v = leeway_structure::exact::to_f64(q);
+        if i == 0 {
+            out.push_str(&format!("{v}*{name}"));
+        } else {
+            out.push_str(&format!(" {} {}*{name}", if v < 0.0 { "-" } else { "+" }, v.abs()));
+        }
+    }
+    out
+}
+
+/// Greedy column selection in preference order on the column-equilibrated
+/// matrix (modified Gram–Schmidt, reorthogonalised): a column is kept when
+/// its residual against the kept ones exceeds `tol` relative to its norm.
+pub(crate) struct Selection {
+    pub(crate) kept: Vec<usize>,
+    /// Dropped column with its combination of kept columns (original units).
+    pub(crate) dropped: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Selection {
+    let rows = m.nrows();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut kept = Vec::new();
+    let mut dropped_idx = Vec::new();
+    for &j in order {
+        let col = m.column(j).into_owned();
+        let norm = col.norm();
+        if norm == 0.0 || !norm.is_finite() {
+            dropped_idx.push(j);
+            continue;
+        }
+        let mut v = col / norm;
+        for _ in 0..2 {
+            for q in &basis {
+                let d = q.dot(&v);
+                v.axpy(-d, q, 1.0);
+            }
+        }
+        let r = v.norm();
+        if r > tol.max(1e-300) && basis.len() < rows {
+            basis.push(v / r);
+            kept.push(j);
+        } else {
+            dropped_idx.push(j);
+        }
+    }
+    kept.sort_unstable();
+    let mk = DMatrix::from_fn(rows, kept.len(), |r, k| m[(r, kept[k])]);
+    let dropped = dropped_idx
+        .into_iter()
+        .map(|j| {
+            if kept.is_empty() || m.column(j).norm() == 0.0 {
+                return (j, Vec::new());
+            }
+            let (alpha, _, _) = solve_equilibrated(&mk, &m.column(j).into_owned());
+            let scale = m.column(j).norm();
+            let combo = kept
+                .iter()
+                .zip(alpha.iter())
+                .filter(|(k, a)| (**a * m.column(**k).norm()).abs() > 1e-3 * scale)
+                .map(|(k, a)| (*k, *a))
+                .collect();
+            (j, combo)
+        })
+        .collect();
+    Selection { kept, dropped }
+}
+
+/// Least-squares solution of `M x = g` with column equilibration; returns
+/// `x`, the pseudo-inverse mapping `g ↦ x`, and the condition number.
+pub(crate) fn solve_equilibrated(m: &DMatrix<f64>, g: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>, f64) {
+    let cols = m.ncols();
+    if cols == 0 {
+        return (DVector::zeros(0), DMatrix::zeros(0, m.nrows()), 1.0);
+    }
+    let d: Vec<f64> = (0..cols).map(|j| m.column(j).norm().max(f64::MIN_POSITIVE)).collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let svd = scaled.svd(true, true);
+    let smax = svd.singular_values.max();
+    let smin = svd.singular_values.min();
+    let condition = if smin > 0.0 { smax / smin } else { f64::INFINITY };
+    let pinv = svd.pseudo_inverse(0.0).unwrap_or_else(|_| DMatrix::zeros(cols, m.nrows()));
+    let pinv = DMatrix::from_fn(cols, m.nrows(), |r, c| pinv[(r, c)] / d[r]);
+    let x = &pinv * g;
+    (x, pinv, condition)
+}

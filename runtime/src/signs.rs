@@ -1,0 +1,106 @@
+//! Sign patterns read from data and checked against paper A7: within one
+//! experiment every modulus argument that carries noise or an unmeasured
+//! disturbance must keep its sign.
+
+use crate::data::Source;
+use crate::interp::{ArgPlan, arg_plan};
+use crate::model::planar_rotation;
+use leeway_structure::identify::relevant_signs;
+use leeway_structure::ir::{Ir, PredictorKind, Rotation, SignPattern};
+use serde::Serialize;
+
+/// One argument's sign in one experiment.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ArgSign {
+    /// `water.u`.
+    pub argument: String,
+    /// The majority sign, `+1` or `-1`.
+    pub sign: i8,
+    /// Fraction of samples with the other sign (or zero): 0 when A7 holds.
+    pub minority_fraction: f64,
+    /// True when measured disturbance values entered the argument.
+    pub used_measured_medium: bool,
+}
+
+/// The sign pattern of one experiment.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ExperimentSigns {
+    /// Experiment name.
+    pub experiment: String,
+    /// `±1` for every sign argument of the model (`+1` where irrelevant).
+    pub pattern: SignPattern,
+    /// The arguments the predictor fixes.
+    pub arguments: Vec<ArgSign>,
+    /// Arguments relative to measured media that IV3 evaluates pointwise
+    /// (their signs may change; reported for information).
+    pub pointwise: Vec<ArgSign>,
+}
+
+impl ExperimentSigns {
+    /// The worst minority fraction.
+    pub fn worst(&self) -> Option<&ArgSign> {
+        self.arguments.iter().max_by(|a, b| a.minority_fraction.total_cmp(&b.minority_fraction))
+    }
+}
+
+/// Reads the sign pattern of an experiment. An argument relative to a
+/// measured medium is evaluated with the measured disturbance; one relative
+/// to an unmeasured medium by its state alone (the disturbance is unknown;
+/// A5/A7 require the state to dominate it).
+pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSigns {
+    let args = if kind == PredictorKind::Basic { Vec::new() } else { relevant_signs(ir, kind) };
+    let extra: Vec<usize> =
+        if kind == PredictorKind::Measured { (0..ir.sign_args.len()).filter(|i| ir.sign_args[*i].measured).collect() } else { Vec::new() };
+    let n_fixed = args.len();
+    let plans: Vec<(usize, ArgPlan, bool)> = args
+        .iter()
+        .chain(extra.iter())
+        .map(|&i| {
+            let a = &ir.sign_args[i];
+            (i, arg_plan(ir, &a.arg), a.measured)
+        })
+        .collect();
+    let mut pos = vec![0usize; plans.len()];
+    let mut neg = vec![0usize; plans.len()];
+    let mut n = 0usize;
+    let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    source.visit(&mut |row| {
+        let rot_buf;
+        let rotation: &[f64] = if planar {
+            rot_buf = planar_rotation(row.heading);
+            &rot_buf
+        } else {
+            row.rotation
+        };
+        let sig = crate::model::Signals { states: row.states, inputs: row.inputs, rotation, disturbances: row.disturbances };
+        for (k, (_, plan, measured)) in plans.iter().enumerate() {
+            let v = plan.eval(&sig, *measured);
+            if v > 0.0 {
+                pos[k] += 1;
+            } else {
+                neg[k] += 1;
+            }
+        }
+        n += 1;
+    });
+    let mut pattern = vec![1i8; ir.sign_args.len()];
+    let mut arguments: Vec<ArgSign> = plans
+        .iter()
+        .enumerate()
+        .map(|(k, (i, _, measured))| {
+            let sign = if neg[k] > pos[k] { -1 } else { 1 };
+            if k < n_fixed {
+                pattern[*i] = sign;
+            }
+            let minority = pos[k].min(neg[k]);
+            ArgSign {
+                argument: ir.sign_args[*i].name.clone(),
+                sign,
+                minority_fraction: if n == 0 { 0.0 } else { minority as f64 / n as f64 },
+                used_measured_medium: *measured,
+            }
+        })
+        .collect();
+    let pointwise = arguments.split_off(n_fixed);
+    ExperimentSigns { experiment: source.name().to_string(), pattern, arguments, pointwise }
+}

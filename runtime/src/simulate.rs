@@ -1,0 +1,109 @@
+//! Simulation of a model on an input, and the normalised fit.
+
+use crate::data::{Experiment, Source};
+use crate::model::{Model, Signals, next_heading, planar_rotation};
+use leeway_structure::ir::Rotation;
+
+/// A simulated trajectory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// `states[i][k]`.
+    pub states: Vec<Vec<f64>>,
+    /// Heading per sample (planar rotation), else empty.
+    pub heading: Vec<f64>,
+    /// True when the simulation left the finite numbers and was stopped.
+    pub diverged: bool,
+}
+
+/// Disturbance values during a simulation.
+#[derive(Clone, Copy, Debug)]
+pub enum Disturbances<'a> {
+    /// Every component zero (undisturbed).
+    None,
+    /// Constant values per global component (earth frame for earth disturbances);
+    /// measured components are taken from the data when present.
+    Constant(&'a [f64]),
+}
+
+/// Simulates `model` with parameters `theta` from the data's first sample,
+/// driven by the data's inputs (and, for a measured `R`, its rotation; for
+/// measured disturbances, their recorded values). A planar heading is
+/// integrated from the first measured heading.
+pub fn simulate(model: &dyn Model, theta: &[f64], data: &dyn Source, disturbances: Disturbances) -> Trajectory {
+    let ir = model.ir();
+    let n_out = ir.states.len();
+    let n_comp = ir.components.len();
+    let h = data.step();
+    let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    let mut states = vec![Vec::with_capacity(data.len()); n_out];
+    let mut heading = Vec::new();
+    let mut x = vec![0.0; n_out];
+    let mut next = vec![0.0; n_out];
+    let mut f = vec![0.0; n_out];
+    let mut psi = 0.0;
+    let mut dist = vec![0.0; n_comp];
+    let mut k = 0usize;
+    let mut diverged = false;
+    data.visit(&mut |row| {
+        if k == 0 {
+            x.copy_from_slice(row.states);
+            psi = row.heading;
+        }
+        for (o, s) in states.iter_mut().enumerate() {
+            s.push(x[o]);
+        }
+        if planar {
+            heading.push(psi);
+        }
+        for c in 0..n_comp {
+            dist[c] = if ir.disturbances[ir.components[c].disturbance].measured {
+                row.disturbances[c]
+            } else {
+                match disturbances {
+                    Disturbances::None => 0.0,
+                    Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
+                }
+            };
+        }
+        let rot_buf;
+        let rotation: &[f64] = if planar {
+            rot_buf = planar_rotation(psi);
+            &rot_buf
+        } else {
+            row.rotation
+        };
+        if !diverged {
+            let sig = Signals { states: &x, inputs: row.inputs, rotation, disturbances: &dist };
+            model.step(theta, h, &sig, &mut f, &mut next);
+            psi = next_heading(ir, psi, h, &x);
+            if next.iter().any(|v| !v.is_finite() || v.abs() > 1e12) {
+                diverged = true;
+                next.fill(f64::NAN);
+            }
+            x.copy_from_slice(&next);
+        }
+        k += 1;
+    });
+    Trajectory { states, heading, diverged }
+}
+
+/// The normalised fit `100·(1 − ‖y − ŷ‖ / ‖y − ȳ‖)` (100 is perfect; may be
+/// negative). `NaN` when the measurement is constant or the simulation diverged.
+pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
+    let n = y.len().min(yhat.len());
+    if n == 0 {
+        return f64::NAN;
+    }
+    let mean = y[..n].iter().sum::<f64>() / n as f64;
+    let num: f64 = y[..n].iter().zip(&yhat[..n]).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
+    let den: f64 = y[..n].iter().map(|a| (a - mean) * (a - mean)).sum::<f64>().sqrt();
+    if den == 0.0 || !num.is_finite() {
+        return f64::NAN;
+    }
+    100.0 * (1.0 - num / den)
+}
+
+/// Fit of every output of a simulation against an experiment.
+pub fn fits(data: &Experiment, sim: &Trajectory) -> Vec<f64> {
+    data.states.iter().zip(&sim.states).map(|(y, s)| fit(y, s)).collect()
+}
