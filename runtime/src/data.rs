@@ -72,7 +72,14 @@ impl Experiment {
             states: vec![Vec::new(); ir.states.len()],
             inputs: vec![Vec::new(); ir.inputs.len()],
             heading: Vec::new(),
-            rotation: vec![Vec::new(); if matches!(ir.rotation, Rotation::Measured { .. }) { ir.rotation_vars.len() } else { 0 }],
+            rotation: vec![
+                Vec::new();
+                if matches!(ir.rotation, Rotation::Measured { .. }) {
+                    ir.rotation_vars.len()
+                } else {
+                    0
+                }
+            ],
             disturbances: vec![Vec::new(); ir.components.len()],
         }
     }
@@ -141,7 +148,13 @@ impl Source for Experiment {
                 *d = c.get(k).copied().unwrap_or(0.0);
             }
             let heading = self.heading.get(k).copied().unwrap_or(0.0);
-            f(&Row { states: &states, inputs: &inputs, heading, rotation: &rotation, disturbances: &dist });
+            f(&Row {
+                states: &states,
+                inputs: &inputs,
+                heading,
+                rotation: &rotation,
+                disturbances: &dist,
+            });
         }
     }
 }
@@ -159,14 +172,25 @@ pub struct DataError {
 }
 
 impl DataError {
-    fn new(location: impl Into<String>, message: impl Into<String>, hint: impl Into<String>) -> DataError {
-        DataError { location: location.into(), message: message.into(), hint: hint.into() }
+    fn new(
+        location: impl Into<String>,
+        message: impl Into<String>,
+        hint: impl Into<String>,
+    ) -> DataError {
+        DataError {
+            location: location.into(),
+            message: message.into(),
+            hint: hint.into(),
+        }
     }
 }
 
 /// The data column a model signal is read from (`data { }` mapping or its own name).
 pub fn column_name(ir: &Ir, signal: &str) -> String {
-    ir.data_columns.get(signal).cloned().unwrap_or_else(|| signal.to_string())
+    ir.data_columns
+        .get(signal)
+        .cloned()
+        .unwrap_or_else(|| signal.to_string())
 }
 
 /// The signals a model reads from data, as (signal name, role).
@@ -181,11 +205,26 @@ enum Role {
 
 fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
     let mut v: Vec<(String, Role)> = Vec::new();
-    v.extend(ir.states.iter().enumerate().map(|(i, s)| (s.clone(), Role::State(i))));
-    v.extend(ir.inputs.iter().enumerate().map(|(i, s)| (s.clone(), Role::Input(i))));
+    v.extend(
+        ir.states
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.clone(), Role::State(i))),
+    );
+    v.extend(
+        ir.inputs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.clone(), Role::Input(i))),
+    );
     match &ir.rotation {
         Rotation::Planar { heading, .. } => v.push((heading.clone(), Role::Heading)),
-        Rotation::Measured { .. } => v.extend(ir.rotation_vars.iter().enumerate().map(|(i, s)| (s.clone(), Role::Rotation(i)))),
+        Rotation::Measured { .. } => v.extend(
+            ir.rotation_vars
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s.clone(), Role::Rotation(i))),
+        ),
         Rotation::None => {}
     }
     for (i, c) in ir.components.iter().enumerate() {
@@ -210,16 +249,37 @@ pub struct LoadOptions {
 /// `experiment` column (each experiment's rows contiguous, in file order).
 pub fn load_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Vec<Experiment>, DataError> {
     let file = path.display().to_string();
-    let text = std::fs::read(path).map_err(|e| DataError::new(&file, format!("cannot read the file: {e}"), "check the path passed to --data"))?;
+    let text = std::fs::read(path).map_err(|e| {
+        DataError::new(
+            &file,
+            format!("cannot read the file: {e}"),
+            "check the path passed to --data",
+        )
+    })?;
     parse_csv(&file, &text, ir, options)
 }
 
 /// Parses CSV text (see [`load_csv`]); `file` names it in errors.
-pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Result<Vec<Experiment>, DataError> {
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).flexible(false).trim(csv::Trim::All).from_reader(text);
+pub fn parse_csv(
+    file: &str,
+    text: &[u8],
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<Vec<Experiment>, DataError> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(false)
+        .trim(csv::Trim::All)
+        .from_reader(text);
     let headers: Vec<String> = reader
         .headers()
-        .map_err(|e| DataError::new(format!("{file}:1"), format!("cannot read the header row: {e}"), "the first row names the columns"))?
+        .map_err(|e| {
+            DataError::new(
+                format!("{file}:1"),
+                format!("cannot read the header row: {e}"),
+                "the first row names the columns",
+            )
+        })?
         .iter()
         .map(str::to_string)
         .collect();
@@ -228,7 +288,11 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
         if let Some(j) = headers[..i].iter().position(|g| g == h) {
             return Err(DataError::new(
                 format!("{file}:1:{}", i + 1),
-                format!("column `{h}` appears twice (columns {} and {})", j + 1, i + 1),
+                format!(
+                    "column `{h}` appears twice (columns {} and {})",
+                    j + 1,
+                    i + 1
+                ),
                 "rename one of them; leeway will not guess which is meant",
             ));
         }
@@ -239,7 +303,11 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
         match find(&col) {
             Some(i) => cols.push((role, i, col)),
             None => {
-                let mapped = if col != signal { format!(" (mapped from `{signal}` by the model's data block)") } else { String::new() };
+                let mapped = if col != signal {
+                    format!(" (mapped from `{signal}` by the model's data block)")
+                } else {
+                    String::new()
+                };
                 return Err(DataError::new(
                     format!("{file}:1"),
                     format!("missing column `{col}`{mapped}"),
@@ -253,7 +321,9 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
     }
     let time_col = find(&column_name(ir, "time"));
     let exp_col = find(&column_name(ir, "experiment"));
-    let base_name = Path::new(file).file_stem().map_or(file.to_string(), |s| s.to_string_lossy().to_string());
+    let base_name = Path::new(file)
+        .file_stem()
+        .map_or(file.to_string(), |s| s.to_string_lossy().to_string());
     let mut experiments: Vec<(Experiment, Vec<f64>, usize)> = Vec::new();
     let mut finished: Vec<String> = Vec::new();
     let n_comp = ir.components.len();
@@ -266,16 +336,32 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
         let line = ri + 2;
         let record = record.map_err(|e| {
             let at = e.position().map_or(line as u64, |p| p.line());
-            DataError::new(format!("{file}:{at}"), format!("malformed row: {e}"), "every row needs as many cells as the header")
+            DataError::new(
+                format!("{file}:{at}"),
+                format!("malformed row: {e}"),
+                "every row needs as many cells as the header",
+            )
         })?;
         let cell = |i: usize, name: &str| -> Result<f64, DataError> {
             let raw = record.get(i).unwrap_or("");
             let loc = format!("{file}:{line}:{} ({name})", i + 1);
             match raw.parse::<f64>() {
                 Ok(v) if v.is_finite() => Ok(v),
-                Ok(_) => Err(DataError::new(loc, format!("`{raw}` is not a finite number"), "NaN and infinite values are not accepted; remove or repair the sample, leeway does not interpolate")),
-                Err(_) if raw.is_empty() => Err(DataError::new(loc, "empty cell", "every sample needs every signal; leeway does not fill gaps")),
-                Err(_) => Err(DataError::new(loc, format!("`{raw}` is not a number"), "use a plain decimal such as 0.25 or -1.5e-3")),
+                Ok(_) => Err(DataError::new(
+                    loc,
+                    format!("`{raw}` is not a finite number"),
+                    "NaN and infinite values are not accepted; remove or repair the sample, leeway does not interpolate",
+                )),
+                Err(_) if raw.is_empty() => Err(DataError::new(
+                    loc,
+                    "empty cell",
+                    "every sample needs every signal; leeway does not fill gaps",
+                )),
+                Err(_) => Err(DataError::new(
+                    loc,
+                    format!("`{raw}` is not a number"),
+                    "use a plain decimal such as 0.25 or -1.5e-3",
+                )),
             }
         };
         for (role, i, name) in &cols {
@@ -296,11 +382,18 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
             Some(i) => Some(cell(i, "time")?),
             None => None,
         };
-        let start_new = experiments.last().is_none_or(|(e, _, _)| e.name != exp_name);
+        let start_new = experiments
+            .last()
+            .is_none_or(|(e, _, _)| e.name != exp_name);
         if start_new {
-            if finished.contains(&exp_name) || experiments.iter().any(|(e, _, _)| e.name == exp_name) {
+            if finished.contains(&exp_name)
+                || experiments.iter().any(|(e, _, _)| e.name == exp_name)
+            {
                 return Err(DataError::new(
-                    format!("{file}:{line}:{} (experiment)", exp_col.map_or(0, |i| i + 1)),
+                    format!(
+                        "{file}:{line}:{} (experiment)",
+                        exp_col.map_or(0, |i| i + 1)
+                    ),
                     format!("experiment `{exp_name}` resumes after another experiment started"),
                     "keep the rows of one experiment together, in time order",
                 ));
@@ -311,14 +404,27 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
             experiments.push((Experiment::new(ir, &exp_name, 0.0), Vec::new(), line));
         }
         if let Some((e, times, _)) = experiments.last_mut() {
-            e.push(ir, &Row { states: &states, inputs: &inputs, heading, rotation: &rotation, disturbances: &dist });
+            e.push(
+                ir,
+                &Row {
+                    states: &states,
+                    inputs: &inputs,
+                    heading,
+                    rotation: &rotation,
+                    disturbances: &dist,
+                },
+            );
             if let Some(t) = t {
                 times.push(t);
             }
         }
     }
     if experiments.is_empty() {
-        return Err(DataError::new(format!("{file}:2"), "the file has a header but no samples", "record at least a few hundred samples per experiment"));
+        return Err(DataError::new(
+            format!("{file}:2"),
+            "the file has a header but no samples",
+            "record at least a few hundred samples per experiment",
+        ));
     }
     let mut out = Vec::new();
     for (mut e, times, first_line) in experiments {
@@ -326,7 +432,10 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
         if n < MIN_SAMPLES {
             return Err(DataError::new(
                 format!("{file}:{first_line}"),
-                format!("experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed", e.name),
+                format!(
+                    "experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed",
+                    e.name
+                ),
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
@@ -336,11 +445,21 @@ pub fn parse_csv(file: &str, text: &[u8], ir: &Ir, options: &LoadOptions) -> Res
     Ok(out)
 }
 
-fn sample_time(file: &str, ir: &Ir, times: &[f64], first_line: usize, options: &LoadOptions) -> Result<f64, DataError> {
+fn sample_time(
+    file: &str,
+    ir: &Ir,
+    times: &[f64],
+    first_line: usize,
+    options: &LoadOptions,
+) -> Result<f64, DataError> {
     let declared = ir.step.or(options.step);
     if times.len() < 2 {
         return declared.ok_or_else(|| {
-            DataError::new(file, "no sample time: the model declares no `step` and the data have no `time` column", "declare `step h` in the model or add a `time` column")
+            DataError::new(
+                file,
+                "no sample time: the model declares no `step` and the data have no `time` column",
+                "declare `step h` in the model or add a `time` column",
+            )
         });
     }
     let h = times[1] - times[0];
@@ -372,7 +491,9 @@ fn sample_time(file: &str, ir: &Ir, times: &[f64], first_line: usize, options: &
 /// of `Δψ/h` on `r` (≈ 1 when consistent, ≈ 57.3 when ψ is in degrees and r
 /// in rad/s). `None` without a planar heading or with too little yaw motion.
 pub fn heading_gain(ir: &Ir, e: &Experiment) -> Option<f64> {
-    let Rotation::Planar { integrates, .. } = &ir.rotation else { return None };
+    let Rotation::Planar { integrates, .. } = &ir.rotation else {
+        return None;
+    };
     let r = &e.states[*integrates];
     let (mut sxy, mut sxx) = (0.0, 0.0);
     for k in 1..e.heading.len() {

@@ -21,7 +21,9 @@ use crate::moments::{CrossMoments, LongRun};
 use crate::signs::{ExperimentSigns, detect};
 use leeway_structure::exact::Q;
 use leeway_structure::grammar::EquationKind;
-use leeway_structure::identify::{Analysis, ExperimentStructure, Patterns, linear_text, patterns_text, verdict};
+use leeway_structure::identify::{
+    Analysis, ExperimentStructure, Patterns, linear_text, patterns_text, verdict,
+};
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, Rotation};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -86,6 +88,18 @@ pub enum Instruments {
     Delayed,
 }
 
+/// Where the refined IV's first instrument simulation gets its θ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Initial {
+    /// The nominal model (`nominal { }` or `--nominal`).
+    Nominal,
+    /// An estimate with delayed-measurement instruments (measured disturbances
+    /// at their experiment mean): consistent, and close enough to the craft
+    /// that the first simulation gives strong instruments.
+    Delayed,
+}
+
 /// How instruments are centred.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -105,6 +119,8 @@ pub struct Options {
     pub method: Method,
     /// Instrument kind.
     pub instruments: Instruments,
+    /// The θ the first instrument simulation uses (simulated instruments).
+    pub initial: Initial,
     /// Instrument centring.
     pub centring: Centring,
     /// θ of the nominal model (default: the model's `nominal { }`).
@@ -133,6 +149,7 @@ impl Default for Options {
         Options {
             method: Method::Iv3,
             instruments: Instruments::Simulated,
+            initial: Initial::Delayed,
             centring: Centring::Experiment,
             nominal: None,
             max_refinements: 8,
@@ -236,7 +253,10 @@ pub struct Estimate {
 impl Estimate {
     /// θ by name.
     pub fn get(&self, name: &str) -> Option<f64> {
-        self.parameters.iter().position(|p| p == name).map(|i| self.theta[i])
+        self.parameters
+            .iter()
+            .position(|p| p == name)
+            .map(|i| self.theta[i])
     }
 }
 
@@ -253,7 +273,11 @@ pub struct EstimateError {
 }
 
 fn err(code: &'static str, message: impl Into<String>, hint: impl Into<String>) -> EstimateError {
-    EstimateError { code, message: message.into(), hint: hint.into() }
+    EstimateError {
+        code,
+        message: message.into(),
+        hint: hint.into(),
+    }
 }
 
 /// A measured-medium (`Φ2`) column whose modulus arguments keep their sign
@@ -308,6 +332,9 @@ struct EquationWalker<'a> {
     terms: &'a [crate::interp::TermPlan],
     kind: PredictorKind,
     instruments: Option<Instruments>,
+    /// Delayed instruments take measured disturbances at their experiment
+    /// mean (bootstrap of the refined IV) instead of one sample earlier.
+    delayed_mean: bool,
     n_cols: usize,
 }
 
@@ -330,7 +357,11 @@ impl SimChange {
         (0..self.diff2.len())
             .map(|o| {
                 let var = (self.sum2[o] / n - (self.sum[o] / n).powi(2)).max(0.0) * n;
-                if var > 0.0 { (self.diff2[o] / var).sqrt() } else { 0.0 }
+                if var > 0.0 {
+                    (self.diff2[o] / var).sqrt()
+                } else {
+                    0.0
+                }
             })
             .fold(0.0, f64::max)
     }
@@ -350,7 +381,11 @@ impl EquationWalker<'_> {
         let n_out = ir.states.len();
         let n_in = ir.inputs.len();
         // Measured rotation columns travel with the data; a planar heading does not.
-        let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) { ir.rotation_vars.len() } else { 0 };
+        let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) {
+            ir.rotation_vars.len()
+        } else {
+            0
+        };
         let n_comp = ir.components.len();
         let planar = match &ir.rotation {
             Rotation::Planar { integrates, .. } => Some(*integrates),
@@ -361,8 +396,15 @@ impl EquationWalker<'_> {
         let mut phi = vec![0.0; len];
         let mut z = vec![0.0; len];
         let mut t = vec![0.0; n_out];
-        let (mut y1, mut u1, mut rot1, mut d1, mut psi1) = (vec![0.0; n_out], vec![0.0; n_in], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
-        let (mut y2, mut rot2, mut d2, mut psi2) = (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
+        let (mut y1, mut u1, mut rot1, mut d1, mut psi1) = (
+            vec![0.0; n_out],
+            vec![0.0; n_in],
+            vec![0.0; n_rot],
+            vec![0.0; n_comp],
+            0.0,
+        );
+        let (mut y2, mut rot2, mut d2, mut psi2) =
+            (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
         let mut x_sim = vec![0.0; n_out];
         let mut x_next = vec![0.0; n_out];
         let mut fbuf = vec![0.0; n_out];
@@ -375,7 +417,12 @@ impl EquationWalker<'_> {
         let mut x_ref_next = vec![0.0; n_out];
         let mut psi_ref = 0.0;
         let mut ref_dist = vec![0.0; n_comp];
-        let mut change = SimChange { diff2: vec![0.0; n_out], sum: vec![0.0; n_out], sum2: vec![0.0; n_out], n: 0 };
+        let mut change = SimChange {
+            diff2: vec![0.0; n_out],
+            sum: vec![0.0; n_out],
+            sum2: vec![0.0; n_out],
+            n: 0,
+        };
         e.visit(&mut |row| {
             if diverged {
                 return;
@@ -388,13 +435,24 @@ impl EquationWalker<'_> {
             } else {
                 if k >= 2 {
                     let rot_data = rotation_at(planar.is_some(), psi1, &rot1);
-                    let sig = Signals { states: &y1, inputs: &u1, rotation: rot_data.as_slice(), disturbances: &d1 };
-                    self.model.regressors(self.kind, &sig, &info.signs, &mut phi);
+                    let sig = Signals {
+                        states: &y1,
+                        inputs: &u1,
+                        rotation: rot_data.as_slice(),
+                        disturbances: &d1,
+                    };
+                    self.model
+                        .regressors(self.kind, &sig, &info.signs, &mut phi);
                     match self.instruments {
                         None => z.copy_from_slice(&phi),
                         Some(Instruments::Simulated) => {
                             let rot_z = rotation_at(planar.is_some(), psi_z, &rot2);
-                            let sig = Signals { states: &x_sim, inputs: &u1, rotation: rot_z.as_slice(), disturbances: &info.measured_mean };
+                            let sig = Signals {
+                                states: &x_sim,
+                                inputs: &u1,
+                                rotation: rot_z.as_slice(),
+                                disturbances: &info.measured_mean,
+                            };
                             self.model.regressors(self.kind, &sig, &info.signs, &mut z);
                             for fixed in &info.fixed_sign_columns {
                                 let mut acc = vec![None; n_out];
@@ -416,7 +474,17 @@ impl EquationWalker<'_> {
                         }
                         Some(Instruments::Delayed) => {
                             let rot_z = rotation_at(planar.is_some(), psi2, &rot2);
-                            let sig = Signals { states: &y2, inputs: &u1, rotation: rot_z.as_slice(), disturbances: &d2 };
+                            let dist: &[f64] = if self.delayed_mean {
+                                &info.measured_mean
+                            } else {
+                                &d2
+                            };
+                            let sig = Signals {
+                                states: &y2,
+                                inputs: &u1,
+                                rotation: rot_z.as_slice(),
+                                disturbances: dist,
+                            };
                             self.model.regressors(self.kind, &sig, &info.signs, &mut z);
                         }
                     }
@@ -428,15 +496,28 @@ impl EquationWalker<'_> {
                     }
                     f(&z, &phi, &t);
                 }
-                if self.instruments == Some(Instruments::Simulated) {
+                if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
                     let rot_sim = rotation_at(planar.is_some(), psi_z, &rot1);
                     for c in 0..n_comp {
-                        sim_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured { d1[c] } else { mu[c] };
+                        sim_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured {
+                            d1[c]
+                        } else {
+                            mu[c]
+                        };
                     }
-                    let sig = Signals { states: &x_sim, inputs: &u1, rotation: rot_sim.as_slice(), disturbances: &sim_dist };
+                    let sig = Signals {
+                        states: &x_sim,
+                        inputs: &u1,
+                        rotation: rot_sim.as_slice(),
+                        disturbances: &sim_dist,
+                    };
                     self.model.step(theta_sim, h, &sig, &mut fbuf, &mut x_next);
-                    if x_next.iter().zip(&info.bound).any(|(x, b)| !x.is_finite() || x.abs() > *b) {
+                    if x_next
+                        .iter()
+                        .zip(&info.bound)
+                        .any(|(x, b)| !x.is_finite() || x.abs() > *b)
+                    {
                         diverged = true;
                         return;
                     }
@@ -447,10 +528,21 @@ impl EquationWalker<'_> {
                     if let Some((theta_ref, mu_ref)) = reference {
                         let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
                         for c in 0..n_comp {
-                            ref_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured { d1[c] } else { mu_ref[c] };
+                            ref_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured
+                            {
+                                d1[c]
+                            } else {
+                                mu_ref[c]
+                            };
                         }
-                        let sig = Signals { states: &x_ref, inputs: &u1, rotation: rot_ref.as_slice(), disturbances: &ref_dist };
-                        self.model.step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
+                        let sig = Signals {
+                            states: &x_ref,
+                            inputs: &u1,
+                            rotation: rot_ref.as_slice(),
+                            disturbances: &ref_dist,
+                        };
+                        self.model
+                            .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
                         if let Some(yaw) = planar {
                             psi_ref = psi1 + h * x_ref[yaw];
                         }
@@ -497,7 +589,11 @@ impl RotationValues<'_> {
 }
 
 fn rotation_at(planar: bool, psi: f64, measured: &[f64]) -> RotationValues<'_> {
-    if planar { RotationValues::Planar(planar_rotation(psi)) } else { RotationValues::Measured(measured) }
+    if planar {
+        RotationValues::Planar(planar_rotation(psi))
+    } else {
+        RotationValues::Measured(measured)
+    }
 }
 
 /// The estimator for one model, method and set of experiments.
@@ -524,10 +620,18 @@ struct Estimator<'a> {
 }
 
 /// Estimates θ (and nuisance parameters) of `model` from the experiments.
-pub fn estimate(model: &dyn Model, experiments: &[&dyn Source], options: &Options) -> Result<Estimate, EstimateError> {
+pub fn estimate(
+    model: &dyn Model,
+    experiments: &[&dyn Source],
+    options: &Options,
+) -> Result<Estimate, EstimateError> {
     let ir = model.ir();
     if experiments.is_empty() {
-        return Err(err("no-data", "no experiment given", "pass at least one --data file"));
+        return Err(err(
+            "no-data",
+            "no experiment given",
+            "pass at least one --data file",
+        ));
     }
     if options.method == Method::Ls && options.centring == Centring::None {
         return Err(err(
@@ -541,7 +645,11 @@ pub fn estimate(model: &dyn Model, experiments: &[&dyn Source], options: &Option
         Some(v) => {
             return Err(err(
                 "invalid-nominal",
-                format!("the nominal model has {} values, the model {} parameters", v.len(), ir.parameters.len()),
+                format!(
+                    "the nominal model has {} values, the model {} parameters",
+                    v.len(),
+                    ir.parameters.len()
+                ),
                 "give one value per parameter",
             ));
         }
@@ -556,7 +664,12 @@ pub fn estimate(model: &dyn Model, experiments: &[&dyn Source], options: &Option
         if e.len() < crate::data::MIN_SAMPLES {
             return Err(err(
                 "too-few-samples",
-                format!("experiment `{}` has {} samples; at least {} are needed", e.name(), e.len(), crate::data::MIN_SAMPLES),
+                format!(
+                    "experiment `{}` has {} samples; at least {} are needed",
+                    e.name(),
+                    e.len(),
+                    crate::data::MIN_SAMPLES
+                ),
                 "record a longer experiment",
             ));
         }
@@ -593,11 +706,24 @@ pub fn estimate(model: &dyn Model, experiments: &[&dyn Source], options: &Option
             ));
         }
     }
-    let mut est = Estimator::new(model, options, kind, nominal, infos, &sign_patterns, warnings)?;
+    let mut est = Estimator::new(
+        model,
+        options,
+        kind,
+        nominal,
+        infos,
+        &sign_patterns,
+        warnings,
+    )?;
     est.run(experiments, sign_patterns)
 }
 
-fn experiment_info(ir: &Ir, e: &dyn Source, s: &ExperimentSigns, options: &Options) -> ExperimentInfo {
+fn experiment_info(
+    ir: &Ir,
+    e: &dyn Source,
+    s: &ExperimentSigns,
+    options: &Options,
+) -> ExperimentInfo {
     let n_comp = ir.components.len();
     let n_out = ir.states.len();
     let mut sum = vec![0.0; n_comp];
@@ -623,18 +749,30 @@ fn experiment_info(ir: &Ir, e: &dyn Source, s: &ExperimentSigns, options: &Optio
     });
     let nf = n.max(1) as f64;
     let measured_mean: Vec<f64> = (0..n_comp)
-        .map(|c| if ir.disturbances[ir.components[c].disturbance].measured { sum[c] / nf } else { 0.0 })
+        .map(|c| {
+            if ir.disturbances[ir.components[c].disturbance].measured {
+                sum[c] / nf
+            } else {
+                0.0
+            }
+        })
         .collect();
     let (spread, frozen) = match &ir.rotation {
         Rotation::Planar { .. } => {
             let r = ((sc / nf).powi(2) + (ss / nf).powi(2)).sqrt().min(1.0);
             let spread = (-2.0 * r.max(1e-300).ln()).sqrt();
-            let frozen = (spread < options.heading_spread).then(|| vec![sc / nf / r.max(1e-300), ss / nf / r.max(1e-300)]);
+            let frozen = (spread < options.heading_spread)
+                .then(|| vec![sc / nf / r.max(1e-300), ss / nf / r.max(1e-300)]);
             (spread, frozen)
         }
         Rotation::Measured { .. } => {
-            let spread = (0..n_rot).map(|i| (rot_sq[i] / nf - (rot_sum[i] / nf).powi(2)).max(0.0).sqrt()).fold(0.0, f64::max);
-            (spread, (spread < options.heading_spread).then(|| rot_sum.iter().map(|v| v / nf).collect()))
+            let spread = (0..n_rot)
+                .map(|i| (rot_sq[i] / nf - (rot_sum[i] / nf).powi(2)).max(0.0).sqrt())
+                .fold(0.0, f64::max);
+            (
+                spread,
+                (spread < options.heading_spread).then(|| rot_sum.iter().map(|v| v / nf).collect()),
+            )
         }
         Rotation::None => (f64::INFINITY, None),
     };
@@ -643,7 +781,10 @@ fn experiment_info(ir: &Ir, e: &dyn Source, s: &ExperimentSigns, options: &Optio
     if options.method.predictor() == PredictorKind::Measured {
         let sign_of = |arg: &leeway_structure::ir::Arg| -> Option<f64> {
             let i = ir.sign_args.iter().position(|a| a.arg == *arg)?;
-            let found = s.pointwise.iter().find(|a| a.argument == ir.sign_args[i].name)?;
+            let found = s
+                .pointwise
+                .iter()
+                .find(|a| a.argument == ir.sign_args[i].name)?;
             (found.minority_fraction == 0.0).then_some(f64::from(found.sign))
         };
         for (c, col) in ir.predictors.measured.iter().enumerate() {
@@ -653,8 +794,17 @@ fn experiment_info(ir: &Ir, e: &dyn Source, s: &ExperimentSigns, options: &Optio
                 match e {
                     leeway_structure::ir::Entry::Term { term, output, .. } => {
                         let t = &ir.terms[*term];
-                        let signs: Option<Vec<f64>> =
-                            t.factors.iter().map(|f| if f.modulus { sign_of(&f.arg) } else { Some(1.0) }).collect();
+                        let signs: Option<Vec<f64>> = t
+                            .factors
+                            .iter()
+                            .map(|f| {
+                                if f.modulus {
+                                    sign_of(&f.arg)
+                                } else {
+                                    Some(1.0)
+                                }
+                            })
+                            .collect();
                         match signs {
                             Some(v) => terms.push((*term, *output, v)),
                             None => ok = false,
@@ -697,7 +847,11 @@ impl<'a> Estimator<'a> {
             .zip(&infos)
             .map(|(s, info)| ExperimentStructure {
                 pattern: s.pattern.clone(),
-                frozen_rotation: info.frozen.as_ref().map(|v| v.iter().map(|x| Q::from_float(*x).unwrap_or_default()).collect()),
+                frozen_rotation: info.frozen.as_ref().map(|v| {
+                    v.iter()
+                        .map(|x| Q::from_float(*x).unwrap_or_default())
+                        .collect()
+                }),
             })
             .collect();
         let red = analysis.reduce(Patterns::Experiments(&exps));
@@ -734,7 +888,10 @@ impl<'a> Estimator<'a> {
                 ));
             }
             for a in &v.aggregates {
-                aggregates.push(format!("{} estimates {} (absorbed parameters held at their nominal values)", ir.parameters[a.parameter].name, a.estimates));
+                aggregates.push(format!(
+                    "{} estimates {} (absorbed parameters held at their nominal values)",
+                    ir.parameters[a.parameter].name, a.estimates
+                ));
             }
             for (c, col) in columns.iter().enumerate() {
                 if let ColumnKind::Theta { parameter } = col.kind
@@ -755,7 +912,10 @@ impl<'a> Estimator<'a> {
         for d in 0..n_cols {
             if !red.pivot[d] {
                 for (k, q) in &red.combination[d] {
-                    meaning.entry(*k).or_default().push((d, leeway_structure::exact::to_f64(q)));
+                    meaning
+                        .entry(*k)
+                        .or_default()
+                        .push((d, leeway_structure::exact::to_f64(q)));
                 }
             }
         }
@@ -781,10 +941,16 @@ impl<'a> Estimator<'a> {
         let mut block_of_output = vec![0; n_out];
         for o in 0..n_out {
             let root = find(&mut parent, o);
-            let b = match blocks.iter().position(|b| find(&mut parent, b.outputs[0]) == root) {
+            let b = match blocks
+                .iter()
+                .position(|b| find(&mut parent, b.outputs[0]) == root)
+            {
                 Some(b) => b,
                 None => {
-                    blocks.push(Block { outputs: Vec::new(), cols: Vec::new() });
+                    blocks.push(Block {
+                        outputs: Vec::new(),
+                        cols: Vec::new(),
+                    });
                     blocks.len() - 1
                 }
             };
@@ -823,8 +989,23 @@ impl<'a> Estimator<'a> {
     }
 
     fn walker(&self) -> EquationWalker<'_> {
-        let instruments = if self.options.method == Method::Ls { None } else { Some(self.options.instruments) };
-        EquationWalker { model: self.model, ir: self.ir, terms: &self.terms, kind: self.kind, instruments, n_cols: self.n_cols }
+        self.walker_with(if self.options.method == Method::Ls {
+            None
+        } else {
+            Some(self.options.instruments)
+        })
+    }
+
+    fn walker_with(&self, instruments: Option<Instruments>) -> EquationWalker<'_> {
+        EquationWalker {
+            model: self.model,
+            ir: self.ir,
+            terms: &self.terms,
+            kind: self.kind,
+            instruments,
+            delayed_mean: self.options.instruments == Instruments::Simulated,
+            n_cols: self.n_cols,
+        }
     }
 
     /// One accumulation pass: `[experiment][output]` moment sums over the block's columns.
@@ -835,7 +1016,12 @@ impl<'a> Estimator<'a> {
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
     ) -> Result<(Vec<Vec<CrossMoments>>, f64), Diverged> {
-        let walker = self.walker();
+        // An empty θ asks for the delayed bootstrap pass of the refined IV.
+        let walker = if theta_sim.is_empty() {
+            self.walker_with(Some(Instruments::Delayed))
+        } else {
+            self.walker()
+        };
         let n = self.n_cols;
         let mut all = Vec::with_capacity(experiments.len());
         let mut change = 0.0f64;
@@ -846,7 +1032,11 @@ impl<'a> Estimator<'a> {
                     CrossMoments::new(m, m)
                 })
                 .collect();
-            let mut zb: Vec<Vec<f64>> = self.blocks.iter().map(|b| vec![0.0; b.cols.len()]).collect();
+            let mut zb: Vec<Vec<f64>> = self
+                .blocks
+                .iter()
+                .map(|b| vec![0.0; b.cols.len()])
+                .collect();
             let mut pb: Vec<Vec<f64>> = zb.clone();
             let c = walker.walk(*e, info, theta_sim, mu, reference, &mut |z, phi, t| {
                 for (o, a) in acc.iter_mut().enumerate() {
@@ -871,7 +1061,12 @@ impl<'a> Estimator<'a> {
     }
 
     /// Moment equations `(H_i, g_i)` of experiment `i`, block `b` (sums, not means).
-    fn equations(&self, moments: &[Vec<CrossMoments>], i: usize, b: usize) -> (DMatrix<f64>, DVector<f64>) {
+    fn equations(
+        &self,
+        moments: &[Vec<CrossMoments>],
+        i: usize,
+        b: usize,
+    ) -> (DMatrix<f64>, DVector<f64>) {
         let block = &self.blocks[b];
         let m = block.cols.len();
         let mut h = DMatrix::zeros(m, m);
@@ -883,7 +1078,10 @@ impl<'a> Estimator<'a> {
                 Centring::None => acc.about(&DVector::zeros(m)),
                 Centring::Pooled => {
                     let total: usize = moments.iter().map(|e| e[o].n).sum();
-                    let pooled = moments.iter().fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64) / total.max(1) as f64;
+                    let pooled = moments
+                        .iter()
+                        .fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64)
+                        / total.max(1) as f64;
                     acc.about(&pooled)
                 }
             };
@@ -894,7 +1092,11 @@ impl<'a> Estimator<'a> {
     }
 
     /// Solves every block; collects numeric rank findings.
-    fn solve(&mut self, moments: &[Vec<CrossMoments>], record: bool) -> Result<Vec<BlockSolution>, EstimateError> {
+    fn solve(
+        &mut self,
+        moments: &[Vec<CrossMoments>],
+        record: bool,
+    ) -> Result<Vec<BlockSolution>, EstimateError> {
         let mut out = Vec::with_capacity(self.blocks.len());
         let mut errors = Vec::new();
         for b in 0..self.blocks.len() {
@@ -902,28 +1104,29 @@ impl<'a> Estimator<'a> {
             let m = cols.len();
             let e_count = moments.len();
             // The stacked system M ϑ = g (IV), or pooled normal equations (LS).
-            let (mat, rhs, scale_rows): (DMatrix<f64>, DVector<f64>, Vec<f64>) = if self.options.method == Method::Ls {
-                let mut a = DMatrix::zeros(m, m);
-                let mut g = DVector::zeros(m);
-                for i in 0..e_count {
-                    let (h, gi) = self.equations(moments, i, b);
-                    a += h;
-                    g += gi;
-                }
-                (a, g, vec![1.0; e_count])
-            } else {
-                let mut a = DMatrix::zeros(m * e_count, m);
-                let mut g = DVector::zeros(m * e_count);
-                let mut scales = Vec::new();
-                for i in 0..e_count {
-                    let (h, gi) = self.equations(moments, i, b);
-                    let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
-                    a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
-                    g.rows_mut(i * m, m).copy_from(&(gi / n));
-                    scales.push(1.0 / n);
-                }
-                (a, g, scales)
-            };
+            let (mat, rhs, scale_rows): (DMatrix<f64>, DVector<f64>, Vec<f64>) =
+                if self.options.method == Method::Ls {
+                    let mut a = DMatrix::zeros(m, m);
+                    let mut g = DVector::zeros(m);
+                    for i in 0..e_count {
+                        let (h, gi) = self.equations(moments, i, b);
+                        a += h;
+                        g += gi;
+                    }
+                    (a, g, vec![1.0; e_count])
+                } else {
+                    let mut a = DMatrix::zeros(m * e_count, m);
+                    let mut g = DVector::zeros(m * e_count);
+                    let mut scales = Vec::new();
+                    for i in 0..e_count {
+                        let (h, gi) = self.equations(moments, i, b);
+                        let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
+                        a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
+                        g.rows_mut(i * m, m).copy_from(&(gi / n));
+                        scales.push(1.0 / n);
+                    }
+                    (a, g, scales)
+                };
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by_key(|j| self.preference[cols[*j]]);
             let sel = select_columns(&mat, &order, self.options.rank_tolerance);
@@ -932,13 +1135,23 @@ impl<'a> Estimator<'a> {
                 let c = cols[*j];
                 let col = &self.ir.predictors.get(self.kind)[c];
                 let text = if combo.is_empty() {
-                    format!("{} is not excited by these data (its moments vanish)", col.name)
+                    format!(
+                        "{} is not excited by these data (its moments vanish)",
+                        col.name
+                    )
                 } else {
                     let mut items: Vec<(String, Q)> = vec![];
                     for (k, a) in combo {
-                        items.push((self.ir.predictors.get(self.kind)[cols[*k]].name.clone(), Q::from_float(round_sig(*a)).unwrap_or_default()));
+                        items.push((
+                            self.ir.predictors.get(self.kind)[cols[*k]].name.clone(),
+                            Q::from_float(round_sig(*a)).unwrap_or_default(),
+                        ));
                     }
-                    format!("{} is not separately excited: its column equals {}", col.name, linear_text_f(&items))
+                    format!(
+                        "{} is not separately excited: its column equals {}",
+                        col.name,
+                        linear_text_f(&items)
+                    )
                 };
                 match col.kind {
                     ColumnKind::Theta { parameter } => {
@@ -965,7 +1178,9 @@ impl<'a> Estimator<'a> {
                             held.push((c, value));
                         } else if self.options.aggregate {
                             if record {
-                                self.warnings.push(format!("{text}; held at its nominal value {value} (--aggregate)"));
+                                self.warnings.push(format!(
+                                    "{text}; held at its nominal value {value} (--aggregate)"
+                                ));
                                 self.unexcited.push(text.clone());
                             }
                             held.push((c, value));
@@ -999,16 +1214,35 @@ impl<'a> Estimator<'a> {
                 let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
                 vec![sub; e_count]
             } else {
-                (0..e_count).map(|i| pinv.columns(i * m, m) * scale_rows[i]).collect()
+                (0..e_count)
+                    .map(|i| pinv.columns(i * m, m) * scale_rows[i])
+                    .collect()
             };
-            let rows = if self.options.method == Method::Ls { kept.clone() } else { cols.clone() };
-            out.push(BlockSolution { kept, held, values: values.iter().copied().collect(), b: b_list, rows, condition });
+            let rows = if self.options.method == Method::Ls {
+                kept.clone()
+            } else {
+                cols.clone()
+            };
+            out.push(BlockSolution {
+                kept,
+                held,
+                values: values.iter().copied().collect(),
+                b: b_list,
+                rows,
+                condition,
+            });
         }
         if !errors.is_empty() {
-            let remark2 = self.infos.iter().any(|i| i.spread < 4.0 * self.options.heading_spread);
+            let remark2 = self
+                .infos
+                .iter()
+                .any(|i| i.spread < 4.0 * self.options.heading_spread);
             return Err(err(
                 "rank-deficient",
-                format!("the data did not excite every parameter: {}", errors.join("; ")),
+                format!(
+                    "the data did not excite every parameter: {}",
+                    errors.join("; ")
+                ),
                 if remark2 {
                     "the heading barely varied, which leaves the disturbance terms collinear with the others (paper Remark 2): turn the craft during the experiment; or estimate the identifiable combinations with --aggregate".to_string()
                 } else {
@@ -1043,7 +1277,12 @@ impl<'a> Estimator<'a> {
 
     /// Unmeasured disturbance means from ρ̂ and θ̂ (paper Corollary 1), with
     /// standard errors by the delta method when a covariance is given.
-    fn disturbance_means(&self, values: &BTreeMap<usize, f64>, theta: &[f64], cov: Option<&BTreeMap<(usize, usize), f64>>) -> Vec<DisturbanceMoment> {
+    fn disturbance_means(
+        &self,
+        values: &BTreeMap<usize, f64>,
+        theta: &[f64],
+        cov: Option<&BTreeMap<(usize, usize), f64>>,
+    ) -> Vec<DisturbanceMoment> {
         let cols = self.ir.predictors.get(self.kind);
         let unmeasured: Vec<usize> = (0..self.ir.components.len())
             .filter(|c| {
@@ -1064,7 +1303,10 @@ impl<'a> Estimator<'a> {
             let mut ok = true;
             for (d, q) in items {
                 match cols[*d].kind {
-                    ColumnKind::Rho { component, parameter } => terms.push((component, parameter, *q)),
+                    ColumnKind::Rho {
+                        component,
+                        parameter,
+                    } => terms.push((component, parameter, *q)),
                     _ => ok = false,
                 }
             }
@@ -1077,9 +1319,17 @@ impl<'a> Estimator<'a> {
         }
         let solve_mu = |vals: &BTreeMap<usize, f64>, th: &[f64]| -> Option<Vec<f64>> {
             let a = DMatrix::from_fn(eqs.len(), unmeasured.len(), |r, j| {
-                eqs[r].1.iter().filter(|(c, _, _)| *c == unmeasured[j]).map(|(_, p, q)| q * th[*p]).sum()
+                eqs[r]
+                    .1
+                    .iter()
+                    .filter(|(c, _, _)| *c == unmeasured[j])
+                    .map(|(_, p, q)| q * th[*p])
+                    .sum()
             });
-            let y = DVector::from_iterator(eqs.len(), eqs.iter().map(|(k, _)| vals.get(k).copied().unwrap_or(0.0)));
+            let y = DVector::from_iterator(
+                eqs.len(),
+                eqs.iter().map(|(k, _)| vals.get(k).copied().unwrap_or(0.0)),
+            );
             let svd = a.svd(true, true);
             let smax = svd.singular_values.max();
             if svd.singular_values.min() <= 1e-10 * smax || smax == 0.0 {
@@ -1087,7 +1337,9 @@ impl<'a> Estimator<'a> {
             }
             svd.solve(&y, 0.0).ok().map(|v| v.iter().copied().collect())
         };
-        let Some(mu) = solve_mu(values, theta) else { return Vec::new() };
+        let Some(mu) = solve_mu(values, theta) else {
+            return Vec::new();
+        };
         // Delta method over the estimated θ and ρ columns involved.
         let mut se = vec![None; unmeasured.len()];
         if let Some(cov) = cov {
@@ -1123,7 +1375,9 @@ impl<'a> Estimator<'a> {
                 }
             }
             if ok {
-                let cm = DMatrix::from_fn(vars.len(), vars.len(), |a, b| cov.get(&(vars[a], vars[b])).copied().unwrap_or(0.0));
+                let cm = DMatrix::from_fn(vars.len(), vars.len(), |a, b| {
+                    cov.get(&(vars[a], vars[b])).copied().unwrap_or(0.0)
+                });
                 let cmu = &jac * cm * jac.transpose();
                 for j in 0..unmeasured.len() {
                     se[j] = Some(cmu[(j, j)].max(0.0).sqrt());
@@ -1145,14 +1399,21 @@ impl<'a> Estimator<'a> {
             .collect()
     }
 
-    fn run(&mut self, experiments: &[&dyn Source], sign_patterns: Vec<ExperimentSigns>) -> Result<Estimate, EstimateError> {
+    fn run(
+        &mut self,
+        experiments: &[&dyn Source],
+        sign_patterns: Vec<ExperimentSigns>,
+    ) -> Result<Estimate, EstimateError> {
         let n_comp = self.ir.components.len();
         let mut theta_sim = self.nominal.clone();
         let mut mu = vec![0.0; n_comp];
-        let refine = self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
+        let refine =
+            self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
         let mut refinements = 0usize;
         let mut converged = !refine;
-        let mut moments = match self.accumulate(experiments, &theta_sim, &mu, None) {
+        let bootstrap = refine && self.options.initial == Initial::Delayed;
+        let first: &[f64] = if bootstrap { &[] } else { &theta_sim };
+        let mut moments = match self.accumulate(experiments, first, &mu, None) {
             Ok((m, _)) => m,
             Err(Diverged) => {
                 return Err(err(
@@ -1164,6 +1425,11 @@ impl<'a> Estimator<'a> {
         };
         let mut sol = self.solve(&moments, !refine)?;
         let mut theta = self.theta_of(&sol);
+        if bootstrap {
+            // The first simulation starts from the bootstrap estimate: compare
+            // it with the nominal simulation only to measure the change.
+            theta_sim = self.nominal.clone();
+        }
         while refine && refinements < self.options.max_refinements {
             // Re-simulate with the estimate (and the disturbance means it implies),
             // damping towards the previous simulation if it diverges. The new
@@ -1174,9 +1440,19 @@ impl<'a> Estimator<'a> {
             let mut step = 1.0;
             let mut accepted = None;
             for _ in 0..6 {
-                let trial: Vec<f64> = theta_sim.iter().zip(&theta).map(|(a, b)| a + step * (b - a)).collect();
-                let trial_mu: Vec<f64> = mu.iter().zip(&new_mu).map(|(a, b)| a + step * (b - a)).collect();
-                if let Ok((m, change)) = self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu))) {
+                let trial: Vec<f64> = theta_sim
+                    .iter()
+                    .zip(&theta)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                let trial_mu: Vec<f64> = mu
+                    .iter()
+                    .zip(&new_mu)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                if let Ok((m, change)) =
+                    self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu)))
+                {
                     accepted = Some((trial, trial_mu, m, change));
                     break;
                 }
@@ -1187,7 +1463,10 @@ impl<'a> Estimator<'a> {
                 break;
             };
             if step < 1.0 {
-                self.warnings.push(format!("refinement {} damped by {step} (the simulation with the full step diverged)", refinements + 1));
+                self.warnings.push(format!(
+                    "refinement {} damped by {step} (the simulation with the full step diverged)",
+                    refinements + 1
+                ));
             }
             theta_sim = trial;
             mu = trial_mu;
@@ -1196,7 +1475,10 @@ impl<'a> Estimator<'a> {
             sol = self.solve(&moments, false)?;
             theta = self.theta_of(&sol);
             if std::env::var("LEEWAY_DEBUG").is_ok() {
-                eprintln!("refinement {refinements}: change {change:.3e} theta {:?}", theta.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>());
+                eprintln!(
+                    "refinement {refinements}: change {change:.3e} theta {:?}",
+                    theta.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>()
+                );
             }
             if change < self.options.tolerance {
                 converged = true;
@@ -1215,14 +1497,32 @@ impl<'a> Estimator<'a> {
             }
         }
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
-        let cov = if self.options.covariance { self.covariance(experiments, &moments, &sol, &theta_sim, &mu) } else { None };
-        self.finish(sign_patterns, &sol, values, theta, cov, refinements, converged, experiments)
+        let cov = if self.options.covariance {
+            self.covariance(experiments, &moments, &sol, &theta_sim, &mu)
+        } else {
+            None
+        };
+        self.finish(
+            sign_patterns,
+            &sol,
+            values,
+            theta,
+            cov,
+            refinements,
+            converged,
+            experiments,
+        )
     }
 
     fn mean_vector(&self, values: &BTreeMap<usize, f64>, theta: &[f64]) -> Vec<f64> {
         let mut mu = vec![0.0; self.ir.components.len()];
         for m in self.disturbance_means(values, theta, None) {
-            if let Some(c) = self.ir.components.iter().position(|c| c.name == m.component) {
+            if let Some(c) = self
+                .ir
+                .components
+                .iter()
+                .position(|c| c.name == m.component)
+            {
                 mu[c] = m.mean;
             }
         }
@@ -1253,10 +1553,16 @@ impl<'a> Estimator<'a> {
             .map(|o| {
                 let m = self.blocks[self.block_of_output[o]].cols.len();
                 let count: usize = moments.iter().map(|e| e[o].n).sum();
-                moments.iter().fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64) / count.max(1) as f64
+                moments
+                    .iter()
+                    .fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64)
+                    / count.max(1) as f64
             })
             .collect();
-        let mut cov = DMatrix::zeros(sol.iter().map(|s| s.kept.len()).sum(), sol.iter().map(|s| s.kept.len()).sum());
+        let mut cov = DMatrix::zeros(
+            sol.iter().map(|s| s.kept.len()).sum(),
+            sol.iter().map(|s| s.kept.len()).sum(),
+        );
         for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
             // Centres and mean residuals per output.
             let centres: Vec<DVector<f64>> = (0..self.ir.states.len())
@@ -1270,7 +1576,12 @@ impl<'a> Estimator<'a> {
                 .map(|o| {
                     let b = &self.blocks[self.block_of_output[o]];
                     let mp = moments[i][o].mean_phi();
-                    moments[i][o].mean_t() - b.cols.iter().enumerate().map(|(j, c)| mp[j] * values.get(c).copied().unwrap_or(0.0)).sum::<f64>()
+                    moments[i][o].mean_t()
+                        - b.cols
+                            .iter()
+                            .enumerate()
+                            .map(|(j, c)| mp[j] * values.get(c).copied().unwrap_or(0.0))
+                            .sum::<f64>()
                 })
                 .collect();
             let mut lr = LongRun::new(total, self.options.lags);
@@ -1292,7 +1603,11 @@ impl<'a> Estimator<'a> {
                     let s = &sol[bi];
                     for (r, c) in s.rows.iter().enumerate() {
                         let j = block.cols.iter().position(|x| x == c).unwrap_or(0);
-                        let zc = if self.options.method == Method::Ls { phi[o * n + c] } else { z[o * n + c] };
+                        let zc = if self.options.method == Method::Ls {
+                            phi[o * n + c]
+                        } else {
+                            z[o * n + c]
+                        };
                         zeta[offsets[bi] + r] += (zc - centres[o][j]) * res;
                     }
                 }
@@ -1307,7 +1622,9 @@ impl<'a> Estimator<'a> {
             let mut b_all = DMatrix::zeros(nk, total);
             let mut row = 0;
             for (bi, s) in sol.iter().enumerate() {
-                b_all.view_mut((row, offsets[bi]), (s.kept.len(), s.rows.len())).copy_from(&s.b[i]);
+                b_all
+                    .view_mut((row, offsets[bi]), (s.kept.len(), s.rows.len()))
+                    .copy_from(&s.b[i]);
                 row += s.kept.len();
             }
             cov += &b_all * g * b_all.transpose();
@@ -1335,11 +1652,19 @@ impl<'a> Estimator<'a> {
         experiments: &[&dyn Source],
     ) -> Result<Estimate, EstimateError> {
         let cols = self.ir.predictors.get(self.kind);
-        let se = |c: usize| cov.as_ref().and_then(|m| m.get(&(c, c))).map(|v| v.max(0.0).sqrt());
+        let se = |c: usize| {
+            cov.as_ref()
+                .and_then(|m| m.get(&(c, c)))
+                .map(|v| v.max(0.0).sqrt())
+        };
         let estimated: Vec<usize> = sol.iter().flat_map(|s| s.kept.iter().copied()).collect();
-        let numeric_held: BTreeMap<usize, f64> = sol.iter().flat_map(|s| s.held.iter().copied()).collect();
+        let numeric_held: BTreeMap<usize, f64> =
+            sol.iter().flat_map(|s| s.held.iter().copied()).collect();
         let structural_held: BTreeMap<usize, f64> = self.held.iter().copied().collect();
-        let names = leeway_structure::identify::Names { ir: self.ir, columns: cols };
+        let names = leeway_structure::identify::Names {
+            ir: self.ir,
+            columns: cols,
+        };
         let columns: Vec<ColumnEstimate> = cols
             .iter()
             .enumerate()
@@ -1350,17 +1675,33 @@ impl<'a> Estimator<'a> {
                     ColumnKind::Lambda { .. } => "lambda",
                 };
                 let meaning = self.meaning.get(&c).map(|items| {
-                    let q: Vec<(String, Q)> = items.iter().map(|(d, v)| (names.moment(*d), Q::from_float(*v).unwrap_or_default())).collect();
+                    let q: Vec<(String, Q)> = items
+                        .iter()
+                        .map(|(d, v)| (names.moment(*d), Q::from_float(*v).unwrap_or_default()))
+                        .collect();
                     linear_text(&q)
                 });
                 let (value, status) = if estimated.contains(&c) {
                     (values.get(&c).copied(), "estimated".to_string())
                 } else if let Some(v) = structural_held.get(&c) {
-                    (Some(*v), "held at nominal (not identifiable; aggregated)".to_string())
+                    (
+                        Some(*v),
+                        "held at nominal (not identifiable; aggregated)".to_string(),
+                    )
                 } else if let Some(v) = numeric_held.get(&c) {
-                    (Some(*v), if col.kind.is_nuisance() { "held at 0 (not excited)".to_string() } else { "held at nominal (not excited)".to_string() })
+                    (
+                        Some(*v),
+                        if col.kind.is_nuisance() {
+                            "held at 0 (not excited)".to_string()
+                        } else {
+                            "held at nominal (not excited)".to_string()
+                        },
+                    )
                 } else {
-                    (None, "dropped (structurally dependent: absorbed by kept columns)".to_string())
+                    (
+                        None,
+                        "dropped (structurally dependent: absorbed by kept columns)".to_string(),
+                    )
                 };
                 ColumnEstimate {
                     name: col.name.clone(),
@@ -1372,10 +1713,21 @@ impl<'a> Estimator<'a> {
                 }
             })
             .collect();
-        let theta_cols: Vec<Option<usize>> =
-            (0..self.ir.parameters.len()).map(|p| cols.iter().position(|c| c.kind == ColumnKind::Theta { parameter: p })).collect();
-        let std_errors = theta_cols.iter().map(|c| c.filter(|c| estimated.contains(c)).and_then(se)).collect();
-        let disturbances = if self.kind == PredictorKind::Basic { Vec::new() } else { self.disturbance_means(&values, &theta, cov.as_ref()) };
+        let theta_cols: Vec<Option<usize>> = (0..self.ir.parameters.len())
+            .map(|p| {
+                cols.iter()
+                    .position(|c| c.kind == ColumnKind::Theta { parameter: p })
+            })
+            .collect();
+        let std_errors = theta_cols
+            .iter()
+            .map(|c| c.filter(|c| estimated.contains(c)).and_then(se))
+            .collect();
+        let disturbances = if self.kind == PredictorKind::Basic {
+            Vec::new()
+        } else {
+            self.disturbance_means(&values, &theta, cov.as_ref())
+        };
         let condition = sol.iter().map(|s| s.condition).fold(0.0, f64::max);
         if condition > 1e8 {
             self.warnings.push(format!("the moment matrix is ill-conditioned (condition number {condition:.2e}): some directions are weakly excited"));
@@ -1390,8 +1742,17 @@ impl<'a> Estimator<'a> {
         };
         let instruments = match (self.options.method, self.options.instruments) {
             (Method::Ls, _) => "none (least squares: the regressors themselves)".to_string(),
-            (_, Instruments::Simulated) => "simulated nominal model, refined with the estimate; rotation from the heading anchored to the previous measurement; measured disturbances as their experiment mean".to_string(),
-            (_, Instruments::Delayed) => "regressors of the measurements one sample earlier".to_string(),
+            (_, Instruments::Simulated) => format!(
+                "simulated model ({}), refined with the estimate; rotation from the heading anchored to the previous measurement; measured disturbances as their experiment mean",
+                match self.options.initial {
+                    Initial::Nominal => "first simulation: the nominal model",
+                    Initial::Delayed =>
+                        "first simulation: an estimate with delayed-measurement instruments",
+                }
+            ),
+            (_, Instruments::Delayed) => {
+                "regressors of the measurements one sample earlier".to_string()
+            }
         };
         let equations = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
         Ok(Estimate {
@@ -1439,7 +1800,11 @@ fn linear_text_f(items: &[(String, Q)]) -> String {
         if i == 0 {
             out.push_str(&format!("{v}*{name}"));
         } else {
-            out.push_str(&format!(" {} {}*{name}", if v < 0.0 { "-" } else { "+" }, v.abs()));
+            out.push_str(&format!(
+                " {} {}*{name}",
+                if v < 0.0 { "-" } else { "+" },
+                v.abs()
+            ));
         }
     }
     out
@@ -1505,18 +1870,29 @@ pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Sel
 
 /// Least-squares solution of `M x = g` with column equilibration; returns
 /// `x`, the pseudo-inverse mapping `g ↦ x`, and the condition number.
-pub(crate) fn solve_equilibrated(m: &DMatrix<f64>, g: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>, f64) {
+pub(crate) fn solve_equilibrated(
+    m: &DMatrix<f64>,
+    g: &DVector<f64>,
+) -> (DVector<f64>, DMatrix<f64>, f64) {
     let cols = m.ncols();
     if cols == 0 {
         return (DVector::zeros(0), DMatrix::zeros(0, m.nrows()), 1.0);
     }
-    let d: Vec<f64> = (0..cols).map(|j| m.column(j).norm().max(f64::MIN_POSITIVE)).collect();
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
     let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
     let svd = scaled.svd(true, true);
     let smax = svd.singular_values.max();
     let smin = svd.singular_values.min();
-    let condition = if smin > 0.0 { smax / smin } else { f64::INFINITY };
-    let pinv = svd.pseudo_inverse(0.0).unwrap_or_else(|_| DMatrix::zeros(cols, m.nrows()));
+    let condition = if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    };
+    let pinv = svd
+        .pseudo_inverse(0.0)
+        .unwrap_or_else(|_| DMatrix::zeros(cols, m.nrows()));
     let pinv = DMatrix::from_fn(cols, m.nrows(), |r, c| pinv[(r, c)] / d[r]);
     let x = &pinv * g;
     (x, pinv, condition)

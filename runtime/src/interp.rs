@@ -44,7 +44,12 @@ pub fn arg_plan(ir: &Ir, arg: &Arg) -> ArgPlan {
                         (_, true, 1) => Some(Share::Rot(0)),
                         _ => None,
                     },
-                    Rotation::Measured { rows } => rows.get(l).and_then(|r| r.get(pos)).copied().flatten().map(Share::Rot),
+                    Rotation::Measured { rows } => rows
+                        .get(l)
+                        .and_then(|r| r.get(pos))
+                        .copied()
+                        .flatten()
+                        .map(Share::Rot),
                     Rotation::None => None,
                 }
             } else if ir.components[c].state == Some(l) {
@@ -57,7 +62,10 @@ pub fn arg_plan(ir: &Ir, arg: &Arg) -> ArgPlan {
             }
         }
     }
-    ArgPlan { signal: arg.signal, shares }
+    ArgPlan {
+        signal: arg.signal,
+        shares,
+    }
 }
 
 impl ArgPlan {
@@ -104,7 +112,11 @@ pub fn term_plans(ir: &Ir) -> Vec<TermPlan> {
         .iter()
         .map(|t| TermPlan {
             coefficient: t.coefficient,
-            factors: t.factors.iter().map(|f| (arg_plan(ir, &f.arg), f.modulus)).collect(),
+            factors: t
+                .factors
+                .iter()
+                .map(|f| (arg_plan(ir, &f.arg), f.modulus))
+                .collect(),
             parameter: t.parameter,
             output: t.output,
         })
@@ -163,17 +175,29 @@ fn var_index(v: &EvalVar, n_x: usize, n_u: usize) -> u32 {
 
 fn plan_predictor(columns: &[Column], n_outputs: usize, n_x: usize, n_u: usize) -> PredictorPlan {
     let n = columns.len();
-    let mut plan = PredictorPlan { len: n * n_outputs, slots: Vec::new(), entries: Vec::new(), signs: Vec::new(), vars: Vec::new() };
+    let mut plan = PredictorPlan {
+        len: n * n_outputs,
+        slots: Vec::new(),
+        entries: Vec::new(),
+        signs: Vec::new(),
+        vars: Vec::new(),
+    };
     for (j, col) in columns.iter().enumerate() {
         for o in col.outputs() {
             let start = plan.entries.len() as u32;
             for e in col.entries.iter().filter(|e| e.output() == o) {
                 let fe = match e {
-                    Entry::Poly { coefficient, signs, vars, .. } => {
+                    Entry::Poly {
+                        coefficient,
+                        signs,
+                        vars,
+                        ..
+                    } => {
                         let s0 = plan.signs.len() as u32;
                         plan.signs.extend(signs.iter().map(|i| *i as u32));
                         let v0 = plan.vars.len() as u32;
-                        plan.vars.extend(vars.iter().map(|v| var_index(v, n_x, n_u)));
+                        plan.vars
+                            .extend(vars.iter().map(|v| var_index(v, n_x, n_u)));
                         FlatEntry {
                             coefficient: *coefficient,
                             signs: (s0, plan.signs.len() as u32),
@@ -182,7 +206,9 @@ fn plan_predictor(columns: &[Column], n_outputs: usize, n_x: usize, n_u: usize) 
                             disturbed: false,
                         }
                     }
-                    Entry::Term { term, pointwise, .. } => FlatEntry {
+                    Entry::Term {
+                        term, pointwise, ..
+                    } => FlatEntry {
                         coefficient: 0.0,
                         signs: (0, 0),
                         vars: (0, 0),
@@ -192,7 +218,8 @@ fn plan_predictor(columns: &[Column], n_outputs: usize, n_x: usize, n_u: usize) 
                 };
                 plan.entries.push(fe);
             }
-            plan.slots.push(((o * n + j) as u32, start, plan.entries.len() as u32));
+            plan.slots
+                .push(((o * n + j) as u32, start, plan.entries.len() as u32));
         }
     }
     plan
@@ -216,12 +243,22 @@ impl Interpreter {
         let n_out = ir.states.len();
         let n_u = ir.inputs.len();
         let terms = term_plans(&ir);
-        let by_output = (0..n_out).map(|o| (0..terms.len()).filter(|t| terms[*t].output == o).collect()).collect();
+        let by_output = (0..n_out)
+            .map(|o| (0..terms.len()).filter(|t| terms[*t].output == o).collect())
+            .collect();
         let basic = plan_predictor(&ir.predictors.basic, n_out, n_out, n_u);
         let augmented = plan_predictor(&ir.predictors.augmented, n_out, n_out, n_u);
         let measured = plan_predictor(&ir.predictors.measured, n_out, n_out, n_u);
         let table_len = n_out + 2 * n_u + ir.rotation_vars.len();
-        Interpreter { ir, terms, by_output, basic, augmented, measured, table_len }
+        Interpreter {
+            ir,
+            terms,
+            by_output,
+            basic,
+            augmented,
+            measured,
+            table_len,
+        }
     }
 
     #[inline]
@@ -245,7 +282,10 @@ impl Interpreter {
         out[..plan.len].fill(0.0);
         for &(index, start, end) in &plan.slots {
             let mut acc = 0.0;
-            for (k, e) in plan.entries[start as usize..end as usize].iter().enumerate() {
+            for (k, e) in plan.entries[start as usize..end as usize]
+                .iter()
+                .enumerate()
+            {
                 let v = if e.term == NO_TERM {
                     let mut t = e.coefficient;
                     for &i in &plan.signs[e.signs.0 as usize..e.signs.1 as usize] {

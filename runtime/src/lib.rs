@@ -17,4 +17,6 @@ pub mod study;
 pub mod synth;
 
 pub use data::{DataError, Experiment, Row, Source, load_csv};
-pub use estimate::{Centring, Estimate, EstimateError, Instruments, Method, Options, estimate};
+pub use estimate::{
+    Centring, Estimate, EstimateError, Initial, Instruments, Method, Options, estimate,
+};

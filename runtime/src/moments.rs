@@ -66,15 +66,27 @@ impl CrossMoments {
 
     /// Mean of the instruments.
     pub fn mean_z(&self) -> DVector<f64> {
-        if self.n == 0 { self.z0.clone() } else { &self.z0 + &self.s_z / self.n as f64 }
+        if self.n == 0 {
+            self.z0.clone()
+        } else {
+            &self.z0 + &self.s_z / self.n as f64
+        }
     }
     /// Mean of the regressors.
     pub fn mean_phi(&self) -> DVector<f64> {
-        if self.n == 0 { self.phi0.clone() } else { &self.phi0 + &self.s_phi / self.n as f64 }
+        if self.n == 0 {
+            self.phi0.clone()
+        } else {
+            &self.phi0 + &self.s_phi / self.n as f64
+        }
     }
     /// Mean of the target.
     pub fn mean_t(&self) -> f64 {
-        if self.n == 0 { self.t0 } else { self.t0 + self.s_t / self.n as f64 }
+        if self.n == 0 {
+            self.t0
+        } else {
+            self.t0 + self.s_t / self.n as f64
+        }
     }
 
     /// The centred co-moments `Σ (z − z̄)(φ − φ̄)ᵀ` and `Σ (z − z̄)(t − t̄)`:
@@ -82,10 +94,16 @@ impl CrossMoments {
     /// experiment.
     pub fn centred(&self) -> (DMatrix<f64>, DVector<f64>) {
         if self.n == 0 {
-            return (DMatrix::zeros(self.s_zphi.nrows(), self.s_zphi.ncols()), DVector::zeros(self.s_zt.len()));
+            return (
+                DMatrix::zeros(self.s_zphi.nrows(), self.s_zphi.ncols()),
+                DVector::zeros(self.s_zt.len()),
+            );
         }
         let n = self.n as f64;
-        (&self.s_zphi - &self.s_z * self.s_phi.transpose() / n, &self.s_zt - &self.s_z * (self.s_t / n))
+        (
+            &self.s_zphi - &self.s_z * self.s_phi.transpose() / n,
+            &self.s_zt - &self.s_z * (self.s_t / n),
+        )
     }
 
     /// The moment equations `Σ (z − c)(t − φᵀϑ) = g − Hϑ` with instruments
@@ -97,7 +115,10 @@ impl CrossMoments {
         }
         let n = self.n as f64;
         let dz = self.mean_z() - c;
-        (h + &dz * self.mean_phi().transpose() * n, g + &dz * (self.mean_t() * n))
+        (
+            h + &dz * self.mean_phi().transpose() * n,
+            g + &dz * (self.mean_t() * n),
+        )
     }
 }
 
@@ -119,7 +140,14 @@ impl LongRun {
     /// Empty sums for dimension `m` with `lags ≥ 1`.
     pub fn new(m: usize, lags: usize) -> LongRun {
         let lags = lags.max(1);
-        LongRun { lags, sum: DMatrix::zeros(m, m), history: vec![DVector::zeros(m); lags], next: 0, filled: 0, n: 0 }
+        LongRun {
+            lags,
+            sum: DMatrix::zeros(m, m),
+            history: vec![DVector::zeros(m); lags],
+            next: 0,
+            filled: 0,
+            n: 0,
+        }
     }
     /// Adds `ζ_k`.
     pub fn push(&mut self, zeta: &DVector<f64>) {
@@ -154,7 +182,9 @@ mod tests {
 
     #[test]
     fn shifted_sums_match_two_pass_covariance() {
-        let zs: Vec<[f64; 2]> = (0..50).map(|k| [1e6 + (k as f64).sin(), 3.0 + 0.1 * k as f64]).collect();
+        let zs: Vec<[f64; 2]> = (0..50)
+            .map(|k| [1e6 + (k as f64).sin(), 3.0 + 0.1 * k as f64])
+            .collect();
         let mut m = CrossMoments::new(2, 2);
         for z in &zs {
             m.push(z, z, z[0] + 2.0 * z[1]);
@@ -164,7 +194,10 @@ mod tests {
         assert!((&c - c2).abs().max() < 1e-9 && (&ct - ct2).abs().max() < 1e-9);
         let mut exact = DMatrix::zeros(2, 2);
         let mut exact_t = DVector::zeros(2);
-        let mu = [zs.iter().map(|z| z[0]).sum::<f64>() / 50.0, zs.iter().map(|z| z[1]).sum::<f64>() / 50.0];
+        let mu = [
+            zs.iter().map(|z| z[0]).sum::<f64>() / 50.0,
+            zs.iter().map(|z| z[1]).sum::<f64>() / 50.0,
+        ];
         let mt = mu[0] + 2.0 * mu[1];
         for z in &zs {
             let d = DVector::from_row_slice(&[z[0] - mu[0], z[1] - mu[1]]);
@@ -179,7 +212,10 @@ mod tests {
     fn long_run_of_white_noise_is_its_covariance_sum() {
         let mut lr = LongRun::new(1, 1);
         for k in 0..4 {
-            lr.push(&DVector::from_element(1, if k % 2 == 0 { 1.0 } else { -1.0 }));
+            lr.push(&DVector::from_element(
+                1,
+                if k % 2 == 0 { 1.0 } else { -1.0 },
+            ));
         }
         // 4 · 1 + 2 · (−1) · 3 = −2 → clipped to 0.
         assert_eq!(lr.sum_psd()[(0, 0)], 0.0);

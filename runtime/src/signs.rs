@@ -39,7 +39,9 @@ pub struct ExperimentSigns {
 impl ExperimentSigns {
     /// The worst minority fraction.
     pub fn worst(&self) -> Option<&ArgSign> {
-        self.arguments.iter().max_by(|a, b| a.minority_fraction.total_cmp(&b.minority_fraction))
+        self.arguments
+            .iter()
+            .max_by(|a, b| a.minority_fraction.total_cmp(&b.minority_fraction))
     }
 }
 
@@ -48,9 +50,18 @@ impl ExperimentSigns {
 /// to an unmeasured medium by its state alone (the disturbance is unknown;
 /// A5/A7 require the state to dominate it).
 pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSigns {
-    let args = if kind == PredictorKind::Basic { Vec::new() } else { relevant_signs(ir, kind) };
-    let extra: Vec<usize> =
-        if kind == PredictorKind::Measured { (0..ir.sign_args.len()).filter(|i| ir.sign_args[*i].measured).collect() } else { Vec::new() };
+    let args = if kind == PredictorKind::Basic {
+        Vec::new()
+    } else {
+        relevant_signs(ir, kind)
+    };
+    let extra: Vec<usize> = if kind == PredictorKind::Measured {
+        (0..ir.sign_args.len())
+            .filter(|i| ir.sign_args[*i].measured)
+            .collect()
+    } else {
+        Vec::new()
+    };
     let n_fixed = args.len();
     let plans: Vec<(usize, ArgPlan, bool)> = args
         .iter()
@@ -72,7 +83,12 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         } else {
             row.rotation
         };
-        let sig = crate::model::Signals { states: row.states, inputs: row.inputs, rotation, disturbances: row.disturbances };
+        let sig = crate::model::Signals {
+            states: row.states,
+            inputs: row.inputs,
+            rotation,
+            disturbances: row.disturbances,
+        };
         for (k, (_, plan, measured)) in plans.iter().enumerate() {
             let v = plan.eval(&sig, *measured);
             if v > 0.0 {
@@ -96,11 +112,20 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
             ArgSign {
                 argument: ir.sign_args[*i].name.clone(),
                 sign,
-                minority_fraction: if n == 0 { 0.0 } else { minority as f64 / n as f64 },
+                minority_fraction: if n == 0 {
+                    0.0
+                } else {
+                    minority as f64 / n as f64
+                },
                 used_measured_medium: *measured,
             }
         })
         .collect();
     let pointwise = arguments.split_off(n_fixed);
-    ExperimentSigns { experiment: source.name().to_string(), pattern, arguments, pointwise }
+    ExperimentSigns {
+        experiment: source.name().to_string(),
+        pattern,
+        arguments,
+        pointwise,
+    }
 }

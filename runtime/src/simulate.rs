@@ -29,7 +29,12 @@ pub enum Disturbances<'a> {
 /// driven by the data's inputs (and, for a measured `R`, its rotation; for
 /// measured disturbances, their recorded values). A planar heading is
 /// integrated from the first measured heading.
-pub fn simulate(model: &dyn Model, theta: &[f64], data: &dyn Source, disturbances: Disturbances) -> Trajectory {
+pub fn simulate(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &dyn Source,
+    disturbances: Disturbances,
+) -> Trajectory {
     let ir = model.ir();
     let n_out = ir.states.len();
     let n_comp = ir.components.len();
@@ -73,7 +78,12 @@ pub fn simulate(model: &dyn Model, theta: &[f64], data: &dyn Source, disturbance
             row.rotation
         };
         if !diverged {
-            let sig = Signals { states: &x, inputs: row.inputs, rotation, disturbances: &dist };
+            let sig = Signals {
+                states: &x,
+                inputs: row.inputs,
+                rotation,
+                disturbances: &dist,
+            };
             model.step(theta, h, &sig, &mut f, &mut next);
             psi = next_heading(ir, psi, h, &x);
             if next.iter().any(|v| !v.is_finite() || v.abs() > 1e12) {
@@ -84,7 +94,11 @@ pub fn simulate(model: &dyn Model, theta: &[f64], data: &dyn Source, disturbance
         }
         k += 1;
     });
-    Trajectory { states, heading, diverged }
+    Trajectory {
+        states,
+        heading,
+        diverged,
+    }
 }
 
 /// The normalised fit `100·(1 − ‖y − ŷ‖ / ‖y − ȳ‖)` (100 is perfect; may be
@@ -95,8 +109,17 @@ pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
         return f64::NAN;
     }
     let mean = y[..n].iter().sum::<f64>() / n as f64;
-    let num: f64 = y[..n].iter().zip(&yhat[..n]).map(|(a, b)| (a - b) * (a - b)).sum::<f64>().sqrt();
-    let den: f64 = y[..n].iter().map(|a| (a - mean) * (a - mean)).sum::<f64>().sqrt();
+    let num: f64 = y[..n]
+        .iter()
+        .zip(&yhat[..n])
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt();
+    let den: f64 = y[..n]
+        .iter()
+        .map(|a| (a - mean) * (a - mean))
+        .sum::<f64>()
+        .sqrt();
     if den == 0.0 || !num.is_finite() {
         return f64::NAN;
     }
@@ -105,5 +128,9 @@ pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
 
 /// Fit of every output of a simulation against an experiment.
 pub fn fits(data: &Experiment, sim: &Trajectory) -> Vec<f64> {
-    data.states.iter().zip(&sim.states).map(|(y, s)| fit(y, s)).collect()
+    data.states
+        .iter()
+        .zip(&sim.states)
+        .map(|(y, s)| fit(y, s))
+        .collect()
 }

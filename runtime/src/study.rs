@@ -20,8 +20,10 @@ use rand_chacha::ChaCha8Rng;
 
 /// θ0 of the paper's table, in `ship.som` order
 /// (X_u, X_vr, X_uu, W_uu, X_tau, Y_v, Y_ur, Y_vv, Y_vr, W_vv, Y_tau, N_r, N_uv, N_vv, N_vr, W_uv, N_tau).
-pub const THETA0: [f64; 17] =
-    [-0.05, 1.0, -0.05, -0.0005, 0.02, -0.2, -0.65, -0.2, -0.1, -0.0015, 0.02, -0.1, -0.0015, -0.001, -0.04, -0.00003, 0.0003];
+pub const THETA0: [f64; 17] = [
+    -0.05, 1.0, -0.05, -0.0005, 0.02, -0.2, -0.65, -0.2, -0.1, -0.0015, 0.02, -0.1, -0.0015,
+    -0.001, -0.04, -0.00003, 0.0003,
+];
 
 /// Mean of the current (north, east), m/s.
 pub const CURRENT_MEAN: [f64; 2] = [0.2, 0.2];
@@ -46,7 +48,14 @@ pub struct InputDesign {
 
 impl Default for InputDesign {
     fn default() -> InputDesign {
-        InputDesign { offset: [50.0, 169.0, 235.0], pulse: [30.0, 40.0, 150.0], width: (20, 80), smoothing: 0.15, x0: [5.0, 3.3, 0.15], sway_from_yaw: 0.25 }
+        InputDesign {
+            offset: [50.0, 169.0, 235.0],
+            pulse: [30.0, 40.0, 150.0],
+            width: (20, 80),
+            smoothing: 0.15,
+            x0: [5.0, 3.3, 0.15],
+            sway_from_yaw: 0.25,
+        }
     }
 }
 
@@ -76,7 +85,8 @@ pub fn estimation_input(design: &InputDesign, n: usize, seed: u64) -> Vec<Vec<f6
         .map(|_| {
             for i in 0..3 {
                 if left[i] == 0 {
-                    left[i] = rng.random_range(design.width.0..design.width.1.max(design.width.0 + 1));
+                    left[i] =
+                        rng.random_range(design.width.0..design.width.1.max(design.width.0 + 1));
                     target[i] = design.pulse[i] * rng.random_range(-1.0..1.0);
                 }
                 left[i] -= 1;
@@ -105,9 +115,23 @@ pub fn validation_input(n: usize) -> Vec<Vec<f64>> {
 }
 
 /// One estimation experiment of the study.
-pub fn estimation_experiment(model: &dyn Model, design: &InputDesign, wind: f64, n: usize, seed: u64) -> (Experiment, Truth) {
+pub fn estimation_experiment(
+    model: &dyn Model,
+    design: &InputDesign,
+    wind: f64,
+    n: usize,
+    seed: u64,
+) -> (Experiment, Truth) {
     let input = estimation_input(design, n, seed ^ 0x5eed_1e57);
-    experiment(model, &true_system(wind), &format!("run{seed}"), &design.x0, 0.0, &input, seed)
+    experiment(
+        model,
+        &true_system(wind),
+        &format!("run{seed}"),
+        &design.x0,
+        0.0,
+        &input,
+        seed,
+    )
 }
 
 /// The undisturbed, noise-free validation experiment.
@@ -118,5 +142,14 @@ pub fn validation_experiment(model: &dyn Model, n: usize) -> Experiment {
     sys.state_noise = vec![0.0; 3];
     sys.heading_noise = 0.0;
     sys.aux_noise = 0.0;
-    experiment(model, &sys, "validation", &[4.0, 0.0, 0.0], 0.0, &validation_input(n), 0).0
+    experiment(
+        model,
+        &sys,
+        "validation",
+        &[4.0, 0.0, 0.0],
+        0.0,
+        &validation_input(n),
+        0,
+    )
+    .0
 }

@@ -61,7 +61,11 @@ pub fn experiment(
     let n_comp = ir.components.len();
     let planar = matches!(ir.rotation, Rotation::Planar { .. });
     let mut e = Experiment::new(ir, name, system.h);
-    let mut truth = Truth { states: vec![Vec::new(); n_out], heading: Vec::new(), disturbances: vec![Vec::new(); n_comp] };
+    let mut truth = Truth {
+        states: vec![Vec::new(); n_out],
+        heading: Vec::new(),
+        disturbances: vec![Vec::new(); n_comp],
+    };
     let mut x = x0.to_vec();
     let mut psi = psi0;
     let mut next = vec![0.0; n_out];
@@ -78,9 +82,22 @@ pub fn experiment(
         }
         let y_psi = psi + system.heading_noise * g();
         for c in 0..n_comp {
-            m[c] = if ir.disturbances[ir.components[c].disturbance].measured { v[c] + system.aux_noise * g() } else { 0.0 };
+            m[c] = if ir.disturbances[ir.components[c].disturbance].measured {
+                v[c] + system.aux_noise * g()
+            } else {
+                0.0
+            };
         }
-        e.push(ir, &Row { states: &y, inputs: u, heading: y_psi, rotation: &[], disturbances: &m });
+        e.push(
+            ir,
+            &Row {
+                states: &y,
+                inputs: u,
+                heading: y_psi,
+                rotation: &[],
+                disturbances: &m,
+            },
+        );
         for o in 0..n_out {
             truth.states[o].push(x[o]);
         }
@@ -88,8 +105,17 @@ pub fn experiment(
         for c in 0..n_comp {
             truth.disturbances[c].push(v[c]);
         }
-        let rot = if planar { planar_rotation(psi).to_vec() } else { Vec::new() };
-        let sig = Signals { states: &x, inputs: u, rotation: &rot, disturbances: &v };
+        let rot = if planar {
+            planar_rotation(psi).to_vec()
+        } else {
+            Vec::new()
+        };
+        let sig = Signals {
+            states: &x,
+            inputs: u,
+            rotation: &rot,
+            disturbances: &v,
+        };
         model.step(&system.theta, system.h, &sig, &mut f, &mut next);
         for o in 0..n_out {
             next[o] += system.process_noise.get(o).copied().unwrap_or(0.0) * g();
@@ -99,4 +125,3 @@ pub fn experiment(
     }
     (e, truth)
 }
-

@@ -1,0 +1,330 @@
+//! The estimators on synthetic ship data (paper §V setting, fixed seeds):
+//! consistency of IV3 against the bias of LS, the current's mean recovered,
+//! IV1 consistent only with zero-mean disturbances, and the diagnostics a
+//! user relies on (unexcited combinations, sign violations, low wind).
+
+use leeway_runtime::estimate::{Method, Options, estimate};
+use leeway_runtime::study::{self, InputDesign};
+use leeway_runtime::synth::{TrueSystem, experiment};
+use leeway_runtime::{Experiment, Interpreter, Model, Signals, Source, planar_rotation};
+
+fn ship() -> Interpreter {
+    let path = format!("{}/../examples/models/ship.som", env!("CARGO_MANIFEST_DIR"));
+    let src = std::fs::read_to_string(path).unwrap_or_default();
+    let c = leeway_runtime::structure::compile(&src, &Default::default());
+    Interpreter::new(c.ir.unwrap_or_else(|| panic!("ship.som compiles: {:?}", c.diagnostics)))
+}
+
+/// Mean relative error of θ over the parameters (median over nothing: plain mean
+/// of |θ̂ − θ0| / |θ0|), the paper's parameters in order.
+fn relative_error(theta: &[f64]) -> f64 {
+    theta
+        .iter()
+        .zip(&study::THETA0)
+        .map(|(a, b)| ((a - b) / b).abs())
+        .sum::<f64>()
+        / theta.len() as f64
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn options(method: Method) -> Options {
+    Options {
+        method,
+        covariance: false,
+        ..Options::default()
+    }
+}
+
+fn run(model: &Interpreter, e: &Experiment, method: Method) -> leeway_runtime::Estimate {
+    estimate(model, &[e as &dyn Source], &options(method))
+        .unwrap_or_else(|err| panic!("{method:?}: {} ({})", err.message, err.hint))
+}
+
+#[test]
+fn iv3_error_shrinks_with_n_while_least_squares_stays_biased() {
+    let model = ship();
+    let design = InputDesign::default();
+    let mut table = Vec::new();
+    for n in [1000usize, 8000] {
+        let (mut iv3, mut ls) = (Vec::new(), Vec::new());
+        for seed in 0..4 {
+            let (e, _) = study::estimation_experiment(&model, &design, 10.0, n, 100 + seed);
+            iv3.push(relative_error(&run(&model, &e, Method::Iv3).theta));
+            ls.push(relative_error(&run(&model, &e, Method::Ls).theta));
+        }
+        table.push((n, median(iv3), median(ls)));
+    }
+    let (small, large) = (table[0], table[1]);
+    eprintln!("N, IV3 error, LS error: {table:?}");
+    // 8× the data: a consistent estimator's error falls by about √8 ≈ 2.8.
+    assert!(large.1 < 0.6 * small.1, "IV3 error must shrink: {table:?}");
+    // LS converges to a biased value: its error does not shrink like 1/√N.
+    assert!(large.2 > 0.7 * small.2, "LS error stays: {table:?}");
+    assert!(
+        large.2 > 2.0 * large.1,
+        "LS is worse than IV3 at large N: {table:?}"
+    );
+}
+
+#[test]
+fn current_mean_is_recovered_within_three_standard_errors() {
+    let model = ship();
+    for seed in 0..4 {
+        let (e, _) =
+            study::estimation_experiment(&model, &InputDesign::default(), 10.0, 5000, 200 + seed);
+        let est = estimate(
+            &model,
+            &[&e as &dyn Source],
+            &Options {
+                method: Method::Iv3,
+                ..Options::default()
+            },
+        )
+        .unwrap_or_else(|err| panic!("{}", err.message));
+        assert_eq!(
+            est.disturbances.len(),
+            2,
+            "north and east means of the current"
+        );
+        for (d, truth) in est.disturbances.iter().zip(study::CURRENT_MEAN) {
+            let se = d.std_error.unwrap_or(f64::INFINITY);
+            assert!(se > 0.0 && se < 0.05, "{} std error {se}", d.component);
+            assert!(
+                (d.mean - truth).abs() < 3.0 * se,
+                "seed {seed}: {} = {} ± {se}, truth {truth}",
+                d.component,
+                d.mean
+            );
+        }
+    }
+}
+
+/// Estimation data with chosen disturbance means (current and wind).
+fn data_with_means(
+    model: &Interpreter,
+    current: f64,
+    wind: f64,
+    n: usize,
+    seed: u64,
+) -> Experiment {
+    let mut sys: TrueSystem = study::true_system(wind);
+    sys.disturbance_mean = vec![current, current, wind, wind];
+    let design = InputDesign::default();
+    experiment(
+        model,
+        &sys,
+        "run",
+        &design.x0,
+        0.0,
+        &study::estimation_input(&design, n, seed + 7),
+        seed,
+    )
+    .0
+}
+
+#[test]
+fn iv1_is_consistent_with_zero_mean_disturbances_only() {
+    let model = ship();
+    let err = |current: f64, n: usize| {
+        median(
+            (0..4)
+                .map(|s| {
+                    relative_error(
+                        &run(
+                            &model,
+                            &data_with_means(&model, current, 0.0, n, 300 + s),
+                            Method::Iv1,
+                        )
+                        .theta,
+                    )
+                })
+                .collect(),
+        )
+    };
+    let (zero_small, zero_large) = (err(0.0, 2000), err(0.0, 16000));
+    let (mean_small, mean_large) = (err(0.2, 2000), err(0.2, 16000));
+    eprintln!("IV1 zero-mean: {zero_small} → {zero_large}; mean 0.2: {mean_small} → {mean_large}");
+    assert!(
+        zero_large < 0.6 * zero_small,
+        "zero-mean current: IV1 converges"
+    );
+    assert!(
+        zero_large < 0.3,
+        "zero-mean current: IV1 close to θ0 at N = 16000"
+    );
+    assert!(
+        mean_large > 3.0 * zero_large && mean_large > 0.5,
+        "current with a mean: IV1 stays biased"
+    );
+}
+
+#[test]
+fn low_wind_names_the_unexcited_wind_parameters_and_returns_aggregates() {
+    let model = ship();
+    let (e, _) = study::estimation_experiment(&model, &InputDesign::default(), 1.0, 5000, 400);
+    let est = run(&model, &e, Method::Iv3);
+    for w in ["W_uu", "W_vv", "W_uv"] {
+        assert!(
+            est.diagnostics
+                .unexcited
+                .iter()
+                .any(|u| u.starts_with(&format!("{w} is not separately excited"))),
+            "{w} named: {:?}",
+            est.diagnostics.unexcited
+        );
+        assert!(
+            est.warnings
+                .iter()
+                .any(|m| m.contains(&format!("`{w}` is not separately excited"))),
+            "{w} warned"
+        );
+        assert_eq!(est.get(w), Some(0.0), "{w} held at its nominal value");
+    }
+    // The aggregates absorb the wind parameters: X_uu + W_uu ≈ θ0's sum.
+    assert!(
+        est.diagnostics
+            .aggregates
+            .iter()
+            .any(|a| a.starts_with("X_uu estimates X_uu + ")),
+        "{:?}",
+        est.diagnostics.aggregates
+    );
+    let x_uu = est.get("X_uu").unwrap_or(f64::NAN);
+    assert!(
+        (x_uu - (study::THETA0[2] + study::THETA0[3])).abs() < 0.01,
+        "X_uu aggregate {x_uu}"
+    );
+}
+
+#[test]
+fn wind_changing_sign_relative_to_the_ship_gives_the_a7_warning_with_its_fraction() {
+    let model = ship();
+    let (e, _) = study::estimation_experiment(&model, &InputDesign::default(), 10.0, 3000, 500);
+    let est = estimate(
+        &model,
+        &[&e as &dyn Source],
+        &Options {
+            method: Method::Iv2,
+            aggregate: true,
+            covariance: false,
+            ..Options::default()
+        },
+    )
+    .unwrap_or_else(|err| panic!("{}", err.message));
+    let air_u = est.sign_patterns[0]
+        .arguments
+        .iter()
+        .find(|a| a.argument == "air.u")
+        .map(|a| a.minority_fraction)
+        .unwrap_or(0.0);
+    assert!(
+        air_u > 0.05 && air_u < 0.5,
+        "air.u changes sign in part of the circle: {air_u}"
+    );
+    assert!(
+        est.warnings
+            .iter()
+            .any(|w| w.contains("air.u has sign") && w.contains('%') && w.contains("A7")),
+        "{:?}",
+        est.warnings
+    );
+    let strict = estimate(
+        &model,
+        &[&e as &dyn Source],
+        &Options {
+            method: Method::Iv2,
+            aggregate: true,
+            strict: true,
+            ..Options::default()
+        },
+    );
+    assert_eq!(strict.err().map(|e| e.code), Some("sign-violation"));
+}
+
+#[test]
+fn a_constant_heading_leaves_the_current_terms_collinear() {
+    // A ship on a perfect heading autopilot: the yaw moment cancels every yaw
+    // term, so r ≡ 0 and ψ is constant (measured with noise). Surge and sway
+    // are excited; the current acts.
+    let model = ship();
+    let ir = model.ir().clone();
+    let sys = study::true_system(1.0);
+    let design = InputDesign::default();
+    let pulses = study::estimation_input(&design, 3000, 9);
+    let mut e = Experiment::new(&ir, "straight", 1.0);
+    let mut x = vec![5.0, 3.3, 0.0];
+    let psi = 0.7;
+    let mut rng_state = 12345u64;
+    let mut noise = || {
+        // A small deterministic LCG-based noise (the shape does not matter here).
+        rng_state = rng_state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((rng_state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.02
+    };
+    let mut f = vec![0.0; 3];
+    let mut next = vec![0.0; 3];
+    for u in &pulses {
+        let dist = [0.2, 0.2, 1.0, 1.0];
+        let rot = planar_rotation(psi);
+        let mut input = vec![u[0], u[1], 0.0];
+        let sig = Signals {
+            states: &x,
+            inputs: &input,
+            rotation: &rot,
+            disturbances: &dist,
+        };
+        model.rhs(&sys.theta, &sig, &mut f);
+        input[2] = -f[2] / sys.theta[16];
+        let y: Vec<f64> = x.iter().map(|v| v + noise()).collect();
+        let m = [0.0, 0.0, 1.0 + noise(), 1.0 + noise()];
+        e.push(
+            &ir,
+            &leeway_runtime::Row {
+                states: &y,
+                inputs: &input,
+                heading: psi + noise(),
+                rotation: &[],
+                disturbances: &m,
+            },
+        );
+        let sig = Signals {
+            states: &x,
+            inputs: &input,
+            rotation: &rot,
+            disturbances: &dist,
+        };
+        model.step(&sys.theta, 1.0, &sig, &mut f, &mut next);
+        x.copy_from_slice(&next);
+    }
+    let err = estimate(&model, &[&e as &dyn Source], &options(Method::Iv3))
+        .err()
+        .unwrap_or_else(|| panic!("must fail"));
+    eprintln!("{}\nhint: {}", err.message, err.hint);
+    assert_eq!(err.code, "unidentifiable");
+    assert!(
+        err.message.contains("rho[north,X_uu]") || err.message.contains("rho["),
+        "names the current terms: {}",
+        err.message
+    );
+    assert!(
+        err.message.contains("X_u"),
+        "names the parameter: {}",
+        err.message
+    );
+    assert!(err.hint.contains("Remark 2"), "{}", err.hint);
+}
+
+#[test]
+fn estimates_are_bit_identical_across_runs() {
+    let model = ship();
+    let (e, _) = study::estimation_experiment(&model, &InputDesign::default(), 10.0, 1500, 600);
+    let a = estimate(&model, &[&e as &dyn Source], &Options::default()).map(|x| x.theta);
+    let b = estimate(&model, &[&e as &dyn Source], &Options::default()).map(|x| x.theta);
+    let bits = |v: &Vec<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(a.as_ref().map(bits), b.as_ref().map(bits));
+}
