@@ -6,5 +6,8 @@ fn main() {
     if let Some(m) = m {
         println!("{} items", m.items.len());
     }
-    print!("{}", leeway_grammar::render(&d, &path, &src, leeway_grammar::RenderStyle::Plain));
+    print!(
+        "{}",
+        leeway_grammar::render(&d, &path, &src, leeway_grammar::RenderStyle::Plain)
+    );
 }

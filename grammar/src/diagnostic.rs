@@ -77,12 +77,20 @@ impl Diagnostic {
     }
     /// Adds the primary label (the caret).
     pub fn with_primary(mut self, span: Span, message: impl Into<String>) -> Self {
-        self.labels.push(Label { span, message: message.into(), primary: true });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: true,
+        });
         self
     }
     /// Adds a secondary label.
     pub fn with_secondary(mut self, span: Span, message: impl Into<String>) -> Self {
-        self.labels.push(Label { span, message: message.into(), primary: false });
+        self.labels.push(Label {
+            span,
+            message: message.into(),
+            primary: false,
+        });
         self
     }
     /// Sets the help line.
@@ -101,7 +109,11 @@ impl Diagnostic {
     }
     /// The primary span, if any.
     pub fn primary_span(&self) -> Option<Span> {
-        self.labels.iter().find(|l| l.primary).or(self.labels.first()).map(|l| l.span)
+        self.labels
+            .iter()
+            .find(|l| l.primary)
+            .or(self.labels.first())
+            .map(|l| l.span)
     }
 }
 
@@ -149,7 +161,11 @@ fn to_codespan(d: &Diagnostic, source: &str) -> cs::Diagnostic<()> {
         .labels
         .iter()
         .map(|l| {
-            let style = if l.primary { cs::LabelStyle::Primary } else { cs::LabelStyle::Secondary };
+            let style = if l.primary {
+                cs::LabelStyle::Primary
+            } else {
+                cs::LabelStyle::Secondary
+            };
             cs::Label::new(style, (), clamp(source, l.span)).with_message(l.message.clone())
         })
         .collect();
@@ -167,7 +183,12 @@ fn to_codespan(d: &Diagnostic, source: &str) -> cs::Diagnostic<()> {
 /// Renders diagnostics like a compiler: `error[code]: message`, then
 /// `┌─ file:line:col`, the source line with a caret under the span, and the
 /// notes and help. A diagnostic without labels renders without a snippet.
-pub fn render(diagnostics: &[Diagnostic], file_name: &str, source: &str, style: RenderStyle) -> String {
+pub fn render(
+    diagnostics: &[Diagnostic],
+    file_name: &str,
+    source: &str,
+    style: RenderStyle,
+) -> String {
     let file = SimpleFile::new(file_name, source);
     let config = term::Config::default();
     let mut out = String::new();
@@ -199,7 +220,10 @@ pub fn render_short(diagnostics: &[Diagnostic], file_name: &str, source: &str) -
         match d.primary_span() {
             Some(span) => {
                 let (l, c) = line_col(source, span.start);
-                out.push_str(&format!("{file_name}:{l}:{c}: {sev}[{}]: {}\n", d.code, d.message));
+                out.push_str(&format!(
+                    "{file_name}:{l}:{c}: {sev}[{}]: {}\n",
+                    d.code, d.message
+                ));
             }
             None => out.push_str(&format!("{file_name}: {sev}[{}]: {}\n", d.code, d.message)),
         }

@@ -153,7 +153,10 @@ fn found_token(source: &str, pos: usize) -> String {
         return "end of file".to_string();
     };
     if first.is_ascii_alphanumeric() || first == '_' || first == '.' {
-        let word: String = rest.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == '.').collect();
+        let word: String = rest
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == '.')
+            .collect();
         format!("`{word}`")
     } else if first == '\n' || first == '\r' {
         "end of line".to_string()
@@ -170,7 +173,10 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
     };
     let found = found_token(source, pos);
     let (message, expected) = match &e.variant {
-        ErrorVariant::ParsingError { positives, negatives } => {
+        ErrorVariant::ParsingError {
+            positives,
+            negatives,
+        } => {
             let mut names: Vec<&str> = positives.iter().map(rule_name).collect();
             names.sort_unstable();
             names.dedup();
@@ -185,8 +191,11 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
             };
             if !names.is_empty() {
                 (format!("expected {list}, found {found}"), names.join(" "))
-            } else if negatives.iter().any(|r| *r == Rule::keyword) {
-                (format!("{found} is a keyword and cannot be used as a name"), String::new())
+            } else if negatives.contains(&Rule::keyword) {
+                (
+                    format!("{found} is a keyword and cannot be used as a name"),
+                    String::new(),
+                )
             } else {
                 (format!("unexpected {found}"), String::new())
             }
@@ -217,8 +226,24 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
 fn is_keyword(word: &str) -> bool {
     matches!(
         word,
-        "model" | "step" | "state" | "input" | "heading" | "integrates" | "axes" | "rotation" | "disturbance"
-            | "unmeasured" | "measured" | "earth" | "body" | "relative" | "der" | "next" | "nominal" | "data"
+        "model"
+            | "step"
+            | "state"
+            | "input"
+            | "heading"
+            | "integrates"
+            | "axes"
+            | "rotation"
+            | "disturbance"
+            | "unmeasured"
+            | "measured"
+            | "earth"
+            | "body"
+            | "relative"
+            | "der"
+            | "next"
+            | "nominal"
+            | "data"
     )
 }
 
@@ -228,22 +253,34 @@ fn span_of(p: &Pair<Rule>) -> Span {
 }
 
 fn ident(p: Pair<Rule>) -> Ident {
-    Ident { name: p.as_str().to_string(), span: span_of(&p) }
+    Ident {
+        name: p.as_str().to_string(),
+        span: span_of(&p),
+    }
 }
 
 fn idents(p: Pair<Rule>) -> Vec<Ident> {
-    p.into_inner().filter(|q| q.as_rule() == Rule::ident).map(ident).collect()
+    p.into_inner()
+        .filter(|q| q.as_rule() == Rule::ident)
+        .map(ident)
+        .collect()
 }
 
 fn number(p: Pair<Rule>) -> Number {
     let text: String = p.as_str().chars().filter(|c| !c.is_whitespace()).collect();
-    Number { text, span: span_of(&p) }
+    Number {
+        text,
+        span: span_of(&p),
+    }
 }
 
 fn build_model(p: Pair<Rule>) -> Model {
     let span = span_of(&p);
     let mut inner = p.into_inner();
-    let name = inner.next().map(ident).unwrap_or(Ident { name: String::new(), span });
+    let name = inner.next().map(ident).unwrap_or(Ident {
+        name: String::new(),
+        span,
+    });
     let items = inner.filter_map(build_item).collect();
     Model { name, items, span }
 }
@@ -253,9 +290,22 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
     let rule = p.as_rule();
     let mut inner = p.into_inner();
     Some(match rule {
-        Rule::step_decl => Item::Step { value: number(inner.next()?), span },
-        Rule::state_decl => Item::States(inner.filter(|q| q.as_rule() == Rule::ident).map(ident).collect()),
-        Rule::input_decl => Item::Inputs(inner.filter(|q| q.as_rule() == Rule::ident).map(ident).collect()),
+        Rule::step_decl => Item::Step {
+            value: number(inner.next()?),
+            span,
+        },
+        Rule::state_decl => Item::States(
+            inner
+                .filter(|q| q.as_rule() == Rule::ident)
+                .map(ident)
+                .collect(),
+        ),
+        Rule::input_decl => Item::Inputs(
+            inner
+                .filter(|q| q.as_rule() == Rule::ident)
+                .map(ident)
+                .collect(),
+        ),
         Rule::heading_decl => {
             let name = ident(inner.next()?);
             let integrates = ident(inner.next()?);
@@ -264,7 +314,12 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
                 let mut it = v.into_iter();
                 Some((it.next()?, it.next()?))
             });
-            Item::Heading { name, integrates, axes, span }
+            Item::Heading {
+                name,
+                integrates,
+                axes,
+                span,
+            }
         }
         Rule::rotation_decl => {
             let rows = inner
@@ -275,9 +330,18 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
                     let state = ident(it.next()?);
                     let entries = it
                         .filter(|q| q.as_rule() == Rule::rotation_entry)
-                        .map(|e| e.into_inner().next().filter(|x| x.as_rule() == Rule::ident).map(ident))
+                        .map(|e| {
+                            e.into_inner()
+                                .next()
+                                .filter(|x| x.as_rule() == Rule::ident)
+                                .map(ident)
+                        })
                         .collect();
-                    Some(RotationRow { state, entries, span: rspan })
+                    Some(RotationRow {
+                        state,
+                        entries,
+                        span: rspan,
+                    })
                 })
                 .collect();
             Item::Rotation { rows, span }
@@ -295,17 +359,29 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
                     f.into_inner()
                         .filter_map(|c| {
                             let mut it = c.into_inner();
-                            Some(BodyComponent { state: ident(it.next()?), component: ident(it.next()?) })
+                            Some(BodyComponent {
+                                state: ident(it.next()?),
+                                component: ident(it.next()?),
+                            })
                         })
                         .collect(),
                 ),
             };
-            Item::Disturbance { name, measurement, frame, span }
+            Item::Disturbance {
+                name,
+                measurement,
+                frame,
+                span,
+            }
         }
         Rule::relative_decl => {
             let name = ident(inner.next()?);
             let disturbance = ident(inner.next()?);
-            Item::Relative { name, disturbance, span }
+            Item::Relative {
+                name,
+                disturbance,
+                span,
+            }
         }
         Rule::equation => {
             let kind = match inner.next()?.as_str() {
@@ -314,7 +390,12 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
             };
             let state = ident(inner.next()?);
             let rhs = build_expr(inner.next()?);
-            Item::Equation { kind, state, rhs, span }
+            Item::Equation {
+                kind,
+                state,
+                rhs,
+                span,
+            }
         }
         Rule::nominal_block => {
             let entries = inner
@@ -334,7 +415,11 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
                     let sig = ident(it.next()?);
                     let s = it.next()?;
                     let sspan = span_of(&s);
-                    let text = s.into_inner().next().map(|x| x.as_str().to_string()).unwrap_or_default();
+                    let text = s
+                        .into_inner()
+                        .next()
+                        .map(|x| x.as_str().to_string())
+                        .unwrap_or_default();
                     Some((sig, text, sspan))
                 })
                 .collect();
@@ -354,7 +439,10 @@ fn build_expr(p: Pair<Rule>) -> Expr {
                 _ => false,
             };
             let Some(first) = inner.next() else {
-                return Expr::Number(Number { text: "0".into(), span });
+                return Expr::Number(Number {
+                    text: "0".into(),
+                    span,
+                });
             };
             let mut acc = build_expr(first);
             if negate {
@@ -362,43 +450,77 @@ fn build_expr(p: Pair<Rule>) -> Expr {
                 acc = Expr::Neg(Box::new(acc), s);
             }
             while let (Some(op), Some(rhs)) = (inner.next(), inner.next()) {
-                let op = if op.as_str() == "-" { BinOp::Sub } else { BinOp::Add };
+                let op = if op.as_str() == "-" {
+                    BinOp::Sub
+                } else {
+                    BinOp::Add
+                };
                 let rhs = build_expr(rhs);
                 let s = acc.span().join(rhs.span());
-                acc = Expr::Binary { op, lhs: Box::new(acc), rhs: Box::new(rhs), span: s };
+                acc = Expr::Binary {
+                    op,
+                    lhs: Box::new(acc),
+                    rhs: Box::new(rhs),
+                    span: s,
+                };
             }
             acc
         }
         Rule::product => {
             let mut inner = p.into_inner();
             let Some(first) = inner.next() else {
-                return Expr::Number(Number { text: "0".into(), span });
+                return Expr::Number(Number {
+                    text: "0".into(),
+                    span,
+                });
             };
             let mut acc = build_expr(first);
             while let (Some(op), Some(rhs)) = (inner.next(), inner.next()) {
-                let op = if op.as_str() == "/" { BinOp::Div } else { BinOp::Mul };
+                let op = if op.as_str() == "/" {
+                    BinOp::Div
+                } else {
+                    BinOp::Mul
+                };
                 let rhs = build_expr(rhs);
                 let s = acc.span().join(rhs.span());
-                acc = Expr::Binary { op, lhs: Box::new(acc), rhs: Box::new(rhs), span: s };
+                acc = Expr::Binary {
+                    op,
+                    lhs: Box::new(acc),
+                    rhs: Box::new(rhs),
+                    span: s,
+                };
             }
             acc
         }
         Rule::number => Expr::Number(number(p)),
         Rule::path => {
             let mut inner = p.into_inner();
-            let base = inner.next().map(ident).unwrap_or(Ident { name: String::new(), span });
+            let base = inner.next().map(ident).unwrap_or(Ident {
+                name: String::new(),
+                span,
+            });
             let field = inner.next().map(ident);
             Expr::Path(Path { base, field, span })
         }
         Rule::modulus | Rule::paren | Rule::negated => {
             let rule = p.as_rule();
-            let inner = p.into_inner().next().map(build_expr).unwrap_or(Expr::Number(Number { text: "0".into(), span }));
+            let inner = p
+                .into_inner()
+                .next()
+                .map(build_expr)
+                .unwrap_or(Expr::Number(Number {
+                    text: "0".into(),
+                    span,
+                }));
             match rule {
                 Rule::modulus => Expr::Abs(Box::new(inner), span),
                 Rule::paren => Expr::Paren(Box::new(inner), span),
                 _ => Expr::Neg(Box::new(inner), span),
             }
         }
-        _ => Expr::Number(Number { text: "0".into(), span }),
+        _ => Expr::Number(Number {
+            text: "0".into(),
+            span,
+        }),
     }
 }

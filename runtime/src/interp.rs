@@ -44,7 +44,12 @@ pub fn arg_plan(ir: &Ir, arg: &Arg) -> ArgPlan {
                         (_, true, 1) => Some(Share::Rot(0)),
                         _ => None,
                     },
-                    Rotation::Measured { rows } => rows.get(l).and_then(|r| r.get(pos)).copied().flatten().map(Share::Rot),
+                    Rotation::Measured { rows } => rows
+                        .get(l)
+                        .and_then(|r| r.get(pos))
+                        .copied()
+                        .flatten()
+                        .map(Share::Rot),
                     Rotation::None => None,
                 }
             } else if ir.components[c].state == Some(l) {
@@ -57,7 +62,10 @@ pub fn arg_plan(ir: &Ir, arg: &Arg) -> ArgPlan {
             }
         }
     }
-    ArgPlan { signal: arg.signal, shares }
+    ArgPlan {
+        signal: arg.signal,
+        shares,
+    }
 }
 
 impl ArgPlan {
@@ -113,8 +121,15 @@ impl TermPlan {
 
 #[derive(Clone, Debug)]
 enum EntryPlan {
-    Poly { coefficient: f64, signs: Vec<usize>, vars: Vec<EvalVar> },
-    Term { term: usize, disturbed: bool },
+    Poly {
+        coefficient: f64,
+        signs: Vec<usize>,
+        vars: Vec<EvalVar>,
+    },
+    Term {
+        term: usize,
+        disturbed: bool,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -139,18 +154,34 @@ fn plan_predictor(columns: &[Column], n_outputs: usize) -> PredictorPlan {
                 .iter()
                 .filter(|e| e.output() == o)
                 .map(|e| match e {
-                    Entry::Poly { coefficient, signs, vars, .. } => {
-                        EntryPlan::Poly { coefficient: *coefficient, signs: signs.clone(), vars: vars.clone() }
-                    }
-                    Entry::Term { term, pointwise, .. } => {
-                        EntryPlan::Term { term: *term, disturbed: *pointwise == Pointwise::Measured }
-                    }
+                    Entry::Poly {
+                        coefficient,
+                        signs,
+                        vars,
+                        ..
+                    } => EntryPlan::Poly {
+                        coefficient: *coefficient,
+                        signs: signs.clone(),
+                        vars: vars.clone(),
+                    },
+                    Entry::Term {
+                        term, pointwise, ..
+                    } => EntryPlan::Term {
+                        term: *term,
+                        disturbed: *pointwise == Pointwise::Measured,
+                    },
                 })
                 .collect();
-            slots.push(Slot { index: o * n + j, entries });
+            slots.push(Slot {
+                index: o * n + j,
+                entries,
+            });
         }
     }
-    PredictorPlan { len: n * n_outputs, slots }
+    PredictorPlan {
+        len: n * n_outputs,
+        slots,
+    }
 }
 
 /// A model interpreted from its IR.
@@ -173,16 +204,29 @@ impl Interpreter {
             .iter()
             .map(|t| TermPlan {
                 coefficient: t.coefficient,
-                factors: t.factors.iter().map(|f| (arg_plan(&ir, &f.arg), f.modulus)).collect(),
+                factors: t
+                    .factors
+                    .iter()
+                    .map(|f| (arg_plan(&ir, &f.arg), f.modulus))
+                    .collect(),
                 parameter: t.parameter,
                 output: t.output,
             })
             .collect();
-        let by_output = (0..n_out).map(|o| (0..terms.len()).filter(|t| terms[*t].output == o).collect()).collect();
+        let by_output = (0..n_out)
+            .map(|o| (0..terms.len()).filter(|t| terms[*t].output == o).collect())
+            .collect();
         let basic = plan_predictor(&ir.predictors.basic, n_out);
         let augmented = plan_predictor(&ir.predictors.augmented, n_out);
         let measured = plan_predictor(&ir.predictors.measured, n_out);
-        Interpreter { ir, terms, by_output, basic, augmented, measured }
+        Interpreter {
+            ir,
+            terms,
+            by_output,
+            basic,
+            augmented,
+            measured,
+        }
     }
 
     #[inline]
@@ -192,7 +236,11 @@ impl Interpreter {
             let mut acc = 0.0;
             for (k, e) in slot.entries.iter().enumerate() {
                 let v = match e {
-                    EntryPlan::Poly { coefficient, signs: s, vars } => {
+                    EntryPlan::Poly {
+                        coefficient,
+                        signs: s,
+                        vars,
+                    } => {
                         let mut t = *coefficient;
                         for i in s {
                             t *= signs[*i];

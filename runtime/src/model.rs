@@ -1,8 +1,8 @@
 //! The [`Model`] trait: what every compiled model offers, whether generated
 //! by `include_model!` or interpreted from the IR at run time.
 
-use leeway_structure::ir::{Ir, PredictorKind, Report, Rotation};
 use leeway_structure::grammar::EquationKind;
+use leeway_structure::ir::{Ir, PredictorKind, Report, Rotation};
 
 /// The signals of one sample, as regressors read them.
 #[derive(Clone, Copy, Debug)]

@@ -36,8 +36,14 @@ fn coefficients(ir: &Ir, kind: PredictorKind, theta: &[f64], v: &[f64]) -> Vec<f
         .iter()
         .map(|c| match &c.kind {
             ColumnKind::Theta { parameter } => theta[*parameter],
-            ColumnKind::Rho { component, parameter } => v[*component] * theta[*parameter],
-            ColumnKind::Lambda { components: [a, b], parameter } => v[*a] * v[*b] * theta[*parameter],
+            ColumnKind::Rho {
+                component,
+                parameter,
+            } => v[*component] * theta[*parameter],
+            ColumnKind::Lambda {
+                components: [a, b],
+                parameter,
+            } => v[*a] * v[*b] * theta[*parameter],
         })
         .collect()
 }
@@ -50,19 +56,37 @@ fn check(name: &str, kind: PredictorKind, seed: &[f64]) -> Result<(), TestCaseEr
     let mut next = || it.next().unwrap_or(0.5);
     let states: Vec<f64> = (0..n_out).map(|_| 4.0 * next() - 2.0).collect();
     let inputs: Vec<f64> = (0..ir.inputs.len()).map(|_| 40.0 * next() - 20.0).collect();
-    let rotation: Vec<f64> = if ir.rotation_vars.len() == 2 && ir.rotation_vars[0].starts_with("cos") {
-        planar_rotation(7.0 * next()).to_vec()
-    } else {
-        (0..ir.rotation_vars.len()).map(|_| 2.0 * next() - 1.0).collect()
+    let rotation: Vec<f64> =
+        if ir.rotation_vars.len() == 2 && ir.rotation_vars[0].starts_with("cos") {
+            planar_rotation(7.0 * next()).to_vec()
+        } else {
+            (0..ir.rotation_vars.len())
+                .map(|_| 2.0 * next() - 1.0)
+                .collect()
+        };
+    let dist: Vec<f64> = (0..ir.components.len())
+        .map(|_| 3.0 * next() - 1.5)
+        .collect();
+    let theta: Vec<f64> = (0..ir.parameters.len())
+        .map(|_| 2.0 * next() - 1.0)
+        .collect();
+    let sig = Signals {
+        states: &states,
+        inputs: &inputs,
+        rotation: &rotation,
+        disturbances: &dist,
     };
-    let dist: Vec<f64> = (0..ir.components.len()).map(|_| 3.0 * next() - 1.5).collect();
-    let theta: Vec<f64> = (0..ir.parameters.len()).map(|_| 2.0 * next() - 1.0).collect();
-    let sig = Signals { states: &states, inputs: &inputs, rotation: &rotation, disturbances: &dist };
     // The sign of each sign argument at the true disturbance values.
     let signs: Vec<f64> = ir
         .sign_args
         .iter()
-        .map(|s| if leeway_runtime::interp::arg_plan(&ir, &s.arg).eval(&sig, true) < 0.0 { -1.0 } else { 1.0 })
+        .map(|s| {
+            if leeway_runtime::interp::arg_plan(&ir, &s.arg).eval(&sig, true) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            }
+        })
         .collect();
     let mut f = vec![0.0; n_out];
     m.rhs(&theta, &sig, &mut f);
@@ -73,7 +97,11 @@ fn check(name: &str, kind: PredictorKind, seed: &[f64]) -> Result<(), TestCaseEr
     for o in 0..n_out {
         let pred: f64 = (0..n).map(|j| phi[o * n + j] * coef[j]).sum();
         let scale = 1.0 + f[o].abs();
-        prop_assert!((pred - f[o]).abs() <= 1e-9 * scale, "{name} {kind:?} output {o}: {pred} vs {}", f[o]);
+        prop_assert!(
+            (pred - f[o]).abs() <= 1e-9 * scale,
+            "{name} {kind:?} output {o}: {pred} vs {}",
+            f[o]
+        );
     }
     Ok(())
 }

@@ -5,11 +5,25 @@ fn main() {
     let aggregate = args.iter().any(|a| a == "--aggregate");
     let src = std::fs::read_to_string(&path).unwrap_or_default();
     let t = std::time::Instant::now();
-    let c = leeway_structure::compile(&src, &leeway_structure::Options { aggregate, patterns: None });
+    let c = leeway_structure::compile(
+        &src,
+        &leeway_structure::Options {
+            aggregate,
+            patterns: None,
+        },
+    );
     let el = t.elapsed();
     if let Some(ir) = &c.ir {
         print!("{}", leeway_structure::render::render(ir));
     }
-    print!("{}", leeway_structure::grammar::render(&c.diagnostics, &path, &src, leeway_structure::grammar::RenderStyle::Plain));
+    print!(
+        "{}",
+        leeway_structure::grammar::render(
+            &c.diagnostics,
+            &path,
+            &src,
+            leeway_structure::grammar::RenderStyle::Plain
+        )
+    );
     eprintln!("compile: {el:?}");
 }

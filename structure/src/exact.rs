@@ -35,7 +35,11 @@ pub fn parse_decimal(text: &str) -> Option<Q> {
         return None;
     }
     let digits = format!("{int}{frac}");
-    let mut num: BigInt = if digits.is_empty() { BigInt::zero() } else { digits.parse().ok()? };
+    let mut num: BigInt = if digits.is_empty() {
+        BigInt::zero()
+    } else {
+        digits.parse().ok()?
+    };
     if neg {
         num = -num;
     }
@@ -45,7 +49,11 @@ pub fn parse_decimal(text: &str) -> Option<Q> {
     }
     let ten = BigInt::from(10);
     let p = num_traits::pow(ten, scale.unsigned_abs() as usize);
-    Some(if scale >= 0 { Q::from_integer(num * p) } else { Q::new(num, p) })
+    Some(if scale >= 0 {
+        Q::from_integer(num * p)
+    } else {
+        Q::new(num, p)
+    })
 }
 
 /// The nearest `f64` to an exact rational (ties to even), so generated code
@@ -69,14 +77,22 @@ pub fn to_f64(q: &Q) -> f64 {
     let a = q.abs();
     let (n, d) = (a.numer().clone(), a.denom().clone());
     let shift = 128i64 - (n.bits() as i64 - d.bits() as i64);
-    let scaled = if shift >= 0 { (n << shift as usize) / d } else { n / (d << (-shift) as usize) };
+    let scaled = if shift >= 0 {
+        (n << shift as usize) / d
+    } else {
+        n / (d << (-shift) as usize)
+    };
     let v = scaled.to_f64().unwrap_or(f64::INFINITY) * 2f64.powi(-shift as i32);
     if neg { -v } else { v }
 }
 
 /// Exact rational rendering: `3`, `-1/2`.
 pub fn fmt_q(q: &Q) -> String {
-    if q.is_integer() { q.numer().to_string() } else { format!("{}/{}", q.numer(), q.denom()) }
+    if q.is_integer() {
+        q.numer().to_string()
+    } else {
+        format!("{}/{}", q.numer(), q.denom())
+    }
 }
 
 /// Parses [`fmt_q`]'s output.
@@ -139,7 +155,10 @@ impl Field for Small {
     fn mul(&self, o: &Self) -> Option<Self> {
         let g1 = self.n.gcd(&o.d).max(1);
         let g2 = o.n.gcd(&self.d).max(1);
-        Small::make((self.n / g1).checked_mul(o.n / g2)?, (self.d / g2).checked_mul(o.d / g1)?)
+        Small::make(
+            (self.n / g1).checked_mul(o.n / g2)?,
+            (self.d / g2).checked_mul(o.d / g1)?,
+        )
     }
     fn div(&self, o: &Self) -> Option<Self> {
         if o.n == 0 {
@@ -166,7 +185,11 @@ impl Field for Q {
         Some(self * o)
     }
     fn div(&self, o: &Self) -> Option<Self> {
-        if Zero::is_zero(o) { None } else { Some(self / o) }
+        if Zero::is_zero(o) {
+            None
+        } else {
+            Some(self / o)
+        }
     }
     fn from_q(q: &Q) -> Option<Self> {
         Some(q.clone())
@@ -214,7 +237,10 @@ pub fn echelon(rows: &[Vec<Q>], n_cols: usize) -> Echelon {
         return e;
     }
     // Overflow in the fast path: redo exactly with big rationals (cannot fail).
-    echelon_in::<Q>(rows, n_cols).unwrap_or(Echelon { pivot: vec![false; n_cols], combination: vec![Vec::new(); n_cols] })
+    echelon_in::<Q>(rows, n_cols).unwrap_or(Echelon {
+        pivot: vec![false; n_cols],
+        combination: vec![Vec::new(); n_cols],
+    })
 }
 
 fn echelon_in<F: Field>(rows: &[Vec<Q>], n_cols: usize) -> Option<Echelon> {
@@ -227,20 +253,21 @@ fn echelon_in<F: Field>(rows: &[Vec<Q>], n_cols: usize) -> Option<Echelon> {
     let mut pivot_row_of: Vec<Option<usize>> = vec![None; n_cols];
     let mut next_row = 0;
     for col in 0..n_cols {
-        let Some(p) = (next_row..m.len()).find(|&i| !m[i][col].is_zero()) else { continue };
+        let Some(p) = (next_row..m.len()).find(|&i| !m[i][col].is_zero()) else {
+            continue;
+        };
         m.swap(next_row, p);
         let inv = m[next_row][col].clone();
-        for j in col..n_cols {
-            let v = m[next_row][j].div(&inv)?;
-            m[next_row][j] = v;
+        for x in m[next_row][col..n_cols].iter_mut() {
+            *x = x.div(&inv)?;
         }
-        for i in 0..m.len() {
-            if i != next_row && !m[i][col].is_zero() {
-                let f = m[i][col].clone();
-                for j in col..n_cols {
-                    if !m[next_row][j].is_zero() {
-                        let v = m[i][j].sub(&f.mul(&m[next_row][j])?)?;
-                        m[i][j] = v;
+        let pivot_row = m[next_row].clone();
+        for (i, row) in m.iter_mut().enumerate() {
+            if i != next_row && !row[col].is_zero() {
+                let f = row[col].clone();
+                for (x, pv) in row[col..n_cols].iter_mut().zip(&pivot_row[col..n_cols]) {
+                    if !pv.is_zero() {
+                        *x = x.sub(&f.mul(pv)?)?;
                     }
                 }
             }
@@ -291,7 +318,10 @@ mod tests {
     fn f64_conversion_rounds_once() {
         assert_eq!(to_f64(&q(1, 10)), 0.1);
         assert_eq!(to_f64(&q(-3, 20000)), -0.00015);
-        assert_eq!(to_f64(&parse_decimal("0.0000000000000000000001").unwrap_or_default()), 1e-22);
+        assert_eq!(
+            to_f64(&parse_decimal("0.0000000000000000000001").unwrap_or_default()),
+            1e-22
+        );
     }
 
     #[test]
@@ -312,7 +342,10 @@ mod tests {
     #[test]
     fn overflow_falls_back_to_big_rationals() {
         let big = Q::from_integer(BigInt::from(i128::MAX) * BigInt::from(4));
-        let rows = vec![vec![big.clone(), big.clone() * q(3, 1)], vec![q(1, 1), q(3, 1)]];
+        let rows = vec![
+            vec![big.clone(), big.clone() * q(3, 1)],
+            vec![q(1, 1), q(3, 1)],
+        ];
         let e = echelon(&rows, 2);
         assert_eq!(e.pivot, vec![true, false]);
         assert_eq!(e.combination[1], vec![(0, q(3, 1))]);

@@ -5,7 +5,9 @@
 //! evaluated pointwise.
 
 use crate::exact::{Q, fmt_q, to_f64};
-use crate::ir::{Arg, Column, ColumnKind, Entry, EvalVar, Pointwise, SignArg, Signal, StructVar, StructuralEntry};
+use crate::ir::{
+    Arg, Column, ColumnKind, Entry, EvalVar, Pointwise, SignArg, Signal, StructVar, StructuralEntry,
+};
 use crate::poly::{Monomial, NormalForm, Poly, Var};
 use crate::resolve::{Resolved, RotationDecl};
 use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
@@ -23,7 +25,9 @@ pub enum View {
 
 /// The normal form of this model's rotation.
 pub fn normal_form(r: &Resolved) -> NormalForm {
-    NormalForm { planar: matches!(r.rotation, RotationDecl::Planar { .. }) }
+    NormalForm {
+        planar: matches!(r.rotation, RotationDecl::Planar { .. }),
+    }
 }
 
 /// Sign arguments: every state argument under a modulus, in order of first use.
@@ -31,9 +35,22 @@ pub fn sign_args(r: &Resolved, terms: &[TermDecl]) -> Vec<SignArg> {
     let mut out: Vec<SignArg> = Vec::new();
     for t in terms {
         for f in &t.factors {
-            if f.modulus && matches!(f.arg.signal, Signal::State(_)) && !out.iter().any(|s| s.arg == f.arg) {
+            if f.modulus
+                && matches!(f.arg.signal, Signal::State(_))
+                && !out.iter().any(|s| s.arg == f.arg)
+            {
                 let measured = arg_medium(r, &f.arg).is_some_and(|d| r.disturbances[d].measured);
-                out.push(SignArg { name: factors_text(r, &[crate::ir::Factor { arg: f.arg, modulus: false }]), arg: f.arg, measured });
+                out.push(SignArg {
+                    name: factors_text(
+                        r,
+                        &[crate::ir::Factor {
+                            arg: f.arg,
+                            modulus: false,
+                        }],
+                    ),
+                    arg: f.arg,
+                    measured,
+                });
             }
         }
     }
@@ -55,10 +72,12 @@ fn rotation_entry(r: &Resolved, l: usize, pos: usize) -> Poly {
                 _ => Poly::zero(),
             }
         }
-        RotationDecl::Measured { rows, .. } => match rows.get(l).and_then(|row| row.get(pos)).copied().flatten() {
-            Some(k) => Poly::var(Var::Rot(k)),
-            None => Poly::zero(),
-        },
+        RotationDecl::Measured { rows, .. } => {
+            match rows.get(l).and_then(|row| row.get(pos)).copied().flatten() {
+                Some(k) => Poly::var(Var::Rot(k)),
+                None => Poly::zero(),
+            }
+        }
         RotationDecl::None => Poly::zero(),
     }
 }
@@ -75,7 +94,11 @@ pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, nf: NormalForm) -> Poly {
     let dist = &r.disturbances[d];
     let measured_here = dist.measured && view == View::Measured;
     for (pos, &c) in dist.components.iter().enumerate() {
-        let v = if measured_here { Var::Measured(c) } else { Var::Dist(c) };
+        let v = if measured_here {
+            Var::Measured(c)
+        } else {
+            Var::Dist(c)
+        };
         let share = if dist.earth {
             rotation_entry(r, l, pos)
         } else if r.components[c].state == Some(l) {
@@ -91,7 +114,13 @@ pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, nf: NormalForm) -> Poly {
 /// `coefficient · Π factors` with every state modulus replaced by its sign
 /// variable (or by +1 for measured media in the measured view, which are
 /// evaluated pointwise and need no fixed sign).
-pub fn term_poly(r: &Resolved, t: &TermDecl, signs: &[SignArg], view: View, nf: NormalForm) -> Poly {
+pub fn term_poly(
+    r: &Resolved,
+    t: &TermDecl,
+    signs: &[SignArg],
+    view: View,
+    nf: NormalForm,
+) -> Poly {
     let mut p = Poly::constant(t.coefficient.clone());
     for f in &t.factors {
         let base = if f.modulus {
@@ -99,7 +128,8 @@ pub fn term_poly(r: &Resolved, t: &TermDecl, signs: &[SignArg], view: View, nf: 
                 Signal::Input(i) => Poly::var(Var::AbsInput(i)),
                 Signal::State(_) => {
                     let a = arg_poly(r, &f.arg, view, nf);
-                    let pointwise = view == View::Measured && arg_medium(r, &f.arg).is_some_and(|d| r.disturbances[d].measured);
+                    let pointwise = view == View::Measured
+                        && arg_medium(r, &f.arg).is_some_and(|d| r.disturbances[d].measured);
                     match (pointwise, signs.iter().position(|s| s.arg == f.arg)) {
                         (false, Some(i)) => Poly::var(Var::Sign(i)).mul(&a, nf),
                         _ => a,
@@ -118,12 +148,26 @@ fn column_name(kind: &ColumnKind, params: &[ParamDecl], r: &Resolved) -> String 
     let comp = |c: usize| r.components[c].name.name.clone();
     match kind {
         ColumnKind::Theta { parameter } => params[*parameter].name.clone(),
-        ColumnKind::Rho { component, parameter } => format!("rho[{},{}]", comp(*component), params[*parameter].name),
-        ColumnKind::Lambda { components: [a, b], parameter } if a == b => {
+        ColumnKind::Rho {
+            component,
+            parameter,
+        } => format!("rho[{},{}]", comp(*component), params[*parameter].name),
+        ColumnKind::Lambda {
+            components: [a, b],
+            parameter,
+        } if a == b => {
             format!("lambda[{}^2,{}]", comp(*a), params[*parameter].name)
         }
-        ColumnKind::Lambda { components: [a, b], parameter } => {
-            format!("lambda[{}*{},{}]", comp(*a), comp(*b), params[*parameter].name)
+        ColumnKind::Lambda {
+            components: [a, b],
+            parameter,
+        } => {
+            format!(
+                "lambda[{}*{},{}]",
+                comp(*a),
+                comp(*b),
+                params[*parameter].name
+            )
         }
     }
 }
@@ -152,7 +196,13 @@ fn eval_entries(output: usize, p: &Poly) -> Vec<Entry> {
                     vars.push(ev);
                 }
             }
-            Entry::Poly { output, coefficient: to_f64(q), coefficient_exact: fmt_q(q), signs, vars }
+            Entry::Poly {
+                output,
+                coefficient: to_f64(q),
+                coefficient_exact: fmt_q(q),
+                signs,
+                vars,
+            }
         })
         .collect()
 }
@@ -195,10 +245,21 @@ fn accumulate(acc: &mut Acc, t: &TermDecl, poly: &Poly) {
     let parts = poly.split_by(|v| matches!(v, Var::Dist(_)));
     for (key, rest) in parts {
         let kind = match key.as_slice() {
-            [] => ColumnKind::Theta { parameter: t.parameter },
-            [(Var::Dist(j), 1)] => ColumnKind::Rho { component: *j, parameter: t.parameter },
-            [(Var::Dist(j), 2)] => ColumnKind::Lambda { components: [*j, *j], parameter: t.parameter },
-            [(Var::Dist(j), 1), (Var::Dist(m), 1)] => ColumnKind::Lambda { components: [*j, *m], parameter: t.parameter },
+            [] => ColumnKind::Theta {
+                parameter: t.parameter,
+            },
+            [(Var::Dist(j), 1)] => ColumnKind::Rho {
+                component: *j,
+                parameter: t.parameter,
+            },
+            [(Var::Dist(j), 2)] => ColumnKind::Lambda {
+                components: [*j, *j],
+                parameter: t.parameter,
+            },
+            [(Var::Dist(j), 1), (Var::Dist(m), 1)] => ColumnKind::Lambda {
+                components: [*j, *m],
+                parameter: t.parameter,
+            },
             // A class term has degree ≤ 2 in v; nothing else can occur.
             _ => continue,
         };
@@ -210,12 +271,23 @@ fn accumulate(acc: &mut Acc, t: &TermDecl, poly: &Poly) {
 fn order_key(k: &ColumnKind) -> (u8, usize, usize, usize) {
     match k {
         ColumnKind::Theta { parameter } => (0, *parameter, 0, 0),
-        ColumnKind::Rho { component, parameter } => (1, *parameter, *component, 0),
-        ColumnKind::Lambda { components: [a, b], parameter } => (2, *parameter, *a, *b),
+        ColumnKind::Rho {
+            component,
+            parameter,
+        } => (1, *parameter, *component, 0),
+        ColumnKind::Lambda {
+            components: [a, b],
+            parameter,
+        } => (2, *parameter, *a, *b),
     }
 }
 
-fn finish(acc: Acc, params: &[ParamDecl], r: &Resolved, pointwise: &BTreeMap<usize, Vec<(usize, usize, Poly)>>) -> Vec<Column> {
+fn finish(
+    acc: Acc,
+    params: &[ParamDecl],
+    r: &Resolved,
+    pointwise: &BTreeMap<usize, Vec<(usize, usize, Poly)>>,
+) -> Vec<Column> {
     let mut kinds: Vec<ColumnKind> = acc.keys().cloned().collect();
     for p in pointwise.keys() {
         let k = ColumnKind::Theta { parameter: *p };
@@ -239,21 +311,35 @@ fn finish(acc: Acc, params: &[ParamDecl], r: &Resolved, pointwise: &BTreeMap<usi
                 && let Some(list) = pointwise.get(&parameter)
             {
                 for (term, output, poly) in list {
-                    entries.push(Entry::Term { output: *output, term: *term, pointwise: Pointwise::Measured });
+                    entries.push(Entry::Term {
+                        output: *output,
+                        term: *term,
+                        pointwise: Pointwise::Measured,
+                    });
                     structural.extend(structural_entries(*output, poly));
                 }
             }
             if entries.is_empty() {
                 return None;
             }
-            Some(Column { name: column_name(&kind, params, r), kind, entries, structural })
+            Some(Column {
+                name: column_name(&kind, params, r),
+                kind,
+                entries,
+                structural,
+            })
         })
         .collect()
 }
 
 /// The columns of the augmented (IV2) and measured (IV3) predictors, and the
 /// basic one (IV1).
-pub fn expand(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], signs: &[SignArg]) -> (Vec<Column>, Vec<Column>, Vec<Column>) {
+pub fn expand(
+    r: &Resolved,
+    params: &[ParamDecl],
+    terms: &[TermDecl],
+    signs: &[SignArg],
+) -> (Vec<Column>, Vec<Column>, Vec<Column>) {
     let nf = normal_form(r);
     let mut aug: Acc = BTreeMap::new();
     let mut meas: Acc = BTreeMap::new();
@@ -261,10 +347,17 @@ pub fn expand(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], signs: &[S
     for (ti, t) in terms.iter().enumerate() {
         let pa = term_poly(r, t, signs, View::Augmented, nf);
         accumulate(&mut aug, t, &pa);
-        let measured_medium = t.factors.iter().find_map(|f| arg_medium(r, &f.arg)).is_some_and(|d| r.disturbances[d].measured);
+        let measured_medium = t
+            .factors
+            .iter()
+            .find_map(|f| arg_medium(r, &f.arg))
+            .is_some_and(|d| r.disturbances[d].measured);
         if measured_medium {
             let pm = term_poly(r, t, signs, View::Measured, nf);
-            pointwise.entry(t.parameter).or_default().push((ti, t.output, pm));
+            pointwise
+                .entry(t.parameter)
+                .or_default()
+                .push((ti, t.output, pm));
         } else {
             accumulate(&mut meas, t, &pa);
         }
@@ -278,10 +371,23 @@ pub fn expand(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], signs: &[S
                 .iter()
                 .enumerate()
                 .filter(|(_, t)| t.parameter == p)
-                .map(|(ti, t)| Entry::Term { output: t.output, term: ti, pointwise: Pointwise::Undisturbed })
+                .map(|(ti, t)| Entry::Term {
+                    output: t.output,
+                    term: ti,
+                    pointwise: Pointwise::Undisturbed,
+                })
                 .collect();
-            let structural = augmented.iter().find(|c| c.kind == kind).map(|c| c.structural.clone()).unwrap_or_default();
-            Column { name: params[p].name.clone(), kind, entries, structural }
+            let structural = augmented
+                .iter()
+                .find(|c| c.kind == kind)
+                .map(|c| c.structural.clone())
+                .unwrap_or_default();
+            Column {
+                name: params[p].name.clone(),
+                kind,
+                entries,
+                structural,
+            }
         })
         .collect();
     (basic, augmented, measured)

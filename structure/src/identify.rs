@@ -13,8 +13,8 @@
 
 use crate::exact::{Echelon, Q, echelon, fmt_q, parse_q};
 use crate::ir::{
-    Aggregate, Column, ColumnKind, Combination, DroppedNuisance, Ir, KeptNuisance, NuisanceReport, PredictorKind, Report,
-    Separation, SignPattern, StructVar,
+    Aggregate, Column, ColumnKind, Combination, DroppedNuisance, Ir, KeptNuisance, NuisanceReport,
+    PredictorKind, Report, Separation, SignPattern, StructVar,
 };
 use num_traits::{One, Signed, Zero};
 use std::collections::{BTreeMap, BTreeSet};
@@ -24,10 +24,13 @@ pub const MAX_ENUMERATED_SIGNS: usize = 8;
 /// Largest number of rank evaluations one experiment search may spend.
 pub const SEARCH_BUDGET: usize = 4000;
 
+/// One parsed structural monomial: (output, coefficient, variables with powers).
+type StructMonomial = (usize, Q, Vec<(StructVar, u32)>);
+
 /// Parsed structural polynomials of a predictor's columns.
 #[derive(Clone, Debug)]
 pub struct Structural {
-    cols: Vec<Vec<(usize, Q, Vec<(StructVar, u32)>)>>,
+    cols: Vec<Vec<StructMonomial>>,
 }
 
 impl Structural {
@@ -35,7 +38,18 @@ impl Structural {
     pub fn new(columns: &[Column]) -> Structural {
         let cols = columns
             .iter()
-            .map(|c| c.structural.iter().map(|e| (e.output, parse_q(&e.coefficient).unwrap_or_else(Q::zero), e.vars.clone())).collect())
+            .map(|c| {
+                c.structural
+                    .iter()
+                    .map(|e| {
+                        (
+                            e.output,
+                            parse_q(&e.coefficient).unwrap_or_else(Q::zero),
+                            e.vars.clone(),
+                        )
+                    })
+                    .collect()
+            })
             .collect();
         Structural { cols }
     }
@@ -49,13 +63,32 @@ impl Structural {
     }
     /// The sign arguments a column's structural polynomial involves.
     pub fn signs_of(&self, col: usize) -> BTreeSet<usize> {
-        self.cols[col].iter().flat_map(|(_, _, vars)| vars.iter().filter_map(|(v, _)| if let StructVar::Sign(i) = v { Some(*i) } else { None })).collect()
+        self.cols[col]
+            .iter()
+            .flat_map(|(_, _, vars)| {
+                vars.iter().filter_map(|(v, _)| {
+                    if let StructVar::Sign(i) = v {
+                        Some(*i)
+                    } else {
+                        None
+                    }
+                })
+            })
+            .collect()
     }
     /// Sign sets per monomial, if every monomial of the column has the same one.
     fn homogeneous_signs(&self, col: usize) -> Option<BTreeSet<usize>> {
-        let mut sets = self.cols[col]
-            .iter()
-            .map(|(_, _, vars)| vars.iter().filter_map(|(v, _)| if let StructVar::Sign(i) = v { Some(*i) } else { None }).collect::<BTreeSet<_>>());
+        let mut sets = self.cols[col].iter().map(|(_, _, vars)| {
+            vars.iter()
+                .filter_map(|(v, _)| {
+                    if let StructVar::Sign(i) = v {
+                        Some(*i)
+                    } else {
+                        None
+                    }
+                })
+                .collect::<BTreeSet<_>>()
+        });
         let first = sets.next().unwrap_or_default();
         sets.all(|s| s == first).then_some(first)
     }
@@ -100,8 +133,13 @@ impl Reduction {
 }
 
 /// Preference order: nuisance (in column order), θ of unmeasured media, θ of measured media.
-pub fn preference_order(columns: &[Column], measured_parameter: &dyn Fn(usize) -> bool) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..columns.len()).filter(|c| columns[*c].kind.is_nuisance()).collect();
+pub fn preference_order(
+    columns: &[Column],
+    measured_parameter: &dyn Fn(usize) -> bool,
+) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..columns.len())
+        .filter(|c| columns[*c].kind.is_nuisance())
+        .collect();
     order.extend((0..columns.len()).filter(|c| matches!(columns[*c].kind, ColumnKind::Theta { parameter } if !measured_parameter(parameter))));
     order.extend((0..columns.len()).filter(|c| matches!(columns[*c].kind, ColumnKind::Theta { parameter } if measured_parameter(parameter))));
     order
@@ -177,7 +215,8 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                                 }
                             }
                             let key = (pi, *o, rest);
-                            let slot = &mut rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j];
+                            let slot =
+                                &mut rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j];
                             if sign > 0 {
                                 *slot += q;
                             } else {
@@ -188,17 +227,27 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                 }
             }
         }
-        let matrix: Vec<Vec<Q>> = rows.into_values().filter(|r| r.iter().any(|q| !q.is_zero())).collect();
+        let matrix: Vec<Vec<Q>> = rows
+            .into_values()
+            .filter(|r| r.iter().any(|q| !q.is_zero()))
+            .collect();
         let e: Echelon = echelon(&matrix, width);
         for (j, &c) in cols.iter().enumerate() {
             pivot[c] = e.pivot[j];
-            combination[c] = e.combination[j].iter().map(|(k, q)| (cols[*k], q.clone())).collect();
+            combination[c] = e.combination[j]
+                .iter()
+                .map(|(k, q)| (cols[*k], q.clone()))
+                .collect();
         }
     }
     for c in empty_cols {
         pivot[c] = false;
     }
-    Reduction { order: order.to_vec(), pivot, combination }
+    Reduction {
+        order: order.to_vec(),
+        pivot,
+        combination,
+    }
 }
 
 /// Context for messages: names of parameters, columns and components.
@@ -218,14 +267,28 @@ impl Names<'_> {
         let comp = |i: usize| self.ir.components[i].name.clone();
         match &self.columns[c].kind {
             ColumnKind::Theta { parameter } => self.param(*parameter).to_string(),
-            ColumnKind::Rho { component, parameter } => format!("E[{}]*{}", comp(*component), self.param(*parameter)),
-            ColumnKind::Lambda { components: [a, b], parameter } if a == b => format!("E[{}^2]*{}", comp(*a), self.param(*parameter)),
-            ColumnKind::Lambda { components: [a, b], parameter } => format!("E[{}*{}]*{}", comp(*a), comp(*b), self.param(*parameter)),
+            ColumnKind::Rho {
+                component,
+                parameter,
+            } => format!("E[{}]*{}", comp(*component), self.param(*parameter)),
+            ColumnKind::Lambda {
+                components: [a, b],
+                parameter,
+            } if a == b => format!("E[{}^2]*{}", comp(*a), self.param(*parameter)),
+            ColumnKind::Lambda {
+                components: [a, b],
+                parameter,
+            } => format!("E[{}*{}]*{}", comp(*a), comp(*b), self.param(*parameter)),
         }
     }
     /// The regressor text of a parameter's first term.
     pub fn term_text(&self, p: usize) -> String {
-        self.ir.terms.iter().find(|t| t.parameter == p).map(|t| t.text.clone()).unwrap_or_default()
+        self.ir
+            .terms
+            .iter()
+            .find(|t| t.parameter == p)
+            .map(|t| t.text.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -269,7 +332,9 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
         ColumnKind::Theta { parameter } => Some(parameter),
         _ => None,
     };
-    let dropped: Vec<usize> = (0..cols.len()).filter(|c| !red.pivot[*c] && param_of(*c).is_some()).collect();
+    let dropped: Vec<usize> = (0..cols.len())
+        .filter(|c| !red.pivot[*c] && param_of(*c).is_some())
+        .collect();
     // Union-find over θ columns linked by combinations.
     let mut group_of: BTreeMap<usize, usize> = BTreeMap::new();
     let mut groups: Vec<BTreeSet<usize>> = Vec::new();
@@ -281,7 +346,10 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
                 members.insert(*k);
             }
         }
-        let existing: BTreeSet<usize> = members.iter().filter_map(|m| group_of.get(m).copied()).collect();
+        let existing: BTreeSet<usize> = members
+            .iter()
+            .filter_map(|m| group_of.get(m).copied())
+            .collect();
         let target = match existing.iter().next() {
             Some(&g) => g,
             None => {
@@ -320,16 +388,33 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
                 }
             }
             let text = linear_text(&items);
-            aggregates.push(Aggregate { parameter: pk, estimates: text.clone(), absorbed });
+            aggregates.push(Aggregate {
+                parameter: pk,
+                estimates: text.clone(),
+                absorbed,
+            });
             idents.push(text);
         }
-        let nuisance: BTreeSet<usize> =
-            lost.iter().flat_map(|d| red.combination[*d].iter().map(|(k, _)| *k)).filter(|k| param_of(*k).is_none()).collect();
+        let nuisance: BTreeSet<usize> = lost
+            .iter()
+            .flat_map(|d| red.combination[*d].iter().map(|(k, _)| *k))
+            .filter(|k| param_of(*k).is_none())
+            .collect();
         let mut params: Vec<usize> = g.iter().filter_map(|c| param_of(*c)).collect();
         params.sort_unstable();
-        let list = quoted_list(&params.iter().map(|p| names.param(*p).to_string()).collect::<Vec<_>>());
+        let list = quoted_list(
+            &params
+                .iter()
+                .map(|p| names.param(*p).to_string())
+                .collect::<Vec<_>>(),
+        );
         let mut message = if idents.is_empty() {
-            let empty: Vec<String> = lost.iter().filter(|d| red.combination[**d].is_empty()).filter_map(|d| param_of(*d)).map(|p| format!("`{}`", names.param(p))).collect();
+            let empty: Vec<String> = lost
+                .iter()
+                .filter(|d| red.combination[**d].is_empty())
+                .filter_map(|d| param_of(*d))
+                .map(|p| format!("`{}`", names.param(p)))
+                .collect();
             if !empty.is_empty() && nuisance.is_empty() {
                 format!(
                     "{} {} not excited: the regressor vanishes or is constant within an experiment (zero-mean instruments annihilate constants)",
@@ -346,9 +431,17 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
             let ns: Vec<String> = nuisance.iter().map(|k| cols[*k].name.clone()).collect();
             message.push_str(&format!(" (together with {})", ns.join(", ")));
         }
-        combinations.push(Combination { parameters: params, identifiable: idents, message });
+        combinations.push(Combination {
+            parameters: params,
+            identifiable: idents,
+            message,
+        });
     }
-    Verdict { identifiable: dropped.is_empty(), combinations, aggregates }
+    Verdict {
+        identifiable: dropped.is_empty(),
+        combinations,
+        aggregates,
+    }
 }
 
 fn quoted_list(items: &[String]) -> String {
@@ -363,7 +456,9 @@ fn quoted_list(items: &[String]) -> String {
 /// The nuisance reduction: kept columns and what each estimates; dropped ones and why.
 pub fn nuisance_report(names: &Names, red: &Reduction) -> NuisanceReport {
     let cols = names.columns;
-    let nuisance: Vec<usize> = (0..cols.len()).filter(|c| cols[*c].kind.is_nuisance()).collect();
+    let nuisance: Vec<usize> = (0..cols.len())
+        .filter(|c| cols[*c].kind.is_nuisance())
+        .collect();
     let mut kept = Vec::new();
     let mut dropped = Vec::new();
     for &c in &nuisance {
@@ -376,23 +471,45 @@ pub fn nuisance_report(names: &Names, red: &Reduction) -> NuisanceReport {
                     items.push((names.moment(d), q.clone()));
                 }
             }
-            kept.push(KeptNuisance { column: c, name: cols[c].name.clone(), estimates: linear_text(&items) });
+            kept.push(KeptNuisance {
+                column: c,
+                name: cols[c].name.clone(),
+                estimates: linear_text(&items),
+            });
         } else {
             let reason = if red.combination[c].is_empty() {
                 "constant within an experiment (annihilated by zero-mean instruments)".to_string()
             } else {
-                let items: Vec<(String, Q)> = red.combination[c].iter().map(|(k, q)| (cols[*k].name.clone(), q.clone())).collect();
+                let items: Vec<(String, Q)> = red.combination[c]
+                    .iter()
+                    .map(|(k, q)| (cols[*k].name.clone(), q.clone()))
+                    .collect();
                 format!("= {}", linear_text(&items))
             };
-            dropped.push(DroppedNuisance { column: c, name: cols[c].name.clone(), reason });
+            dropped.push(DroppedNuisance {
+                column: c,
+                name: cols[c].name.clone(),
+                reason,
+            });
         }
     }
-    NuisanceReport { before: nuisance.len(), after: kept.len(), kept, dropped }
+    NuisanceReport {
+        before: nuisance.len(),
+        after: kept.len(),
+        kept,
+        dropped,
+    }
 }
 
 /// Every sign pattern of `n` arguments, all-plus first.
 pub fn all_patterns(n: usize) -> Vec<SignPattern> {
-    (0..(1usize << n)).map(|bits| (0..n).map(|i| if bits >> i & 1 == 1 { -1 } else { 1 }).collect()).collect()
+    (0..(1usize << n))
+        .map(|bits| {
+            (0..n)
+                .map(|i| if bits >> i & 1 == 1 { -1 } else { 1 })
+                .collect()
+        })
+        .collect()
 }
 
 /// A predictor's analysis context.
@@ -433,7 +550,11 @@ impl<'a> Analysis<'a> {
     /// θ identifiable from these patterns.
     pub fn identifiable(&self, patterns: Patterns) -> bool {
         let red = self.reduce(patterns);
-        self.names.columns.iter().enumerate().all(|(c, col)| col.kind.is_nuisance() || red.pivot[c])
+        self.names
+            .columns
+            .iter()
+            .enumerate()
+            .all(|(c, col)| col.kind.is_nuisance() || red.pivot[c])
     }
     /// Are the θ columns of `group` free of every null vector?
     fn group_identifiable(&self, patterns: Patterns, group: &[usize]) -> bool {
@@ -446,7 +567,9 @@ impl<'a> Analysis<'a> {
             .filter(|(_, c)| matches!(c.kind, ColumnKind::Theta { parameter } if group.contains(&parameter)))
             .map(|(i, _)| i)
             .collect();
-        red.null_space().iter().all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
+        red.null_space()
+            .iter()
+            .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
     }
     /// True when flipping any set of signs only negates whole columns.
     fn homogeneous(&self) -> bool {
@@ -454,7 +577,11 @@ impl<'a> Analysis<'a> {
     }
     /// The smallest set of sign patterns, over the given arguments (others +1),
     /// for which `ok` holds; `None` if none within the budget.
-    fn search(&self, args: &[usize], ok: &dyn Fn(&[SignPattern]) -> bool) -> Option<Vec<SignPattern>> {
+    fn search(
+        &self,
+        args: &[usize],
+        ok: &dyn Fn(&[SignPattern]) -> bool,
+    ) -> Option<Vec<SignPattern>> {
         let m = args.len().min(MAX_ENUMERATED_SIGNS);
         let candidates = self.expand_patterns(&args[..m]);
         let mut spent = 0usize;
@@ -513,13 +640,19 @@ impl<'a> Analysis<'a> {
         if self.relevant.len() > MAX_ENUMERATED_SIGNS {
             return None;
         }
-        Some(self.expand_patterns(&self.relevant).iter().all(|p| self.identifiable(Patterns::Set(std::slice::from_ref(p)))))
+        Some(
+            self.expand_patterns(&self.relevant)
+                .iter()
+                .all(|p| self.identifiable(Patterns::Set(std::slice::from_ref(p)))),
+        )
     }
     /// What separates an unidentifiable group.
     pub fn separation(&self, combination: &Combination) -> Separation {
         let group = &combination.parameters;
         let cols = self.names.columns;
-        let member_cols: Vec<usize> = (0..cols.len()).filter(|c| group.contains(&cols[*c].kind.parameter())).collect();
+        let member_cols: Vec<usize> = (0..cols.len())
+            .filter(|c| group.contains(&cols[*c].kind.parameter()))
+            .collect();
         let args: Vec<usize> = member_cols
             .iter()
             .flat_map(|c| self.structural.signs_of(*c))
@@ -527,18 +660,31 @@ impl<'a> Analysis<'a> {
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
-        let list = quoted_list(&group.iter().map(|p| self.names.param(*p).to_string()).collect::<Vec<_>>());
+        let list = quoted_list(
+            &group
+                .iter()
+                .map(|p| self.names.param(*p).to_string())
+                .collect::<Vec<_>>(),
+        );
         let sign_name = |i: &usize| self.names.ir.sign_args[*i].name.clone();
         let theta_signs: Vec<Option<BTreeSet<usize>>> = group
             .iter()
-            .filter_map(|p| cols.iter().position(|c| c.kind == ColumnKind::Theta { parameter: *p }))
+            .filter_map(|p| {
+                cols.iter()
+                    .position(|c| c.kind == ColumnKind::Theta { parameter: *p })
+            })
             .map(|c| self.structural.homogeneous_signs(c))
             .collect();
         if !self.group_identifiable(Patterns::All, group) {
             let texts: Vec<String> = group.iter().map(|p| self.names.term_text(*p)).collect();
             let why = match theta_signs.first() {
-                Some(Some(s)) if theta_signs.iter().all(|t| t.as_ref() == Some(s)) && s.is_empty() => {
-                    format!("{} carry no modulus, so no sign pattern tells them apart", texts.join(" and "))
+                Some(Some(s))
+                    if theta_signs.iter().all(|t| t.as_ref() == Some(s)) && s.is_empty() =>
+                {
+                    format!(
+                        "{} carry no modulus, so no sign pattern tells them apart",
+                        texts.join(" and ")
+                    )
                 }
                 Some(Some(s)) if theta_signs.iter().all(|t| t.as_ref() == Some(s)) => format!(
                     "{} carry the same sign factor ({}), so every experiment scales them alike",
@@ -547,26 +693,47 @@ impl<'a> Analysis<'a> {
                 ),
                 _ => "their regressors coincide in every sign pattern".to_string(),
             };
-            return Separation { parameters: group.clone(), patterns: None, message: format!("no experiment separates {list}: {why}") };
+            return Separation {
+                parameters: group.clone(),
+                patterns: None,
+                message: format!("no experiment separates {list}: {why}"),
+            };
         }
-        let found = self.search(&args, &|set| self.group_identifiable(Patterns::Set(set), group));
+        let found = self.search(&args, &|set| {
+            self.group_identifiable(Patterns::Set(set), group)
+        });
         let message = match (&found, theta_signs.as_slice()) {
             (Some(_), [Some(a), Some(b)]) => {
                 let diff: Vec<usize> = a.symmetric_difference(b).copied().collect();
                 match diff.as_slice() {
-                    [x] => format!("{list} are separated by experiments with both signs of {}", sign_name(x)),
+                    [x] => format!(
+                        "{list} are separated by experiments with both signs of {}",
+                        sign_name(x)
+                    ),
                     [x, y] => format!(
                         "{list} are separated by an experiment where sign({}) ≠ sign({}) together with one where they agree",
                         sign_name(x),
                         sign_name(y)
                     ),
-                    _ => format!("{list} are separated by the sign patterns {}", patterns_text(self.names.ir, found.as_deref().unwrap_or(&[]), self.kind)),
+                    _ => format!(
+                        "{list} are separated by the sign patterns {}",
+                        patterns_text(self.names.ir, found.as_deref().unwrap_or(&[]), self.kind)
+                    ),
                 }
             }
-            (Some(set), _) => format!("{list} are separated by the sign patterns {}", patterns_text(self.names.ir, set, self.kind)),
-            (None, _) => format!("{list}: no set of up to four sign patterns separates them (search budget)"),
+            (Some(set), _) => format!(
+                "{list} are separated by the sign patterns {}",
+                patterns_text(self.names.ir, set, self.kind)
+            ),
+            (None, _) => {
+                format!("{list}: no set of up to four sign patterns separates them (search budget)")
+            }
         };
-        Separation { parameters: group.clone(), patterns: found, message }
+        Separation {
+            parameters: group.clone(),
+            patterns: found,
+            message,
+        }
     }
 }
 
@@ -589,19 +756,34 @@ fn next_combination(idx: &mut [usize], n: usize) -> bool {
 
 /// The sign arguments a predictor fixes per experiment.
 pub fn relevant_signs(ir: &Ir, kind: PredictorKind) -> Vec<usize> {
-    (0..ir.sign_args.len()).filter(|i| kind != PredictorKind::Measured || !ir.sign_args[*i].measured).collect()
+    (0..ir.sign_args.len())
+        .filter(|i| kind != PredictorKind::Measured || !ir.sign_args[*i].measured)
+        .collect()
 }
 
 /// `{+water.u +water.v}, {+water.u -water.v}`.
 pub fn patterns_text(ir: &Ir, set: &[SignPattern], kind: PredictorKind) -> String {
-    set.iter().map(|p| pattern_text(ir, p, kind)).collect::<Vec<_>>().join(", ")
+    set.iter()
+        .map(|p| pattern_text(ir, p, kind))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// `{+water.u -water.v}`: the signs this predictor fixes.
 pub fn pattern_text(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
     let items: Vec<String> = relevant_signs(ir, kind)
         .into_iter()
-        .map(|i| format!("{}{}", if p.get(i).copied().unwrap_or(1) < 0 { "-" } else { "+" }, ir.sign_args[i].name))
+        .map(|i| {
+            format!(
+                "{}{}",
+                if p.get(i).copied().unwrap_or(1) < 0 {
+                    "-"
+                } else {
+                    "+"
+                },
+                ir.sign_args[i].name
+            )
+        })
         .collect();
     if items.is_empty() {
         return "{} (no modulus needs a fixed sign)".to_string();
@@ -626,15 +808,27 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
     let red_check = a.reduce(Patterns::Set(&check_set));
     let v_check = verdict(&a.names, &red_check);
     let required = if options.patterns.is_some() {
-        if v_check.identifiable { check_set.clone() } else { Vec::new() }
+        if v_check.identifiable {
+            check_set.clone()
+        } else {
+            Vec::new()
+        }
     } else {
         a.required_patterns().unwrap_or_default()
     };
     let identifiable = !required.is_empty();
-    let reduction_set = if options.patterns.is_some() || !identifiable { check_set.clone() } else { required.clone() };
+    let reduction_set = if options.patterns.is_some() || !identifiable {
+        check_set.clone()
+    } else {
+        required.clone()
+    };
     let red = a.reduce(Patterns::Set(&reduction_set));
     let v = verdict(&a.names, &red);
-    let separations = v_check.combinations.iter().map(|c| a.separation(c)).collect();
+    let separations = v_check
+        .combinations
+        .iter()
+        .map(|c| a.separation(c))
+        .collect();
     Report {
         identifiable,
         any_single_pattern: a.any_single_pattern().unwrap_or(v_check.identifiable),
@@ -643,7 +837,11 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
         unidentifiable: v_check.combinations,
         separations,
         nuisance: nuisance_report(&a.names, &red),
-        aggregates: if options.aggregate { v.aggregates } else { Vec::new() },
+        aggregates: if options.aggregate {
+            v.aggregates
+        } else {
+            Vec::new()
+        },
         notes: Vec::new(),
     }
 }

@@ -252,9 +252,9 @@ impl ColumnKind {
     /// The physical parameter involved.
     pub fn parameter(&self) -> usize {
         match self {
-            ColumnKind::Theta { parameter } | ColumnKind::Rho { parameter, .. } | ColumnKind::Lambda { parameter, .. } => {
-                *parameter
-            }
+            ColumnKind::Theta { parameter }
+            | ColumnKind::Rho { parameter, .. }
+            | ColumnKind::Lambda { parameter, .. } => *parameter,
         }
     }
 }

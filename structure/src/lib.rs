@@ -38,67 +38,134 @@ impl Compilation {
     }
     /// True when the only errors say that θ is not identifiable (valid model).
     pub fn only_unidentifiable(&self) -> bool {
-        self.ir.is_some() && self.diagnostics.iter().filter(|d| d.is_error()).all(|d| d.code == "unidentifiable-combination")
+        self.ir.is_some()
+            && self
+                .diagnostics
+                .iter()
+                .filter(|d| d.is_error())
+                .all(|d| d.code == "unidentifiable-combination")
     }
 }
 
 /// Parses and compiles a `.som` source.
 pub fn compile(source: &str, options: &Options) -> Compilation {
     let (model, mut diagnostics) = leeway_grammar::parse(source);
-    let Some(model) = model else { return Compilation { ir: None, diagnostics } };
+    let Some(model) = model else {
+        return Compilation {
+            ir: None,
+            diagnostics,
+        };
+    };
     let resolved = resolve::resolve(&model, &mut diagnostics);
     let (params, terms) = terms::lower_terms(&resolved, &mut diagnostics);
     if diagnostics.iter().any(Diagnostic::is_error) {
-        return Compilation { ir: None, diagnostics };
+        return Compilation {
+            ir: None,
+            diagnostics,
+        };
     }
     if params.is_empty() {
         diagnostics.push(
-            Diagnostic::error("no-parameters", format!("model `{}` has no parameter to estimate", resolved.name.name))
-                .with_primary(resolved.name.span, "")
-                .with_help("write each equation as a sum of `parameter * regressor` terms"),
+            Diagnostic::error(
+                "no-parameters",
+                format!(
+                    "model `{}` has no parameter to estimate",
+                    resolved.name.name
+                ),
+            )
+            .with_primary(resolved.name.span, "")
+            .with_help("write each equation as a sum of `parameter * regressor` terms"),
         );
-        return Compilation { ir: None, diagnostics };
+        return Compilation {
+            ir: None,
+            diagnostics,
+        };
     }
     unused_declarations(&resolved, &terms, &mut diagnostics);
     let signs = expand::sign_args(&resolved, &terms);
     let (basic, augmented, measured) = expand::expand(&resolved, &params, &terms, &signs);
-    let predictors = ir::Predictors { basic, augmented, measured };
-    let mut ir = lower::lower(&resolved, &params, &terms, signs, predictors, &mut diagnostics);
+    let predictors = ir::Predictors {
+        basic,
+        augmented,
+        measured,
+    };
+    let mut ir = lower::lower(
+        &resolved,
+        &params,
+        &terms,
+        signs,
+        predictors,
+        &mut diagnostics,
+    );
     if diagnostics.iter().any(Diagnostic::is_error) {
-        return Compilation { ir: None, diagnostics };
+        return Compilation {
+            ir: None,
+            diagnostics,
+        };
     }
     ir.report = identify::report(&ir, options);
     identifiability_diagnostics(&ir, options, &mut diagnostics);
-    ir.report.notes = diagnostics.iter().filter(|d| d.severity == Severity::Note).map(|d| d.message.clone()).collect();
-    Compilation { ir: Some(ir), diagnostics }
+    ir.report.notes = diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Note)
+        .map(|d| d.message.clone())
+        .collect();
+    Compilation {
+        ir: Some(ir),
+        diagnostics,
+    }
 }
 
-fn unused_declarations(r: &resolve::Resolved, terms: &[terms::TermDecl], diags: &mut Vec<Diagnostic>) {
+fn unused_declarations(
+    r: &resolve::Resolved,
+    terms: &[terms::TermDecl],
+    diags: &mut Vec<Diagnostic>,
+) {
     use ir::Signal;
     for (i, input) in r.inputs.iter().enumerate() {
-        if !terms.iter().any(|t| t.factors.iter().any(|f| f.arg.signal == Signal::Input(i))) {
+        if !terms
+            .iter()
+            .any(|t| t.factors.iter().any(|f| f.arg.signal == Signal::Input(i)))
+        {
             diags.push(
-                Diagnostic::warning("unused-declaration", format!("input `{}` appears in no equation", input.name))
-                    .with_primary(input.span, "unused")
-                    .with_help("remove it, or add the term it drives"),
+                Diagnostic::warning(
+                    "unused-declaration",
+                    format!("input `{}` appears in no equation", input.name),
+                )
+                .with_primary(input.span, "unused")
+                .with_help("remove it, or add the term it drives"),
             );
         }
     }
     for (ri, (name, _)) in r.relatives.iter().enumerate() {
-        if !terms.iter().any(|t| t.factors.iter().any(|f| f.arg.relative == Some(ri))) {
+        if !terms
+            .iter()
+            .any(|t| t.factors.iter().any(|f| f.arg.relative == Some(ri)))
+        {
             diags.push(
-                Diagnostic::warning("unused-declaration", format!("relative velocity `{}` appears in no equation", name.name))
-                    .with_primary(name.span, "unused")
-                    .with_help("write terms such as `X*{0}.u`, or remove it".replace("{0}", &name.name)),
+                Diagnostic::warning(
+                    "unused-declaration",
+                    format!("relative velocity `{}` appears in no equation", name.name),
+                )
+                .with_primary(name.span, "unused")
+                .with_help(
+                    "write terms such as `X*{0}.u`, or remove it".replace("{0}", &name.name),
+                ),
             );
         }
     }
     for (di, d) in r.disturbances.iter().enumerate() {
         if !r.relatives.iter().any(|(_, dd)| *dd == di) {
             diags.push(
-                Diagnostic::warning("unused-declaration", format!("disturbance `{}` has no relative velocity", d.name.name))
-                    .with_primary(d.name.span, "never acts on the craft")
-                    .with_help(format!("declare `rel = relative({})` and use it in the equations", d.name.name)),
+                Diagnostic::warning(
+                    "unused-declaration",
+                    format!("disturbance `{}` has no relative velocity", d.name.name),
+                )
+                .with_primary(d.name.span, "never acts on the craft")
+                .with_help(format!(
+                    "declare `rel = relative({})` and use it in the equations",
+                    d.name.name
+                )),
             );
         }
     }
@@ -111,15 +178,25 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             .iter()
             .filter_map(|p| ir.terms.iter().find(|t| t.parameter == *p))
             .enumerate()
-            .map(|(i, t)| Label { span: t.span, message: format!("`{}`", ir.parameters[t.parameter].name), primary: i == 0 })
+            .map(|(i, t)| Label {
+                span: t.span,
+                message: format!("`{}`", ir.parameters[t.parameter].name),
+                primary: i == 0,
+            })
             .collect()
     };
     if !r.identifiable {
         for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
             let mut d = if options.aggregate {
-                Diagnostic::warning("aggregated-combination", format!("{}; estimating the aggregate", c.message))
+                Diagnostic::warning(
+                    "aggregated-combination",
+                    format!("{}; estimating the aggregate", c.message),
+                )
             } else {
-                Diagnostic::error("unidentifiable-combination", format!("θ is not identifiable: {}", c.message))
+                Diagnostic::error(
+                    "unidentifiable-combination",
+                    format!("θ is not identifiable: {}", c.message),
+                )
             };
             d.labels = labels_for(&c.parameters);
             d = d.with_note(s.message.clone());
@@ -142,7 +219,9 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             ),
         );
         for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
-            d = d.with_note(format!("from one experiment: {}", c.message)).with_note(s.message.clone());
+            d = d
+                .with_note(format!("from one experiment: {}", c.message))
+                .with_note(s.message.clone());
         }
         if let Some(first) = r.unidentifiable.first() {
             d.labels = labels_for(&first.parameters);

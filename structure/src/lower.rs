@@ -18,13 +18,25 @@ pub fn lower(
 ) -> Ir {
     let (rotation, rotation_vars) = match &r.rotation {
         RotationDecl::None => (ir::Rotation::None, Vec::new()),
-        RotationDecl::Planar { heading, integrates, axes } => (
-            ir::Rotation::Planar { heading: heading.name.clone(), integrates: *integrates, axes: *axes },
-            vec![format!("cos({})", heading.name), format!("sin({})", heading.name)],
+        RotationDecl::Planar {
+            heading,
+            integrates,
+            axes,
+        } => (
+            ir::Rotation::Planar {
+                heading: heading.name.clone(),
+                integrates: *integrates,
+                axes: *axes,
+            },
+            vec![
+                format!("cos({})", heading.name),
+                format!("sin({})", heading.name),
+            ],
         ),
-        RotationDecl::Measured { columns, rows, .. } => {
-            (ir::Rotation::Measured { rows: rows.clone() }, columns.iter().map(|c| c.name.clone()).collect())
-        }
+        RotationDecl::Measured { columns, rows, .. } => (
+            ir::Rotation::Measured { rows: rows.clone() },
+            columns.iter().map(|c| c.name.clone()).collect(),
+        ),
     };
     let mut nominal: BTreeMap<&str, f64> = BTreeMap::new();
     for (id, q, span) in &r.nominal {
@@ -32,9 +44,19 @@ pub fn lower(
             nominal.insert(&id.name, to_f64(q));
         } else {
             diags.push(
-                Diagnostic::error("unknown-parameter", format!("`{}` is not a parameter of this model", id.name))
-                    .with_primary(*span, "no term uses it")
-                    .with_help(format!("parameters: {}", params.iter().map(|p| p.name.as_str()).collect::<Vec<_>>().join(", "))),
+                Diagnostic::error(
+                    "unknown-parameter",
+                    format!("`{}` is not a parameter of this model", id.name),
+                )
+                .with_primary(*span, "no term uses it")
+                .with_help(format!(
+                    "parameters: {}",
+                    params
+                        .iter()
+                        .map(|p| p.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )),
             );
         }
     }
@@ -44,18 +66,36 @@ pub fn lower(
         .map(|(pi, p)| {
             let mine: Vec<&TermDecl> = terms.iter().filter(|t| t.parameter == pi).collect();
             let media: Vec<usize> = {
-                let mut m: Vec<usize> = mine.iter().filter_map(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg))).collect();
+                let mut m: Vec<usize> = mine
+                    .iter()
+                    .filter_map(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg)))
+                    .collect();
                 m.sort_unstable();
                 m.dedup();
                 m
             };
-            let medium = if media.len() == 1 { Some(media[0]) } else { None };
+            let medium = if media.len() == 1 {
+                Some(media[0])
+            } else {
+                None
+            };
             let measured = !mine.is_empty()
-                && mine.iter().all(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg)).is_some_and(|d| r.disturbances[d].measured));
+                && mine.iter().all(|t| {
+                    t.factors
+                        .iter()
+                        .find_map(|f| arg_medium(r, &f.arg))
+                        .is_some_and(|d| r.disturbances[d].measured)
+                });
             let mut outputs: Vec<usize> = mine.iter().map(|t| t.output).collect();
             outputs.sort_unstable();
             outputs.dedup();
-            ir::Parameter { name: p.name.clone(), nominal: nominal.get(p.name.as_str()).copied().unwrap_or(0.0), medium, measured, outputs }
+            ir::Parameter {
+                name: p.name.clone(),
+                nominal: nominal.get(p.name.as_str()).copied().unwrap_or(0.0),
+                medium,
+                measured,
+                outputs,
+            }
         })
         .collect();
     let ir_terms = terms
@@ -80,25 +120,48 @@ pub fn lower(
         disturbances: r
             .disturbances
             .iter()
-            .map(|d| ir::Disturbance { name: d.name.name.clone(), measured: d.measured, earth: d.earth, components: d.components.clone() })
+            .map(|d| ir::Disturbance {
+                name: d.name.name.clone(),
+                measured: d.measured,
+                earth: d.earth,
+                components: d.components.clone(),
+            })
             .collect(),
         components: r
             .components
             .iter()
-            .map(|c| ir::Component { name: c.name.name.clone(), disturbance: c.disturbance, state: c.state })
+            .map(|c| ir::Component {
+                name: c.name.name.clone(),
+                disturbance: c.disturbance,
+                state: c.state,
+            })
             .collect(),
-        relatives: r.relatives.iter().map(|(n, d)| ir::Relative { name: n.name.clone(), disturbance: *d }).collect(),
+        relatives: r
+            .relatives
+            .iter()
+            .map(|(n, d)| ir::Relative {
+                name: n.name.clone(),
+                disturbance: *d,
+            })
+            .collect(),
         equations: r
             .equations
             .iter()
             .enumerate()
-            .map(|(i, e)| ir::Equation { state: i, kind: e.as_ref().map_or(EquationKind::Der, |e| e.kind) })
+            .map(|(i, e)| ir::Equation {
+                state: i,
+                kind: e.as_ref().map_or(EquationKind::Der, |e| e.kind),
+            })
             .collect(),
         parameters,
         terms: ir_terms,
         sign_args,
         predictors,
-        data_columns: r.data.iter().map(|(id, col, _)| (id.name.clone(), col.clone())).collect(),
+        data_columns: r
+            .data
+            .iter()
+            .map(|(id, col, _)| (id.name.clone(), col.clone()))
+            .collect(),
         report: Report::default(),
     }
 }

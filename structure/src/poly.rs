@@ -156,7 +156,11 @@ impl Poly {
     }
     /// The total degree in the variables selected by `pick`.
     pub fn max_degree(&self, pick: impl Fn(&Var) -> bool) -> u32 {
-        self.terms.keys().map(|m| m.iter().filter(|(v, _)| pick(v)).map(|(_, e)| e).sum()).max().unwrap_or(0)
+        self.terms
+            .keys()
+            .map(|m| m.iter().filter(|(v, _)| pick(v)).map(|(_, e)| e).sum())
+            .max()
+            .unwrap_or(0)
     }
     /// Renders with the given variable names: `-2*s[water.u]*u*cos(psi) + 1`.
     pub fn render(&self, name: &dyn Fn(&Var) -> String) -> String {
@@ -193,7 +197,13 @@ impl Poly {
 /// `x*y^2`-style rendering of a monomial.
 pub fn render_monomial(m: &Monomial, name: &dyn Fn(&Var) -> String) -> String {
     m.iter()
-        .map(|(v, e)| if *e == 1 { name(v) } else { format!("{}^{}", name(v), e) })
+        .map(|(v, e)| {
+            if *e == 1 {
+                name(v)
+            } else {
+                format!("{}^{}", name(v), e)
+            }
+        })
         .collect::<Vec<_>>()
         .join("*")
 }

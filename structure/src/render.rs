@@ -21,10 +21,18 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
     let mut parts: Vec<(bool, String)> = Vec::new();
     for e in col.entries.iter().filter(|e| e.output() == output) {
         match e {
-            Entry::Poly { coefficient_exact, signs, vars, .. } => {
+            Entry::Poly {
+                coefficient_exact,
+                signs,
+                vars,
+                ..
+            } => {
                 let neg = coefficient_exact.starts_with('-');
                 let mag = coefficient_exact.trim_start_matches('-');
-                let mut factors: Vec<String> = signs.iter().map(|s| format!("s[{}]", ir.sign_args[*s].name)).collect();
+                let mut factors: Vec<String> = signs
+                    .iter()
+                    .map(|s| format!("s[{}]", ir.sign_args[*s].name))
+                    .collect();
                 let mut i = 0;
                 while i < vars.len() {
                     let mut j = i;
@@ -32,7 +40,11 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
                         j += 1;
                     }
                     let name = var_name(ir, &vars[i]);
-                    factors.push(if j - i == 1 { name } else { format!("{name}^{}", j - i) });
+                    factors.push(if j - i == 1 {
+                        name
+                    } else {
+                        format!("{name}^{}", j - i)
+                    });
                     i = j;
                 }
                 let body = factors.join("*");
@@ -46,8 +58,15 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
             Entry::Term { term, .. } => {
                 let t = &ir.terms[*term];
                 let k = t.coefficient_exact.trim_start_matches('-');
-                let text = if k == "1" { t.text.clone() } else { format!("{k}*{}", t.text) };
-                parts.push((t.coefficient_exact.starts_with('-'), format!("{text} (pointwise)")));
+                let text = if k == "1" {
+                    t.text.clone()
+                } else {
+                    format!("{k}*{}", t.text)
+                };
+                parts.push((
+                    t.coefficient_exact.starts_with('-'),
+                    format!("{text} (pointwise)"),
+                ));
             }
         }
     }
@@ -81,17 +100,34 @@ pub fn render(ir: &Ir) -> String {
     let kinds: Vec<String> = ir
         .equations
         .iter()
-        .map(|e| format!("{} {}", if e.kind == EquationKind::Der { "der" } else { "next" }, ir.states[e.state]))
+        .map(|e| {
+            format!(
+                "{} {}",
+                if e.kind == EquationKind::Der {
+                    "der"
+                } else {
+                    "next"
+                },
+                ir.states[e.state]
+            )
+        })
         .collect();
     let _ = writeln!(
         o,
         "  equations: {}; step {}",
         kinds.join(", "),
-        ir.step.map_or("from the data's sample time".to_string(), |h| format!("{h}"))
+        ir.step
+            .map_or("from the data's sample time".to_string(), |h| format!(
+                "{h}"
+            ))
     );
     match &ir.rotation {
         Rotation::None => {}
-        Rotation::Planar { heading, integrates, axes } => {
+        Rotation::Planar {
+            heading,
+            integrates,
+            axes,
+        } => {
             let _ = writeln!(
                 o,
                 "  R = Rz({heading})^T on ({}, {}); {heading} integrates {}",
@@ -99,7 +135,11 @@ pub fn render(ir: &Ir) -> String {
             );
         }
         Rotation::Measured { .. } => {
-            let _ = writeln!(o, "  R measured from data columns {}", ir.rotation_vars.join(", "));
+            let _ = writeln!(
+                o,
+                "  R measured from data columns {}",
+                ir.rotation_vars.join(", ")
+            );
         }
     }
     for d in &ir.disturbances {
@@ -114,8 +154,12 @@ pub fn render(ir: &Ir) -> String {
                 }
             })
             .collect();
-        let rel: Vec<&str> =
-            ir.relatives.iter().filter(|r| ir.disturbances[r.disturbance].name == d.name).map(|r| r.name.as_str()).collect();
+        let rel: Vec<&str> = ir
+            .relatives
+            .iter()
+            .filter(|r| ir.disturbances[r.disturbance].name == d.name)
+            .map(|r| r.name.as_str())
+            .collect();
         let _ = writeln!(
             o,
             "  disturbance {} {} {}({}){}",
@@ -123,38 +167,94 @@ pub fn render(ir: &Ir) -> String {
             if d.measured { "measured" } else { "unmeasured" },
             if d.earth { "earth" } else { "body" },
             comps.join(", "),
-            if rel.is_empty() { String::new() } else { format!(", seen through {}", rel.join(", ")) }
+            if rel.is_empty() {
+                String::new()
+            } else {
+                format!(", seen through {}", rel.join(", "))
+            }
         );
     }
-    let fixed: Vec<&str> = ir.sign_args.iter().filter(|s| !s.measured).map(|s| s.name.as_str()).collect();
-    let pointwise: Vec<&str> = ir.sign_args.iter().filter(|s| s.measured).map(|s| s.name.as_str()).collect();
+    let fixed: Vec<&str> = ir
+        .sign_args
+        .iter()
+        .filter(|s| !s.measured)
+        .map(|s| s.name.as_str())
+        .collect();
+    let pointwise: Vec<&str> = ir
+        .sign_args
+        .iter()
+        .filter(|s| s.measured)
+        .map(|s| s.name.as_str())
+        .collect();
     let _ = writeln!(
         o,
         "  sign arguments: {}{}",
-        if fixed.is_empty() { "none".to_string() } else { fixed.join(", ") },
-        if pointwise.is_empty() { String::new() } else { format!(" (measured medium, pointwise in IV3, fixed in IV2: {})", pointwise.join(", ")) }
+        if fixed.is_empty() {
+            "none".to_string()
+        } else {
+            fixed.join(", ")
+        },
+        if pointwise.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (measured medium, pointwise in IV3, fixed in IV2: {})",
+                pointwise.join(", ")
+            )
+        }
     );
 
     let cols = &ir.predictors.measured;
     let _ = writeln!(o, "\nΦ: θ regressors ({} parameters)", ir.parameters.len());
     for (out, state) in ir.states.iter().enumerate() {
-        let theta: Vec<&Column> = cols.iter().filter(|c| !c.kind.is_nuisance() && c.outputs().contains(&out)).collect();
-        let kind = if ir.equations[out].kind == EquationKind::Der { "der" } else { "next" };
+        let theta: Vec<&Column> = cols
+            .iter()
+            .filter(|c| !c.kind.is_nuisance() && c.outputs().contains(&out))
+            .collect();
+        let kind = if ir.equations[out].kind == EquationKind::Der {
+            "der"
+        } else {
+            "next"
+        };
         let _ = writeln!(o, "  {kind} {state} ({} terms)", theta.len());
         for c in theta {
             let p = c.kind.parameter();
-            let text: Vec<String> = ir.terms.iter().filter(|t| t.parameter == p && t.output == out).map(|t| t.text.clone()).collect();
-            let tag = if ir.parameters[p].measured { "  [Φ2]" } else { "" };
-            let _ = writeln!(o, "    {:<8} {:<22} = {}{tag}", c.name, text.join(" + "), column_text(ir, c, out));
+            let text: Vec<String> = ir
+                .terms
+                .iter()
+                .filter(|t| t.parameter == p && t.output == out)
+                .map(|t| t.text.clone())
+                .collect();
+            let tag = if ir.parameters[p].measured {
+                "  [Φ2]"
+            } else {
+                ""
+            };
+            let _ = writeln!(
+                o,
+                "    {:<8} {:<22} = {}{tag}",
+                c.name,
+                text.join(" + "),
+                column_text(ir, c, out)
+            );
         }
     }
     let nuis: Vec<&Column> = cols.iter().filter(|c| c.kind.is_nuisance()).collect();
-    let unmeasured: Vec<&str> = ir.disturbances.iter().filter(|d| !d.measured).map(|d| d.name.as_str()).collect();
+    let unmeasured: Vec<&str> = ir
+        .disturbances
+        .iter()
+        .filter(|d| !d.measured)
+        .map(|d| d.name.as_str())
+        .collect();
     let _ = writeln!(
         o,
         "\nNuisance regressors ({} unreduced; moments of {})",
         nuis.len(),
-        if unmeasured.is_empty() { "no unmeasured disturbance".to_string() } else { unmeasured.join(", ") }
+        if unmeasured.is_empty() {
+            "no unmeasured disturbance".to_string()
+        } else {
+            unmeasured.join(", ")
+        }
     );
     for (out, state) in ir.states.iter().enumerate() {
         let mine: Vec<&&Column> = nuis.iter().filter(|c| c.outputs().contains(&out)).collect();
@@ -185,7 +285,11 @@ pub fn render(ir: &Ir) -> String {
         if r.any_single_pattern {
             let _ = writeln!(o, "  identifiable from one experiment of any sign pattern");
         } else {
-            let _ = writeln!(o, "  identifiable from one experiment with sign pattern {}", patterns_text(ir, &r.required_patterns, PredictorKind::Measured));
+            let _ = writeln!(
+                o,
+                "  identifiable from one experiment with sign pattern {}",
+                patterns_text(ir, &r.required_patterns, PredictorKind::Measured)
+            );
         }
     } else if r.identifiable {
         let _ = writeln!(
@@ -198,7 +302,11 @@ pub fn render(ir: &Ir) -> String {
         let _ = writeln!(o, "  NOT identifiable from any set of experiments");
     }
     if !r.unidentifiable.is_empty() {
-        let base = r.patterns.first().map(|p| pattern_text(ir, p, PredictorKind::Measured)).unwrap_or_default();
+        let base = r
+            .patterns
+            .first()
+            .map(|p| pattern_text(ir, p, PredictorKind::Measured))
+            .unwrap_or_default();
         let _ = writeln!(o, "  from one experiment {base}:");
         for c in &r.unidentifiable {
             let _ = writeln!(o, "    {}", c.message);
@@ -208,9 +316,16 @@ pub fn render(ir: &Ir) -> String {
         let _ = writeln!(o, "    {}", s.message);
     }
     if !r.aggregates.is_empty() {
-        let _ = writeln!(o, "  aggregated (absorbed parameters held at their nominal values):");
+        let _ = writeln!(
+            o,
+            "  aggregated (absorbed parameters held at their nominal values):"
+        );
         for a in &r.aggregates {
-            let _ = writeln!(o, "    {} estimates {}", ir.parameters[a.parameter].name, a.estimates);
+            let _ = writeln!(
+                o,
+                "    {} estimates {}",
+                ir.parameters[a.parameter].name, a.estimates
+            );
         }
     }
     for n in &r.notes {

@@ -2,7 +2,9 @@
 //! (duplicates, unknown names, missing rotation, bad shapes) collected.
 
 use crate::exact::{Q, parse_decimal};
-use leeway_grammar::{Diagnostic, EquationKind, Expr, Frame, Ident, Item, Measurement, Model, Span};
+use leeway_grammar::{
+    Diagnostic, EquationKind, Expr, Frame, Ident, Item, Measurement, Model, Span,
+};
 use num_traits::Zero;
 use std::collections::BTreeMap;
 
@@ -142,15 +144,16 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
         data: Vec::new(),
         symbols: BTreeMap::new(),
     };
-    let declare = |r: &mut Resolved, diags: &mut Vec<Diagnostic>, id: &Ident, sym: Symbol, what: &str| {
-        if let Some((_, first)) = r.symbols.get(&id.name) {
-            diags.push(duplicate(id, *first, what));
-            false
-        } else {
-            r.symbols.insert(id.name.clone(), (sym, id.span));
-            true
-        }
-    };
+    let declare =
+        |r: &mut Resolved, diags: &mut Vec<Diagnostic>, id: &Ident, sym: Symbol, what: &str| {
+            if let Some((_, first)) = r.symbols.get(&id.name) {
+                diags.push(duplicate(id, *first, what));
+                false
+            } else {
+                r.symbols.insert(id.name.clone(), (sym, id.span));
+                true
+            }
+        };
     // States and inputs first: other declarations refer to them.
     for item in &model.items {
         match item {
@@ -175,9 +178,14 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
     }
     if r.states.is_empty() {
         diags.push(
-            Diagnostic::error("no-states", format!("model `{}` declares no state", model.name.name))
-                .with_primary(model.name.span, "this model")
-                .with_help("declare the measured states, e.g. `state u, v, r`, and give each an equation"),
+            Diagnostic::error(
+                "no-states",
+                format!("model `{}` declares no state", model.name.name),
+            )
+            .with_primary(model.name.span, "this model")
+            .with_help(
+                "declare the measured states, e.g. `state u, v, r`, and give each an equation",
+            ),
         );
     }
     let state_of = |r: &Resolved, id: &Ident| -> Option<usize> {
@@ -192,9 +200,12 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
             Some(_) => "not a state",
             None => "not declared",
         };
-        Diagnostic::error("unknown-name", format!("`{}` is {what}; {role} must be a state", id.name))
-            .with_primary(id.span, "expected a state")
-            .with_help(format!("declared states: {}", names(&r.states)))
+        Diagnostic::error(
+            "unknown-name",
+            format!("`{}` is {what}; {role} must be a state", id.name),
+        )
+        .with_primary(id.span, "expected a state")
+        .with_help(format!("declared states: {}", names(&r.states)))
     };
     let mut rotation_span: Option<Span> = None;
     let mut step_span: Option<Span> = None;
@@ -214,13 +225,21 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                 match parse_decimal(&value.text) {
                     Some(q) if q > Q::zero() => r.step = Some((q, value.span)),
                     _ => diags.push(
-                        Diagnostic::error("invalid-step", format!("the sample time must be positive, found `{}`", value.text))
-                            .with_primary(value.span, "not a positive number")
-                            .with_help("write the sample time in seconds, e.g. `step 0.1`"),
+                        Diagnostic::error(
+                            "invalid-step",
+                            format!("the sample time must be positive, found `{}`", value.text),
+                        )
+                        .with_primary(value.span, "not a positive number")
+                        .with_help("write the sample time in seconds, e.g. `step 0.1`"),
                     ),
                 }
             }
-            Item::Heading { name, integrates, axes, span } => {
+            Item::Heading {
+                name,
+                integrates,
+                axes,
+                span,
+            } => {
                 if let Some(first) = rotation_span {
                     diags.push(rotation_conflict(*span, first));
                     continue;
@@ -236,9 +255,12 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                         (Some(i), Some(j)) if i != j => Some([i, j]),
                         (Some(_), Some(_)) => {
                             diags.push(
-                                Diagnostic::error("heading-axes", "the two heading axes must be different states")
-                                    .with_primary(b.span, "same as the first axis")
-                                    .with_help("name the surge and sway states, e.g. `axes(u, v)`"),
+                                Diagnostic::error(
+                                    "heading-axes",
+                                    "the two heading axes must be different states",
+                                )
+                                .with_primary(b.span, "same as the first axis")
+                                .with_help("name the surge and sway states, e.g. `axes(u, v)`"),
                             );
                             None
                         }
@@ -254,15 +276,24 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                     None if r.states.len() >= 2 => Some([0, 1]),
                     None => {
                         diags.push(
-                            Diagnostic::error("heading-axes", "a planar heading rotates two states, but fewer are declared")
-                                .with_primary(*span, "needs two body axes")
-                                .with_help("declare surge and sway states, or name them with `axes(u, v)`"),
+                            Diagnostic::error(
+                                "heading-axes",
+                                "a planar heading rotates two states, but fewer are declared",
+                            )
+                            .with_primary(*span, "needs two body axes")
+                            .with_help(
+                                "declare surge and sway states, or name them with `axes(u, v)`",
+                            ),
                         );
                         None
                     }
                 };
                 if let Some(axes) = axes_idx {
-                    r.rotation = RotationDecl::Planar { heading: name.clone(), integrates: yaw, axes };
+                    r.rotation = RotationDecl::Planar {
+                        heading: name.clone(),
+                        integrates: yaw,
+                        axes,
+                    };
                 }
             }
             Item::Rotation { rows, span } => {
@@ -298,33 +329,57 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                     }
                     let mut entries = Vec::new();
                     for e in &row.entries {
-                        entries.push(e.as_ref().map(|id| match columns.iter().position(|c| c.name == id.name) {
-                            Some(k) => k,
-                            None => {
-                                columns.push(id.clone());
-                                columns.len() - 1
+                        entries.push(e.as_ref().map(|id| {
+                            match columns.iter().position(|c| c.name == id.name) {
+                                Some(k) => k,
+                                None => {
+                                    columns.push(id.clone());
+                                    columns.len() - 1
+                                }
                             }
                         }));
                     }
                     table[si] = entries;
                 }
                 for (k, c) in columns.iter().enumerate() {
-                    declare(&mut r, diags, c, Symbol::RotationColumn(k), "a rotation column");
+                    declare(
+                        &mut r,
+                        diags,
+                        c,
+                        Symbol::RotationColumn(k),
+                        "a rotation column",
+                    );
                 }
                 let width = width.unwrap_or(0);
                 for row in table.iter_mut() {
                     row.resize(width, None);
                 }
-                r.rotation = RotationDecl::Measured { columns, rows: table, width };
+                r.rotation = RotationDecl::Measured {
+                    columns,
+                    rows: table,
+                    width,
+                };
             }
             _ => {}
         }
     }
     // Disturbances, then relatives.
     for item in &model.items {
-        if let Item::Disturbance { name, measurement, frame, span } = item {
+        if let Item::Disturbance {
+            name,
+            measurement,
+            frame,
+            span,
+        } = item
+        {
             let di = r.disturbances.len();
-            if !declare(&mut r, diags, name, Symbol::Disturbance(di), "a disturbance") {
+            if !declare(
+                &mut r,
+                diags,
+                name,
+                Symbol::Disturbance(di),
+                "a disturbance",
+            ) {
                 continue;
             }
             let mut comps = Vec::new();
@@ -361,8 +416,18 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                     }
                     for id in ids {
                         let ci = r.components.len();
-                        if declare(&mut r, diags, id, Symbol::Component(ci), "a disturbance component") {
-                            r.components.push(ComponentDecl { name: id.clone(), disturbance: di, state: None });
+                        if declare(
+                            &mut r,
+                            diags,
+                            id,
+                            Symbol::Component(ci),
+                            "a disturbance component",
+                        ) {
+                            r.components.push(ComponentDecl {
+                                name: id.clone(),
+                                disturbance: di,
+                                state: None,
+                            });
                             comps.push(ci);
                         }
                     }
@@ -379,8 +444,18 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                             continue;
                         }
                         let ci = r.components.len();
-                        if declare(&mut r, diags, &bc.component, Symbol::Component(ci), "a disturbance component") {
-                            r.components.push(ComponentDecl { name: bc.component.clone(), disturbance: di, state: Some(si) });
+                        if declare(
+                            &mut r,
+                            diags,
+                            &bc.component,
+                            Symbol::Component(ci),
+                            "a disturbance component",
+                        ) {
+                            r.components.push(ComponentDecl {
+                                name: bc.component.clone(),
+                                disturbance: di,
+                                state: Some(si),
+                            });
                             comps.push(ci);
                         }
                     }
@@ -395,22 +470,39 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
         }
     }
     for item in &model.items {
-        if let Item::Relative { name, disturbance, .. } = item {
+        if let Item::Relative {
+            name, disturbance, ..
+        } = item
+        {
             match r.symbols.get(&disturbance.name) {
                 Some((Symbol::Disturbance(d), _)) => {
                     let d = *d;
                     let k = r.relatives.len();
-                    if declare(&mut r, diags, name, Symbol::Relative(k), "a relative velocity") {
+                    if declare(
+                        &mut r,
+                        diags,
+                        name,
+                        Symbol::Relative(k),
+                        "a relative velocity",
+                    ) {
                         r.relatives.push((name.clone(), d));
                     }
                 }
                 _ => diags.push(
-                    Diagnostic::error("unknown-name", format!("`{}` is not a declared disturbance", disturbance.name))
-                        .with_primary(disturbance.span, "expected a disturbance")
-                        .with_help(format!(
-                            "declared disturbances: {}",
-                            names(&r.disturbances.iter().map(|d| d.name.clone()).collect::<Vec<_>>())
-                        )),
+                    Diagnostic::error(
+                        "unknown-name",
+                        format!("`{}` is not a declared disturbance", disturbance.name),
+                    )
+                    .with_primary(disturbance.span, "expected a disturbance")
+                    .with_help(format!(
+                        "declared disturbances: {}",
+                        names(
+                            &r.disturbances
+                                .iter()
+                                .map(|d| d.name.clone())
+                                .collect::<Vec<_>>()
+                        )
+                    )),
                 ),
             }
         }
@@ -494,9 +586,15 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
         if eq.is_none() {
             let s = &r.states[i];
             diags.push(
-                Diagnostic::error("missing-equation", format!("state `{}` has no equation", s.name))
-                    .with_primary(s.span, "declared here")
-                    .with_help(format!("add `der {0} = ...` (continuous time) or `next {0} = ...` (discrete time)", s.name)),
+                Diagnostic::error(
+                    "missing-equation",
+                    format!("state `{}` has no equation", s.name),
+                )
+                .with_primary(s.span, "declared here")
+                .with_help(format!(
+                    "add `der {0} = ...` (continuous time) or `next {0} = ...` (discrete time)",
+                    s.name
+                )),
             );
         }
     }
@@ -512,5 +610,12 @@ fn rotation_conflict(span: Span, first: Span) -> Diagnostic {
 
 /// `a, b, c` or `none`.
 pub fn names(ids: &[Ident]) -> String {
-    if ids.is_empty() { "none".to_string() } else { ids.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", ") }
+    if ids.is_empty() {
+        "none".to_string()
+    } else {
+        ids.iter()
+            .map(|i| i.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }

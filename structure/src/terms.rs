@@ -61,16 +61,23 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
     let mut terms: Vec<TermDecl> = Vec::new();
     let mut ctx = Ctx { r, diags };
     for eq in r.equations.iter().flatten() {
-        let Some(products) = sum_of_products(&eq.rhs, &mut ctx) else { continue };
+        let Some(products) = sum_of_products(&eq.rhs, &mut ctx) else {
+            continue;
+        };
         // Combine equal terms (same parameter and factors) by adding coefficients.
         let mut combined: BTreeMap<(usize, Vec<Factor>), usize> = BTreeMap::new();
         let mut local: Vec<TermDecl> = Vec::new();
         for p in products {
-            let Some((pname, factors)) = classify(&p, &mut ctx) else { continue };
+            let Some((pname, factors)) = classify(&p, &mut ctx) else {
+                continue;
+            };
             let pi = match params.iter().position(|q| q.name == pname.name) {
                 Some(i) => i,
                 None => {
-                    params.push(ParamDecl { name: pname.name.clone(), span: pname.span });
+                    params.push(ParamDecl {
+                        name: pname.name.clone(),
+                        span: pname.span,
+                    });
                     params.len() - 1
                 }
             };
@@ -81,16 +88,28 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
                 }
                 None => {
                     combined.insert((pi, factors.clone()), local.len());
-                    local.push(TermDecl { output: eq.state, coefficient: p.coeff, parameter: pi, factors, span: p.span });
+                    local.push(TermDecl {
+                        output: eq.state,
+                        coefficient: p.coeff,
+                        parameter: pi,
+                        factors,
+                        span: p.span,
+                    });
                 }
             }
         }
         for t in local {
             if t.coefficient.is_zero() {
                 ctx.diags.push(
-                    Diagnostic::warning("terms-cancel", format!("the terms of `{}` in this equation cancel", params[t.parameter].name))
-                        .with_primary(t.span, "sums to zero")
-                        .with_help("remove them, or check the signs"),
+                    Diagnostic::warning(
+                        "terms-cancel",
+                        format!(
+                            "the terms of `{}` in this equation cancel",
+                            params[t.parameter].name
+                        ),
+                    )
+                    .with_primary(t.span, "sums to zero")
+                    .with_help("remove them, or check the signs"),
                 );
             } else {
                 terms.push(t);
@@ -98,7 +117,9 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
         }
     }
     // Only parameters that survived in some term.
-    let used: Vec<bool> = (0..params.len()).map(|i| terms.iter().any(|t| t.parameter == i)).collect();
+    let used: Vec<bool> = (0..params.len())
+        .map(|i| terms.iter().any(|t| t.parameter == i))
+        .collect();
     let mut remap = vec![usize::MAX; params.len()];
     let mut kept = Vec::new();
     for (i, p) in params.into_iter().enumerate() {
@@ -117,23 +138,38 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
 fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
     match e {
         Expr::Number(n) => match parse_decimal(&n.text) {
-            Some(q) => Some(vec![Product { coeff: q, atoms: Vec::new(), span: n.span }]),
+            Some(q) => Some(vec![Product {
+                coeff: q,
+                atoms: Vec::new(),
+                span: n.span,
+            }]),
             None => {
                 ctx.diags.push(
-                    Diagnostic::error("invalid-number", format!("`{}` is not a number leeway can represent", n.text))
-                        .with_primary(n.span, "here")
-                        .with_help("write a decimal such as 0.5 or 1e-3"),
+                    Diagnostic::error(
+                        "invalid-number",
+                        format!("`{}` is not a number leeway can represent", n.text),
+                    )
+                    .with_primary(n.span, "here")
+                    .with_help("write a decimal such as 0.5 or 1e-3"),
                 );
                 None
             }
         },
         Expr::Path(p) => {
             let atom = resolve_path(p, ctx)?;
-            Some(vec![Product { coeff: Q::one(), atoms: vec![atom], span: p.span }])
+            Some(vec![Product {
+                coeff: Q::one(),
+                atoms: vec![atom],
+                span: p.span,
+            }])
         }
         Expr::Abs(inner, span) => {
             let arg = modulus_arg(inner, *span, ctx)?;
-            Some(vec![Product { coeff: Q::one(), atoms: vec![Atom::Abs(arg)], span: *span }])
+            Some(vec![Product {
+                coeff: Q::one(),
+                atoms: vec![Atom::Abs(arg)],
+                span: *span,
+            }])
         }
         Expr::Neg(inner, span) => {
             let mut v = sum_of_products(inner, ctx)?;
@@ -172,7 +208,11 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                         for b in &r {
                             let mut atoms = a.atoms.clone();
                             atoms.extend(b.atoms.iter().cloned());
-                            v.push(Product { coeff: &a.coeff * &b.coeff, atoms, span: a.span.join(b.span) });
+                            v.push(Product {
+                                coeff: &a.coeff * &b.coeff,
+                                atoms,
+                                span: a.span.join(b.span),
+                            });
                         }
                     }
                     Some(v)
@@ -186,7 +226,10 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                         );
                         return None;
                     }
-                    let d: Q = r.iter().map(|p| p.coeff.clone()).fold(Q::zero(), |a, b| a + b);
+                    let d: Q = r
+                        .iter()
+                        .map(|p| p.coeff.clone())
+                        .fold(Q::zero(), |a, b| a + b);
                     if d.is_zero() {
                         ctx.diags.push(
                             Diagnostic::error("division-by-zero", "division by zero")
@@ -198,7 +241,7 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                     Some(
                         l.into_iter()
                             .map(|mut p| {
-                                p.coeff = p.coeff / d.clone();
+                                p.coeff /= d.clone();
                                 p.span = p.span.join(rhs.span());
                                 p
                             })
@@ -215,8 +258,14 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
     let base = r.symbols.get(&p.base.name).map(|(s, _)| *s);
     match (&p.field, base) {
         (None, None) => Some(Atom::Param(p.base.clone())),
-        (None, Some(Symbol::State(i))) => Some(Atom::Signal(Arg { signal: Signal::State(i), relative: None })),
-        (None, Some(Symbol::Input(i))) => Some(Atom::Signal(Arg { signal: Signal::Input(i), relative: None })),
+        (None, Some(Symbol::State(i))) => Some(Atom::Signal(Arg {
+            signal: Signal::State(i),
+            relative: None,
+        })),
+        (None, Some(Symbol::Input(i))) => Some(Atom::Signal(Arg {
+            signal: Signal::Input(i),
+            relative: None,
+        })),
         (None, Some(Symbol::Heading | Symbol::RotationColumn(_))) => {
             ctx.diags.push(
                 Diagnostic::error("not-a-regressor-signal", format!("`{}` belongs to the rotation R and cannot appear in a term", p.base.name))
@@ -227,27 +276,54 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
         }
         (None, Some(Symbol::Disturbance(_) | Symbol::Component(_))) => {
             ctx.diags.push(
-                Diagnostic::error("disturbance-used-directly", format!("`{}` is a disturbance; it enters only through a relative velocity", p.base.name))
-                    .with_primary(p.span, "a disturbance")
-                    .with_help("declare `water = relative(current)` and write components such as `water.u`"),
+                Diagnostic::error(
+                    "disturbance-used-directly",
+                    format!(
+                        "`{}` is a disturbance; it enters only through a relative velocity",
+                        p.base.name
+                    ),
+                )
+                .with_primary(p.span, "a disturbance")
+                .with_help(
+                    "declare `water = relative(current)` and write components such as `water.u`",
+                ),
             );
             None
         }
         (None, Some(Symbol::Relative(_))) => {
             ctx.diags.push(
-                Diagnostic::error("relative-needs-component", format!("`{}` is a relative velocity; name one of its components", p.base.name))
-                    .with_primary(p.span, "which component?")
-                    .with_help(format!("write `{}.{}`", p.base.name, r.states.first().map(|s| s.name.as_str()).unwrap_or("u"))),
+                Diagnostic::error(
+                    "relative-needs-component",
+                    format!(
+                        "`{}` is a relative velocity; name one of its components",
+                        p.base.name
+                    ),
+                )
+                .with_primary(p.span, "which component?")
+                .with_help(format!(
+                    "write `{}.{}`",
+                    p.base.name,
+                    r.states.first().map(|s| s.name.as_str()).unwrap_or("u")
+                )),
             );
             None
         }
         (Some(field), Some(Symbol::Relative(ri))) => match r.symbols.get(&field.name) {
-            Some((Symbol::State(i), _)) => Some(Atom::Signal(Arg { signal: Signal::State(*i), relative: Some(ri) })),
+            Some((Symbol::State(i), _)) => Some(Atom::Signal(Arg {
+                signal: Signal::State(*i),
+                relative: Some(ri),
+            })),
             _ => {
                 ctx.diags.push(
-                    Diagnostic::error("unknown-name", format!("`{}` has no component `{}`", p.base.name, field.name))
-                        .with_primary(field.span, "not a state")
-                        .with_help(format!("components of a relative velocity are states: {}", names(&r.states))),
+                    Diagnostic::error(
+                        "unknown-name",
+                        format!("`{}` has no component `{}`", p.base.name, field.name),
+                    )
+                    .with_primary(field.span, "not a state")
+                    .with_help(format!(
+                        "components of a relative velocity are states: {}",
+                        names(&r.states)
+                    )),
                 );
                 None
             }
@@ -262,12 +338,20 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
         }
         (Some(_), None) => {
             ctx.diags.push(
-                Diagnostic::error("unknown-name", format!("`{}` is not a declared relative velocity", p.base.name))
-                    .with_primary(p.base.span, "not declared")
-                    .with_help(format!(
-                        "declared relative velocities: {}",
-                        names(&r.relatives.iter().map(|(i, _)| i.clone()).collect::<Vec<_>>())
-                    )),
+                Diagnostic::error(
+                    "unknown-name",
+                    format!("`{}` is not a declared relative velocity", p.base.name),
+                )
+                .with_primary(p.base.span, "not declared")
+                .with_help(format!(
+                    "declared relative velocities: {}",
+                    names(
+                        &r.relatives
+                            .iter()
+                            .map(|(i, _)| i.clone())
+                            .collect::<Vec<_>>()
+                    )
+                )),
             );
             None
         }
@@ -291,7 +375,10 @@ fn modulus_arg(inner: &Expr, span: Span, ctx: &mut Ctx) -> Option<Arg> {
                 None
             }
         },
-        Expr::Binary { op: BinOp::Add | BinOp::Sub, .. } => {
+        Expr::Binary {
+            op: BinOp::Add | BinOp::Sub,
+            ..
+        } => {
             ctx.diags.push(
                 Diagnostic::error("modulus-of-sum", "a modulus of a sum is not in the model class")
                     .with_primary(span, "sum inside |..|")
@@ -301,9 +388,12 @@ fn modulus_arg(inner: &Expr, span: Span, ctx: &mut Ctx) -> Option<Arg> {
         }
         Expr::Abs(..) => {
             ctx.diags.push(
-                Diagnostic::error("nested-modulus", "a modulus inside a modulus is not in the model class")
-                    .with_primary(span, "nested |..|")
-                    .with_help("||a|| is |a|: write it once"),
+                Diagnostic::error(
+                    "nested-modulus",
+                    "a modulus inside a modulus is not in the model class",
+                )
+                .with_primary(span, "nested |..|")
+                .with_help("||a|| is |a|: write it once"),
             );
             None
         }
@@ -333,7 +423,13 @@ fn arg_text(r: &Resolved, a: &Arg) -> String {
 pub fn factors_text(r: &Resolved, factors: &[Factor]) -> String {
     factors
         .iter()
-        .map(|f| if f.modulus { format!("|{}|", arg_text(r, &f.arg)) } else { arg_text(r, &f.arg) })
+        .map(|f| {
+            if f.modulus {
+                format!("|{}|", arg_text(r, &f.arg))
+            } else {
+                arg_text(r, &f.arg)
+            }
+        })
         .collect::<Vec<_>>()
         .join("*")
 }
@@ -345,19 +441,39 @@ pub fn arg_medium(r: &Resolved, a: &Arg) -> Option<usize> {
 
 fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
     let r = ctx.r;
-    let params: Vec<&Ident> = p.atoms.iter().filter_map(|a| if let Atom::Param(i) = a { Some(i) } else { None }).collect();
+    let params: Vec<&Ident> = p
+        .atoms
+        .iter()
+        .filter_map(|a| {
+            if let Atom::Param(i) = a {
+                Some(i)
+            } else {
+                None
+            }
+        })
+        .collect();
     let mut factors: Vec<Factor> = p
         .atoms
         .iter()
         .filter_map(|a| match a {
-            Atom::Signal(arg) => Some(Factor { arg: *arg, modulus: false }),
-            Atom::Abs(arg) => Some(Factor { arg: *arg, modulus: true }),
+            Atom::Signal(arg) => Some(Factor {
+                arg: *arg,
+                modulus: false,
+            }),
+            Atom::Abs(arg) => Some(Factor {
+                arg: *arg,
+                modulus: true,
+            }),
             Atom::Param(_) => None,
         })
         .collect();
     let mut ok = true;
     if params.is_empty() {
-        let text = if factors.is_empty() { "a constant".to_string() } else { factors_text(r, &factors) };
+        let text = if factors.is_empty() {
+            "a constant".to_string()
+        } else {
+            factors_text(r, &factors)
+        };
         ctx.diags.push(
             Diagnostic::error("missing-parameter", format!("the term {text} has no parameter"))
                 .with_primary(p.span, "no parameter")
@@ -369,11 +485,19 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         let same = list.windows(2).all(|w| w[0] == w[1]);
         list.dedup();
         let msg = if same {
-            format!("parameter `{}` appears {} times in one term: the model would not be linear in θ", list[0], params.len())
+            format!(
+                "parameter `{}` appears {} times in one term: the model would not be linear in θ",
+                list[0],
+                params.len()
+            )
         } else {
-            format!("`{}` are all parameters here: the model would not be linear in θ", list.join("`, `"))
+            format!(
+                "`{}` are all parameters here: the model would not be linear in θ",
+                list.join("`, `")
+            )
         };
-        let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(p.span, "one term, several parameters");
+        let mut d = Diagnostic::error("nonlinear-parameter", msg)
+            .with_primary(p.span, "one term, several parameters");
         for extra in params.iter().skip(1) {
             d = d.with_secondary(extra.span, "");
         }
@@ -392,27 +516,42 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
     }
     if factors.len() > 2 {
         ctx.diags.push(
-            Diagnostic::error("order-too-high", format!("the term {} is beyond second order", factors_text(r, &factors)))
-                .with_primary(p.span, format!("{} signals in one term", factors.len()))
-                .with_help("second-order modulus terms are a, |a|, a*b and a*|b|"),
+            Diagnostic::error(
+                "order-too-high",
+                format!(
+                    "the term {} is beyond second order",
+                    factors_text(r, &factors)
+                ),
+            )
+            .with_primary(p.span, format!("{} signals in one term", factors.len()))
+            .with_help("second-order modulus terms are a, |a|, a*b and a*|b|"),
         );
         ok = false;
     } else if factors.len() == 2 && factors.iter().all(|f| f.modulus) {
         ctx.diags.push(
-            Diagnostic::error("modulus-product", format!("{} is not in the model class", factors_text(r, &factors)))
-                .with_primary(p.span, "two moduli in one term")
-                .with_help("the class allows a*|b|; for |a|*|a| write a*a"),
+            Diagnostic::error(
+                "modulus-product",
+                format!("{} is not in the model class", factors_text(r, &factors)),
+            )
+            .with_primary(p.span, "two moduli in one term")
+            .with_help("the class allows a*|b|; for |a|*|a| write a*a"),
         );
         ok = false;
     }
     let media: Vec<usize> = {
-        let mut m: Vec<usize> = factors.iter().filter_map(|f| arg_medium(r, &f.arg)).collect();
+        let mut m: Vec<usize> = factors
+            .iter()
+            .filter_map(|f| arg_medium(r, &f.arg))
+            .collect();
         m.sort_unstable();
         m.dedup();
         m
     };
     if media.len() > 1 {
-        let list: Vec<String> = media.iter().map(|d| r.disturbances[*d].name.name.clone()).collect();
+        let list: Vec<String> = media
+            .iter()
+            .map(|d| r.disturbances[*d].name.name.clone())
+            .collect();
         ctx.diags.push(
             Diagnostic::error("mixed-media", format!("one term mixes velocities relative to {}", list.join(" and ")))
                 .with_primary(p.span, "two media in one term")
@@ -428,17 +567,31 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
 }
 
 /// The common-term rules of paper A11/A12.
-fn common_terms(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], diags: &mut Vec<Diagnostic>) {
+fn common_terms(
+    r: &Resolved,
+    params: &[ParamDecl],
+    terms: &[TermDecl],
+    diags: &mut Vec<Diagnostic>,
+) {
     type Shape = Vec<(Signal, bool)>;
-    let shape = |t: &TermDecl| -> Shape { t.factors.iter().map(|f| (f.arg.signal, f.modulus)).collect() };
-    let medium = |t: &TermDecl| -> Option<usize> { t.factors.iter().find_map(|f| arg_medium(r, &f.arg)) };
+    let shape = |t: &TermDecl| -> Shape {
+        t.factors
+            .iter()
+            .map(|f| (f.arg.signal, f.modulus))
+            .collect()
+    };
+    let medium =
+        |t: &TermDecl| -> Option<usize> { t.factors.iter().find_map(|f| arg_medium(r, &f.arg)) };
     for (i, a) in terms.iter().enumerate() {
         for b in terms.iter().skip(i + 1) {
             if a.output != b.output || a.parameter == b.parameter || shape(a) != shape(b) {
                 continue;
             }
             let (pa, pb) = (&params[a.parameter].name, &params[b.parameter].name);
-            let input_only = a.factors.iter().all(|f| matches!(f.arg.signal, Signal::Input(_)));
+            let input_only = a
+                .factors
+                .iter()
+                .all(|f| matches!(f.arg.signal, Signal::Input(_)));
             if input_only {
                 diags.push(
                     Diagnostic::error(
@@ -454,7 +607,11 @@ fn common_terms(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], diags: &
                     .with_help(format!("merge them into one parameter (paper A11: the two media may not share a term that depends only on inputs), e.g. keep `{pa}` alone")),
                 );
             } else if medium(a) != medium(b) {
-                let name = |m: Option<usize>| m.map_or("no medium".to_string(), |d| r.disturbances[d].name.name.clone());
+                let name = |m: Option<usize>| {
+                    m.map_or("no medium".to_string(), |d| {
+                        r.disturbances[d].name.name.clone()
+                    })
+                };
                 diags.push(
                     Diagnostic::note(
                         "common-state-term",
@@ -476,7 +633,15 @@ fn common_terms(r: &Resolved, params: &[ParamDecl], terms: &[TermDecl], diags: &
 }
 
 fn strip(f: &[Factor]) -> Vec<Factor> {
-    f.iter().map(|x| Factor { arg: Arg { signal: x.arg.signal, relative: None }, modulus: x.modulus }).collect()
+    f.iter()
+        .map(|x| Factor {
+            arg: Arg {
+                signal: x.arg.signal,
+                relative: None,
+            },
+            modulus: x.modulus,
+        })
+        .collect()
 }
 
 /// The exact coefficient as a short string.
