@@ -392,6 +392,8 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                         RotationDecl::None => None,
                     };
                     match expected {
+                        // A heading or rotation was declared but is invalid: already reported.
+                        None if rotation_span.is_some() => {}
                         None => diags.push(
                             Diagnostic::error(
                                 "missing-rotation",
