@@ -38,7 +38,9 @@ pub fn run(args: &CheckArgs) -> Status {
         Err(e) => {
             let message = match e.kind() {
                 std::io::ErrorKind::NotFound => format!("cannot read `{file}`: no such file"),
-                std::io::ErrorKind::InvalidData => format!("cannot read `{file}`: it is not UTF-8 text"),
+                std::io::ErrorKind::InvalidData => {
+                    format!("cannot read `{file}`: it is not UTF-8 text")
+                }
                 _ => format!("cannot read `{file}`: {e}"),
             };
             return fail(args, &file, "io", message);
@@ -59,10 +61,20 @@ pub fn run(args: &CheckArgs) -> Status {
         let style = stderr_style();
         let diagnostics = grammar::render(&compilation.diagnostics, &file, &source, style);
         eprint!("{diagnostics}");
-        let errors = compilation.diagnostics.iter().filter(|d| d.is_error()).count();
+        let errors = compilation
+            .diagnostics
+            .iter()
+            .filter(|d| d.is_error())
+            .count();
         if status == Status::Error {
             let plural = if errors == 1 { "" } else { "s" };
-            eprintln!("{}", headline(style, &format!("`{file}` was not checked: {errors} error{plural}")));
+            eprintln!(
+                "{}",
+                headline(
+                    style,
+                    &format!("`{file}` was not checked: {errors} error{plural}")
+                )
+            );
         }
     }
     status
@@ -71,18 +83,40 @@ pub fn run(args: &CheckArgs) -> Status {
 /// Compiles with the experiments given on the command line, if any.
 fn analyse(args: &CheckArgs, source: &str) -> Result<Compilation, String> {
     if args.patterns.is_empty() {
-        return Ok(compile(source, &Options { aggregate: args.aggregate, patterns: None }));
+        return Ok(compile(
+            source,
+            &Options {
+                aggregate: args.aggregate,
+                patterns: None,
+            },
+        ));
     }
     // The sign arguments are known only after compiling: a first pass analyses one
     // all-plus experiment (no search), then the given experiments are analysed.
-    let probe = compile(source, &Options { aggregate: args.aggregate, patterns: Some(vec![Vec::new()]) });
-    let Some(ir) = &probe.ir else { return Ok(probe) };
+    let probe = compile(
+        source,
+        &Options {
+            aggregate: args.aggregate,
+            patterns: Some(vec![Vec::new()]),
+        },
+    );
+    let Some(ir) = &probe.ir else {
+        return Ok(probe);
+    };
     let patterns = args
         .patterns
         .iter()
-        .map(|spec| parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}")))
+        .map(|spec| {
+            parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}"))
+        })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(compile(source, &Options { aggregate: args.aggregate, patterns: Some(patterns) }))
+    Ok(compile(
+        source,
+        &Options {
+            aggregate: args.aggregate,
+            patterns: Some(patterns),
+        },
+    ))
 }
 
 fn status_of(c: &Compilation) -> Status {

@@ -31,7 +31,11 @@ impl Status {
 /// (<https://no-color.org>); plain text into pipes, files and tests.
 fn style_for(is_terminal: bool) -> RenderStyle {
     let no_color = std::env::var_os("NO_COLOR").is_some_and(|v| !v.is_empty());
-    if is_terminal && !no_color { RenderStyle::Color } else { RenderStyle::Plain }
+    if is_terminal && !no_color {
+        RenderStyle::Color
+    } else {
+        RenderStyle::Plain
+    }
 }
 
 /// The render style for text written to standard error.

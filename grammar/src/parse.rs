@@ -61,7 +61,12 @@ fn nesting_guard(source: &str) -> Option<Diagnostic> {
 /// `|` still open at `to`, innermost last. A `|` opens a modulus where an
 /// operand is expected (after an operator, `(`, `|`, `=`, `,`), else closes one.
 /// Fails with the offset of the first delimiter nested deeper than `limit`.
-fn scan_delimiters(source: &str, from: usize, to: usize, limit: usize) -> Result<Vec<usize>, usize> {
+fn scan_delimiters(
+    source: &str,
+    from: usize,
+    to: usize,
+    limit: usize,
+) -> Result<Vec<usize>, usize> {
     let bytes = source.as_bytes();
     let to = to.min(bytes.len());
     let mut open: Vec<usize> = Vec::new();
@@ -121,7 +126,10 @@ fn scan_delimiters(source: &str, from: usize, to: usize, limit: usize) -> Result
 fn unclosed_delimiter(source: &str, pos: usize) -> Option<usize> {
     let pos = pos.min(source.len());
     let start = source.get(..pos)?.rfind('=').map_or(0, |i| i + 1);
-    scan_delimiters(source, start, pos, usize::MAX).ok()?.last().copied()
+    scan_delimiters(source, start, pos, usize::MAX)
+        .ok()?
+        .last()
+        .copied()
 }
 
 fn rule_name(rule: &Rule) -> &'static str {
@@ -179,7 +187,11 @@ fn found_token(source: &str, pos: usize) -> (String, usize) {
     };
     let word_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
     if word_char(first) {
-        let len: usize = rest.chars().take_while(|c| word_char(*c)).map(char::len_utf8).sum();
+        let len: usize = rest
+            .chars()
+            .take_while(|c| word_char(*c))
+            .map(char::len_utf8)
+            .sum();
         (format!("`{}`", &rest[..len]), pos + len)
     } else if first == '\n' || first == '\r' {
         ("end of line".to_string(), pos + 1)
@@ -196,9 +208,16 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
     };
     let (found, end) = found_token(source, pos);
     let keyword = is_keyword(found.trim_matches('`'));
-    let found_text = if keyword { format!("the keyword {found}") } else { found.clone() };
+    let found_text = if keyword {
+        format!("the keyword {found}")
+    } else {
+        found.clone()
+    };
     let (message, expected) = match &e.variant {
-        ErrorVariant::ParsingError { positives, negatives } => {
+        ErrorVariant::ParsingError {
+            positives,
+            negatives,
+        } => {
             let mut names: Vec<&str> = positives.iter().map(rule_name).collect();
             names.sort_unstable();
             names.dedup();
@@ -212,31 +231,55 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
                 n => format!("{} or {}", names[..n - 1].join(", "), names[n - 1]),
             };
             if !names.is_empty() {
-                (format!("expected {list}, found {found_text}"), names.join(" "))
+                (
+                    format!("expected {list}, found {found_text}"),
+                    names.join(" "),
+                )
             } else if negatives.contains(&Rule::keyword) {
-                (format!("{found} is a keyword and cannot be used as a name"), "a name".to_string())
+                (
+                    format!("{found} is a keyword and cannot be used as a name"),
+                    "a name".to_string(),
+                )
             } else {
                 (format!("unexpected {found_text}"), String::new())
             }
         }
         ErrorVariant::CustomError { message } => (message.clone(), String::new()),
     };
-    let label = if found == "end of file" { "the file ends here" } else { "here" };
+    let label = if found == "end of file" {
+        "the file ends here"
+    } else {
+        "here"
+    };
     let mut d = Diagnostic::error("syntax", message).with_primary(Span::new(pos, end), label);
     // An expression cut short by the next declaration, or by the end of the file,
     // usually has an unclosed `(` or `|`: point at it.
     let cut_short = found == "end of file" || (keyword && expected.contains("an operator"));
-    let unclosed = if cut_short { unclosed_delimiter(source, pos) } else { None };
+    let unclosed = if cut_short {
+        unclosed_delimiter(source, pos)
+    } else {
+        None
+    };
     if let Some(open) = unclosed {
-        let what = if source.as_bytes().get(open) == Some(&b'(') { "`(`" } else { "`|`" };
-        d = d.with_secondary(Span::new(open, open + 1), format!("this {what} is never closed"));
+        let what = if source.as_bytes().get(open) == Some(&b'(') {
+            "`(`"
+        } else {
+            "`|`"
+        };
+        d = d.with_secondary(
+            Span::new(open, open + 1),
+            format!("this {what} is never closed"),
+        );
     }
     let help = if found == "`^`" {
         Some("powers are not part of the language; write products such as u*u or u*|u|".to_string())
     } else if expected.contains("a name") && keyword {
         Some(format!("{found} is reserved; choose another name"))
     } else if unclosed.is_some() {
-        Some("close the modulus or parenthesis before the next declaration, e.g. X*u*|water.u|".to_string())
+        Some(
+            "close the modulus or parenthesis before the next declaration, e.g. X*u*|water.u|"
+                .to_string(),
+        )
     } else if expected.contains("an expression") || expected.contains("an operand") {
         Some("each term is a product of a parameter, numbers and at most two signals, e.g. X_uu*water.u*|water.u|".to_string())
     } else if found == "end of file" {

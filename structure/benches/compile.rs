@@ -12,7 +12,10 @@ fn compile(c: &mut Criterion) {
     c.bench_function("compile ship.som", |b| {
         b.iter(|| leeway_structure::compile(black_box(SHIP), &options))
     });
-    let aggregate = leeway_structure::Options { aggregate: true, patterns: None };
+    let aggregate = leeway_structure::Options {
+        aggregate: true,
+        patterns: None,
+    };
     c.bench_function("compile ship_iv2.som --aggregate", |b| {
         b.iter(|| leeway_structure::compile(black_box(SHIP_IV2), &aggregate))
     });

@@ -807,16 +807,25 @@ pub fn parse_pattern(sign_args: &[SignArg], spec: &str) -> Result<SignPattern, S
     };
     for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
         let Some((name, sign)) = item.rsplit_once(':') else {
-            return Err(format!("expected `argument:+` or `argument:-`, found `{item}`"));
+            return Err(format!(
+                "expected `argument:+` or `argument:-`, found `{item}`"
+            ));
         };
         let (name, sign) = (name.trim(), sign.trim());
         let value = match sign {
             "+" | "+1" | "1" => 1,
             "-" | "-1" => -1,
-            _ => return Err(format!("the sign of `{name}` must be `+` or `-`, found `{sign}`")),
+            _ => {
+                return Err(format!(
+                    "the sign of `{name}` must be `+` or `-`, found `{sign}`"
+                ));
+            }
         };
         let Some(index) = sign_args.iter().position(|s| s.name == name) else {
-            return Err(format!("`{name}` is not a sign argument of this model; {}", known()));
+            return Err(format!(
+                "`{name}` is not a sign argument of this model; {}",
+                known()
+            ));
         };
         if given.contains(&name) {
             return Err(format!("`{name}` is given twice in one pattern"));
@@ -832,7 +841,17 @@ pub fn parse_pattern(sign_args: &[SignArg], spec: &str) -> Result<SignPattern, S
 pub fn pattern_spec(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
     relevant_signs(ir, kind)
         .into_iter()
-        .map(|i| format!("{}:{}", ir.sign_args[i].name, if p.get(i).copied().unwrap_or(1) < 0 { "-" } else { "+" }))
+        .map(|i| {
+            format!(
+                "{}:{}",
+                ir.sign_args[i].name,
+                if p.get(i).copied().unwrap_or(1) < 0 {
+                    "-"
+                } else {
+                    "+"
+                }
+            )
+        })
         .collect::<Vec<_>>()
         .join(",")
 }

@@ -490,26 +490,35 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         let quoted: Vec<String> = list.iter().map(|n| format!("`{n}`")).collect();
         let msg = match quoted.as_slice() {
             [one] if params.len() == 2 => {
-                format!("parameter {one} appears twice in one term: the model would not be linear in θ")
+                format!(
+                    "parameter {one} appears twice in one term: the model would not be linear in θ"
+                )
             }
             [one] => format!(
                 "parameter {one} appears {} times in one term: the model would not be linear in θ",
                 params.len()
             ),
-            [a, b] => format!("{a} and {b} are both parameters in one term: the model would not be linear in θ"),
+            [a, b] => format!(
+                "{a} and {b} are both parameters in one term: the model would not be linear in θ"
+            ),
             [rest @ .., last] => format!(
                 "{} and {last} are all parameters in one term: the model would not be linear in θ",
                 rest.join(", ")
             ),
             [] => String::new(),
         };
-        let mut d = Diagnostic::error("nonlinear-parameter", msg)
-            .with_primary(p.span, format!("{} unknown factors in one term", params.len()));
+        let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(
+            p.span,
+            format!("{} unknown factors in one term", params.len()),
+        );
         for extra in params.iter().skip(1) {
             let label = if extra.name == params[0].name {
                 format!("`{}` again", extra.name)
             } else {
-                format!("`{}` is not a declared signal, so it is a parameter", extra.name)
+                format!(
+                    "`{}` is not a declared signal, so it is a parameter",
+                    extra.name
+                )
             };
             d = d.with_secondary(extra.span, label);
         }

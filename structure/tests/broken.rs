@@ -44,7 +44,13 @@ fn annotation(line: &str) -> Option<(usize, usize, String, String, String)> {
     let message = tail.strip_prefix(": ")?;
     // Columns count characters; `//` and the spaces before the carets are ASCII.
     let start = 2 + carets_at + 1;
-    Some((start, start + width, severity.to_string(), code.to_string(), message.to_string()))
+    Some((
+        start,
+        start + width,
+        severity.to_string(),
+        code.to_string(),
+        message.to_string(),
+    ))
 }
 
 fn expectations(source: &str) -> Vec<Expected> {
@@ -53,8 +59,19 @@ fn expectations(source: &str) -> Vec<Expected> {
     for (i, line) in source.lines().enumerate() {
         match annotation(line) {
             Some((start, end, severity, code, message)) => {
-                assert!(target > 0, "annotation on line {} has no line above it", i + 1);
-                out.push(Expected { line: target, start, end, severity, code, message });
+                assert!(
+                    target > 0,
+                    "annotation on line {} has no line above it",
+                    i + 1
+                );
+                out.push(Expected {
+                    line: target,
+                    start,
+                    end,
+                    severity,
+                    code,
+                    message,
+                });
             }
             None => target = i + 1,
         }
@@ -66,8 +83,14 @@ fn expectations(source: &str) -> Vec<Expected> {
 /// What the compiler reported, in the same shape. A span running past its
 /// first line is drawn to the end of that line; an empty span as one caret.
 fn reported(source: &str, d: &Diagnostic) -> Expected {
-    let span = d.primary_span().unwrap_or_else(|| panic!("{} has no location: {d:?}", d.code));
-    assert!(span.start <= span.end && span.end <= source.len(), "{}: span {span:?} outside the source", d.code);
+    let span = d
+        .primary_span()
+        .unwrap_or_else(|| panic!("{} has no location: {d:?}", d.code));
+    assert!(
+        span.start <= span.end && span.end <= source.len(),
+        "{}: span {span:?} outside the source",
+        d.code
+    );
     let (line, start) = line_col(source, span.start);
     let (end_line, end_col) = line_col(source, span.end);
     let end = if end_line == line {
@@ -81,7 +104,14 @@ fn reported(source: &str, d: &Diagnostic) -> Expected {
         Severity::Warning => "warning",
         Severity::Note => "note",
     };
-    Expected { line, start, end, severity: severity.into(), code: d.code.clone(), message: d.message.clone() }
+    Expected {
+        line,
+        start,
+        end,
+        severity: severity.into(),
+        code: d.code.clone(),
+        message: d.message.clone(),
+    }
 }
 
 fn broken_dir() -> PathBuf {
@@ -89,10 +119,17 @@ fn broken_dir() -> PathBuf {
 }
 
 fn check(path: &Path) -> String {
-    let source = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let name = format!("broken/{}", path.file_name().unwrap_or_default().to_string_lossy());
+    let source =
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let name = format!(
+        "broken/{}",
+        path.file_name().unwrap_or_default().to_string_lossy()
+    );
     let expected = expectations(&source);
-    assert!(!expected.is_empty(), "{name}: a broken model states what it expects");
+    assert!(
+        !expected.is_empty(),
+        "{name}: a broken model states what it expects"
+    );
     let c = compile(&source, &Options::default());
     let mut actual: Vec<Expected> = c
         .diagnostics
@@ -101,9 +138,15 @@ fn check(path: &Path) -> String {
         .map(|d| reported(&source, d))
         .collect();
     actual.sort();
-    assert_eq!(actual, expected, "{name}: reported (left) vs annotated (right)");
+    assert_eq!(
+        actual, expected,
+        "{name}: reported (left) vs annotated (right)"
+    );
     if c.has_errors() {
-        assert!(c.ir.is_none() || c.only_unidentifiable(), "{name}: an invalid model yields no IR");
+        assert!(
+            c.ir.is_none() || c.only_unidentifiable(),
+            "{name}: an invalid model yields no IR"
+        );
     }
     render(&c.diagnostics, &name, &source, RenderStyle::Plain)
 }
@@ -154,13 +197,20 @@ fn every_error_code_has_a_broken_model() {
     // A model over 1 MiB does not belong in the repository; grammar's unit
     // tests cover `file-too-large`.
     let elsewhere = BTreeSet::from(["file-too-large".to_string()]);
-    let missing: Vec<&String> = codes.iter().filter(|c| !covered.contains(*c) && !elsewhere.contains(*c)).collect();
-    assert!(missing.is_empty(), "error codes without a broken model: {missing:?}");
+    let missing: Vec<&String> = codes
+        .iter()
+        .filter(|c| !covered.contains(*c) && !elsewhere.contains(*c))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "error codes without a broken model: {missing:?}"
+    );
 }
 
 #[test]
 fn annotations_parse() {
-    let src = "model M {\n    der u = X*u^2\n//             ^ error[syntax]: expected x, found `^`\n}\n";
+    let src =
+        "model M {\n    der u = X*u^2\n//             ^ error[syntax]: expected x, found `^`\n}\n";
     let e = expectations(src);
     assert_eq!(
         e,

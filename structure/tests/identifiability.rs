@@ -12,19 +12,33 @@ fn source(path: &str) -> String {
 }
 
 fn with(path: &str, aggregate: bool, patterns: Option<Vec<SignPattern>>) -> Compilation {
-    compile(&source(path), &Options { aggregate, patterns })
+    compile(
+        &source(path),
+        &Options {
+            aggregate,
+            patterns,
+        },
+    )
 }
 
 fn ir_of(c: &Compilation) -> &Ir {
-    c.ir.as_ref().unwrap_or_else(|| panic!("expected an IR: {:?}", c.diagnostics))
+    c.ir.as_ref()
+        .unwrap_or_else(|| panic!("expected an IR: {:?}", c.diagnostics))
 }
 
 fn errors(c: &Compilation) -> Vec<String> {
-    c.diagnostics.iter().filter(|d| d.is_error()).map(|d| format!("{}: {}", d.code, d.message)).collect()
+    c.diagnostics
+        .iter()
+        .filter(|d| d.is_error())
+        .map(|d| format!("{}: {}", d.code, d.message))
+        .collect()
 }
 
 fn sign_index(ir: &Ir, name: &str) -> usize {
-    ir.sign_args.iter().position(|s| s.name == name).unwrap_or_else(|| panic!("no sign argument {name}"))
+    ir.sign_args
+        .iter()
+        .position(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no sign argument {name}"))
 }
 
 /// The parameter name sets of the unidentifiable groups, sorted.
@@ -34,7 +48,11 @@ fn groups(ir: &Ir) -> Vec<Vec<String>> {
         .unidentifiable
         .iter()
         .map(|c| {
-            let mut names: Vec<String> = c.parameters.iter().map(|p| ir.parameters[*p].name.clone()).collect();
+            let mut names: Vec<String> = c
+                .parameters
+                .iter()
+                .map(|p| ir.parameters[*p].name.clone())
+                .collect();
             names.sort();
             names
         })
@@ -92,7 +110,10 @@ fn ship_phi_is_the_papers() {
             .filter(|col| !col.kind.is_nuisance() && col.outputs().contains(&out))
             .map(|col| (col.name.clone(), render::column_text(ir, col, out)))
             .collect();
-        let want: Vec<(String, String)> = want.iter().map(|(p, e)| (p.to_string(), e.to_string())).collect();
+        let want: Vec<(String, String)> = want
+            .iter()
+            .map(|(p, e)| (p.to_string(), e.to_string()))
+            .collect();
         assert_eq!(got, want, "output {}", ir.states[out]);
     }
     // Identifiable from one experiment, whatever its sign pattern.
@@ -104,7 +125,10 @@ fn ship_phi_is_the_papers() {
         assert!(ir_of(&c).report.identifiable);
     }
     // 32 nuisance columns, 24 after reduction (see the snapshot for which).
-    assert_eq!((ir.report.nuisance.before, ir.report.nuisance.after), (32, 24));
+    assert_eq!(
+        (ir.report.nuisance.before, ir.report.nuisance.after),
+        (32, 24)
+    );
 }
 
 // ------------------------------------------------------------ ship, IV2
@@ -118,10 +142,25 @@ fn ship_iv2_is_refused_from_any_single_pattern_naming_the_three_pairs() {
         let c = with("ship_iv2.som", false, Some(vec![p.clone()]));
         let ir = ir_of(&c);
         assert!(!ir.report.identifiable, "{p:?}");
-        assert!(c.only_unidentifiable() && c.has_errors(), "{p:?}: {:?}", errors(&c));
-        assert_eq!(groups(ir), vec![pair("N_uv", "W_uv"), pair("X_uu", "W_uu"), pair("Y_vv", "W_vv")], "{p:?}");
+        assert!(
+            c.only_unidentifiable() && c.has_errors(),
+            "{p:?}: {:?}",
+            errors(&c)
+        );
+        assert_eq!(
+            groups(ir),
+            vec![
+                pair("N_uv", "W_uv"),
+                pair("X_uu", "W_uu"),
+                pair("Y_vv", "W_vv")
+            ],
+            "{p:?}"
+        );
         for e in errors(&c) {
-            assert!(e.starts_with("unidentifiable-combination: θ is not identifiable: "), "{e}");
+            assert!(
+                e.starts_with("unidentifiable-combination: θ is not identifiable: "),
+                "{e}"
+            );
         }
     }
     // At the all-plus pattern the combinations are plain sums.
@@ -135,7 +174,11 @@ fn ship_iv2_is_refused_from_any_single_pattern_naming_the_three_pairs() {
     let mut p = vec![1i8; n];
     p[sign_index(ir, "water.u")] = -1;
     let c = with("ship_iv2.som", false, Some(vec![p]));
-    assert!(errors(&c).join("\n").contains("enter only as X_uu - W_uu"), "{:?}", errors(&c));
+    assert!(
+        errors(&c).join("\n").contains("enter only as X_uu - W_uu"),
+        "{:?}",
+        errors(&c)
+    );
 }
 
 #[test]
@@ -149,14 +192,22 @@ fn ship_iv2_separations() {
             .separations
             .iter()
             .find(|s| {
-                let mut names: Vec<String> = s.parameters.iter().map(|p| ir.parameters[*p].name.clone()).collect();
+                let mut names: Vec<String> = s
+                    .parameters
+                    .iter()
+                    .map(|p| ir.parameters[*p].name.clone())
+                    .collect();
                 names.sort();
                 names == pair(a, b)
             })
             .unwrap_or_else(|| panic!("no separation for {a}/{b}"))
     };
-    let (wu, au, wv, av) =
-        (sign_index(ir, "water.u"), sign_index(ir, "air.u"), sign_index(ir, "water.v"), sign_index(ir, "air.v"));
+    let (wu, au, wv, av) = (
+        sign_index(ir, "water.u"),
+        sign_index(ir, "air.u"),
+        sign_index(ir, "water.v"),
+        sign_index(ir, "air.v"),
+    );
     // X_uu / W_uu: experiments where sign(water.u)·sign(air.u) differs.
     for (a, b, (i, j)) in [("X_uu", "W_uu", (wu, au)), ("Y_vv", "W_vv", (wv, av))] {
         let s = sep(a, b);
@@ -168,9 +219,15 @@ fn ship_iv2_separations() {
             "{}",
             s.message
         );
-        let set = s.patterns.as_ref().unwrap_or_else(|| panic!("{a}/{b} are separable"));
+        let set = s
+            .patterns
+            .as_ref()
+            .unwrap_or_else(|| panic!("{a}/{b} are separable"));
         let products: Vec<i8> = set.iter().map(|p| p[i] * p[j]).collect();
-        assert!(products.contains(&1) && products.contains(&-1), "{a}/{b}: {set:?}");
+        assert!(
+            products.contains(&1) && products.contains(&-1),
+            "{a}/{b}: {set:?}"
+        );
         // Those experiments really separate the pair (and leave N_uv/W_uv).
         let c2 = with("ship_iv2.som", false, Some(set.clone()));
         let g = groups(ir_of(&c2));
@@ -179,7 +236,12 @@ fn ship_iv2_separations() {
     }
     let s = sep("N_uv", "W_uv");
     assert!(s.patterns.is_none());
-    assert!(s.message.starts_with("no experiment separates `N_uv` and `W_uv`"), "{}", s.message);
+    assert!(
+        s.message
+            .starts_with("no experiment separates `N_uv` and `W_uv`"),
+        "{}",
+        s.message
+    );
     // Exhaustively: no set of sign patterns separates N_uv from W_uv.
     let every = all_patterns(ir.sign_args.len());
     let c_all = with("ship_iv2.som", false, Some(every));
@@ -196,20 +258,44 @@ fn ship_iv2_is_accepted_with_aggregation() {
         .aggregates
         .iter()
         .map(|a| {
-            let absorbed = a.absorbed.iter().map(|p| ir.parameters[*p].name.clone()).collect();
-            (ir.parameters[a.parameter].name.clone(), a.estimates.clone(), absorbed)
+            let absorbed = a
+                .absorbed
+                .iter()
+                .map(|p| ir.parameters[*p].name.clone())
+                .collect();
+            (
+                ir.parameters[a.parameter].name.clone(),
+                a.estimates.clone(),
+                absorbed,
+            )
         })
         .collect();
     assert_eq!(
         aggregates,
         vec![
-            ("X_uu".to_string(), "X_uu + W_uu".to_string(), vec!["W_uu".to_string()]),
-            ("Y_vv".to_string(), "Y_vv + W_vv".to_string(), vec!["W_vv".to_string()]),
-            ("N_uv".to_string(), "N_uv + W_uv".to_string(), vec!["W_uv".to_string()]),
+            (
+                "X_uu".to_string(),
+                "X_uu + W_uu".to_string(),
+                vec!["W_uu".to_string()]
+            ),
+            (
+                "Y_vv".to_string(),
+                "Y_vv + W_vv".to_string(),
+                vec!["W_vv".to_string()]
+            ),
+            (
+                "N_uv".to_string(),
+                "N_uv + W_uv".to_string(),
+                vec!["W_uv".to_string()]
+            ),
         ]
     );
-    let warnings: Vec<&str> =
-        c.diagnostics.iter().filter(|d| d.code == "aggregated-combination").map(|d| d.message.as_str()).collect();
+    let warnings: Vec<&str> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == "aggregated-combination")
+        .map(|d| d.message.as_str())
+        .collect();
     assert_eq!(warnings.len(), 3, "{warnings:?}");
 }
 
@@ -222,11 +308,29 @@ fn rov_needs_two_sign_patterns() {
     assert!(errors(&c).is_empty(), "{:?}", errors(&c));
     assert!(ir.report.identifiable);
     assert!(!ir.report.any_single_pattern);
-    assert_eq!(ir.report.required_patterns.len(), 2, "{:?}", ir.report.required_patterns);
+    assert_eq!(
+        ir.report.required_patterns.len(),
+        2,
+        "{:?}",
+        ir.report.required_patterns
+    );
     let (v, r) = (sign_index(ir, "water.v"), sign_index(ir, "r"));
-    let products: Vec<i8> = ir.report.required_patterns.iter().map(|p| p[v] * p[r]).collect();
-    assert!(products.contains(&1) && products.contains(&-1), "{:?}", ir.report.required_patterns);
-    assert!(c.diagnostics.iter().any(|d| d.code == "required-experiments"));
+    let products: Vec<i8> = ir
+        .report
+        .required_patterns
+        .iter()
+        .map(|p| p[v] * p[r])
+        .collect();
+    assert!(
+        products.contains(&1) && products.contains(&-1),
+        "{:?}",
+        ir.report.required_patterns
+    );
+    assert!(
+        c.diagnostics
+            .iter()
+            .any(|d| d.code == "required-experiments")
+    );
 
     // Refused from every single pattern, naming Y_vr and Y_rv.
     let every = all_patterns(ir.sign_args.len());
@@ -242,7 +346,12 @@ fn rov_needs_two_sign_patterns() {
         for b in &every[i + 1..] {
             let c2 = with("rov.som", false, Some(vec![a.clone(), b.clone()]));
             let separated = a[v] * a[r] != b[v] * b[r];
-            assert_eq!(ir_of(&c2).report.identifiable, separated, "{a:?} {b:?}: {:?}", errors(&c2));
+            assert_eq!(
+                ir_of(&c2).report.identifiable,
+                separated,
+                "{a:?} {b:?}: {:?}",
+                errors(&c2)
+            );
             assert_eq!(c2.has_errors(), !separated);
         }
     }
@@ -252,15 +361,31 @@ fn rov_needs_two_sign_patterns() {
 fn patterns_parse_by_name() {
     let c = with("rov.som", false, None);
     let ir = ir_of(&c);
-    let (u, v, r) = (sign_index(ir, "water.u"), sign_index(ir, "water.v"), sign_index(ir, "r"));
+    let (u, v, r) = (
+        sign_index(ir, "water.u"),
+        sign_index(ir, "water.v"),
+        sign_index(ir, "r"),
+    );
     let p = parse_pattern(&ir.sign_args, "water.v:-, r:+").expect("valid");
     assert_eq!((p[u], p[v], p[r]), (1, -1, 1));
-    assert_eq!(parse_pattern(&ir.sign_args, "").expect("empty is all plus"), vec![1; 3]);
+    assert_eq!(
+        parse_pattern(&ir.sign_args, "").expect("empty is all plus"),
+        vec![1; 3]
+    );
     assert_eq!(parse_pattern(&ir.sign_args, "r:-1").expect("-1")[r], -1);
     for (bad, says) in [
-        ("water.w:+", "`water.w` is not a sign argument of this model; its sign arguments are water.u, water.v, r"),
-        ("water.v", "expected `argument:+` or `argument:-`, found `water.v`"),
-        ("water.v:x", "the sign of `water.v` must be `+` or `-`, found `x`"),
+        (
+            "water.w:+",
+            "`water.w` is not a sign argument of this model; its sign arguments are water.u, water.v, r",
+        ),
+        (
+            "water.v",
+            "expected `argument:+` or `argument:-`, found `water.v`",
+        ),
+        (
+            "water.v:x",
+            "the sign of `water.v` must be `+` or `-`, found `x`",
+        ),
         ("r:+,r:-", "`r` is given twice in one pattern"),
     ] {
         assert_eq!(parse_pattern(&ir.sign_args, bad), Err(says.to_string()));
@@ -271,29 +396,61 @@ fn patterns_parse_by_name() {
 
 #[test]
 fn blimp_and_hovercraft_are_identifiable_from_one_experiment() {
-    for (name, params, signs, nuisance) in [("blimp.som", 11, 3, (23, 20)), ("hovercraft.som", 8, 0, (0, 0))] {
+    for (name, params, signs, nuisance) in [
+        ("blimp.som", 11, 3, (23, 20)),
+        ("hovercraft.som", 8, 0, (0, 0)),
+    ] {
         let c = with(name, false, None);
         let ir = ir_of(&c);
         assert!(errors(&c).is_empty(), "{name}: {:?}", errors(&c));
         assert_eq!(ir.parameters.len(), params, "{name}");
-        assert_eq!(ir.sign_args.iter().filter(|s| !s.measured).count(), signs, "{name}");
-        assert!(ir.report.identifiable && ir.report.any_single_pattern, "{name}");
-        assert_eq!((ir.report.nuisance.before, ir.report.nuisance.after), nuisance, "{name}");
+        assert_eq!(
+            ir.sign_args.iter().filter(|s| !s.measured).count(),
+            signs,
+            "{name}"
+        );
+        assert!(
+            ir.report.identifiable && ir.report.any_single_pattern,
+            "{name}"
+        );
+        assert_eq!(
+            (ir.report.nuisance.before, ir.report.nuisance.after),
+            nuisance,
+            "{name}"
+        );
     }
     // The hovercraft's wind is measured: every wind term is a pointwise Φ2 column.
     let c = with("hovercraft.som", false, None);
     let ir = ir_of(&c);
-    let measured: Vec<&str> = ir.parameters.iter().filter(|p| p.measured).map(|p| p.name.as_str()).collect();
+    let measured: Vec<&str> = ir
+        .parameters
+        .iter()
+        .filter(|p| p.measured)
+        .map(|p| p.name.as_str())
+        .collect();
     assert_eq!(measured, ["X_uu", "Y_vv", "N_uv"]);
-    assert!(ir.predictors.measured.iter().all(|c| matches!(c.kind, ColumnKind::Theta { .. })));
+    assert!(
+        ir.predictors
+            .measured
+            .iter()
+            .all(|c| matches!(c.kind, ColumnKind::Theta { .. }))
+    );
 }
 
 #[test]
 fn common_input_term_is_refused_naming_both_parameters() {
     let c = with("broken/common-input-term.som", false, None);
     assert!(c.ir.is_none());
-    let e: Vec<_> = c.diagnostics.iter().filter(|d| d.code == "common-input-term").collect();
+    let e: Vec<_> = c
+        .diagnostics
+        .iter()
+        .filter(|d| d.code == "common-input-term")
+        .collect();
     assert_eq!(e.len(), 1, "{:?}", c.diagnostics);
-    assert!(e[0].message.contains("`X_t`") && e[0].message.contains("`W_t`"), "{}", e[0].message);
+    assert!(
+        e[0].message.contains("`X_t`") && e[0].message.contains("`W_t`"),
+        "{}",
+        e[0].message
+    );
     assert!(e[0].message.contains("X_t + W_t"), "{}", e[0].message);
 }

@@ -9,8 +9,12 @@ use std::path::Path;
 
 /// `render::render` of the IR (if any) followed by the plain diagnostics.
 fn derived(path: &Path, options: &Options) -> String {
-    let source = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let name = format!("examples/models/{}", path.file_name().unwrap_or_default().to_string_lossy());
+    let source =
+        std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let name = format!(
+        "examples/models/{}",
+        path.file_name().unwrap_or_default().to_string_lossy()
+    );
     let c = compile(&source, options);
     let mut out = String::new();
     if let Some(ir) = &c.ir {
@@ -34,14 +38,20 @@ fn structure_of_every_example_model() {
 
 #[test]
 fn ship_iv2_aggregated() {
-    let options = Options { aggregate: true, patterns: None };
+    let options = Options {
+        aggregate: true,
+        patterns: None,
+    };
     insta::assert_snapshot!(derived(&models().join("ship_iv2.som"), &options));
 }
 
 #[test]
 fn rov_from_one_experiment() {
     // One all-plus experiment (an empty pattern means every sign +).
-    let options = Options { aggregate: false, patterns: Some(vec![Vec::new()]) };
+    let options = Options {
+        aggregate: false,
+        patterns: Some(vec![Vec::new()]),
+    };
     insta::assert_snapshot!(derived(&models().join("rov.som"), &options));
 }
 
@@ -54,9 +64,17 @@ fn every_example_model_compiles() {
             seen += 1;
             let source = std::fs::read_to_string(&path).expect("read");
             let c = compile(&source, &Options::default());
-            assert!(c.ir.is_some(), "{} must compile: {:?}", path.display(), c.diagnostics);
-            let unexpected: Vec<_> =
-                c.diagnostics.iter().filter(|d| d.is_error() && d.code != "unidentifiable-combination").collect();
+            assert!(
+                c.ir.is_some(),
+                "{} must compile: {:?}",
+                path.display(),
+                c.diagnostics
+            );
+            let unexpected: Vec<_> = c
+                .diagnostics
+                .iter()
+                .filter(|d| d.is_error() && d.code != "unidentifiable-combination")
+                .collect();
             assert!(unexpected.is_empty(), "{}: {unexpected:?}", path.display());
             assert!(
                 c.diagnostics.iter().all(|d| d.code != "unused-declaration"),

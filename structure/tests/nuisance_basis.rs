@@ -29,8 +29,15 @@ fn compile_examples() -> Vec<(String, Ir)> {
         if path.extension().is_some_and(|e| e == "som") {
             let src = std::fs::read_to_string(&path).expect("read");
             let c = compile(&src, &Options::default());
-            let name = path.file_name().unwrap_or_default().to_string_lossy().to_string();
-            out.push((name.clone(), c.ir.unwrap_or_else(|| panic!("{name}: {:?}", c.diagnostics))));
+            let name = path
+                .file_name()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .to_string();
+            out.push((
+                name.clone(),
+                c.ir.unwrap_or_else(|| panic!("{name}: {:?}", c.diagnostics)),
+            ));
         }
     }
     out.sort_by(|a, b| a.0.cmp(&b.0));
@@ -48,7 +55,11 @@ fn vector(col: &Column, set: &[SignPattern]) -> BTreeMap<Row, Q> {
             let mut rest = Vec::new();
             for (var, power) in &e.vars {
                 match var {
-                    StructVar::Sign(i) if power % 2 == 1 && pattern.get(*i).copied().unwrap_or(1) < 0 => q = -q,
+                    StructVar::Sign(i)
+                        if power % 2 == 1 && pattern.get(*i).copied().unwrap_or(1) < 0 =>
+                    {
+                        q = -q
+                    }
                     StructVar::Sign(_) => {}
                     other => rest.push((*other, *power)),
                 }
@@ -62,8 +73,15 @@ fn vector(col: &Column, set: &[SignPattern]) -> BTreeMap<Row, Q> {
 
 fn rank(vectors: &[BTreeMap<Row, Q>]) -> usize {
     let rows: BTreeSet<&Row> = vectors.iter().flat_map(|v| v.keys()).collect();
-    let matrix: Vec<Vec<Q>> =
-        rows.iter().map(|r| vectors.iter().map(|v| v.get(*r).cloned().unwrap_or_else(Q::zero)).collect()).collect();
+    let matrix: Vec<Vec<Q>> = rows
+        .iter()
+        .map(|r| {
+            vectors
+                .iter()
+                .map(|v| v.get(*r).cloned().unwrap_or_else(Q::zero))
+                .collect()
+        })
+        .collect();
     echelon(&matrix, vectors.len()).rank()
 }
 
@@ -94,28 +112,48 @@ fn reduced_nuisance_basis_spans_the_unreduced_one() {
         for kind in [PredictorKind::Augmented, PredictorKind::Measured] {
             let columns = ir.predictors.get(kind);
             let analysis = Analysis::new(ir, kind);
-            let nuisance: Vec<usize> = (0..columns.len()).filter(|c| columns[*c].kind.is_nuisance()).collect();
+            let nuisance: Vec<usize> = (0..columns.len())
+                .filter(|c| columns[*c].kind.is_nuisance())
+                .collect();
             for set in pattern_sets(ir, kind) {
                 let red = analysis.reduce(Patterns::Set(&set));
-                let vectors: Vec<BTreeMap<Row, Q>> = columns.iter().map(|c| vector(c, &set)).collect();
+                let vectors: Vec<BTreeMap<Row, Q>> =
+                    columns.iter().map(|c| vector(c, &set)).collect();
                 let kept: Vec<usize> = nuisance.iter().copied().filter(|c| red.pivot[*c]).collect();
                 for &d in nuisance.iter().filter(|c| !red.pivot[**c]) {
                     // Rebuild the dropped column from the kept nuisance columns.
                     let mut rebuilt: BTreeMap<Row, Q> = BTreeMap::new();
                     for (k, q) in &red.combination[d] {
-                        assert!(kept.contains(k), "{name} {kind:?}: {} uses non-kept column {k}", columns[d].name);
+                        assert!(
+                            kept.contains(k),
+                            "{name} {kind:?}: {} uses non-kept column {k}",
+                            columns[d].name
+                        );
                         for (row, value) in &vectors[*k] {
                             *rebuilt.entry(row.clone()).or_insert_with(Q::zero) += value * q;
                         }
                     }
                     rebuilt.retain(|_, q| !q.is_zero());
-                    assert_eq!(rebuilt, vectors[d], "{name} {kind:?} {set:?}: {}", columns[d].name);
+                    assert_eq!(
+                        rebuilt, vectors[d],
+                        "{name} {kind:?} {set:?}: {}",
+                        columns[d].name
+                    );
                     checked += 1;
                 }
                 let kept_vectors: Vec<_> = kept.iter().rev().map(|k| vectors[*k].clone()).collect();
-                let all_vectors: Vec<_> = nuisance.iter().rev().map(|k| vectors[*k].clone()).collect();
-                assert_eq!(rank(&kept_vectors), kept.len(), "{name} {kind:?} {set:?}: kept columns are independent");
-                assert_eq!(rank(&all_vectors), kept.len(), "{name} {kind:?} {set:?}: same column space");
+                let all_vectors: Vec<_> =
+                    nuisance.iter().rev().map(|k| vectors[*k].clone()).collect();
+                assert_eq!(
+                    rank(&kept_vectors),
+                    kept.len(),
+                    "{name} {kind:?} {set:?}: kept columns are independent"
+                );
+                assert_eq!(
+                    rank(&all_vectors),
+                    kept.len(),
+                    "{name} {kind:?} {set:?}: same column space"
+                );
             }
         }
     }
@@ -134,7 +172,16 @@ fn structural_polynomials_match_the_evaluated_entries() {
                 }
                 let mut from_entries: BTreeMap<(usize, Vec<(StructVar, u32)>), Q> = BTreeMap::new();
                 for e in &col.entries {
-                    let Entry::Poly { output, coefficient_exact, signs, vars, .. } = e else { continue };
+                    let Entry::Poly {
+                        output,
+                        coefficient_exact,
+                        signs,
+                        vars,
+                        ..
+                    } = e
+                    else {
+                        continue;
+                    };
                     if vars.is_empty() {
                         continue; // constant within an experiment: dropped for the rank
                     }
@@ -152,13 +199,20 @@ fn structural_polynomials_match_the_evaluated_entries() {
                         *powers.entry(sv).or_insert(0) += 1;
                     }
                     let q = parse_q(coefficient_exact).expect("exact");
-                    *from_entries.entry((*output, powers.into_iter().collect())).or_insert_with(Q::zero) += q;
+                    *from_entries
+                        .entry((*output, powers.into_iter().collect()))
+                        .or_insert_with(Q::zero) += q;
                 }
                 from_entries.retain(|_, q| !q.is_zero());
                 let structural: BTreeMap<(usize, Vec<(StructVar, u32)>), Q> = col
                     .structural
                     .iter()
-                    .map(|e| ((e.output, e.vars.clone()), parse_q(&e.coefficient).expect("exact")))
+                    .map(|e| {
+                        (
+                            (e.output, e.vars.clone()),
+                            parse_q(&e.coefficient).expect("exact"),
+                        )
+                    })
                     .collect();
                 assert_eq!(from_entries, structural, "{name} {kind:?} {}", col.name);
             }

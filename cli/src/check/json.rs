@@ -174,7 +174,14 @@ fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
             .iter()
             .map(|l| {
                 let ((line, column), (end_line, end_column)) = (at(l.span.start), at(l.span.end));
-                JsonLabel { message: l.message.clone(), primary: l.primary, line, column, end_line, end_column }
+                JsonLabel {
+                    message: l.message.clone(),
+                    primary: l.primary,
+                    line,
+                    column,
+                    end_line,
+                    end_column,
+                }
             })
             .collect(),
         help: d.help.clone(),
@@ -186,25 +193,45 @@ fn pattern(ir: &Ir, p: &SignPattern) -> BTreeMap<String, String> {
     relevant_signs(ir, PredictorKind::Measured)
         .into_iter()
         .map(|i| {
-            let sign = if p.get(i).copied().unwrap_or(1) < 0 { "-" } else { "+" };
+            let sign = if p.get(i).copied().unwrap_or(1) < 0 {
+                "-"
+            } else {
+                "+"
+            };
             (ir.sign_args[i].name.clone(), sign.to_string())
         })
         .collect()
 }
 
 fn names(ir: &Ir, params: &[usize]) -> Vec<String> {
-    params.iter().map(|p| ir.parameters[*p].name.clone()).collect()
+    params
+        .iter()
+        .map(|p| ir.parameters[*p].name.clone())
+        .collect()
 }
 
 /// The document for a compiled (or rejected) model.
 pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
     let by = |s: Severity| -> Vec<JsonDiagnostic> {
-        c.diagnostics.iter().filter(|d| d.severity == s).map(|d| diagnostic(file, source, d)).collect()
+        c.diagnostics
+            .iter()
+            .filter(|d| d.severity == s)
+            .map(|d| diagnostic(file, source, d))
+            .collect()
     };
-    let (errors, warnings, notes) = (by(Severity::Error), by(Severity::Warning), by(Severity::Note));
+    let (errors, warnings, notes) = (
+        by(Severity::Error),
+        by(Severity::Warning),
+        by(Severity::Note),
+    );
     let Some(ir) = &c.ir else {
         let model = grammar::parse(source).0.map(|m| m.name.name);
-        return Report { errors, warnings, notes, ..empty(model, file, aggregate) };
+        return Report {
+            errors,
+            warnings,
+            notes,
+            ..empty(model, file, aggregate)
+        };
     };
     let r = &ir.report;
     let columns = &ir.predictors.measured;
@@ -226,7 +253,11 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
                         output: state.clone(),
                         expression,
                         term: term.join(" + "),
-                        kind: if ir.parameters[parameter].measured { "phi2" } else { "phi" },
+                        kind: if ir.parameters[parameter].measured {
+                            "phi2"
+                        } else {
+                            "phi"
+                        },
                     });
                 }
                 _ => nuisance_regressors.push(NuisanceRegressor {
@@ -249,14 +280,33 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
         nuisance: Nuisance {
             before: r.nuisance.before,
             after: r.nuisance.after,
-            kept: r.nuisance.kept.iter().map(|k| Kept { name: k.name.clone(), estimates: k.estimates.clone() }).collect(),
-            dropped: r.nuisance.dropped.iter().map(|d| Dropped { name: d.name.clone(), reason: d.reason.clone() }).collect(),
+            kept: r
+                .nuisance
+                .kept
+                .iter()
+                .map(|k| Kept {
+                    name: k.name.clone(),
+                    estimates: k.estimates.clone(),
+                })
+                .collect(),
+            dropped: r
+                .nuisance
+                .dropped
+                .iter()
+                .map(|d| Dropped {
+                    name: d.name.clone(),
+                    reason: d.reason.clone(),
+                })
+                .collect(),
             regressors: nuisance_regressors,
         },
         sign_arguments: ir
             .sign_args
             .iter()
-            .map(|s| SignArgument { name: s.name.clone(), fixed_per_experiment: !s.measured })
+            .map(|s| SignArgument {
+                name: s.name.clone(),
+                fixed_per_experiment: !s.measured,
+            })
             .collect(),
         required_sign_patterns: r.required_patterns.iter().map(|p| pattern(ir, p)).collect(),
         analysed_sign_patterns: r.patterns.iter().map(|p| pattern(ir, p)).collect(),
@@ -274,7 +324,10 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
             .iter()
             .map(|s| Separation {
                 parameters: names(ir, &s.parameters),
-                sign_patterns: s.patterns.as_ref().map(|set| set.iter().map(|p| pattern(ir, p)).collect()),
+                sign_patterns: s
+                    .patterns
+                    .as_ref()
+                    .map(|set| set.iter().map(|p| pattern(ir, p)).collect()),
                 message: s.message.clone(),
             })
             .collect(),
@@ -309,7 +362,10 @@ pub fn failure(file: &str, d: Diagnostic, aggregate: bool) -> Report {
         help: d.help,
         notes: d.notes,
     };
-    Report { errors: vec![error], ..empty(None, file, aggregate) }
+    Report {
+        errors: vec![error],
+        ..empty(None, file, aggregate)
+    }
 }
 
 fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
