@@ -599,3 +599,186 @@ fn build_expr(p: Pair<Rule>) -> Expr {
         }),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error(src: &str) -> Diagnostic {
+        let (model, diags) = parse(src);
+        assert!(model.is_none(), "{src:?} should not parse");
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        diags
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| Diagnostic::error("none", ""))
+    }
+
+    fn at(src: &str, d: &Diagnostic) -> String {
+        let span = d.primary_span().unwrap_or_default();
+        src.get(span.start..span.end)
+            .unwrap_or("<bad span>")
+            .to_string()
+    }
+
+    #[test]
+    fn parses_every_construct() {
+        let src = r#"
+            /* a block comment */ model M {
+                step 0.5;
+                state u, v, r
+                input tau, delta
+                heading psi integrates r axes(u, v)
+                disturbance c unmeasured earth(n, e)
+                disturbance w measured body(u: wu, v: wv)
+                water = relative(c)
+                air = relative(w)
+                der u = -X*water.u + 2*Y*water.u*|water.u| / 4 + (Z*tau) - K*delta*|delta|
+                next v = +A*air.v*|air.v| - B*-v
+                der r = 1.5e-3*N*r
+                nominal { X = -0.2, Y = +1e-3 }
+                data { u = "surge", time = "t" }
+            }
+        "#;
+        let (model, diags) = parse(src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let m = model.unwrap_or_else(|| Model {
+            name: Ident {
+                name: String::new(),
+                span: Span::default(),
+            },
+            items: Vec::new(),
+            span: Span::default(),
+        });
+        assert_eq!(m.name.name, "M");
+        assert_eq!(m.items.len(), 13);
+        assert!(
+            matches!(&m.items[3], Item::Heading { axes: Some((a, b)), .. } if a.name == "u" && b.name == "v")
+        );
+        assert!(
+            matches!(&m.items[5], Item::Disturbance { measurement: Measurement::Measured, frame: Frame::Body(c), .. } if c.len() == 2)
+        );
+        assert!(matches!(
+            &m.items[9],
+            Item::Equation {
+                kind: EquationKind::Next,
+                ..
+            }
+        ));
+        assert!(
+            matches!(&m.items[11], Item::Nominal { entries, .. } if entries[1].1.text == "+1e-3")
+        );
+        assert!(matches!(&m.items[12], Item::Data { entries, .. } if entries[0].1 == "surge"));
+    }
+
+    #[test]
+    fn syntax_errors_name_what_was_expected_and_found() {
+        let src = "model M {\n    state u\n    der u = X*u^2\n}\n";
+        let d = error(src);
+        assert_eq!(d.code, "syntax");
+        assert_eq!(
+            d.message,
+            "expected a declaration or an operator, found `^`"
+        );
+        assert_eq!(at(src, &d), "^");
+        assert!(d.help.as_deref().is_some_and(|h| h.contains("powers")));
+
+        let src = "model M {\n    state u, input\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected a name, found the keyword `input`");
+        assert_eq!(at(src, &d), "input", "the whole keyword is underlined");
+        assert_eq!(
+            d.help.as_deref(),
+            Some("`input` is reserved; choose another name")
+        );
+
+        let src = "model M {\n    state u\n    der u = X*\n}\n";
+        let d = error(src);
+        assert!(d.message.starts_with("expected "), "{}", d.message);
+        assert!(d.message.ends_with("found `}`"), "{}", d.message);
+
+        let src = "model M {\n    stat u\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected a declaration, found `stat`");
+        assert!(
+            d.help
+                .as_deref()
+                .is_some_and(|h| h.starts_with("declarations are:"))
+        );
+    }
+
+    #[test]
+    fn an_unclosed_modulus_is_pointed_at() {
+        let src = "model M {\n    state u, v\n    der u = X*u*|u + Y*v\n    der v = Z*v\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected an operator, found the keyword `der`");
+        let open = d.labels.iter().find(|l| !l.primary).map(|l| l.span);
+        assert_eq!(
+            open,
+            Some(Span::new(
+                src.find('|').unwrap_or(0),
+                src.find('|').unwrap_or(0) + 1
+            ))
+        );
+        assert!(
+            d.labels
+                .iter()
+                .any(|l| l.message == "this `|` is never closed")
+        );
+
+        let src = "model M {\n    state u\n    der u = X*(u\n";
+        let d = error(src);
+        assert!(d.message.ends_with("found end of file"), "{}", d.message);
+        assert!(
+            d.labels
+                .iter()
+                .any(|l| l.message == "this `(` is never closed"),
+            "{d:?}"
+        );
+    }
+
+    #[test]
+    fn nesting_guard_counts_expressions_only() {
+        let deep = format!(
+            "model M {{ state u der u = X*{}u{} }}",
+            "(".repeat(65),
+            ")".repeat(65)
+        );
+        let d = error(&deep);
+        assert_eq!(d.code, "nesting-too-deep");
+        assert_eq!(at(&deep, &d), "(");
+        let ok = format!(
+            "model M {{ state u der u = X*{}u{} }}",
+            "(".repeat(64),
+            ")".repeat(64)
+        );
+        assert!(parse(&ok).1.is_empty());
+        // Parentheses and bars in comments and strings do not count.
+        let quiet = format!(
+            "// {}\n/* {} */ model M {{ state u der u = X*u data {{ u = \"{}\" }} }}",
+            "(".repeat(100),
+            "|".repeat(100),
+            "(".repeat(100)
+        );
+        assert!(parse(&quiet).1.is_empty(), "{:?}", parse(&quiet).1);
+    }
+
+    #[test]
+    fn oversized_input_is_rejected_up_front() {
+        let big = " ".repeat(MAX_SOURCE_BYTES + 1);
+        let d = error(&big);
+        assert_eq!(d.code, "file-too-large");
+        assert_eq!(d.primary_span(), Some(Span::new(0, 0)));
+    }
+
+    #[test]
+    fn found_token_is_character_aware() {
+        assert_eq!(found_token("é*u", 0), ("`é`".to_string(), 2));
+        assert_eq!(found_token("abc_1.u rest", 0), ("`abc_1.u`".to_string(), 7));
+        assert_eq!(found_token("x", 1), ("end of file".to_string(), 1));
+        assert_eq!(found_token("\nx", 0), ("end of line".to_string(), 1));
+        let src = "model M { state é }";
+        let d = error(src);
+        assert_eq!(at(src, &d), "é");
+    }
+}
