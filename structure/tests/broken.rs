@@ -158,8 +158,14 @@ fn broken_models_report_what_they_annotate() {
     });
 }
 
-/// Every `Diagnostic::error("code", ..)` in grammar/ and structure/.
+/// Every `Diagnostic::error("code", ..)` in the library code of grammar/ and
+/// structure/ (unit tests excluded).
 fn error_codes_in_source() -> BTreeSet<String> {
+    codes_in_source(&["Diagnostic::error("])
+}
+
+/// The string literals right after any of `calls` in the library code.
+fn codes_in_source(calls: &[&str]) -> BTreeSet<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut codes = BTreeSet::new();
     for dir in ["grammar/src", "structure/src"] {
@@ -169,12 +175,15 @@ fn error_codes_in_source() -> BTreeSet<String> {
                 continue;
             }
             let text = std::fs::read_to_string(&path).expect("read source");
-            for (i, _) in text.match_indices("Diagnostic::error(") {
-                let rest = text[i + "Diagnostic::error(".len()..].trim_start();
-                if let Some(lit) = rest.strip_prefix('"')
-                    && let Some(end) = lit.find('"')
-                {
-                    codes.insert(lit[..end].to_string());
+            let library = text.split("#[cfg(test)]").next().unwrap_or_default();
+            for call in calls {
+                for (i, _) in library.match_indices(call) {
+                    let rest = library[i + call.len()..].trim_start();
+                    if let Some(lit) = rest.strip_prefix('"')
+                        && let Some(end) = lit.find('"')
+                    {
+                        codes.insert(lit[..end].to_string());
+                    }
                 }
             }
         }
@@ -228,4 +237,25 @@ fn annotations_parse() {
     // Prose comments and code are not annotations.
     assert_eq!(annotation("// Powers: u^2 is written u*u"), None);
     assert_eq!(annotation("    der u = X*u"), None);
+}
+
+/// docs/language.md has a `#### \`code\`` section for every diagnostic the
+/// compiler (and the CLI) can emit.
+#[test]
+fn every_diagnostic_code_is_documented() {
+    let docs_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/language.md");
+    let docs = std::fs::read_to_string(&docs_path).expect("docs/language.md");
+    let documented: BTreeSet<String> = docs
+        .lines()
+        .filter_map(|l| l.strip_prefix("#### `"))
+        .filter_map(|l| l.split('`').next())
+        .map(str::to_string)
+        .collect();
+    let mut codes = codes_in_source(&["Diagnostic::error(", "Diagnostic::warning(", "Diagnostic::note("]);
+    codes.extend(["io".to_string(), "invalid-pattern".to_string()]);
+    assert!(codes.len() > 40, "{codes:?}");
+    let missing: Vec<&String> = codes.difference(&documented).collect();
+    assert!(missing.is_empty(), "codes without a section in docs/language.md: {missing:?}");
+    let stale: Vec<&String> = documented.difference(&codes).collect();
+    assert!(stale.is_empty(), "docs/language.md documents codes nobody emits: {stale:?}");
 }
