@@ -618,14 +618,14 @@ fn common_terms(
                     Diagnostic::error(
                         "common-input-term",
                         format!(
-                            "`{pa}` and `{pb}` multiply the same input-only term {} in `{}`: they enter only as {pa} + {pb}",
+                            "`{pa}` and `{pb}` multiply the same input-only term `{}` in the equation of `{}`: they enter only as {pa} + {pb}",
                             factors_text(r, &a.factors),
                             r.states[a.output].name
                         ),
                     )
                     .with_primary(b.span, format!("`{pb}` here"))
                     .with_secondary(a.span, format!("`{pa}` here"))
-                    .with_help(format!("merge them into one parameter (paper A11: the two media may not share a term that depends only on inputs), e.g. keep `{pa}` alone")),
+                    .with_help(format!("merge them into one parameter, e.g. keep `{pa}` alone: no data can tell apart two parameters of one input-only term (paper A11)")),
                 );
             } else if medium(a) != medium(b) {
                 let name = |m: Option<usize>| {
