@@ -251,11 +251,21 @@ fn every_diagnostic_code_is_documented() {
         .filter_map(|l| l.split('`').next())
         .map(str::to_string)
         .collect();
-    let mut codes = codes_in_source(&["Diagnostic::error(", "Diagnostic::warning(", "Diagnostic::note("]);
+    let mut codes = codes_in_source(&[
+        "Diagnostic::error(",
+        "Diagnostic::warning(",
+        "Diagnostic::note(",
+    ]);
     codes.extend(["io".to_string(), "invalid-pattern".to_string()]);
     assert!(codes.len() > 40, "{codes:?}");
     let missing: Vec<&String> = codes.difference(&documented).collect();
-    assert!(missing.is_empty(), "codes without a section in docs/language.md: {missing:?}");
+    assert!(
+        missing.is_empty(),
+        "codes without a section in docs/language.md: {missing:?}"
+    );
     let stale: Vec<&String> = documented.difference(&codes).collect();
-    assert!(stale.is_empty(), "docs/language.md documents codes nobody emits: {stale:?}");
+    assert!(
+        stale.is_empty(),
+        "docs/language.md documents codes nobody emits: {stale:?}"
+    );
 }
