@@ -69,7 +69,7 @@ pub enum RotationDecl {
     Measured {
         /// Column names (rotation variables).
         columns: Vec<Ident>,
-        /// rows[state][component] → column index.
+        /// `rows[state][component]` → column index.
         rows: Vec<Vec<Option<usize>>>,
         /// Number of earth components.
         width: usize,
