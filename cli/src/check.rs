@@ -4,7 +4,7 @@
 
 mod json;
 
-use crate::output::{Status, stderr_style};
+use crate::output::{Status, err, out, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use leeway_structure::identify::parse_pattern;
 use leeway_structure::{Compilation, Options, compile, render};
@@ -56,11 +56,11 @@ pub fn run(args: &CheckArgs) -> Status {
         print_json(&report);
     } else {
         if let Some(ir) = &compilation.ir {
-            print!("{}", render::render(ir));
+            out(&render::render(ir));
         }
         let style = stderr_style();
         let diagnostics = grammar::render(&compilation.diagnostics, &file, &source, style);
-        eprint!("{diagnostics}");
+        err(&diagnostics);
         let errors = compilation
             .diagnostics
             .iter()
@@ -68,13 +68,10 @@ pub fn run(args: &CheckArgs) -> Status {
             .count();
         if status == Status::Error {
             let plural = if errors == 1 { "" } else { "s" };
-            eprintln!(
-                "{}",
-                headline(
-                    style,
-                    &format!("`{file}` was not checked: {errors} error{plural}")
-                )
-            );
+            err(&headline(
+                style,
+                &format!("`{file}` was not checked: {errors} error{plural}"),
+            ));
         }
     }
     status
@@ -137,22 +134,23 @@ fn fail(args: &CheckArgs, file: &str, code: &str, message: String) -> Status {
         let d = Diagnostic::error(code, message);
         print_json(&json::failure(file, d, args.aggregate));
     } else {
-        eprintln!("{}", headline(stderr_style(), &message));
+        err(&headline(stderr_style(), &message));
     }
     Status::Error
 }
 
+/// `error: message` and a newline, bold red on a terminal.
 fn headline(style: RenderStyle, message: &str) -> String {
     match style {
-        RenderStyle::Color => format!("\x1b[1;31merror\x1b[0m\x1b[1m: {message}\x1b[0m"),
-        RenderStyle::Plain => format!("error: {message}"),
+        RenderStyle::Color => format!("\x1b[1;31merror\x1b[0m\x1b[1m: {message}\x1b[0m\n"),
+        RenderStyle::Plain => format!("error: {message}\n"),
     }
 }
 
 fn print_json(report: &json::Report) {
     match serde_json::to_string_pretty(report) {
-        Ok(text) => println!("{text}"),
+        Ok(text) => out(&format!("{text}\n")),
         // Serialising plain structs of strings and numbers cannot fail; say so if it ever does.
-        Err(e) => eprintln!("error: cannot serialise the report: {e}"),
+        Err(e) => err(&format!("error: cannot serialise the report: {e}\n")),
     }
 }

@@ -42,3 +42,19 @@ fn style_for(is_terminal: bool) -> RenderStyle {
 pub fn stderr_style() -> RenderStyle {
     style_for(std::io::stderr().is_terminal())
 }
+
+/// Writes to stdout. A closed pipe (`leeway check m.som | head`) is not an
+/// error worth a panic: what cannot be written is dropped.
+pub fn out(text: &str) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    let _ = stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush());
+}
+
+/// Writes to stderr, ignoring a closed stream like [`out`].
+pub fn err(text: &str) {
+    use std::io::Write;
+    let _ = std::io::stderr().lock().write_all(text.as_bytes());
+}
