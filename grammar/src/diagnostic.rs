@@ -230,3 +230,53 @@ pub fn render_short(diagnostics: &[Diagnostic], file_name: &str, source: &str) -
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_col_counts_characters_from_one() {
+        let src = "ab\ncé d\n";
+        assert_eq!(line_col(src, 0), (1, 1));
+        assert_eq!(line_col(src, 2), (1, 3));
+        assert_eq!(line_col(src, 3), (2, 1));
+        assert_eq!(line_col(src, 6), (2, 3), "é is one column");
+        assert_eq!(line_col(src, 5), (2, 2), "inside é: its start");
+        assert_eq!(line_col(src, 999), (3, 1), "past the end: the end");
+    }
+
+    #[test]
+    fn render_is_like_a_compiler() {
+        let src = "model M {\n    der u = X*u*v*r\n}\n";
+        let d = Diagnostic::error("order-too-high", "the term `u*v*r` is beyond second order")
+            .with_primary(Span::new(22, 29), "3 signals in one term")
+            .with_help("second-order modulus terms are a, |a|, a*b and a*|b|");
+        let text = render(std::slice::from_ref(&d), "m.som", src, RenderStyle::Plain);
+        let expected = "error[order-too-high]: the term `u*v*r` is beyond second order\n  ┌─ m.som:2:13\n  │\n2 │     der u = X*u*v*r\n  │             ^^^^^^^ 3 signals in one term\n  │\n  = help: second-order modulus terms are a, |a|, a*b and a*|b|\n\n";
+        assert_eq!(text, expected);
+        assert_eq!(
+            render_short(&[d], "m.som", src),
+            "m.som:2:13: error[order-too-high]: the term `u*v*r` is beyond second order\n"
+        );
+        let colored = render(
+            &[Diagnostic::error("x", "y").with_primary(Span::new(0, 5), "")],
+            "m.som",
+            src,
+            RenderStyle::Color,
+        );
+        assert!(colored.contains('\u{1b}'));
+    }
+
+    #[test]
+    fn spans_outside_the_source_are_clamped() {
+        let d = Diagnostic::warning("w", "far away").with_primary(Span::new(500, 900), "here");
+        let text = render(&[d], "m.som", "é", RenderStyle::Plain);
+        assert!(text.starts_with("warning[w]: far away"), "{text}");
+        let note = Diagnostic::note("n", "no location");
+        assert_eq!(
+            render(&[note], "m.som", "", RenderStyle::Plain),
+            "note[n]: no location\n\n"
+        );
+    }
+}

@@ -46,61 +46,90 @@ pub fn parse(source: &str) -> (Option<Model>, Vec<Diagnostic>) {
     }
 }
 
-/// Rejects input nested deeper than [`MAX_NESTING`]. A `|` opens a modulus
-/// where an operand is expected (after an operator, `(`, `|`, `=`), else closes one.
+/// Rejects input nested deeper than [`MAX_NESTING`].
 fn nesting_guard(source: &str) -> Option<Diagnostic> {
-    let mut depth = 0usize;
-    let mut operand_expected = true;
-    let mut in_comment = false;
+    let deepest = scan_delimiters(source, 0, source.len(), MAX_NESTING).err()?;
+    Some(
+        Diagnostic::error("nesting-too-deep", format!("expression nested more than {MAX_NESTING} levels deep"))
+            .with_primary(Span::new(deepest, deepest + 1), "too deep here")
+            .with_help("second-order modulus terms never need deep nesting; write the term as a product such as X*u*|v|"),
+    )
+}
+
+/// Scans `source[from..to]` for the delimiters of expressions, skipping
+/// comments and string literals, and returns the byte offsets of the `(` and
+/// `|` still open at `to`, innermost last. A `|` opens a modulus where an
+/// operand is expected (after an operator, `(`, `|`, `=`, `,`), else closes one.
+/// Fails with the offset of the first delimiter nested deeper than `limit`.
+fn scan_delimiters(
+    source: &str,
+    from: usize,
+    to: usize,
+    limit: usize,
+) -> Result<Vec<usize>, usize> {
     let bytes = source.as_bytes();
-    let mut i = 0;
-    while i < bytes.len() {
+    let to = to.min(bytes.len());
+    let mut open: Vec<usize> = Vec::new();
+    let mut operand_expected = true;
+    let mut i = from;
+    while i < to {
         let b = bytes[i];
-        if in_comment {
-            if b == b'\n' {
-                in_comment = false;
-            }
-            i += 1;
-            continue;
-        }
-        if b == b'/' && bytes.get(i + 1) == Some(&b'/') {
-            in_comment = true;
-            i += 2;
-            continue;
-        }
+        let next = bytes.get(i + 1).copied();
         match b {
+            b'/' if next == Some(b'/') => {
+                while i < to && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if next == Some(b'*') => {
+                i += 2;
+                while i < to && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                i += 2;
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < to && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                operand_expected = false;
+            }
             b'(' => {
-                depth += 1;
+                open.push(i);
                 operand_expected = true;
             }
             b')' => {
-                depth = depth.saturating_sub(1);
+                open.pop();
                 operand_expected = false;
             }
+            b'|' if operand_expected => open.push(i),
             b'|' => {
-                if operand_expected {
-                    depth += 1;
-                } else {
-                    depth = depth.saturating_sub(1);
-                }
+                open.pop();
             }
             b'+' | b'-' | b'*' | b'/' | b'=' | b',' | b'{' | b'[' => operand_expected = true,
             b' ' | b'\t' | b'\r' | b'\n' => {}
             _ => operand_expected = false,
         }
-        if depth > MAX_NESTING {
-            return Some(
-                Diagnostic::error(
-                    "nesting-too-deep",
-                    format!("expression nested more than {MAX_NESTING} levels deep"),
-                )
-                .with_primary(Span::new(i, i + 1), "too deep here")
-                .with_help("second-order modulus terms never need deep nesting; write the term as a product such as X*u*|v|"),
-            );
+        if open.len() > limit {
+            return Err(i);
         }
         i += 1;
     }
-    None
+    Ok(open)
+}
+
+/// The innermost `(` or `|` left open by the expression that ends at `pos`
+/// (the text after the last `=` before it), if any.
+fn unclosed_delimiter(source: &str, pos: usize) -> Option<usize> {
+    let pos = pos.min(source.len());
+    let start = source.get(..pos)?.rfind('=').map_or(0, |i| i + 1);
+    scan_delimiters(source, start, pos, usize::MAX)
+        .ok()?
+        .last()
+        .copied()
 }
 
 fn rule_name(rule: &Rule) -> &'static str {
@@ -127,8 +156,8 @@ fn rule_name(rule: &Rule) -> &'static str {
         Rule::ident_list => "a list of names",
         Rule::body_frame => "`body(..)`",
         Rule::body_component => "`state: component`",
-        Rule::relative_decl => "a relative velocity `name = relative(disturbance)`",
-        Rule::equation => "an equation `der x = ...` or `next x = ...`",
+        // Both start a declaration; listing them separately only lengthens the message.
+        Rule::relative_decl | Rule::equation => "a declaration",
         Rule::nominal_entry => "`parameter = value`",
         Rule::data_entry => "`signal = \"column\"`",
         Rule::expr | Rule::product => "an expression",
@@ -147,21 +176,27 @@ fn rule_name(rule: &Rule) -> &'static str {
     }
 }
 
-fn found_token(source: &str, pos: usize) -> String {
-    let rest = &source[pos.min(source.len())..];
-    let Some(first) = rest.chars().next() else {
-        return "end of file".to_string();
+/// What the parser found at `pos`, as the user reads it, and where it ends:
+/// a whole word or number, one character, or the end of the line or file.
+fn found_token(source: &str, pos: usize) -> (String, usize) {
+    let Some(rest) = source.get(pos..) else {
+        return ("end of file".to_string(), pos);
     };
-    if first.is_ascii_alphanumeric() || first == '_' || first == '.' {
-        let word: String = rest
+    let Some(first) = rest.chars().next() else {
+        return ("end of file".to_string(), pos);
+    };
+    let word_char = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
+    if word_char(first) {
+        let len: usize = rest
             .chars()
-            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == '.')
-            .collect();
-        format!("`{word}`")
+            .take_while(|c| word_char(*c))
+            .map(char::len_utf8)
+            .sum();
+        (format!("`{}`", &rest[..len]), pos + len)
     } else if first == '\n' || first == '\r' {
-        "end of line".to_string()
+        ("end of line".to_string(), pos + 1)
     } else {
-        format!("`{first}`")
+        (format!("`{first}`"), pos + first.len_utf8())
     }
 }
 
@@ -171,7 +206,13 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
         InputLocation::Pos(p) => p,
         InputLocation::Span((s, _)) => s,
     };
-    let found = found_token(source, pos);
+    let (found, end) = found_token(source, pos);
+    let keyword = is_keyword(found.trim_matches('`'));
+    let found_text = if keyword {
+        format!("the keyword {found}")
+    } else {
+        found.clone()
+    };
     let (message, expected) = match &e.variant {
         ErrorVariant::ParsingError {
             positives,
@@ -190,30 +231,64 @@ fn syntax_error(source: &str, e: pest::error::Error<Rule>) -> Diagnostic {
                 n => format!("{} or {}", names[..n - 1].join(", "), names[n - 1]),
             };
             if !names.is_empty() {
-                (format!("expected {list}, found {found}"), names.join(" "))
-            } else if negatives.iter().any(|r| *r == Rule::keyword) {
+                (
+                    format!("expected {list}, found {found_text}"),
+                    names.join(" "),
+                )
+            } else if negatives.contains(&Rule::keyword) {
                 (
                     format!("{found} is a keyword and cannot be used as a name"),
-                    String::new(),
+                    "a name".to_string(),
                 )
             } else {
-                (format!("unexpected {found}"), String::new())
+                (format!("unexpected {found_text}"), String::new())
             }
         }
         ErrorVariant::CustomError { message } => (message.clone(), String::new()),
     };
-    let end = (pos + 1).min(source.len()).max(pos);
-    let mut d = Diagnostic::error("syntax", message).with_primary(Span::new(pos, end), "here");
+    let label = if found == "end of file" {
+        "the file ends here"
+    } else {
+        "here"
+    };
+    let mut d = Diagnostic::error("syntax", message).with_primary(Span::new(pos, end), label);
+    // An expression cut short by the next declaration, or by the end of the file,
+    // usually has an unclosed `(` or `|`: point at it.
+    let cut_short = found == "end of file" || (keyword && expected.contains("an operator"));
+    let unclosed = if cut_short {
+        unclosed_delimiter(source, pos)
+    } else {
+        None
+    };
+    if let Some(open) = unclosed {
+        let what = if source.as_bytes().get(open) == Some(&b'(') {
+            "`(`"
+        } else {
+            "`|`"
+        };
+        d = d.with_secondary(
+            Span::new(open, open + 1),
+            format!("this {what} is never closed"),
+        );
+    }
     let help = if found == "`^`" {
         Some("powers are not part of the language; write products such as u*u or u*|u|".to_string())
-    } else if expected.contains("a name") && is_keyword(found.trim_matches('`')) {
+    } else if expected.contains("a name") && keyword {
         Some(format!("{found} is reserved; choose another name"))
+    } else if unclosed.is_some() {
+        Some(
+            "close the modulus or parenthesis before the next declaration, e.g. X*u*|water.u|"
+                .to_string(),
+        )
     } else if expected.contains("an expression") || expected.contains("an operand") {
         Some("each term is a product of a parameter, numbers and at most two signals, e.g. X_uu*water.u*|water.u|".to_string())
     } else if found == "end of file" {
         Some("a model ends with `}`; check for an unclosed `{`, `(` or `|`".to_string())
     } else if expected.contains("a declaration") || expected.contains("end of file") {
-        Some("declarations are: step, state, input, heading, rotation, disturbance, `name = relative(..)`, der, next, nominal, data".to_string())
+        Some(
+            "declarations are: step, state, input, heading, rotation, disturbance, `name = relative(..)`, der, next, nominal, data"
+                .to_string(),
+        )
     } else {
         None
     };
@@ -522,5 +597,188 @@ fn build_expr(p: Pair<Rule>) -> Expr {
             text: "0".into(),
             span,
         }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn error(src: &str) -> Diagnostic {
+        let (model, diags) = parse(src);
+        assert!(model.is_none(), "{src:?} should not parse");
+        assert_eq!(diags.len(), 1, "{diags:?}");
+        diags
+            .into_iter()
+            .next()
+            .unwrap_or_else(|| Diagnostic::error("none", ""))
+    }
+
+    fn at(src: &str, d: &Diagnostic) -> String {
+        let span = d.primary_span().unwrap_or_default();
+        src.get(span.start..span.end)
+            .unwrap_or("<bad span>")
+            .to_string()
+    }
+
+    #[test]
+    fn parses_every_construct() {
+        let src = r#"
+            /* a block comment */ model M {
+                step 0.5;
+                state u, v, r
+                input tau, delta
+                heading psi integrates r axes(u, v)
+                disturbance c unmeasured earth(n, e)
+                disturbance w measured body(u: wu, v: wv)
+                water = relative(c)
+                air = relative(w)
+                der u = -X*water.u + 2*Y*water.u*|water.u| / 4 + (Z*tau) - K*delta*|delta|
+                next v = +A*air.v*|air.v| - B*-v
+                der r = 1.5e-3*N*r
+                nominal { X = -0.2, Y = +1e-3 }
+                data { u = "surge", time = "t" }
+            }
+        "#;
+        let (model, diags) = parse(src);
+        assert!(diags.is_empty(), "{diags:?}");
+        let m = model.unwrap_or_else(|| Model {
+            name: Ident {
+                name: String::new(),
+                span: Span::default(),
+            },
+            items: Vec::new(),
+            span: Span::default(),
+        });
+        assert_eq!(m.name.name, "M");
+        assert_eq!(m.items.len(), 13);
+        assert!(
+            matches!(&m.items[3], Item::Heading { axes: Some((a, b)), .. } if a.name == "u" && b.name == "v")
+        );
+        assert!(
+            matches!(&m.items[5], Item::Disturbance { measurement: Measurement::Measured, frame: Frame::Body(c), .. } if c.len() == 2)
+        );
+        assert!(matches!(
+            &m.items[9],
+            Item::Equation {
+                kind: EquationKind::Next,
+                ..
+            }
+        ));
+        assert!(
+            matches!(&m.items[11], Item::Nominal { entries, .. } if entries[1].1.text == "+1e-3")
+        );
+        assert!(matches!(&m.items[12], Item::Data { entries, .. } if entries[0].1 == "surge"));
+    }
+
+    #[test]
+    fn syntax_errors_name_what_was_expected_and_found() {
+        let src = "model M {\n    state u\n    der u = X*u^2\n}\n";
+        let d = error(src);
+        assert_eq!(d.code, "syntax");
+        assert_eq!(
+            d.message,
+            "expected a declaration or an operator, found `^`"
+        );
+        assert_eq!(at(src, &d), "^");
+        assert!(d.help.as_deref().is_some_and(|h| h.contains("powers")));
+
+        let src = "model M {\n    state u, input\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected a name, found the keyword `input`");
+        assert_eq!(at(src, &d), "input", "the whole keyword is underlined");
+        assert_eq!(
+            d.help.as_deref(),
+            Some("`input` is reserved; choose another name")
+        );
+
+        let src = "model M {\n    state u\n    der u = X*\n}\n";
+        let d = error(src);
+        assert!(d.message.starts_with("expected "), "{}", d.message);
+        assert!(d.message.ends_with("found `}`"), "{}", d.message);
+
+        let src = "model M {\n    stat u\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected a declaration, found `stat`");
+        assert!(
+            d.help
+                .as_deref()
+                .is_some_and(|h| h.starts_with("declarations are:"))
+        );
+    }
+
+    #[test]
+    fn an_unclosed_modulus_is_pointed_at() {
+        let src = "model M {\n    state u, v\n    der u = X*u*|u + Y*v\n    der v = Z*v\n}\n";
+        let d = error(src);
+        assert_eq!(d.message, "expected an operator, found the keyword `der`");
+        let open = d.labels.iter().find(|l| !l.primary).map(|l| l.span);
+        assert_eq!(
+            open,
+            Some(Span::new(
+                src.find('|').unwrap_or(0),
+                src.find('|').unwrap_or(0) + 1
+            ))
+        );
+        assert!(
+            d.labels
+                .iter()
+                .any(|l| l.message == "this `|` is never closed")
+        );
+
+        let src = "model M {\n    state u\n    der u = X*(u\n";
+        let d = error(src);
+        assert!(d.message.ends_with("found end of file"), "{}", d.message);
+        assert!(
+            d.labels
+                .iter()
+                .any(|l| l.message == "this `(` is never closed"),
+            "{d:?}"
+        );
+    }
+
+    #[test]
+    fn nesting_guard_counts_expressions_only() {
+        let deep = format!(
+            "model M {{ state u der u = X*{}u{} }}",
+            "(".repeat(65),
+            ")".repeat(65)
+        );
+        let d = error(&deep);
+        assert_eq!(d.code, "nesting-too-deep");
+        assert_eq!(at(&deep, &d), "(");
+        let ok = format!(
+            "model M {{ state u der u = X*{}u{} }}",
+            "(".repeat(64),
+            ")".repeat(64)
+        );
+        assert!(parse(&ok).1.is_empty());
+        // Parentheses and bars in comments and strings do not count.
+        let quiet = format!(
+            "// {}\n/* {} */ model M {{ state u der u = X*u data {{ u = \"{}\" }} }}",
+            "(".repeat(100),
+            "|".repeat(100),
+            "(".repeat(100)
+        );
+        assert!(parse(&quiet).1.is_empty(), "{:?}", parse(&quiet).1);
+    }
+
+    #[test]
+    fn oversized_input_is_rejected_up_front() {
+        let big = " ".repeat(MAX_SOURCE_BYTES + 1);
+        let d = error(&big);
+        assert_eq!(d.code, "file-too-large");
+        assert_eq!(d.primary_span(), Some(Span::new(0, 0)));
+    }
+
+    #[test]
+    fn found_token_is_character_aware() {
+        assert_eq!(found_token("é*u", 0), ("`é`".to_string(), 2));
+        assert_eq!(found_token("abc_1.u rest", 0), ("`abc_1.u`".to_string(), 7));
+        assert_eq!(found_token("x", 1), ("end of file".to_string(), 1));
+        assert_eq!(found_token("\nx", 0), ("end of line".to_string(), 1));
+        let src = "model M { state é }";
+        let d = error(src);
+        assert_eq!(at(src, &d), "é");
     }
 }

@@ -1,7 +1,7 @@
-//! The expansion is exact: for random states, inputs, heading and
-//! disturbances with a sign pattern consistent with them,
-//! `Φᵀθ + Φ_ρᵀρ + Φ_λᵀλ` (unreduced, `ρ = vθ`, `λ = vvθ`) equals the model
-//! evaluated directly with `|·|`.
+//! The expansion is exact: for every example model (`examples/models/*.som`)
+//! and random states, inputs, heading and disturbances with a sign pattern
+//! consistent with them, `Φᵀθ + Φ_ρᵀρ + Φ_λᵀλ` (unreduced, `ρ = vθ`,
+//! `λ = vvθ`) equals the model evaluated directly with `|·|`.
 
 use leeway_runtime::structure::ir::{ColumnKind, Ir, PredictorKind};
 use leeway_runtime::{Interpreter, Model, Signals, planar_rotation};
@@ -20,6 +20,22 @@ fn load(name: &str) -> Ir {
         c.insert(name.to_string(), ir.clone());
     }
     ir
+}
+
+/// The file names of every example model, sorted.
+fn example_models() -> &'static [String] {
+    static NAMES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    NAMES.get_or_init(|| {
+        let dir = format!("{}/../examples/models", env!("CARGO_MANIFEST_DIR"));
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap_or_else(|e| panic!("{dir}: {e}"))
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "som"))
+            .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+            .collect();
+        names.sort();
+        names
+    })
 }
 
 fn compile_file(name: &str) -> Ir {
@@ -106,11 +122,31 @@ fn check(name: &str, kind: PredictorKind, seed: &[f64]) -> Result<(), TestCaseEr
     Ok(())
 }
 
+#[test]
+fn every_example_model_is_covered() {
+    let names = example_models();
+    for required in [
+        "ship.som",
+        "ship_iv2.som",
+        "blimp.som",
+        "rov.som",
+        "hovercraft.som",
+    ] {
+        assert!(
+            names.iter().any(|n| n == required),
+            "{required} missing from {names:?}"
+        );
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 500, .. ProptestConfig::default() })]
+    // `PROPTEST_CASES` (CI: 2000) overrides the default.
+    #![proptest_config(ProptestConfig::with_cases(
+        std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300)
+    ))]
     #[test]
     fn augmented_expansion_equals_direct_evaluation(seed in proptest::collection::vec(0.0f64..1.0, 32)) {
-        for name in ["ship.som", "ship_iv2.som"] {
+        for name in example_models() {
             check(name, PredictorKind::Augmented, &seed)?;
             check(name, PredictorKind::Measured, &seed)?;
         }

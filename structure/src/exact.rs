@@ -258,17 +258,16 @@ fn echelon_in<F: Field>(rows: &[Vec<Q>], n_cols: usize) -> Option<Echelon> {
         };
         m.swap(next_row, p);
         let inv = m[next_row][col].clone();
-        for j in col..n_cols {
-            let v = m[next_row][j].div(&inv)?;
-            m[next_row][j] = v;
+        for x in m[next_row][col..n_cols].iter_mut() {
+            *x = x.div(&inv)?;
         }
-        for i in 0..m.len() {
-            if i != next_row && !m[i][col].is_zero() {
-                let f = m[i][col].clone();
-                for j in col..n_cols {
-                    if !m[next_row][j].is_zero() {
-                        let v = m[i][j].sub(&f.mul(&m[next_row][j])?)?;
-                        m[i][j] = v;
+        let pivot_row = m[next_row].clone();
+        for (i, row) in m.iter_mut().enumerate() {
+            if i != next_row && !row[col].is_zero() {
+                let f = row[col].clone();
+                for (x, pv) in row[col..n_cols].iter_mut().zip(&pivot_row[col..n_cols]) {
+                    if !pv.is_zero() {
+                        *x = x.sub(&f.mul(pv)?)?;
                     }
                 }
             }

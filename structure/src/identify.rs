@@ -14,7 +14,7 @@
 use crate::exact::{Echelon, Q, echelon, fmt_q, parse_q};
 use crate::ir::{
     Aggregate, Column, ColumnKind, Combination, DroppedNuisance, Ir, KeptNuisance, NuisanceReport,
-    PredictorKind, Report, Separation, SignPattern, StructVar,
+    PredictorKind, Report, Separation, SignArg, SignPattern, StructVar,
 };
 use num_traits::{One, Signed, Zero};
 use std::collections::{BTreeMap, BTreeSet};
@@ -24,10 +24,13 @@ pub const MAX_ENUMERATED_SIGNS: usize = 8;
 /// Largest number of rank evaluations one experiment search may spend.
 pub const SEARCH_BUDGET: usize = 4000;
 
+/// One parsed structural monomial: (output, coefficient, variables with powers).
+type StructMonomial = (usize, Q, Vec<(StructVar, u32)>);
+
 /// Parsed structural polynomials of a predictor's columns.
 #[derive(Clone, Debug)]
 pub struct Structural {
-    cols: Vec<Vec<(usize, Q, Vec<(StructVar, u32)>)>>,
+    cols: Vec<Vec<StructMonomial>>,
 }
 
 impl Structural {
@@ -841,6 +844,71 @@ pub fn pattern_text(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
         return "{} (no modulus needs a fixed sign)".to_string();
     }
     format!("{{{}}}", items.join(" "))
+}
+
+/// Parses one experiment's sign pattern written as `water.u:+,air.u:-`: each
+/// named sign argument gets the given sign (`+`, `-`, `+1` or `-1`), every
+/// argument not named gets `+`. Names are those of [`Ir::sign_args`].
+pub fn parse_pattern(sign_args: &[SignArg], spec: &str) -> Result<SignPattern, String> {
+    let mut pattern = vec![1i8; sign_args.len()];
+    let mut given: Vec<&str> = Vec::new();
+    let known = || {
+        if sign_args.is_empty() {
+            "this model has no sign argument (no modulus of a noisy state)".to_string()
+        } else {
+            let list: Vec<&str> = sign_args.iter().map(|s| s.name.as_str()).collect();
+            format!("its sign arguments are {}", list.join(", "))
+        }
+    };
+    for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
+        let Some((name, sign)) = item.rsplit_once(':') else {
+            return Err(format!(
+                "expected `argument:+` or `argument:-`, found `{item}`"
+            ));
+        };
+        let (name, sign) = (name.trim(), sign.trim());
+        let value = match sign {
+            "+" | "+1" | "1" => 1,
+            "-" | "-1" => -1,
+            _ => {
+                return Err(format!(
+                    "the sign of `{name}` must be `+` or `-`, found `{sign}`"
+                ));
+            }
+        };
+        let Some(index) = sign_args.iter().position(|s| s.name == name) else {
+            return Err(format!(
+                "`{name}` is not a sign argument of this model; {}",
+                known()
+            ));
+        };
+        if given.contains(&name) {
+            return Err(format!("`{name}` is given twice in one pattern"));
+        }
+        given.push(name);
+        pattern[index] = value;
+    }
+    Ok(pattern)
+}
+
+/// A pattern in the syntax [`parse_pattern`] reads: `water.u:+,water.v:-`
+/// (the signs this predictor fixes).
+pub fn pattern_spec(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
+    relevant_signs(ir, kind)
+        .into_iter()
+        .map(|i| {
+            format!(
+                "{}:{}",
+                ir.sign_args[i].name,
+                if p.get(i).copied().unwrap_or(1) < 0 {
+                    "-"
+                } else {
+                    "+"
+                }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 /// Options of the compile-time analysis.

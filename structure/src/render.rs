@@ -1,7 +1,7 @@
 //! Human-readable rendering of a compiled structure: the text of
 //! `leeway check` and of the snapshot tests. Plain text, no terminal codes.
 
-use crate::identify::{pattern_text, patterns_text};
+use crate::identify::{Analysis, Patterns, pattern_text, patterns_text};
 use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation};
 use leeway_grammar::EquationKind;
 use std::fmt::Write;
@@ -297,6 +297,13 @@ pub fn render(ir: &Ir) -> String {
             "  identifiable from {} experiments with sign patterns {}",
             r.required_patterns.len(),
             patterns_text(ir, &r.required_patterns, PredictorKind::Measured)
+        );
+    } else if Analysis::new(ir, PredictorKind::Measured).identifiable(Patterns::All) {
+        // Every sign pattern together identifies θ: more experiments would do.
+        let _ = writeln!(
+            o,
+            "  NOT identifiable from the analysed experiments {}; more experiments would identify it",
+            patterns_text(ir, &r.patterns, PredictorKind::Measured)
         );
     } else {
         let _ = writeln!(o, "  NOT identifiable from any set of experiments");

@@ -69,7 +69,7 @@ pub enum RotationDecl {
     Measured {
         /// Column names (rotation variables).
         columns: Vec<Ident>,
-        /// rows[state][component] → column index.
+        /// `rows[state][component]` → column index.
         rows: Vec<Vec<Option<usize>>>,
         /// Number of earth components.
         width: usize,
@@ -392,6 +392,8 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                         RotationDecl::None => None,
                     };
                     match expected {
+                        // A heading or rotation was declared but is invalid: already reported.
+                        None if rotation_span.is_some() => {}
                         None => diags.push(
                             Diagnostic::error(
                                 "missing-rotation",

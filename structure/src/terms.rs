@@ -241,7 +241,7 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                     Some(
                         l.into_iter()
                             .map(|mut p| {
-                                p.coeff = p.coeff / d.clone();
+                                p.coeff /= d.clone();
                                 p.span = p.span.join(rhs.span());
                                 p
                             })
@@ -469,37 +469,58 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         .collect();
     let mut ok = true;
     if params.is_empty() {
-        let text = if factors.is_empty() {
-            "a constant".to_string()
+        let message = if factors.is_empty() {
+            "a constant term has no parameter".to_string()
         } else {
-            factors_text(r, &factors)
+            format!("the term `{}` has no parameter", factors_text(r, &factors))
         };
         ctx.diags.push(
-            Diagnostic::error("missing-parameter", format!("the term {text} has no parameter"))
+            Diagnostic::error("missing-parameter", message)
                 .with_primary(p.span, "no parameter")
                 .with_help("every term is `parameter * regressor`; give it a parameter (e.g. K*r*v) and list its known value in `nominal { }`"),
         );
         ok = false;
     } else if params.len() > 1 {
-        let mut list: Vec<&str> = params.iter().map(|i| i.name.as_str()).collect();
-        let same = list.windows(2).all(|w| w[0] == w[1]);
-        list.dedup();
-        let msg = if same {
-            format!(
-                "parameter `{}` appears {} times in one term: the model would not be linear in θ",
-                list[0],
+        let mut list: Vec<&str> = Vec::new();
+        for q in &params {
+            if !list.contains(&q.name.as_str()) {
+                list.push(q.name.as_str());
+            }
+        }
+        let quoted: Vec<String> = list.iter().map(|n| format!("`{n}`")).collect();
+        let msg = match quoted.as_slice() {
+            [one] if params.len() == 2 => {
+                format!(
+                    "parameter {one} appears twice in one term: the model would not be linear in θ"
+                )
+            }
+            [one] => format!(
+                "parameter {one} appears {} times in one term: the model would not be linear in θ",
                 params.len()
-            )
-        } else {
-            format!(
-                "`{}` are all parameters here: the model would not be linear in θ",
-                list.join("`, `")
-            )
+            ),
+            [a, b] => format!(
+                "{a} and {b} are both parameters in one term: the model would not be linear in θ"
+            ),
+            [rest @ .., last] => format!(
+                "{} and {last} are all parameters in one term: the model would not be linear in θ",
+                rest.join(", ")
+            ),
+            [] => String::new(),
         };
-        let mut d = Diagnostic::error("nonlinear-parameter", msg)
-            .with_primary(p.span, "one term, several parameters");
+        let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(
+            p.span,
+            format!("{} unknown factors in one term", params.len()),
+        );
         for extra in params.iter().skip(1) {
-            d = d.with_secondary(extra.span, "");
+            let label = if extra.name == params[0].name {
+                format!("`{}` again", extra.name)
+            } else {
+                format!(
+                    "`{}` is not a declared signal, so it is a parameter",
+                    extra.name
+                )
+            };
+            d = d.with_secondary(extra.span, label);
         }
         ctx.diags.push(d.with_help(
             "each term has exactly one parameter; names not declared as signals are parameters, so declare misspelt or missing signals",
@@ -519,7 +540,7 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
             Diagnostic::error(
                 "order-too-high",
                 format!(
-                    "the term {} is beyond second order",
+                    "the term `{}` is beyond second order",
                     factors_text(r, &factors)
                 ),
             )
@@ -531,7 +552,7 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         ctx.diags.push(
             Diagnostic::error(
                 "modulus-product",
-                format!("{} is not in the model class", factors_text(r, &factors)),
+                format!("`{}` is not in the model class", factors_text(r, &factors)),
             )
             .with_primary(p.span, "two moduli in one term")
             .with_help("the class allows a*|b|; for |a|*|a| write a*a"),
@@ -597,14 +618,14 @@ fn common_terms(
                     Diagnostic::error(
                         "common-input-term",
                         format!(
-                            "`{pa}` and `{pb}` multiply the same input-only term {} in `{}`: they enter only as {pa} + {pb}",
+                            "`{pa}` and `{pb}` multiply the same input-only term `{}` in the equation of `{}`: they enter only as {pa} + {pb}",
                             factors_text(r, &a.factors),
                             r.states[a.output].name
                         ),
                     )
                     .with_primary(b.span, format!("`{pb}` here"))
                     .with_secondary(a.span, format!("`{pa}` here"))
-                    .with_help(format!("merge them into one parameter (paper A11: the two media may not share a term that depends only on inputs), e.g. keep `{pa}` alone")),
+                    .with_help(format!("merge them into one parameter, e.g. keep `{pa}` alone: no data can tell apart two parameters of one input-only term (paper A11)")),
                 );
             } else if medium(a) != medium(b) {
                 let name = |m: Option<usize>| {

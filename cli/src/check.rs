@@ -1,0 +1,156 @@
+//! `leeway check MODEL.som`: compile a model, print its derived structure
+//! (regressors, nuisance reduction, required experiments) and diagnostics,
+//! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
+
+mod json;
+
+use crate::output::{Status, err, out, stderr_style};
+use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
+use leeway_structure::identify::parse_pattern;
+use leeway_structure::{Compilation, Options, compile, render};
+use std::path::PathBuf;
+
+/// Arguments of `leeway check`.
+#[derive(Debug, clap::Args)]
+pub struct CheckArgs {
+    /// The `.som` model file.
+    #[arg(value_name = "MODEL.som")]
+    pub model: PathBuf,
+    /// Print one JSON document on stdout instead of text (the contract is in the README).
+    #[arg(long)]
+    pub json: bool,
+    /// When θ is not identifiable, estimate its identifiable combinations instead
+    /// (the absorbed parameters are held at their nominal values).
+    #[arg(long)]
+    pub aggregate: bool,
+    /// The sign pattern of one experiment, e.g. `water.u:+,air.u:-` (arguments not
+    /// named are `+`). Repeat once per experiment. Without it, leeway searches the
+    /// smallest set of experiments that identifies θ.
+    #[arg(long = "pattern", value_name = "SPEC")]
+    pub patterns: Vec<String>,
+}
+
+/// Runs `leeway check`.
+pub fn run(args: &CheckArgs) -> Status {
+    let file = args.model.display().to_string();
+    let source = match std::fs::read_to_string(&args.model) {
+        Ok(s) => s,
+        Err(e) => {
+            let message = match e.kind() {
+                std::io::ErrorKind::NotFound => format!("cannot read `{file}`: no such file"),
+                std::io::ErrorKind::InvalidData => {
+                    format!("cannot read `{file}`: it is not UTF-8 text")
+                }
+                _ => format!("cannot read `{file}`: {e}"),
+            };
+            return fail(args, &file, "io", message);
+        }
+    };
+    let compilation = match analyse(args, &source) {
+        Ok(c) => c,
+        Err(message) => return fail(args, &file, "invalid-pattern", message),
+    };
+    let status = status_of(&compilation);
+    if args.json {
+        let report = json::report(&file, &source, &compilation, args.aggregate);
+        print_json(&report);
+    } else {
+        if let Some(ir) = &compilation.ir {
+            out(&render::render(ir));
+        }
+        let style = stderr_style();
+        let diagnostics = grammar::render(&compilation.diagnostics, &file, &source, style);
+        err(&diagnostics);
+        let errors = compilation
+            .diagnostics
+            .iter()
+            .filter(|d| d.is_error())
+            .count();
+        if status == Status::Error {
+            let plural = if errors == 1 { "" } else { "s" };
+            err(&headline(
+                style,
+                &format!("`{file}` was not checked: {errors} error{plural}"),
+            ));
+        }
+    }
+    status
+}
+
+/// Compiles with the experiments given on the command line, if any.
+fn analyse(args: &CheckArgs, source: &str) -> Result<Compilation, String> {
+    if args.patterns.is_empty() {
+        return Ok(compile(
+            source,
+            &Options {
+                aggregate: args.aggregate,
+                patterns: None,
+            },
+        ));
+    }
+    // The sign arguments are known only after compiling: a first pass analyses one
+    // all-plus experiment (no search), then the given experiments are analysed.
+    let probe = compile(
+        source,
+        &Options {
+            aggregate: args.aggregate,
+            patterns: Some(vec![Vec::new()]),
+        },
+    );
+    let Some(ir) = &probe.ir else {
+        return Ok(probe);
+    };
+    let patterns = args
+        .patterns
+        .iter()
+        .map(|spec| {
+            parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}"))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(compile(
+        source,
+        &Options {
+            aggregate: args.aggregate,
+            patterns: Some(patterns),
+        },
+    ))
+}
+
+fn status_of(c: &Compilation) -> Status {
+    if c.ir.is_none() {
+        Status::Error
+    } else if !c.has_errors() {
+        Status::Success
+    } else if c.only_unidentifiable() {
+        Status::NotIdentifiable
+    } else {
+        Status::Error
+    }
+}
+
+/// An error found before compiling (unreadable file, bad `--pattern`): exit 2.
+fn fail(args: &CheckArgs, file: &str, code: &str, message: String) -> Status {
+    if args.json {
+        let d = Diagnostic::error(code, message);
+        print_json(&json::failure(file, d, args.aggregate));
+    } else {
+        err(&headline(stderr_style(), &message));
+    }
+    Status::Error
+}
+
+/// `error: message` and a newline, bold red on a terminal.
+fn headline(style: RenderStyle, message: &str) -> String {
+    match style {
+        RenderStyle::Color => format!("\x1b[1;31merror\x1b[0m\x1b[1m: {message}\x1b[0m\n"),
+        RenderStyle::Plain => format!("error: {message}\n"),
+    }
+}
+
+fn print_json(report: &json::Report) {
+    match serde_json::to_string_pretty(report) {
+        Ok(text) => out(&format!("{text}\n")),
+        // Serialising plain structs of strings and numbers cannot fail; say so if it ever does.
+        Err(e) => err(&format!("error: cannot serialise the report: {e}\n")),
+    }
+}

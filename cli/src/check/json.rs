@@ -1,0 +1,392 @@
+//! The JSON document of `leeway check --json`: a contract scripts rely on
+//! (README, "Checking a model"). Fields may be added; none is renamed or removed.
+
+use leeway_structure::Compilation;
+use leeway_structure::grammar::{self, Diagnostic, Severity};
+use leeway_structure::identify::relevant_signs;
+use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, SignPattern};
+use leeway_structure::render::column_text;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// The whole document.
+#[derive(Debug, Serialize)]
+pub struct Report {
+    /// `model Name`, or null when the file does not parse.
+    model: Option<String>,
+    /// The file as given on the command line.
+    file: String,
+    /// The states (one equation, one output each).
+    outputs: Vec<String>,
+    /// θ, in order of first appearance.
+    parameters: Vec<String>,
+    /// θ identifiable from the required (or the given) sign patterns.
+    identifiable: bool,
+    /// θ identifiable from one experiment whatever its sign pattern.
+    any_single_pattern: bool,
+    /// `--aggregate` was given.
+    aggregate: bool,
+    /// The `Φ` part: one entry per (parameter, output).
+    regressors: Vec<Regressor>,
+    /// The nuisance parameters before and after reduction.
+    nuisance: Nuisance,
+    /// Arguments under a modulus and whether the analysed predictor fixes their sign.
+    sign_arguments: Vec<SignArgument>,
+    /// The smallest set of experiments identifying θ, each `{argument: "+" | "-"}`; empty if none.
+    required_sign_patterns: Vec<BTreeMap<String, String>>,
+    /// The experiments the nuisance reduction and the verdicts were computed for.
+    analysed_sign_patterns: Vec<BTreeMap<String, String>>,
+    /// Parameter groups that enter only through combinations at the analysed patterns.
+    unidentifiable: Vec<Unidentifiable>,
+    /// What separates each unidentifiable group, if anything does.
+    separations: Vec<Separation>,
+    /// With `--aggregate`: what each kept parameter estimates.
+    aggregates: Vec<Aggregate>,
+    /// Diagnostics by severity.
+    errors: Vec<JsonDiagnostic>,
+    warnings: Vec<JsonDiagnostic>,
+    notes: Vec<JsonDiagnostic>,
+}
+
+#[derive(Debug, Serialize)]
+struct Regressor {
+    parameter: String,
+    output: String,
+    /// The regressor after expansion, e.g. `s[water.u]*u^2`.
+    expression: String,
+    /// The term as written, e.g. `water.u*|water.u|`.
+    term: String,
+    /// `phi` (expanded) or `phi2` (measured medium, evaluated pointwise in IV3).
+    kind: &'static str,
+}
+
+#[derive(Debug, Default, Serialize)]
+struct Nuisance {
+    before: usize,
+    after: usize,
+    kept: Vec<Kept>,
+    dropped: Vec<Dropped>,
+    /// Every unreduced nuisance column, per output.
+    regressors: Vec<NuisanceRegressor>,
+}
+
+#[derive(Debug, Serialize)]
+struct Kept {
+    name: String,
+    estimates: String,
+}
+
+#[derive(Debug, Serialize)]
+struct Dropped {
+    name: String,
+    reason: String,
+}
+
+#[derive(Debug, Serialize)]
+struct NuisanceRegressor {
+    name: String,
+    output: String,
+    expression: String,
+}
+
+#[derive(Debug, Serialize)]
+struct SignArgument {
+    name: String,
+    /// False for arguments relative to a measured medium (evaluated pointwise).
+    fixed_per_experiment: bool,
+}
+
+#[derive(Debug, Serialize)]
+struct Unidentifiable {
+    parameters: Vec<String>,
+    combinations: Vec<String>,
+    message: String,
+}
+
+#[derive(Debug, Serialize)]
+struct Separation {
+    parameters: Vec<String>,
+    /// The experiments that separate the group, or null when none can.
+    sign_patterns: Option<Vec<BTreeMap<String, String>>>,
+    message: String,
+}
+
+#[derive(Debug, Serialize)]
+struct Aggregate {
+    parameter: String,
+    estimates: String,
+    absorbed: Vec<String>,
+}
+
+/// A diagnostic: stable code, severity, message, `file:line:col` of its
+/// primary span (null for model-wide findings), help and notes.
+#[derive(Debug, Serialize)]
+struct JsonDiagnostic {
+    code: String,
+    severity: &'static str,
+    message: String,
+    location: Option<String>,
+    file: String,
+    line: Option<usize>,
+    column: Option<usize>,
+    end_line: Option<usize>,
+    end_column: Option<usize>,
+    labels: Vec<JsonLabel>,
+    help: Option<String>,
+    notes: Vec<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct JsonLabel {
+    message: String,
+    primary: bool,
+    line: usize,
+    column: usize,
+    end_line: usize,
+    end_column: usize,
+}
+
+fn severity(s: Severity) -> &'static str {
+    match s {
+        Severity::Error => "error",
+        Severity::Warning => "warning",
+        Severity::Note => "note",
+    }
+}
+
+fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
+    let at = |offset: usize| grammar::line_col(source, offset);
+    let primary = d.primary_span();
+    let (line, column) = primary.map(|s| at(s.start)).unzip();
+    let (end_line, end_column) = primary.map(|s| at(s.end)).unzip();
+    JsonDiagnostic {
+        code: d.code.clone(),
+        severity: severity(d.severity),
+        message: d.message.clone(),
+        location: line.zip(column).map(|(l, c)| format!("{file}:{l}:{c}")),
+        file: file.to_string(),
+        line,
+        column,
+        end_line,
+        end_column,
+        labels: d
+            .labels
+            .iter()
+            .map(|l| {
+                let ((line, column), (end_line, end_column)) = (at(l.span.start), at(l.span.end));
+                JsonLabel {
+                    message: l.message.clone(),
+                    primary: l.primary,
+                    line,
+                    column,
+                    end_line,
+                    end_column,
+                }
+            })
+            .collect(),
+        help: d.help.clone(),
+        notes: d.notes.clone(),
+    }
+}
+
+fn pattern(ir: &Ir, p: &SignPattern) -> BTreeMap<String, String> {
+    relevant_signs(ir, PredictorKind::Measured)
+        .into_iter()
+        .map(|i| {
+            let sign = if p.get(i).copied().unwrap_or(1) < 0 {
+                "-"
+            } else {
+                "+"
+            };
+            (ir.sign_args[i].name.clone(), sign.to_string())
+        })
+        .collect()
+}
+
+fn names(ir: &Ir, params: &[usize]) -> Vec<String> {
+    params
+        .iter()
+        .map(|p| ir.parameters[*p].name.clone())
+        .collect()
+}
+
+/// The document for a compiled (or rejected) model.
+pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
+    let by = |s: Severity| -> Vec<JsonDiagnostic> {
+        c.diagnostics
+            .iter()
+            .filter(|d| d.severity == s)
+            .map(|d| diagnostic(file, source, d))
+            .collect()
+    };
+    let (errors, warnings, notes) = (
+        by(Severity::Error),
+        by(Severity::Warning),
+        by(Severity::Note),
+    );
+    let Some(ir) = &c.ir else {
+        let model = grammar::parse(source).0.map(|m| m.name.name);
+        return Report {
+            errors,
+            warnings,
+            notes,
+            ..empty(model, file, aggregate)
+        };
+    };
+    let r = &ir.report;
+    let columns = &ir.predictors.measured;
+    let mut regressors = Vec::new();
+    let mut nuisance_regressors = Vec::new();
+    for (out, state) in ir.states.iter().enumerate() {
+        for col in columns.iter().filter(|col| col.outputs().contains(&out)) {
+            let expression = column_text(ir, col, out);
+            match col.kind {
+                ColumnKind::Theta { parameter } => {
+                    let term: Vec<String> = ir
+                        .terms
+                        .iter()
+                        .filter(|t| t.parameter == parameter && t.output == out)
+                        .map(|t| t.text.clone())
+                        .collect();
+                    regressors.push(Regressor {
+                        parameter: ir.parameters[parameter].name.clone(),
+                        output: state.clone(),
+                        expression,
+                        term: term.join(" + "),
+                        kind: if ir.parameters[parameter].measured {
+                            "phi2"
+                        } else {
+                            "phi"
+                        },
+                    });
+                }
+                _ => nuisance_regressors.push(NuisanceRegressor {
+                    name: col.name.clone(),
+                    output: state.clone(),
+                    expression,
+                }),
+            }
+        }
+    }
+    Report {
+        model: Some(ir.name.clone()),
+        file: file.to_string(),
+        outputs: ir.states.clone(),
+        parameters: ir.parameters.iter().map(|p| p.name.clone()).collect(),
+        identifiable: r.identifiable,
+        any_single_pattern: r.any_single_pattern,
+        aggregate,
+        regressors,
+        nuisance: Nuisance {
+            before: r.nuisance.before,
+            after: r.nuisance.after,
+            kept: r
+                .nuisance
+                .kept
+                .iter()
+                .map(|k| Kept {
+                    name: k.name.clone(),
+                    estimates: k.estimates.clone(),
+                })
+                .collect(),
+            dropped: r
+                .nuisance
+                .dropped
+                .iter()
+                .map(|d| Dropped {
+                    name: d.name.clone(),
+                    reason: d.reason.clone(),
+                })
+                .collect(),
+            regressors: nuisance_regressors,
+        },
+        sign_arguments: ir
+            .sign_args
+            .iter()
+            .map(|s| SignArgument {
+                name: s.name.clone(),
+                fixed_per_experiment: !s.measured,
+            })
+            .collect(),
+        required_sign_patterns: r.required_patterns.iter().map(|p| pattern(ir, p)).collect(),
+        analysed_sign_patterns: r.patterns.iter().map(|p| pattern(ir, p)).collect(),
+        unidentifiable: r
+            .unidentifiable
+            .iter()
+            .map(|u| Unidentifiable {
+                parameters: names(ir, &u.parameters),
+                combinations: u.identifiable.clone(),
+                message: u.message.clone(),
+            })
+            .collect(),
+        separations: r
+            .separations
+            .iter()
+            .map(|s| Separation {
+                parameters: names(ir, &s.parameters),
+                sign_patterns: s
+                    .patterns
+                    .as_ref()
+                    .map(|set| set.iter().map(|p| pattern(ir, p)).collect()),
+                message: s.message.clone(),
+            })
+            .collect(),
+        aggregates: r
+            .aggregates
+            .iter()
+            .map(|a| Aggregate {
+                parameter: ir.parameters[a.parameter].name.clone(),
+                estimates: a.estimates.clone(),
+                absorbed: names(ir, &a.absorbed),
+            })
+            .collect(),
+        errors,
+        warnings,
+        notes,
+    }
+}
+
+/// The document for a failure before compiling (unreadable file, bad `--pattern`).
+pub fn failure(file: &str, d: Diagnostic, aggregate: bool) -> Report {
+    let error = JsonDiagnostic {
+        code: d.code,
+        severity: severity(d.severity),
+        message: d.message,
+        location: None,
+        file: file.to_string(),
+        line: None,
+        column: None,
+        end_line: None,
+        end_column: None,
+        labels: Vec::new(),
+        help: d.help,
+        notes: d.notes,
+    };
+    Report {
+        errors: vec![error],
+        ..empty(None, file, aggregate)
+    }
+}
+
+fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
+    Report {
+        model,
+        file: file.to_string(),
+        outputs: Vec::new(),
+        parameters: Vec::new(),
+        identifiable: false,
+        any_single_pattern: false,
+        aggregate,
+        regressors: Vec::new(),
+        nuisance: Nuisance::default(),
+        sign_arguments: Vec::new(),
+        required_sign_patterns: Vec::new(),
+        analysed_sign_patterns: Vec::new(),
+        unidentifiable: Vec::new(),
+        separations: Vec::new(),
+        aggregates: Vec::new(),
+        errors: Vec::new(),
+        warnings: Vec::new(),
+        notes: Vec::new(),
+    }
+}

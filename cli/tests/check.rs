@@ -1,0 +1,354 @@
+//! End-to-end tests of `leeway check`: the built binary, its exit codes,
+//! its text on stdout/stderr and the JSON contract of the README.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+/// Runs `leeway ARGS` from the workspace root, so paths read `examples/models/..`.
+fn leeway(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_leeway"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .env_remove("NO_COLOR")
+        .output()
+        .expect("run leeway")
+}
+
+fn code(o: &Output) -> i32 {
+    o.status.code().expect("exit code")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> Value {
+    serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {}", stdout(o)))
+}
+
+fn no_panic(o: &Output) {
+    assert!(!stderr(o).contains("panicked"), "{}", stderr(o));
+}
+
+#[test]
+fn identifiable_model_exits_0() {
+    let o = leeway(&["check", "examples/models/ship.som"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("Φ: θ regressors (17 parameters)"), "{out}");
+    assert!(
+        out.contains("identifiable from one experiment of any sign pattern"),
+        "{out}"
+    );
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+    // Piped output carries no colour codes.
+    assert!(!stderr(&o).contains('\u{1b}') && !out.contains('\u{1b}'));
+}
+
+#[test]
+fn valid_but_unidentifiable_model_exits_1() {
+    let o = leeway(&["check", "examples/models/ship_iv2.som"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 1);
+    let err = stderr(&o);
+    assert!(err.contains("error[unidentifiable-combination]: θ is not identifiable: `X_uu` and `W_uu` enter only as X_uu + W_uu"), "{err}");
+    assert!(
+        err.contains("┌─ examples/models/ship_iv2.som:16:44"),
+        "{err}"
+    );
+    assert!(stdout(&o).contains("NOT identifiable from any set of experiments"));
+}
+
+#[test]
+fn aggregate_makes_ship_iv2_exit_0() {
+    let o = leeway(&["check", "--aggregate", "examples/models/ship_iv2.som"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(stdout(&o).contains("X_uu estimates X_uu + W_uu"));
+    assert!(stderr(&o).contains("warning[aggregated-combination]"));
+}
+
+#[test]
+fn syntax_and_semantic_errors_exit_2() {
+    for (file, expect) in [
+        (
+            "examples/models/broken/syntax-power.som",
+            "error[syntax]: expected a declaration or an operator, found `^`",
+        ),
+        (
+            "examples/models/broken/order-too-high.som",
+            "error[order-too-high]",
+        ),
+        (
+            "examples/models/broken/common-input-term.som",
+            "`X_t` and `W_t`",
+        ),
+    ] {
+        let o = leeway(&["check", file]);
+        no_panic(&o);
+        assert_eq!(code(&o), 2, "{file}");
+        assert!(stderr(&o).contains(expect), "{file}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("`{file}` was not checked")),
+            "{}",
+            stderr(&o)
+        );
+        assert!(
+            stdout(&o).is_empty(),
+            "{file}: nothing on stdout for an invalid model"
+        );
+    }
+}
+
+#[test]
+fn missing_file_exits_2_naming_the_path() {
+    let o = leeway(&["check", "no/such/model.som"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    assert_eq!(
+        stderr(&o).trim(),
+        "error: cannot read `no/such/model.som`: no such file"
+    );
+    let o = leeway(&["check", "--json", "no/such/model.som"]);
+    assert_eq!(code(&o), 2);
+    let v = json(&o);
+    assert_eq!(v["errors"][0]["code"], "io");
+    assert_eq!(
+        v["errors"][0]["message"],
+        "cannot read `no/such/model.som`: no such file"
+    );
+    let o = leeway(&["check", "examples/models"]);
+    assert_eq!(code(&o), 2, "a directory is not a model");
+    no_panic(&o);
+}
+
+#[test]
+fn usage_errors_exit_2_and_help_exits_0() {
+    assert_eq!(code(&leeway(&[])), 2);
+    assert_eq!(code(&leeway(&["check"])), 2);
+    assert_eq!(code(&leeway(&["check", "--frobnicate", "x.som"])), 2);
+    let help = leeway(&["check", "--help"]);
+    assert_eq!(code(&help), 0);
+    assert!(
+        stdout(&help).contains("--pattern <SPEC>"),
+        "{}",
+        stdout(&help)
+    );
+}
+
+#[test]
+fn patterns_select_the_experiments() {
+    let one = leeway(&[
+        "check",
+        "examples/models/rov.som",
+        "--pattern",
+        "water.v:+,r:+",
+    ]);
+    assert_eq!(code(&one), 1, "{}", stderr(&one));
+    assert!(
+        stderr(&one).contains("`Y_vr` and `Y_rv` enter only as Y_vr + Y_rv"),
+        "{}",
+        stderr(&one)
+    );
+    let same = leeway(&[
+        "check",
+        "examples/models/rov.som",
+        "--pattern",
+        "r:+",
+        "--pattern",
+        "water.v:-,r:-",
+    ]);
+    assert_eq!(
+        code(&same),
+        1,
+        "same sign(water.v)·sign(r) in both experiments"
+    );
+    let two = leeway(&[
+        "check",
+        "examples/models/rov.som",
+        "--pattern",
+        "r:+",
+        "--pattern",
+        "r:-",
+    ]);
+    assert_eq!(code(&two), 0, "{}", stderr(&two));
+    assert!(
+        stdout(&two).contains("identifiable from 2 experiments"),
+        "{}",
+        stdout(&two)
+    );
+    let bad = leeway(&["check", "examples/models/rov.som", "--pattern", "water.w:+"]);
+    assert_eq!(code(&bad), 2);
+    assert_eq!(
+        stderr(&bad).trim(),
+        "error: --pattern `water.w:+`: `water.w` is not a sign argument of this model; its sign arguments are water.u, water.v, r"
+    );
+    let bad_json = leeway(&[
+        "check",
+        "--json",
+        "examples/models/rov.som",
+        "--pattern",
+        "r",
+    ]);
+    assert_eq!(code(&bad_json), 2);
+    assert_eq!(json(&bad_json)["errors"][0]["code"], "invalid-pattern");
+}
+
+/// Every key of the README's contract, with its type.
+fn assert_contract(v: &Value) {
+    for key in [
+        "model",
+        "outputs",
+        "parameters",
+        "identifiable",
+        "regressors",
+        "nuisance",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}");
+    }
+    assert!(v["model"].is_string() || v["model"].is_null());
+    assert!(
+        v["outputs"]
+            .as_array()
+            .is_some_and(|a| a.iter().all(Value::is_string))
+    );
+    assert!(
+        v["parameters"]
+            .as_array()
+            .is_some_and(|a| a.iter().all(Value::is_string))
+    );
+    assert!(v["identifiable"].is_boolean());
+    for r in v["regressors"].as_array().expect("regressors") {
+        for key in ["parameter", "output", "expression"] {
+            assert!(r[key].is_string(), "regressor {key}: {r}");
+        }
+    }
+    let n = &v["nuisance"];
+    assert!(n["before"].is_u64() && n["after"].is_u64());
+    for k in n["kept"].as_array().expect("kept") {
+        assert!(k["name"].is_string() && k["estimates"].is_string(), "{k}");
+    }
+    assert!(v["required_sign_patterns"].is_array());
+    for key in ["notes", "errors"] {
+        for d in v[key].as_array().unwrap_or_else(|| panic!("{key}")) {
+            for f in ["code", "message", "severity"] {
+                assert!(d[f].is_string(), "{key}.{f}: {d}");
+            }
+            assert!(d["location"].is_string() || d["location"].is_null());
+        }
+    }
+}
+
+#[test]
+fn json_of_the_ship() {
+    let o = leeway(&["check", "--json", "examples/models/ship.som"]);
+    assert_eq!(code(&o), 0);
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(v["model"], "Ship");
+    assert_eq!(v["outputs"], serde_json::json!(["u", "v", "r"]));
+    assert_eq!(v["parameters"].as_array().map(Vec::len), Some(17));
+    assert_eq!(v["identifiable"], true);
+    let regressors = v["regressors"].as_array().expect("regressors");
+    let per_output = |o: &str| regressors.iter().filter(|r| r["output"] == o).count();
+    assert_eq!(
+        (per_output("u"), per_output("v"), per_output("r")),
+        (5, 6, 6)
+    );
+    let x_uu = regressors
+        .iter()
+        .find(|r| r["parameter"] == "X_uu")
+        .expect("X_uu");
+    assert_eq!(x_uu["expression"], "s[water.u]*u^2");
+    assert_eq!(x_uu["term"], "water.u*|water.u|");
+    assert_eq!(regressors.iter().filter(|r| r["kind"] == "phi2").count(), 3);
+    assert_eq!(
+        (
+            v["nuisance"]["before"].as_u64(),
+            v["nuisance"]["after"].as_u64()
+        ),
+        (Some(32), Some(24))
+    );
+    assert_eq!(
+        v["required_sign_patterns"],
+        serde_json::json!([{"water.u": "+", "water.v": "+"}])
+    );
+    assert_eq!(v["errors"], serde_json::json!([]));
+    assert_eq!(
+        v["notes"].as_array().map(Vec::len),
+        Some(3),
+        "three common state terms"
+    );
+}
+
+#[test]
+fn json_of_an_unidentifiable_model() {
+    let o = leeway(&["check", "--json", "examples/models/ship_iv2.som"]);
+    assert_eq!(code(&o), 1);
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(v["identifiable"], false);
+    assert_eq!(v["required_sign_patterns"], serde_json::json!([]));
+    let errors = v["errors"].as_array().expect("errors");
+    assert_eq!(errors.len(), 3);
+    assert_eq!(errors[0]["code"], "unidentifiable-combination");
+    assert_eq!(errors[0]["location"], "examples/models/ship_iv2.som:16:44");
+    let separations = v["separations"].as_array().expect("separations");
+    assert!(
+        separations
+            .iter()
+            .any(|s| s["parameters"] == serde_json::json!(["N_uv", "W_uv"])
+                && s["sign_patterns"].is_null())
+    );
+}
+
+#[test]
+fn json_on_a_syntax_error_is_still_json() {
+    let o = leeway(&["check", "--json", "examples/models/broken/syntax-power.som"]);
+    assert_eq!(code(&o), 2);
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(v["model"], Value::Null);
+    assert_eq!(v["identifiable"], false);
+    let e = &v["errors"][0];
+    assert_eq!(e["code"], "syntax");
+    assert_eq!(
+        e["location"],
+        "examples/models/broken/syntax-power.som:9:25"
+    );
+    assert_eq!(
+        (e["line"].as_u64(), e["column"].as_u64()),
+        (Some(9), Some(25))
+    );
+    assert!(e["help"].as_str().is_some_and(|h| h.contains("powers")));
+    // A semantic error keeps the model's name.
+    let o = leeway(&[
+        "check",
+        "--json",
+        "examples/models/broken/missing-equation.som",
+    ]);
+    assert_eq!(code(&o), 2);
+    assert_eq!(json(&o)["model"], "Broken");
+}
+
+#[test]
+fn json_of_the_rov() {
+    let o = leeway(&["check", "--json", "examples/models/rov.som"]);
+    assert_eq!(code(&o), 0);
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(
+        v["required_sign_patterns"],
+        serde_json::json!([
+            {"water.u": "+", "water.v": "+", "r": "+"},
+            {"water.u": "+", "water.v": "-", "r": "+"}
+        ])
+    );
+    insta::assert_snapshot!(stdout(&o));
+}
