@@ -308,6 +308,23 @@ struct Block {
     cols: Vec<usize>,
 }
 
+/// Fit points by which a refinement's simulation may fall below the best
+/// earlier iterate before the refinement counts as running away.
+const RUNAWAY_FIT_DROP: f64 = 5.0;
+
+/// One iterate of the refined IV.
+#[derive(Clone, Debug)]
+struct Iterate {
+    theta: Vec<f64>,
+    sol: Vec<BlockSolution>,
+    /// The θ (empty: delayed bootstrap) whose simulation gave the instruments.
+    theta_sim: Vec<f64>,
+    mu: Vec<f64>,
+    moments: Vec<Vec<CrossMoments>>,
+    /// Fit of this iterate's own simulation to the data, once simulated.
+    fit: Option<f64>,
+}
+
 /// The per-block outcome of a solve.
 #[derive(Clone, Debug)]
 struct BlockSolution {
@@ -349,9 +366,31 @@ struct SimChange {
     sum: Vec<f64>,
     sum2: Vec<f64>,
     n: usize,
+    /// `Σ (y − x_sim)²`, `Σ y`, `Σ y²` per output: how well the instrument
+    /// simulation tracks the measured states (its strength as an instrument).
+    err2: Vec<f64>,
+    y_sum: Vec<f64>,
+    y_sum2: Vec<f64>,
+    y_n: usize,
 }
 
 impl SimChange {
+    /// Mean over outputs of the fit `100·(1 − ‖y − x_sim‖/‖y − ȳ‖)`.
+    fn fit(&self) -> f64 {
+        let n = self.y_n.max(1) as f64;
+        let fits: Vec<f64> = (0..self.err2.len())
+            .map(|o| {
+                let var = (self.y_sum2[o] - self.y_sum[o] * self.y_sum[o] / n).max(0.0);
+                if var > 0.0 {
+                    100.0 * (1.0 - (self.err2[o] / var).sqrt())
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        fits.iter().sum::<f64>() / fits.len().max(1) as f64
+    }
+
     fn relative(&self) -> f64 {
         let n = self.n.max(1) as f64;
         (0..self.diff2.len())
@@ -422,6 +461,10 @@ impl EquationWalker<'_> {
             sum: vec![0.0; n_out],
             sum2: vec![0.0; n_out],
             n: 0,
+            err2: vec![0.0; n_out],
+            y_sum: vec![0.0; n_out],
+            y_sum2: vec![0.0; n_out],
+            y_n: 0,
         };
         e.visit(&mut |row| {
             if diverged {
@@ -525,6 +568,13 @@ impl EquationWalker<'_> {
                         psi_z = psi1 + h * x_sim[yaw];
                     }
                     x_sim.copy_from_slice(&x_next);
+                    for o in 0..n_out {
+                        let e = row.states[o] - x_sim[o];
+                        change.err2[o] += e * e;
+                        change.y_sum[o] += row.states[o];
+                        change.y_sum2[o] += row.states[o] * row.states[o];
+                    }
+                    change.y_n += 1;
                     if let Some((theta_ref, mu_ref)) = reference {
                         let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
                         for c in 0..n_comp {
@@ -1015,7 +1065,7 @@ impl<'a> Estimator<'a> {
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
-    ) -> Result<(Vec<Vec<CrossMoments>>, f64), Diverged> {
+    ) -> Result<(Vec<Vec<CrossMoments>>, f64, f64), Diverged> {
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
         let walker = if theta_sim.is_empty() {
             self.walker_with(Some(Instruments::Delayed))
@@ -1025,6 +1075,7 @@ impl<'a> Estimator<'a> {
         let n = self.n_cols;
         let mut all = Vec::with_capacity(experiments.len());
         let mut change = 0.0f64;
+        let mut fit = 0.0f64;
         for (e, info) in experiments.iter().zip(&self.infos) {
             let mut acc: Vec<CrossMoments> = (0..self.ir.states.len())
                 .map(|o| {
@@ -1055,9 +1106,10 @@ impl<'a> Estimator<'a> {
                 }
             })?;
             change = change.max(c.relative());
+            fit += c.fit() / experiments.len() as f64;
             all.push(acc);
         }
-        Ok((all, change))
+        Ok((all, change, fit))
     }
 
     /// Moment equations `(H_i, g_i)` of experiment `i`, block `b` (sums, not means).
@@ -1412,9 +1464,9 @@ impl<'a> Estimator<'a> {
         let mut refinements = 0usize;
         let mut converged = !refine;
         let bootstrap = refine && self.options.initial == Initial::Delayed;
-        let first: &[f64] = if bootstrap { &[] } else { &theta_sim };
-        let mut moments = match self.accumulate(experiments, first, &mu, None) {
-            Ok((m, _)) => m,
+        let first: Vec<f64> = if bootstrap { Vec::new() } else { theta_sim.clone() };
+        let moments = match self.accumulate(experiments, &first, &mu, None) {
+            Ok((m, _, _)) => m,
             Err(Diverged) => {
                 return Err(err(
                     "nominal-diverges",
@@ -1423,79 +1475,86 @@ impl<'a> Estimator<'a> {
                 ));
             }
         };
-        let mut sol = self.solve(&moments, !refine)?;
-        let mut theta = self.theta_of(&sol);
-        if bootstrap {
-            // The first simulation starts from the bootstrap estimate: compare
-            // it with the nominal simulation only to measure the change.
-            theta_sim = self.nominal.clone();
-        }
+        let sol = self.solve(&moments, !refine)?;
+        // The current iterate: its estimate, the simulation that produced its
+        // instruments, and (once simulated itself) how well it tracks the data.
+        let mut cur = Iterate { theta: self.theta_of(&sol), sol, theta_sim: first, mu: mu.clone(), moments, fit: None };
+        let mut best: Option<Iterate> = None;
         while refine && refinements < self.options.max_refinements {
             // Re-simulate with the estimate (and the disturbance means it implies),
             // damping towards the previous simulation if it diverges. The new
             // simulation is compared with the previous one in the same pass:
             // once the instruments stop moving, so does the estimate.
-            let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
-            let new_mu = self.mean_vector(&values, &theta);
+            let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
+            let new_mu = self.mean_vector(&values, &cur.theta);
             let mut step = 1.0;
             let mut accepted = None;
             for _ in 0..6 {
-                let trial: Vec<f64> = theta_sim
-                    .iter()
-                    .zip(&theta)
-                    .map(|(a, b)| a + step * (b - a))
-                    .collect();
-                let trial_mu: Vec<f64> = mu
-                    .iter()
-                    .zip(&new_mu)
-                    .map(|(a, b)| a + step * (b - a))
-                    .collect();
-                if let Ok((m, change)) =
-                    self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu)))
-                {
-                    accepted = Some((trial, trial_mu, m, change));
+                let trial: Vec<f64> = theta_sim.iter().zip(&cur.theta).map(|(a, b)| a + step * (b - a)).collect();
+                let trial_mu: Vec<f64> = mu.iter().zip(&new_mu).map(|(a, b)| a + step * (b - a)).collect();
+                if let Ok(r) = self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu))) {
+                    accepted = Some((trial, trial_mu, r));
                     break;
                 }
                 step *= 0.5;
             }
-            let Some((trial, trial_mu, m, change)) = accepted else {
+            let Some((trial, trial_mu, (m, change, fit))) = accepted else {
                 self.warnings.push("refinement stopped: the simulation with the refined estimate diverges even when damped".to_string());
                 break;
             };
             if step < 1.0 {
-                self.warnings.push(format!(
-                    "refinement {} damped by {step} (the simulation with the full step diverged)",
-                    refinements + 1
-                ));
+                self.warnings.push(format!("refinement {} damped by {step} (the simulation with the full step diverged)", refinements + 1));
+            } else {
+                cur.fit = Some(fit);
+                if best.as_ref().is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) < fit) {
+                    best = Some(cur.clone());
+                }
             }
-            theta_sim = trial;
-            mu = trial_mu;
-            moments = m;
+            theta_sim = trial.clone();
+            mu = trial_mu.clone();
             refinements += 1;
-            sol = self.solve(&moments, false)?;
-            theta = self.theta_of(&sol);
+            let sol = self.solve(&m, false)?;
+            let next = Iterate { theta: self.theta_of(&sol), sol, theta_sim: trial, mu: trial_mu, moments: m, fit: None };
             if std::env::var("LEEWAY_DEBUG").is_ok() {
-                eprintln!(
-                    "refinement {refinements}: change {change:.3e} theta {:?}",
-                    theta.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>()
-                );
+                eprintln!("refinement {refinements}: change {change:.3e} simulation fit {fit:.1}");
             }
             if change < self.options.tolerance {
                 converged = true;
+                cur = next;
                 break;
             }
-        }
-        if refine {
-            // Record the numeric findings of the final solve.
-            sol = self.solve(&moments, true)?;
-            theta = self.theta_of(&sol);
-            if !converged {
+            // A refinement whose simulation tracks the data markedly worse than
+            // an earlier iterate is running away (small samples): stop there.
+            if let (Some(b), Some(f)) = (&best, cur.fit)
+                && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
+            {
                 self.warnings.push(format!(
-                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the last estimate is reported",
-                    self.options.max_refinements, self.options.tolerance
+                    "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported",
+                    b.fit.unwrap_or(f) - f
                 ));
+                cur = next;
+                break;
             }
+            cur = next;
         }
+        if refine && !converged {
+            // Report the iterate whose own simulation tracks the data best.
+            if let Some(b) = best
+                && cur.fit.is_none_or(|f| f < b.fit.unwrap_or(f))
+            {
+                cur = b;
+            }
+            self.warnings.push(format!(
+                "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
+                refinements, self.options.tolerance
+            ));
+        }
+        let theta_sim = cur.theta_sim.clone();
+        let mu = cur.mu.clone();
+        let moments = cur.moments;
+        // Record the numeric findings of the reported solve.
+        let sol = if refine { self.solve(&moments, true)? } else { cur.sol };
+        let theta = self.theta_of(&sol);
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
         let cov = if self.options.covariance {
             self.covariance(experiments, &moments, &sol, &theta_sim, &mu)
@@ -1539,7 +1598,12 @@ impl<'a> Estimator<'a> {
         theta_sim: &[f64],
         mu: &[f64],
     ) -> Option<BTreeMap<(usize, usize), f64>> {
-        let walker = self.walker();
+        // The instruments of the reported iterate (empty θ: the delayed bootstrap).
+        let walker = if theta_sim.is_empty() && self.options.method != Method::Ls {
+            self.walker_with(Some(Instruments::Delayed))
+        } else {
+            self.walker()
+        };
         let n = self.n_cols;
         let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();
         // ζ rows: the instrument rows of every block, concatenated.
