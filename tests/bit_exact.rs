@@ -42,15 +42,35 @@ struct Case {
 
 fn cases() -> Vec<Case> {
     vec![
-        Case { file: "examples/models/ship.som", model: &models::ship::Ship, aggregate: false },
-        Case { file: "examples/models/ship_iv2.som", model: &models::ship_iv2::ShipIv2, aggregate: true },
-        Case { file: "tests/models/raft.som", model: &models::raft::Raft, aggregate: false },
-        Case { file: "tests/models/sub.som", model: &models::sub::Sub, aggregate: false },
+        Case {
+            file: "examples/models/ship.som",
+            model: &models::ship::Ship,
+            aggregate: false,
+        },
+        Case {
+            file: "examples/models/ship_iv2.som",
+            model: &models::ship_iv2::ShipIv2,
+            aggregate: true,
+        },
+        Case {
+            file: "tests/models/raft.som",
+            model: &models::raft::Raft,
+            aggregate: false,
+        },
+        Case {
+            file: "tests/models/sub.som",
+            model: &models::sub::Sub,
+            aggregate: false,
+        },
     ]
 }
 
 const SAMPLES: usize = 4000;
-const KINDS: [PredictorKind; 3] = [PredictorKind::Basic, PredictorKind::Augmented, PredictorKind::Measured];
+const KINDS: [PredictorKind; 3] = [
+    PredictorKind::Basic,
+    PredictorKind::Augmented,
+    PredictorKind::Measured,
+];
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -59,8 +79,15 @@ fn root() -> &'static Path {
 /// The IR the structure compiler makes of the case's file now.
 fn compiled(case: &Case) -> Ir {
     let path = root().join(case.file);
-    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let c = compile(&source, &Options { aggregate: case.aggregate, patterns: None });
+    let source =
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let c = compile(
+        &source,
+        &Options {
+            aggregate: case.aggregate,
+            patterns: None,
+        },
+    );
     c.ir.unwrap_or_else(|| panic!("{} must compile: {:?}", case.file, c.diagnostics))
 }
 
@@ -69,12 +96,18 @@ fn every_example_model_is_covered() {
     let listed: Vec<&str> = cases().iter().map(|c| c.file).collect();
     let dir = root().join("examples/models");
     let mut found = 0;
-    for entry in std::fs::read_dir(&dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())).flatten() {
+    for entry in std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .flatten()
+    {
         let name = entry.file_name().to_string_lossy().into_owned();
         if name.ends_with(".som") {
             found += 1;
             let file = format!("examples/models/{name}");
-            assert!(listed.contains(&file.as_str()), "{file} is not in the bit-exactness test: add it to `models` and `cases()`");
+            assert!(
+                listed.contains(&file.as_str()),
+                "{file} is not in the bit-exactness test: add it to `models` and `cases()`"
+            );
         }
     }
     assert!(found >= 2, "no example models found in {}", dir.display());
@@ -83,7 +116,11 @@ fn every_example_model_is_covered() {
 #[test]
 fn the_embedded_ir_is_the_compilers() {
     for case in cases() {
-        assert!(*case.model.ir() == compiled(&case), "{}: the IR embedded by include_model! differs from the compiler's", case.file);
+        assert!(
+            *case.model.ir() == compiled(&case),
+            "{}: the IR embedded by include_model! differs from the compiler's",
+            case.file
+        );
     }
 }
 
@@ -111,14 +148,18 @@ fn value(rng: &mut ChaCha8Rng, scale: f64) -> f64 {
 fn sample(ir: &Ir, rng: &mut ChaCha8Rng) -> Sample {
     let rotation = match ir.rotation {
         Rotation::Planar { .. } => planar_rotation(rng.random_range(-10.0..10.0)).to_vec(),
-        Rotation::Measured { .. } | Rotation::None => (0..ir.rotation_vars.len()).map(|_| value(rng, 1.0)).collect(),
+        Rotation::Measured { .. } | Rotation::None => (0..ir.rotation_vars.len())
+            .map(|_| value(rng, 1.0))
+            .collect(),
     };
     Sample {
         states: (0..ir.states.len()).map(|_| value(rng, 3.0)).collect(),
         inputs: (0..ir.inputs.len()).map(|_| value(rng, 30.0)).collect(),
         rotation,
         disturbances: (0..ir.components.len()).map(|_| value(rng, 2.0)).collect(),
-        signs: (0..ir.sign_args.len()).map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 }).collect(),
+        signs: (0..ir.sign_args.len())
+            .map(|_| if rng.random::<bool>() { 1.0 } else { -1.0 })
+            .collect(),
         theta: (0..ir.parameters.len()).map(|_| value(rng, 2.0)).collect(),
         h: rng.random_range(0.01..2.0),
     }
@@ -127,33 +168,62 @@ fn sample(ir: &Ir, rng: &mut ChaCha8Rng) -> Sample {
 /// Buffers of `len` slots plus a tail that must stay untouched, filled with
 /// different garbage for the two evaluators so an unwritten slot shows.
 fn buffers(len: usize) -> (Vec<f64>, Vec<f64>) {
-    (vec![f64::from_bits(0x7ff8_dead_beef_0001); len + 3], vec![-1.234_567e300; len + 3])
+    (
+        vec![f64::from_bits(0x7ff8_dead_beef_0001); len + 3],
+        vec![-1.234_567e300; len + 3],
+    )
 }
 
 /// The first slot where the two buffers differ in any bit, or where the
 /// generated code wrote past its `len` slots. `n` is the number of columns
 /// (0 for one slot per output).
 #[allow(clippy::too_many_arguments)]
-fn compare(case: &Case, what: &str, names: &[String], n: usize, k: usize, generated: &[f64], interpreted: &[f64], len: usize) -> Result<(), String> {
+fn compare(
+    case: &Case,
+    what: &str,
+    names: &[String],
+    n: usize,
+    k: usize,
+    generated: &[f64],
+    interpreted: &[f64],
+    len: usize,
+) -> Result<(), String> {
     for (i, (g, r)) in generated[..len].iter().zip(&interpreted[..len]).enumerate() {
         if g.to_bits() != r.to_bits() {
             // `n == 0`: one slot per output (rhs, step), `names` are the states.
-            let slot = if n == 0 {
-                format!("output {i} `{}`", names.get(i).map_or("?", String::as_str))
-            } else {
-                format!("output {}, column {} `{}`", i / n, i % n, names.get(i % n).map_or("?", String::as_str))
+            let slot = match (i.checked_div(n), i.checked_rem(n)) {
+                (Some(o), Some(j)) => format!(
+                    "output {o}, column {j} `{}`",
+                    names.get(j).map_or("?", String::as_str)
+                ),
+                _ => format!("output {i} `{}`", names.get(i).map_or("?", String::as_str)),
             };
-            return Err(format!("{}: {what}, sample {k}, {slot}: generated {g:e} ≠ interpreted {r:e}", case.file));
+            return Err(format!(
+                "{}: {what}, sample {k}, {slot}: generated {g:e} ≠ interpreted {r:e}",
+                case.file
+            ));
         }
     }
-    if generated[len..].iter().any(|v| v.to_bits() != 0x7ff8_dead_beef_0001) {
+    if generated[len..]
+        .iter()
+        .any(|v| v.to_bits() != 0x7ff8_dead_beef_0001)
+    {
         return Err(format!("{}: {what} wrote past its {len} slots", case.file));
     }
     Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]
-fn assert_same(case: &Case, what: &str, names: &[String], n: usize, k: usize, generated: &[f64], interpreted: &[f64], len: usize) {
+fn assert_same(
+    case: &Case,
+    what: &str,
+    names: &[String],
+    n: usize,
+    k: usize,
+    generated: &[f64],
+    interpreted: &[f64],
+    len: usize,
+) {
     if let Err(e) = compare(case, what, names, n, k, generated, interpreted, len) {
         panic!("{e}");
     }
@@ -170,16 +240,40 @@ fn generated_code_matches_the_interpreter_bit_for_bit() {
         let mut rng = ChaCha8Rng::seed_from_u64(0x1ee_3a7 + seed as u64);
         for k in 0..SAMPLES {
             let s = sample(&ir, &mut rng);
-            let sig = Signals { states: &s.states, inputs: &s.inputs, rotation: &s.rotation, disturbances: &s.disturbances };
+            let sig = Signals {
+                states: &s.states,
+                inputs: &s.inputs,
+                rotation: &s.rotation,
+                disturbances: &s.disturbances,
+            };
             for kind in KINDS {
                 let n = ir.predictors.get(kind).len();
-                assert_eq!(generated.n_columns(kind), n, "{}: {kind:?} columns", case.file);
-                let names: Vec<String> = ir.predictors.get(kind).iter().map(|c| c.name.clone()).collect();
+                assert_eq!(
+                    generated.n_columns(kind),
+                    n,
+                    "{}: {kind:?} columns",
+                    case.file
+                );
+                let names: Vec<String> = ir
+                    .predictors
+                    .get(kind)
+                    .iter()
+                    .map(|c| c.name.clone())
+                    .collect();
                 let len = n * n_out;
                 let (mut g, mut r) = buffers(len);
                 generated.regressors(kind, &sig, &s.signs, &mut g);
                 interpreter.regressors(kind, &sig, &s.signs, &mut r);
-                assert_same(case, &format!("{kind:?} regressors"), &names, n, k, &g, &r, len);
+                assert_same(
+                    case,
+                    &format!("{kind:?} regressors"),
+                    &names,
+                    n,
+                    k,
+                    &g,
+                    &r,
+                    len,
+                );
             }
             let states = ir.states.clone();
             let (mut g, mut r) = buffers(n_out);
@@ -203,12 +297,20 @@ fn the_comparison_sees_one_ulp() {
     let ir = compiled(case);
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let s = sample(&ir, &mut rng);
-    let sig = Signals { states: &s.states, inputs: &s.inputs, rotation: &s.rotation, disturbances: &s.disturbances };
+    let sig = Signals {
+        states: &s.states,
+        inputs: &s.inputs,
+        rotation: &s.rotation,
+        disturbances: &s.disturbances,
+    };
     let len = ir.states.len() * ir.predictors.measured.len();
     let mut g = vec![0.0; len];
     case.model.measured(&sig, &s.signs, &mut g);
     let nonzero = g.iter().filter(|v| **v != 0.0).count();
-    assert!(nonzero > len / 4, "only {nonzero} of {len} regressors are non-zero");
+    assert!(
+        nonzero > len / 4,
+        "only {nonzero} of {len} regressors are non-zero"
+    );
     let mut r = g.clone();
     let i = g.iter().position(|v| *v != 0.0).unwrap_or(0);
     r[i] = f64::from_bits(r[i].to_bits() + 1);
@@ -216,7 +318,10 @@ fn the_comparison_sees_one_ulp() {
     gg[..len].copy_from_slice(&g);
     rr[..len].copy_from_slice(&r);
     let n = ir.predictors.measured.len();
-    assert!(compare(case, "probe", &[], n, 0, &gg, &rr, len).is_err(), "a one-ulp difference went unnoticed");
+    assert!(
+        compare(case, "probe", &[], n, 0, &gg, &rr, len).is_err(),
+        "a one-ulp difference went unnoticed"
+    );
     rr[..len].copy_from_slice(&g);
     assert!(compare(case, "probe", &[], n, 0, &gg, &rr, len).is_ok());
 }

@@ -29,7 +29,8 @@ pub(crate) struct Shape {
 
 impl Shape {
     pub fn of(ir: &Ir) -> Shape {
-        let names = |cols: &[leeway_structure::ir::Column]| cols.iter().map(|c| c.name.clone()).collect();
+        let names =
+            |cols: &[leeway_structure::ir::Column]| cols.iter().map(|c| c.name.clone()).collect();
         Shape {
             name: ir.name.clone(),
             states: ir.states.clone(),
@@ -73,14 +74,20 @@ pub(crate) fn names(shape: &Shape) -> (Option<Names>, Vec<String>) {
         .map(|p| {
             let id = rust_ident(p);
             if id.is_none() {
-                errors.push(format!("parameter `{p}` cannot be a Rust field name; rename it in the model"));
+                errors.push(format!(
+                    "parameter `{p}` cannot be a Rust field name; rename it in the model"
+                ));
             }
             id
         })
         .collect();
     let names = model.map(|model| {
         let params = Ident::new(&format!("{}Params", shape.name), Span::call_site());
-        Names { model, params, fields }
+        Names {
+            model,
+            params,
+            fields,
+        }
     });
     (names, errors)
 }
@@ -164,7 +171,7 @@ pub(crate) fn params(shape: &Shape, names: &Names) -> TokenStream {
         "to the θ slices `leeway::Model::rhs` and the estimators use.".to_string(),
     ]);
     let decls = fields.iter().map(|(id, name, nominal)| {
-        let d = format!("`{name}` (nominal {nominal:?}).");
+        let d = format!(" `{name}` (nominal {nominal:?}).");
         quote!(#[doc = #d] pub #id: f64,)
     });
     let nominal = fields.iter().map(|(id, _, v)| {
@@ -251,9 +258,13 @@ fn identifiability(ir: &Ir) -> Vec<String> {
         let n = r.required_patterns.len();
         let set = patterns_text(ir, &r.required_patterns, PredictorKind::Measured);
         if n == 1 {
-            lines.push(format!("θ is identifiable from one experiment with sign pattern {set}."));
+            lines.push(format!(
+                "θ is identifiable from one experiment with sign pattern {set}."
+            ));
         } else {
-            lines.push(format!("θ is identifiable from {n} experiments with sign patterns {set}."));
+            lines.push(format!(
+                "θ is identifiable from {n} experiments with sign patterns {set}."
+            ));
         }
     } else if r.aggregates.is_empty() {
         lines.push("θ is not identifiable:".to_string());
@@ -265,7 +276,10 @@ fn identifiability(ir: &Ir) -> Vec<String> {
                 .to_string(),
         );
         for a in &r.aggregates {
-            let p = ir.parameters.get(a.parameter).map_or("?", |p| p.name.as_str());
+            let p = ir
+                .parameters
+                .get(a.parameter)
+                .map_or("?", |p| p.name.as_str());
             lines.push(format!("- `{p}` estimates {}", a.estimates));
         }
     }
@@ -276,10 +290,18 @@ fn identifiability(ir: &Ir) -> Vec<String> {
 /// identifiability, and the compiler's warnings and notes (a proc macro
 /// cannot emit warnings on stable Rust; they are kept here instead).
 fn model_doc(ir: &Ir, label: &str, remarks: &[String]) -> TokenStream {
-    let list = |v: &[String]| v.iter().map(|s| format!("`{s}`")).collect::<Vec<_>>().join(", ");
+    let list = |v: &[String]| {
+        v.iter()
+            .map(|s| format!("`{s}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let p = &ir.predictors;
     let mut lines = vec![
-        format!("The model `{}` of `{}`, compiled by leeway at build time.", ir.name, label),
+        format!(
+            "The model `{}` of `{}`, compiled by leeway at build time.",
+            ir.name, label
+        ),
         String::new(),
         format!(
             "{} states ({}), {} inputs ({}), {} parameters θ (see the `{}Params` struct).",
@@ -295,7 +317,16 @@ fn model_doc(ir: &Ir, label: &str, remarks: &[String]) -> TokenStream {
             p.basic.len(),
             p.augmented.len(),
             p.measured.len(),
-            if ir.sign_args.is_empty() { "none".to_string() } else { list(&ir.sign_args.iter().map(|s| s.name.clone()).collect::<Vec<_>>()) }
+            if ir.sign_args.is_empty() {
+                "none".to_string()
+            } else {
+                list(
+                    &ir.sign_args
+                        .iter()
+                        .map(|s| s.name.clone())
+                        .collect::<Vec<_>>(),
+                )
+            }
         ),
         String::new(),
     ];
@@ -311,7 +342,12 @@ fn model_doc(ir: &Ir, label: &str, remarks: &[String]) -> TokenStream {
 /// The JSON of the IR, checked to read back to exactly the same IR (every
 /// f64 bit for bit), so `Model::ir` of generated code equals the compiler's.
 fn ir_json(ir: &Ir) -> Result<String, String> {
-    let json = serde_json::to_string(ir).map_err(|e| format!("internal error: the IR of `{}` cannot be serialized: {e}", ir.name))?;
+    let json = serde_json::to_string(ir).map_err(|e| {
+        format!(
+            "internal error: the IR of `{}` cannot be serialized: {e}",
+            ir.name
+        )
+    })?;
     match serde_json::from_str::<Ir>(&json) {
         Ok(back) if back == *ir => Ok(json),
         _ => Err(format!(
@@ -333,7 +369,9 @@ pub(crate) fn model(ir: &Ir, label: &str, remarks: &[String]) -> Result<TokenStr
             None
         }
     };
-    let (Some(names), Some(json), true) = (names, json, errors.is_empty()) else { return Err(errors) };
+    let (Some(names), Some(json), true) = (names, json, errors.is_empty()) else {
+        return Err(errors);
+    };
     let ty = &names.model;
     let doc = model_doc(ir, label, remarks);
     let consts = consts(&shape);

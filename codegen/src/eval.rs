@@ -42,7 +42,11 @@ struct Body<'a> {
 
 impl<'a> Body<'a> {
     fn new(ir: &'a Ir) -> Self {
-        Body { ir, reads: Reads::default(), args: Vec::new() }
+        Body {
+            ir,
+            reads: Reads::default(),
+            args: Vec::new(),
+        }
     }
 
     fn signal(&mut self, s: Signal) -> TokenStream {
@@ -96,7 +100,8 @@ impl<'a> Body<'a> {
             k += 1;
         }
         // Built from two `.som` identifiers joined by `_`: never a keyword.
-        crate::tokens::rust_ident(&name).unwrap_or_else(|| Ident::new(&format!("arg_{}", self.args.len()), Span::call_site()))
+        crate::tokens::rust_ident(&name)
+            .unwrap_or_else(|| Ident::new(&format!("arg_{}", self.args.len()), Span::call_site()))
     }
 
     /// An argument's value: the plain signal, or (disturbed) a local bound to
@@ -147,14 +152,23 @@ impl<'a> Body<'a> {
         let mut value = crate::tokens::float(t.coefficient);
         for f in &t.factors {
             let a = self.arg(&f.arg, disturbed);
-            value = if f.modulus { quote!(#value * #a.abs()) } else { quote!(#value * #a) };
+            value = if f.modulus {
+                quote!(#value * #a.abs())
+            } else {
+                quote!(#value * #a)
+            };
         }
         value
     }
 
     fn entry(&mut self, e: &Entry) -> TokenStream {
         match e {
-            Entry::Poly { coefficient, signs, vars, .. } => {
+            Entry::Poly {
+                coefficient,
+                signs,
+                vars,
+                ..
+            } => {
                 let mut value = crate::tokens::float(*coefficient);
                 for &i in signs {
                     note(&mut self.reads.s, i);
@@ -167,7 +181,9 @@ impl<'a> Body<'a> {
                 }
                 value
             }
-            Entry::Term { term, pointwise, .. } => match self.ir.terms.get(*term) {
+            Entry::Term {
+                term, pointwise, ..
+            } => match self.ir.terms.get(*term) {
                 Some(t) => self.term(t, *pointwise == Pointwise::Measured),
                 // Cannot happen: the IR comes from `compile`, whose term indices are valid.
                 None => quote!(::core::f64::NAN),
@@ -210,7 +226,11 @@ impl<'a> Body<'a> {
 /// A parameter name, prefixed with `_` when the body does not read it (so
 /// user crates see no `unused_variables` warning).
 fn param(name: &str, used: bool) -> Ident {
-    let name = if used { name.to_string() } else { format!("_{name}") };
+    let name = if used {
+        name.to_string()
+    } else {
+        format!("_{name}")
+    };
     Ident::new(&name, Span::call_site())
 }
 
@@ -225,7 +245,12 @@ pub(crate) fn predictor(ir: &Ir, columns: &[Column], with_signs: bool) -> TokenS
     let mut slots: Vec<(usize, TokenStream)> = Vec::new();
     for (j, col) in columns.iter().enumerate() {
         for o in col.outputs() {
-            let values: Vec<TokenStream> = col.entries.iter().filter(|e| e.output() == o).map(|e| body.entry(e)).collect();
+            let values: Vec<TokenStream> = col
+                .entries
+                .iter()
+                .filter(|e| e.output() == o)
+                .map(|e| body.entry(e))
+                .collect();
             let k = index(o * n + j);
             slots.push((o * n + j, quote!(out[#k] = #(#values)+*;)));
         }
@@ -279,7 +304,11 @@ pub(crate) fn rhs(ir: &Ir) -> TokenStream {
             })
             .collect();
         let k = index(o);
-        stmts.push(if values.is_empty() { quote!(out[#k] = 0.0;) } else { quote!(out[#k] = #(#values)+*;) });
+        stmts.push(if values.is_empty() {
+            quote!(out[#k] = 0.0;)
+        } else {
+            quote!(out[#k] = #(#values)+*;)
+        });
     }
     let theta = param("theta", body.reads.theta.is_some());
     let sig = param("sig", body.reads_sig());
@@ -315,7 +344,11 @@ pub(crate) fn step(ir: &Ir) -> TokenStream {
     let h = param("h", der);
     let bindings = if n > 0 {
         let n = index(n);
-        let x = if der { quote!(let x = &sig.states[..#n];) } else { TokenStream::new() };
+        let x = if der {
+            quote!(let x = &sig.states[..#n];)
+        } else {
+            TokenStream::new()
+        };
         quote! {
             #x
             let f = &f[..#n];

@@ -32,21 +32,34 @@ pub(crate) fn sketch(source: &str) -> Shape {
                 ..Shape::default()
             }
         }
-        None => Shape { name: scan_name(source).unwrap_or_default(), ..Shape::default() },
+        None => Shape {
+            name: scan_name(source).unwrap_or_default(),
+            ..Shape::default()
+        },
     }
 }
 
 /// The identifier after the first `model` keyword outside `//` comments.
 fn scan_name(source: &str) -> Option<String> {
-    let mut words = source.lines().flat_map(|l| l.split("//").next().unwrap_or("").split(|c: char| c.is_whitespace() || c == '{'));
+    let mut words = source.lines().flat_map(|l| {
+        l.split("//")
+            .next()
+            .unwrap_or("")
+            .split(|c: char| c.is_whitespace() || c == '{')
+    });
     words.find(|w| *w == "model")?;
-    words.find(|w| !w.is_empty()).filter(|w| rust_ident(w).is_some()).map(str::to_string)
+    words
+        .find(|w| !w.is_empty())
+        .filter(|w| rust_ident(w).is_some())
+        .map(str::to_string)
 }
 
 /// The fallback items for `shape`; nothing when not even the model's name is
 /// a Rust identifier (the errors then stand alone).
 pub(crate) fn expansion(shape: &Shape) -> TokenStream {
-    let (Some(names), _) = names(shape) else { return TokenStream::new() };
+    let (Some(names), _) = names(shape) else {
+        return TokenStream::new();
+    };
     let ty = &names.model;
     let consts = consts(shape);
     let params = params(shape, &names);

@@ -93,7 +93,10 @@ impl Parse for MacroInput {
 
 impl MacroInput {
     fn options(&self) -> Options {
-        Options { aggregate: self.aggregate, patterns: None }
+        Options {
+            aggregate: self.aggregate,
+            patterns: None,
+        }
     }
 }
 
@@ -133,20 +136,30 @@ fn for_macro(d: &Diagnostic) -> Diagnostic {
 /// into the model's documentation and never fail the build.
 pub fn expand(source: &Source, options: &Options, span: Span) -> TokenStream {
     let compilation = compile(source.text, options);
-    let (errors, remarks): (Vec<&Diagnostic>, Vec<&Diagnostic>) = compilation.diagnostics.iter().partition(|d| d.is_error());
+    let (errors, remarks): (Vec<&Diagnostic>, Vec<&Diagnostic>) =
+        compilation.diagnostics.iter().partition(|d| d.is_error());
     let mut out = TokenStream::new();
     for d in &errors {
-        out.extend(compile_error(&error_message(&for_macro(d), source.label, source.text), span));
+        out.extend(compile_error(
+            &error_message(&for_macro(d), source.label, source.text),
+            span,
+        ));
     }
     if let Some(path) = source.tracked {
-        out.extend(quote!(const _: &str = ::core::include_str!(#path);));
+        out.extend(quote!(
+            const _: &str = ::core::include_str!(#path);
+        ));
     }
     // An aggregated combination is stated in the identifiability paragraph already.
     let remarks: Vec<String> = remarks
         .iter()
         .filter(|d| d.code != "aggregated-combination")
         .map(|d| {
-            let severity = if d.severity == Severity::Warning { "warning" } else { "note" };
+            let severity = if d.severity == Severity::Warning {
+                "warning"
+            } else {
+                "note"
+            };
             format!("{severity}[{}]: {}", d.code, d.message)
         })
         .collect();
@@ -173,7 +186,10 @@ pub fn expand(source: &Source, options: &Options, span: Span) -> TokenStream {
 pub fn resolve_path(written: &str, invocation: &Invocation) -> Result<PathBuf, String> {
     let path = Path::new(written);
     if written.is_empty() {
-        return Err("expected the path of a `.som` model file, e.g. `include_model!(\"models/ship.som\")`".to_string());
+        return Err(
+            "expected the path of a `.som` model file, e.g. `include_model!(\"models/ship.som\")`"
+                .to_string(),
+        );
     }
     if path.is_absolute() || path.has_root() {
         return Err(format!(
@@ -223,12 +239,25 @@ pub fn include_model(input: TokenStream, invocation: &Invocation) -> TokenStream
             );
         }
     };
-    let absolute = std::fs::canonicalize(&path).or_else(|_| std::path::absolute(&path)).unwrap_or(path);
+    let absolute = std::fs::canonicalize(&path)
+        .or_else(|_| std::path::absolute(&path))
+        .unwrap_or(path);
     let tracked = absolute.to_str();
     if tracked.is_none() {
-        return compile_error(&format!("the path of model file `{written}` is not valid UTF-8"), span);
+        return compile_error(
+            &format!("the path of model file `{written}` is not valid UTF-8"),
+            span,
+        );
     }
-    expand(&Source { text: &text, label: &written, tracked }, &input.options(), span)
+    expand(
+        &Source {
+            text: &text,
+            label: &written,
+            tracked,
+        },
+        &input.options(),
+        span,
+    )
 }
 
 /// `inline_model!(r#"model A { … }"#)`: the model written in a string
@@ -240,7 +269,15 @@ pub fn inline_model(input: TokenStream) -> TokenStream {
         Err(e) => return e.to_compile_error(),
     };
     let text = input.literal.value();
-    expand(&Source { text: &text, label: "<inline>", tracked: None }, &input.options(), input.literal.span())
+    expand(
+        &Source {
+            text: &text,
+            label: "<inline>",
+            tracked: None,
+        },
+        &input.options(),
+        input.literal.span(),
+    )
 }
 
 #[cfg(test)]
@@ -248,21 +285,37 @@ mod tests {
     use super::*;
 
     fn invocation(file: &str) -> Invocation {
-        Invocation { invoking_file: Some(PathBuf::from(file)), manifest_dir: Some(PathBuf::from("/crate")) }
+        Invocation {
+            invoking_file: Some(PathBuf::from(file)),
+            manifest_dir: Some(PathBuf::from("/crate")),
+        }
     }
 
     #[test]
     fn paths_resolve_next_to_the_invoking_file() {
-        assert_eq!(resolve_path("models/a.som", &invocation("src/main.rs")), Ok(PathBuf::from("src/models/a.som")));
-        assert_eq!(resolve_path("../a.som", &invocation("/w/tests/ui/x.rs")), Ok(PathBuf::from("/w/tests/ui/../a.som")));
-        let no_file = Invocation { invoking_file: None, manifest_dir: Some(PathBuf::from("/crate")) };
-        assert_eq!(resolve_path("a.som", &no_file), Ok(PathBuf::from("/crate/a.som")));
+        assert_eq!(
+            resolve_path("models/a.som", &invocation("src/main.rs")),
+            Ok(PathBuf::from("src/models/a.som"))
+        );
+        assert_eq!(
+            resolve_path("../a.som", &invocation("/w/tests/ui/x.rs")),
+            Ok(PathBuf::from("/w/tests/ui/../a.som"))
+        );
+        let no_file = Invocation {
+            invoking_file: None,
+            manifest_dir: Some(PathBuf::from("/crate")),
+        };
+        assert_eq!(
+            resolve_path("a.som", &no_file),
+            Ok(PathBuf::from("/crate/a.som"))
+        );
         assert!(resolve_path("a.som", &Invocation::default()).is_err());
     }
 
     #[test]
     fn absolute_and_empty_paths_are_rejected() {
-        assert!(resolve_path("/etc/ship.som", &invocation("src/main.rs")).unwrap_err().contains("absolute"));
+        let e = resolve_path("/etc/ship.som", &invocation("src/main.rs"));
+        assert!(e.as_ref().is_err_and(|e| e.contains("absolute")), "{e:?}");
         assert!(resolve_path("", &invocation("src/main.rs")).is_err());
     }
 
@@ -272,17 +325,27 @@ mod tests {
         assert!(i.aggregate);
         let i: MacroInput = syn::parse_quote!("a.som");
         assert!(!i.aggregate);
-        let e = syn::parse2::<MacroInput>(quote!("a.som", aggregated)).unwrap_err();
-        assert!(e.to_string().contains("unknown option `aggregated`"));
-        let e = syn::parse2::<MacroInput>(quote!(ship)).unwrap_err();
-        assert!(e.to_string().contains("expected a string literal"));
+        let e = syn::parse2::<MacroInput>(quote!("a.som", aggregated))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("unknown option `aggregated`"), "{e}");
+        let e = syn::parse2::<MacroInput>(quote!(ship))
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("expected a string literal"), "{e}");
     }
 
     #[test]
     fn error_messages_carry_the_rendered_snippet() {
         let src = "model A {\n  state u\n  der u = X*u*u*u\n}\n";
         let c = compile(src, &Options::default());
-        let d = c.diagnostics.iter().find(|d| d.is_error()).expect("an error");
+        let d = c
+            .diagnostics
+            .iter()
+            .find(|d| d.is_error())
+            .expect("an error");
         let m = error_message(d, "models/a.som", src);
         assert!(m.starts_with(&format!("[{}] ", d.code)), "{m}");
         assert!(m.contains("models/a.som:3:"), "{m}");
@@ -293,7 +356,16 @@ mod tests {
     #[test]
     fn a_broken_model_expands_to_errors_and_a_fallback() {
         let src = "model A {\n  state u\n  der u = X*u*u*u\n}\n";
-        let out = expand(&Source { text: src, label: "a.som", tracked: None }, &Options::default(), Span::call_site()).to_string();
+        let out = expand(
+            &Source {
+                text: src,
+                label: "a.som",
+                tracked: None,
+            },
+            &Options::default(),
+            Span::call_site(),
+        )
+        .to_string();
         assert_eq!(out.matches("compile_error").count(), 1, "{out}");
         assert!(out.contains("struct A"), "{out}");
         assert!(out.contains("struct AParams"), "{out}");
@@ -303,7 +375,16 @@ mod tests {
     #[test]
     fn a_valid_model_has_no_errors_and_tracks_its_file() {
         let src = "model A {\n  state u\n  input f\n  der u = X*u + F*f\n}\n";
-        let out = expand(&Source { text: src, label: "a.som", tracked: Some("/m/a.som") }, &Options::default(), Span::call_site()).to_string();
+        let out = expand(
+            &Source {
+                text: src,
+                label: "a.som",
+                tracked: Some("/m/a.som"),
+            },
+            &Options::default(),
+            Span::call_site(),
+        )
+        .to_string();
         assert!(!out.contains("compile_error"), "{out}");
         assert!(out.contains("include_str ! (\"/m/a.som\")"), "{out}");
         assert!(!out.contains("unreachable"), "{out}");

@@ -11,7 +11,10 @@ const NOT_RAW: [&str; 5] = ["self", "Self", "super", "crate", "_"];
 /// A Rust identifier spelled exactly as `name`, raw (`r#type`) for a
 /// keyword; `None` when Rust has no such identifier (`self`, `_`, `2x`).
 pub(crate) fn rust_ident(name: &str) -> Option<Ident> {
-    let shaped = name.chars().next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    let shaped = name
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
     if !shaped || NOT_RAW.contains(&name) {
         return None;
@@ -32,12 +35,21 @@ pub(crate) fn float(v: f64) -> TokenStream {
         return quote!(::core::f64::NAN);
     }
     if v.is_infinite() {
-        return if v > 0.0 { quote!(::core::f64::INFINITY) } else { quote!(::core::f64::NEG_INFINITY) };
+        return if v > 0.0 {
+            quote!(::core::f64::INFINITY)
+        } else {
+            quote!(::core::f64::NEG_INFINITY)
+        };
     }
     let magnitude = v.abs();
     // `{:?}` writes `0.5`, `1.0`, `1e-7`, `1e300`: all valid float literals.
-    let lit = Literal::from_str(&format!("{magnitude:?}")).unwrap_or_else(|_| Literal::f64_unsuffixed(magnitude));
-    if v.is_sign_negative() { quote!(-#lit) } else { quote!(#lit) }
+    let lit = Literal::from_str(&format!("{magnitude:?}"))
+        .unwrap_or_else(|_| Literal::f64_unsuffixed(magnitude));
+    if v.is_sign_negative() {
+        quote!(-#lit)
+    } else {
+        quote!(#lit)
+    }
 }
 
 /// An unsuffixed integer literal (`3`, not `3usize`), for indices and lengths.
@@ -50,7 +62,11 @@ pub(crate) fn doc(lines: &[String]) -> TokenStream {
     lines
         .iter()
         .map(|l| {
-            let l = if l.is_empty() { String::new() } else { format!(" {l}") };
+            let l = if l.is_empty() {
+                String::new()
+            } else {
+                format!(" {l}")
+            };
             quote!(#[doc = #l])
         })
         .collect()
@@ -86,8 +102,14 @@ mod tests {
 
     #[test]
     fn identifiers_are_spelled_as_written() {
-        assert_eq!(rust_ident("X_uu").map(|i| i.to_string()), Some("X_uu".to_string()));
-        assert_eq!(rust_ident("type").map(|i| i.to_string()), Some("r#type".to_string()));
+        assert_eq!(
+            rust_ident("X_uu").map(|i| i.to_string()),
+            Some("X_uu".to_string())
+        );
+        assert_eq!(
+            rust_ident("type").map(|i| i.to_string()),
+            Some("r#type".to_string())
+        );
         assert_eq!(rust_ident("self"), None);
         assert_eq!(rust_ident("_"), None);
         assert_eq!(rust_ident("2x"), None);
@@ -96,17 +118,38 @@ mod tests {
 
     #[test]
     fn float_literals_round_trip_exactly() {
-        for v in [0.5, 1.0, -0.2, 0.00015, 1e-7, -1e300, 5e-324, 0.1 + 0.2, -0.0, 123456789.125, f64::MAX] {
+        for v in [
+            0.5,
+            1.0,
+            -0.2,
+            0.00015,
+            1e-7,
+            -1e300,
+            5e-324,
+            0.1 + 0.2,
+            -0.0,
+            123456789.125,
+            f64::MAX,
+        ] {
             let text = float(v).to_string().replace(' ', "");
             let parsed: f64 = text.parse().unwrap_or(f64::NAN);
             assert_eq!(parsed.to_bits(), v.to_bits(), "{v} written as {text}");
         }
-        assert_eq!(float(f64::NAN).to_string().replace(' ', ""), "::core::f64::NAN");
-        assert_eq!(float(f64::NEG_INFINITY).to_string().replace(' ', ""), "::core::f64::NEG_INFINITY");
+        assert_eq!(
+            float(f64::NAN).to_string().replace(' ', ""),
+            "::core::f64::NAN"
+        );
+        assert_eq!(
+            float(f64::NEG_INFINITY).to_string().replace(' ', ""),
+            "::core::f64::NEG_INFINITY"
+        );
     }
 
     #[test]
     fn doc_text_is_escaped_outside_code() {
-        assert_eq!(doc_escape("rho[north] `s[water.u]` <inline>"), "rho\\[north\\] `s[water.u]` \\<inline\\>");
+        assert_eq!(
+            doc_escape("rho[north] `s[water.u]` <inline>"),
+            "rho\\[north\\] `s[water.u]` \\<inline\\>"
+        );
     }
 }

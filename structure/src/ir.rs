@@ -196,8 +196,16 @@ impl Ir {
     /// skipped, never a panic.
     pub fn arg_shares(&self, arg: &Arg) -> Vec<(Share, usize)> {
         let mut shares = Vec::new();
-        let (Signal::State(l), Some(ri)) = (arg.signal, arg.relative) else { return shares };
-        let Some(d) = self.relatives.get(ri).and_then(|r| self.disturbances.get(r.disturbance)) else { return shares };
+        let (Signal::State(l), Some(ri)) = (arg.signal, arg.relative) else {
+            return shares;
+        };
+        let Some(d) = self
+            .relatives
+            .get(ri)
+            .and_then(|r| self.disturbances.get(r.disturbance))
+        else {
+            return shares;
+        };
         for (pos, &c) in d.components.iter().enumerate() {
             let share = if d.earth {
                 match &self.rotation {
@@ -208,7 +216,12 @@ impl Ir {
                         (_, true, 1) => Some(Share::Rot(0)),
                         _ => None,
                     },
-                    Rotation::Measured { rows } => rows.get(l).and_then(|r| r.get(pos)).copied().flatten().map(Share::Rot),
+                    Rotation::Measured { rows } => rows
+                        .get(l)
+                        .and_then(|r| r.get(pos))
+                        .copied()
+                        .flatten()
+                        .map(Share::Rot),
                     Rotation::None => None,
                 }
             } else if self.components.get(c).is_some_and(|k| k.state == Some(l)) {
