@@ -60,7 +60,12 @@ pub(crate) struct Names {
 /// Rust cannot spell.
 pub(crate) fn names(shape: &Shape) -> (Option<Names>, Vec<String>) {
     let mut errors = Vec::new();
-    let model = rust_ident(&shape.name);
+    // A struct named `f64` would shadow the primitive the generated code uses.
+    const PRIMITIVES: [&str; 17] = [
+        "bool", "char", "str", "f32", "f64", "i8", "i16", "i32", "i64", "i128", "isize", "u8",
+        "u16", "u32", "u64", "u128", "usize",
+    ];
+    let model = rust_ident(&shape.name).filter(|_| !PRIMITIVES.contains(&shape.name.as_str()));
     if model.is_none() {
         errors.push(format!(
             "model `{}` cannot be a Rust type name; rename the model (`model {}Model {{ … }}`)",

@@ -373,6 +373,25 @@ mod tests {
     }
 
     #[test]
+    fn model_names_rust_cannot_use_are_errors() {
+        for name in ["f64", "self", "_"] {
+            let src = format!("model {name} {{\n  state u\n  der u = X*u\n}}\n");
+            let out = expand(
+                &Source {
+                    text: &src,
+                    label: "a.som",
+                    tracked: None,
+                },
+                &Options::default(),
+                Span::call_site(),
+            )
+            .to_string();
+            assert!(out.contains("cannot be a Rust type name"), "{name}: {out}");
+            assert!(!out.contains("struct"), "{name}: {out}");
+        }
+    }
+
+    #[test]
     fn a_valid_model_has_no_errors_and_tracks_its_file() {
         let src = "model A {\n  state u\n  input f\n  der u = X*u + F*f\n}\n";
         let out = expand(
