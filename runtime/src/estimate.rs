@@ -1464,7 +1464,11 @@ impl<'a> Estimator<'a> {
         let mut refinements = 0usize;
         let mut converged = !refine;
         let bootstrap = refine && self.options.initial == Initial::Delayed;
-        let first: Vec<f64> = if bootstrap { Vec::new() } else { theta_sim.clone() };
+        let first: Vec<f64> = if bootstrap {
+            Vec::new()
+        } else {
+            theta_sim.clone()
+        };
         let moments = match self.accumulate(experiments, &first, &mu, None) {
             Ok((m, _, _)) => m,
             Err(Diverged) => {
@@ -1478,7 +1482,14 @@ impl<'a> Estimator<'a> {
         let sol = self.solve(&moments, !refine)?;
         // The current iterate: its estimate, the simulation that produced its
         // instruments, and (once simulated itself) how well it tracks the data.
-        let mut cur = Iterate { theta: self.theta_of(&sol), sol, theta_sim: first, mu: mu.clone(), moments, fit: None };
+        let mut cur = Iterate {
+            theta: self.theta_of(&sol),
+            sol,
+            theta_sim: first,
+            mu: mu.clone(),
+            moments,
+            fit: None,
+        };
         let mut best: Option<Iterate> = None;
         while refine && refinements < self.options.max_refinements {
             // Re-simulate with the estimate (and the disturbance means it implies),
@@ -1490,9 +1501,19 @@ impl<'a> Estimator<'a> {
             let mut step = 1.0;
             let mut accepted = None;
             for _ in 0..6 {
-                let trial: Vec<f64> = theta_sim.iter().zip(&cur.theta).map(|(a, b)| a + step * (b - a)).collect();
-                let trial_mu: Vec<f64> = mu.iter().zip(&new_mu).map(|(a, b)| a + step * (b - a)).collect();
-                if let Ok(r) = self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu))) {
+                let trial: Vec<f64> = theta_sim
+                    .iter()
+                    .zip(&cur.theta)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                let trial_mu: Vec<f64> = mu
+                    .iter()
+                    .zip(&new_mu)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                if let Ok(r) =
+                    self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu)))
+                {
                     accepted = Some((trial, trial_mu, r));
                     break;
                 }
@@ -1503,10 +1524,16 @@ impl<'a> Estimator<'a> {
                 break;
             };
             if step < 1.0 {
-                self.warnings.push(format!("refinement {} damped by {step} (the simulation with the full step diverged)", refinements + 1));
+                self.warnings.push(format!(
+                    "refinement {} damped by {step} (the simulation with the full step diverged)",
+                    refinements + 1
+                ));
             } else {
                 cur.fit = Some(fit);
-                if best.as_ref().is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) < fit) {
+                if best
+                    .as_ref()
+                    .is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) < fit)
+                {
                     best = Some(cur.clone());
                 }
             }
@@ -1514,7 +1541,14 @@ impl<'a> Estimator<'a> {
             mu = trial_mu.clone();
             refinements += 1;
             let sol = self.solve(&m, false)?;
-            let next = Iterate { theta: self.theta_of(&sol), sol, theta_sim: trial, mu: trial_mu, moments: m, fit: None };
+            let next = Iterate {
+                theta: self.theta_of(&sol),
+                sol,
+                theta_sim: trial,
+                mu: trial_mu,
+                moments: m,
+                fit: None,
+            };
             if std::env::var("LEEWAY_DEBUG").is_ok() {
                 eprintln!("refinement {refinements}: change {change:.3e} simulation fit {fit:.1}");
             }
@@ -1553,7 +1587,11 @@ impl<'a> Estimator<'a> {
         let mu = cur.mu.clone();
         let moments = cur.moments;
         // Record the numeric findings of the reported solve.
-        let sol = if refine { self.solve(&moments, true)? } else { cur.sol };
+        let sol = if refine {
+            self.solve(&moments, true)?
+        } else {
+            cur.sol
+        };
         let theta = self.theta_of(&sol);
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
         let cov = if self.options.covariance {

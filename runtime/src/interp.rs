@@ -5,18 +5,9 @@
 //! two agree bit for bit.
 
 use crate::model::{Model, Signals};
-use leeway_structure::ir::{Arg, Column, Entry, EvalVar, Ir, Pointwise, Rotation, Signal};
+use leeway_structure::ir::{Arg, Column, Entry, EvalVar, Ir, Pointwise, Signal};
 
-/// One factor of a rotation share: `R_l,pos · d_comp`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Share {
-    /// `rot[k] * d`.
-    Rot(usize),
-    /// `-(rot[k] * d)`.
-    NegRot(usize),
-    /// `d` (body frame).
-    One,
-}
+pub use leeway_structure::ir::Share;
 
 /// How to evaluate a term argument: the base signal, and the rotated
 /// disturbance shares subtracted from it (`x − ((p0 + p1) + …)`).
@@ -31,40 +22,9 @@ pub struct ArgPlan {
 /// The disturbance shares of an argument, in the IR's order: the
 /// components of its medium in order, non-zero rotation entries only.
 pub fn arg_plan(ir: &Ir, arg: &Arg) -> ArgPlan {
-    let mut shares = Vec::new();
-    if let (Signal::State(l), Some(ri)) = (arg.signal, arg.relative) {
-        let d = &ir.disturbances[ir.relatives[ri].disturbance];
-        for (pos, &c) in d.components.iter().enumerate() {
-            let share = if d.earth {
-                match &ir.rotation {
-                    Rotation::Planar { axes, .. } => match (l == axes[0], l == axes[1], pos) {
-                        (true, _, 0) => Some(Share::Rot(0)),
-                        (true, _, 1) => Some(Share::Rot(1)),
-                        (_, true, 0) => Some(Share::NegRot(1)),
-                        (_, true, 1) => Some(Share::Rot(0)),
-                        _ => None,
-                    },
-                    Rotation::Measured { rows } => rows
-                        .get(l)
-                        .and_then(|r| r.get(pos))
-                        .copied()
-                        .flatten()
-                        .map(Share::Rot),
-                    Rotation::None => None,
-                }
-            } else if ir.components[c].state == Some(l) {
-                Some(Share::One)
-            } else {
-                None
-            };
-            if let Some(s) = share {
-                shares.push((s, c));
-            }
-        }
-    }
     ArgPlan {
         signal: arg.signal,
-        shares,
+        shares: ir.arg_shares(arg),
     }
 }
 

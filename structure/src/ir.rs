@@ -175,6 +175,68 @@ pub struct Term {
     pub span: Span,
 }
 
+/// One disturbance share of a relative argument: the entry `R_l,pos` of the
+/// rotation (or the identity of a body-frame component) that multiplies a
+/// disturbance component `d` in `x_l − (R·v)_l`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Share {
+    /// `rot[k] * d`.
+    Rot(usize),
+    /// `-(rot[k] * d)`.
+    NegRot(usize),
+    /// `d` (body frame).
+    One,
+}
+
+impl Ir {
+    /// The disturbance shares of an argument, in the evaluation order of
+    /// [`Entry`]: the components of its medium in order, non-zero rotation
+    /// entries only; empty for an input or a plain state. The argument's value
+    /// is `x − ((p0 + p1) + …)` over these shares. Indices outside the IR are
+    /// skipped, never a panic.
+    pub fn arg_shares(&self, arg: &Arg) -> Vec<(Share, usize)> {
+        let mut shares = Vec::new();
+        let (Signal::State(l), Some(ri)) = (arg.signal, arg.relative) else {
+            return shares;
+        };
+        let Some(d) = self
+            .relatives
+            .get(ri)
+            .and_then(|r| self.disturbances.get(r.disturbance))
+        else {
+            return shares;
+        };
+        for (pos, &c) in d.components.iter().enumerate() {
+            let share = if d.earth {
+                match &self.rotation {
+                    Rotation::Planar { axes, .. } => match (l == axes[0], l == axes[1], pos) {
+                        (true, _, 0) => Some(Share::Rot(0)),
+                        (true, _, 1) => Some(Share::Rot(1)),
+                        (_, true, 0) => Some(Share::NegRot(1)),
+                        (_, true, 1) => Some(Share::Rot(0)),
+                        _ => None,
+                    },
+                    Rotation::Measured { rows } => rows
+                        .get(l)
+                        .and_then(|r| r.get(pos))
+                        .copied()
+                        .flatten()
+                        .map(Share::Rot),
+                    Rotation::None => None,
+                }
+            } else if self.components.get(c).is_some_and(|k| k.state == Some(l)) {
+                Some(Share::One)
+            } else {
+                None
+            };
+            if let Some(s) = share {
+                shares.push((s, c));
+            }
+        }
+        shares
+    }
+}
+
 /// An argument under a modulus whose sign is fixed within an experiment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SignArg {

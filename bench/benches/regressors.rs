@@ -1,0 +1,101 @@
+//! Regressor evaluation of the ship, generated (`include_model!`) vs
+//! interpreted (`Interpreter`), per predictor. Each iteration evaluates a
+//! batch of `BATCH` different samples, so the time per sample is the reported
+//! time divided by `BATCH` (criterion also reports the throughput).
+//!
+//! `cargo bench -p leeway-bench --bench regressors`
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use leeway::ir::PredictorKind;
+use leeway::{Interpreter, Model, Signals, planar_rotation};
+use std::hint::black_box;
+
+leeway::include_model!("../../examples/models/ship.som");
+
+const BATCH: usize = 1000;
+
+/// One sample's signals, owned.
+struct Sample {
+    states: Vec<f64>,
+    inputs: Vec<f64>,
+    rotation: Vec<f64>,
+    disturbances: Vec<f64>,
+}
+
+/// Deterministic pseudo-random samples (a 64-bit LCG; no dependency).
+fn samples() -> Vec<Sample> {
+    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..BATCH)
+        .map(|_| Sample {
+            states: (0..Ship::STATES.len())
+                .map(|_| 4.0 * next() - 2.0)
+                .collect(),
+            inputs: (0..Ship::INPUTS.len())
+                .map(|_| 40.0 * next() - 20.0)
+                .collect(),
+            rotation: planar_rotation(7.0 * next()).to_vec(),
+            disturbances: (0..Ship::COMPONENTS.len())
+                .map(|_| 3.0 * next() - 1.5)
+                .collect(),
+        })
+        .collect()
+}
+
+fn run(
+    model: &impl Model,
+    kind: PredictorKind,
+    samples: &[Sample],
+    signs: &[f64],
+    out: &mut [f64],
+) {
+    for s in samples {
+        let sig = Signals {
+            states: &s.states,
+            inputs: &s.inputs,
+            rotation: &s.rotation,
+            disturbances: &s.disturbances,
+        };
+        match kind {
+            PredictorKind::Basic => model.basic(black_box(&sig), out),
+            PredictorKind::Augmented => model.augmented(black_box(&sig), black_box(signs), out),
+            PredictorKind::Measured => model.measured(black_box(&sig), black_box(signs), out),
+        }
+        black_box(&mut *out);
+    }
+}
+
+fn regressors(c: &mut Criterion) {
+    let interpreter = Interpreter::new(Ship.ir().clone());
+    let samples = samples();
+    let signs = vec![1.0; Ship::SIGN_ARGS.len()];
+    let mut out = vec![
+        0.0;
+        Ship::AUGMENTED_LEN
+            .max(Ship::MEASURED_LEN)
+            .max(Ship::BASIC_LEN)
+    ];
+    for (name, kind) in [
+        ("basic", PredictorKind::Basic),
+        ("augmented", PredictorKind::Augmented),
+        ("measured", PredictorKind::Measured),
+    ] {
+        let mut group = c.benchmark_group(format!("ship/{name}"));
+        group.throughput(Throughput::Elements(BATCH as u64));
+        group.bench_function("generated", |b| {
+            b.iter(|| run(&Ship, kind, &samples, &signs, &mut out))
+        });
+        group.bench_function("interpreted", |b| {
+            b.iter(|| run(&interpreter, kind, &samples, &signs, &mut out))
+        });
+        group.finish();
+    }
+}
+
+criterion_group!(benches, regressors);
+criterion_main!(benches);

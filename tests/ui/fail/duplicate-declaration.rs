@@ -1,0 +1,4 @@
+// error[duplicate-declaration]: `tau` declared twice.
+leeway::include_model!("duplicate-declaration.som");
+
+fn main() {}

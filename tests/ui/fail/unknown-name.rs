@@ -1,0 +1,4 @@
+// error[unknown-name]: `water.w`: the relative velocity has no component `w`.
+leeway::include_model!("unknown-name.som");
+
+fn main() {}
