@@ -896,6 +896,12 @@ impl<'a> Estimator<'a> {
             .iter()
             .zip(&infos)
             .map(|(s, info)| ExperimentStructure {
+                varying: s
+                    .pointwise
+                    .iter()
+                    .filter(|a| a.minority_fraction > 0.0)
+                    .filter_map(|a| ir.sign_args.iter().position(|x| x.name == a.argument))
+                    .collect(),
                 pattern: s.pattern.clone(),
                 frozen_rotation: info.frozen.as_ref().map(|v| {
                     v.iter()

@@ -112,8 +112,7 @@ pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, nf: NormalForm) -> Poly {
 }
 
 /// `coefficient · Π factors` with every state modulus replaced by its sign
-/// variable (or by +1 for measured media in the measured view, which are
-/// evaluated pointwise and need no fixed sign).
+/// variable.
 pub fn term_poly(
     r: &Resolved,
     t: &TermDecl,
@@ -127,12 +126,15 @@ pub fn term_poly(
             match f.arg.signal {
                 Signal::Input(i) => Poly::var(Var::AbsInput(i)),
                 Signal::State(_) => {
+                    // |a| = s_a·a. For a measured medium in the measured view the
+                    // modulus is evaluated pointwise, but its sign still matters
+                    // structurally: a sign change (even within one experiment)
+                    // separates a·|b| from a·b. The analysis decides per experiment
+                    // whether that sign is fixed or varies.
                     let a = arg_poly(r, &f.arg, view, nf);
-                    let pointwise = view == View::Measured
-                        && arg_medium(r, &f.arg).is_some_and(|d| r.disturbances[d].measured);
-                    match (pointwise, signs.iter().position(|s| s.arg == f.arg)) {
-                        (false, Some(i)) => Poly::var(Var::Sign(i)).mul(&a, nf),
-                        _ => a,
+                    match signs.iter().position(|s| s.arg == f.arg) {
+                        Some(i) => Poly::var(Var::Sign(i)).mul(&a, nf),
+                        None => a,
                     }
                 }
             }

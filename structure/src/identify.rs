@@ -115,6 +115,9 @@ pub struct ExperimentStructure {
     pub pattern: SignPattern,
     /// Constant rotation variables (exact values), if `R` did not vary.
     pub frozen_rotation: Option<Vec<Q>>,
+    /// Sign arguments (of measured media, evaluated pointwise) whose sign
+    /// changes within the experiment: kept symbolic, as if every sign occurred.
+    pub varying: Vec<usize>,
 }
 
 /// The exact reduction of a predictor's columns.
@@ -216,22 +219,22 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                     }
                     Patterns::Set(set) => {
                         for (pi, pat) in set.iter().enumerate() {
-                            add_row(&mut rows, pi, *o, q, vars, pat, None, j, width);
+                            let ctx = RowContext {
+                                pattern: pat,
+                                frozen: None,
+                                varying: &[],
+                            };
+                            add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
                         }
                     }
                     Patterns::Experiments(list) => {
                         for (pi, e) in list.iter().enumerate() {
-                            add_row(
-                                &mut rows,
-                                pi,
-                                *o,
-                                q,
-                                vars,
-                                &e.pattern,
-                                e.frozen_rotation.as_deref(),
-                                j,
-                                width,
-                            );
+                            let ctx = RowContext {
+                                pattern: &e.pattern,
+                                frozen: e.frozen_rotation.as_deref(),
+                                varying: &e.varying,
+                            };
+                            add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
                         }
                     }
                 }
@@ -260,8 +263,16 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
     }
 }
 
+/// How one experiment evaluates structural monomials.
+struct RowContext<'a> {
+    pattern: &'a [i8],
+    frozen: Option<&'a [Q]>,
+    varying: &'a [usize],
+}
+
 /// Adds one structural monomial of column `j` to the rows of experiment `pi`:
-/// signs evaluated, frozen rotation variables multiplied into the coefficient.
+/// fixed signs evaluated, varying ones kept symbolic, frozen rotation
+/// variables multiplied into the coefficient.
 #[allow(clippy::too_many_arguments)]
 fn add_row(
     rows: &mut BTreeMap<RowKey, Vec<Q>>,
@@ -269,8 +280,7 @@ fn add_row(
     output: usize,
     q: &Q,
     vars: &[(StructVar, u32)],
-    pattern: &[i8],
-    frozen: Option<&[Q]>,
+    experiment: &RowContext,
     j: usize,
     width: usize,
 ) {
@@ -278,13 +288,15 @@ fn add_row(
     let mut rest = Vec::with_capacity(vars.len());
     for (v, e) in vars {
         match v {
+            StructVar::Sign(i) if experiment.varying.contains(i) => rest.push((*v, *e)),
             StructVar::Sign(i) => {
-                if e % 2 == 1 && pattern.get(*i).copied().unwrap_or(1) < 0 {
+                if e % 2 == 1 && experiment.pattern.get(*i).copied().unwrap_or(1) < 0 {
                     coef = -coef;
                 }
             }
-            StructVar::Rot(i) if frozen.is_some() => {
-                let value = frozen
+            StructVar::Rot(i) if experiment.frozen.is_some() => {
+                let value = experiment
+                    .frozen
                     .and_then(|f| f.get(*i))
                     .cloned()
                     .unwrap_or_else(Q::zero);
@@ -689,6 +701,14 @@ impl<'a> Analysis<'a> {
             return None;
         }
         self.search(&self.relevant, &|set| self.identifiable(Patterns::Set(set)))
+            .or_else(|| {
+                // Pointwise moduli of measured media may change sign too (within an
+                // experiment or between experiments): search over them as well.
+                let all: Vec<usize> = (0..self.n_signs).collect();
+                (all.len() > self.relevant.len())
+                    .then(|| self.search(&all, &|set| self.identifiable(Patterns::Set(set))))
+                    .flatten()
+            })
     }
     /// Whether one experiment of any sign pattern identifies θ.
     pub fn any_single_pattern(&self) -> Option<bool> {
@@ -711,7 +731,6 @@ impl<'a> Analysis<'a> {
         let args: Vec<usize> = member_cols
             .iter()
             .flat_map(|c| self.structural.signs_of(*c))
-            .filter(|a| self.relevant.contains(a))
             .collect::<BTreeSet<_>>()
             .into_iter()
             .collect();
@@ -721,7 +740,17 @@ impl<'a> Analysis<'a> {
                 .map(|p| self.names.param(*p).to_string())
                 .collect::<Vec<_>>(),
         );
-        let sign_name = |i: &usize| self.names.ir.sign_args[*i].name.clone();
+        let sign_name = |i: &usize| {
+            let a = &self.names.ir.sign_args[*i];
+            if a.measured && self.kind == PredictorKind::Measured {
+                format!(
+                    "{} (measured medium, pointwise: a sign change within one experiment suffices)",
+                    a.name
+                )
+            } else {
+                a.name.clone()
+            }
+        };
         let theta_signs: Vec<Option<BTreeSet<usize>>> = group
             .iter()
             .filter_map(|p| {
@@ -816,34 +845,42 @@ pub fn relevant_signs(ir: &Ir, kind: PredictorKind) -> Vec<usize> {
         .collect()
 }
 
-/// `{+water.u +water.v}, {+water.u -water.v}`.
+/// `{+water.u +water.v}, {+water.u -water.v}`: the signs the predictor fixes,
+/// plus any pointwise (measured-medium) sign that some pattern of the set
+/// makes negative, shown in every pattern of the set.
 pub fn patterns_text(ir: &Ir, set: &[SignPattern], kind: PredictorKind) -> String {
+    let relevant = relevant_signs(ir, kind);
+    let shown: Vec<usize> = (0..ir.sign_args.len())
+        .filter(|i| relevant.contains(i) || set.iter().any(|p| p.get(*i).copied().unwrap_or(1) < 0))
+        .collect();
+    if shown.is_empty() {
+        return "{} (no modulus needs a fixed sign)".to_string();
+    }
     set.iter()
-        .map(|p| pattern_text(ir, p, kind))
+        .map(|p| {
+            let items: Vec<String> = shown
+                .iter()
+                .map(|i| {
+                    format!(
+                        "{}{}",
+                        if p.get(*i).copied().unwrap_or(1) < 0 {
+                            "-"
+                        } else {
+                            "+"
+                        },
+                        ir.sign_args[*i].name
+                    )
+                })
+                .collect();
+            format!("{{{}}}", items.join(" "))
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }
 
-/// `{+water.u -water.v}`: the signs this predictor fixes.
+/// `{+water.u -water.v}`: one pattern (see [`patterns_text`]).
 pub fn pattern_text(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
-    let items: Vec<String> = relevant_signs(ir, kind)
-        .into_iter()
-        .map(|i| {
-            format!(
-                "{}{}",
-                if p.get(i).copied().unwrap_or(1) < 0 {
-                    "-"
-                } else {
-                    "+"
-                },
-                ir.sign_args[i].name
-            )
-        })
-        .collect();
-    if items.is_empty() {
-        return "{} (no modulus needs a fixed sign)".to_string();
-    }
-    format!("{{{}}}", items.join(" "))
+    patterns_text(ir, std::slice::from_ref(p), kind)
 }
 
 /// Parses one experiment's sign pattern written as `water.u:+,air.u:-`: each

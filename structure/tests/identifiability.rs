@@ -454,3 +454,28 @@ fn common_input_term_is_refused_naming_both_parameters() {
     );
     assert!(e[0].message.contains("X_t + W_t"), "{}", e[0].message);
 }
+
+/// A pointwise modulus of a measured medium still carries a sign: `a·|b|`
+/// and `a·b` in that medium are told apart by a sign change of `b`, which
+/// may happen within one experiment (IV3 evaluates it pointwise).
+#[test]
+fn measured_medium_modulus_is_separated_by_a_sign_change() {
+    let src = "model M {
+        step 0.1
+        state u, v
+        input t1, t2
+        disturbance gust measured body(u: gu, v: gv)
+        air = relative(gust)
+        der u = A*air.u + T1*t1
+        der v = B*air.v*|air.u| + F*air.u*air.v + T2*t2
+    }";
+    let c = leeway_structure::compile(src, &Options::default());
+    let ir = ir_of(&c);
+    assert!(ir.report.identifiable, "{:?}", c.diagnostics);
+    assert!(!ir.report.any_single_pattern);
+    let u = sign_index(ir, "air.u");
+    let signs: Vec<i8> = ir.report.required_patterns.iter().map(|p| p[u]).collect();
+    assert_eq!(signs, [1, -1], "both signs of the measured air.u");
+    let sep = &ir.report.separations[0].message;
+    assert!(sep.contains("within one experiment"), "{sep}");
+}
