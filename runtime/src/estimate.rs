@@ -466,6 +466,11 @@ impl EquationWalker<'_> {
             y_sum2: vec![0.0; n_out],
             y_n: 0,
         };
+        // Rotations of the measured headings one and two samples back, and
+        // buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
+        let (mut rh1, mut rh2) = ([1.0, 0.0], [1.0, 0.0]);
+        let mut fix_acc = vec![0.0; n_out];
+        let mut fix_set = vec![false; n_out];
         e.visit(&mut |row| {
             if diverged {
                 return;
@@ -476,12 +481,13 @@ impl EquationWalker<'_> {
                 psi_z = row.heading;
                 psi_ref = row.heading;
             } else {
+                // The anchored heading's rotation serves the instruments and the simulation.
+                let rz = planar_rotation(psi_z);
                 if k >= 2 {
-                    let rot_data = rotation_at(planar.is_some(), psi1, &rot1);
                     let sig = Signals {
                         states: &y1,
                         inputs: &u1,
-                        rotation: rot_data.as_slice(),
+                        rotation: if planar.is_some() { &rh1 } else { &rot1 },
                         disturbances: &d1,
                     };
                     self.model
@@ -489,16 +495,15 @@ impl EquationWalker<'_> {
                     match self.instruments {
                         None => z.copy_from_slice(&phi),
                         Some(Instruments::Simulated) => {
-                            let rot_z = rotation_at(planar.is_some(), psi_z, &rot2);
                             let sig = Signals {
                                 states: &x_sim,
                                 inputs: &u1,
-                                rotation: rot_z.as_slice(),
+                                rotation: if planar.is_some() { &rz } else { &rot2 },
                                 disturbances: &info.measured_mean,
                             };
                             self.model.regressors(self.kind, &sig, &info.signs, &mut z);
                             for fixed in &info.fixed_sign_columns {
-                                let mut acc = vec![None; n_out];
+                                fix_set.fill(false);
                                 for (term, o, signs) in &fixed.terms {
                                     let plan = &self.terms[*term];
                                     let mut t = plan.coefficient;
@@ -506,17 +511,17 @@ impl EquationWalker<'_> {
                                         let v = arg.eval(&sig, true);
                                         t *= if *modulus { s * v } else { v };
                                     }
-                                    acc[*o] = Some(acc[*o].map_or(t, |a: f64| a + t));
+                                    fix_acc[*o] = if fix_set[*o] { fix_acc[*o] + t } else { t };
+                                    fix_set[*o] = true;
                                 }
-                                for (o, v) in acc.into_iter().enumerate() {
-                                    if let Some(v) = v {
-                                        z[o * self.n_cols + fixed.column] = v;
+                                for o in 0..n_out {
+                                    if fix_set[o] {
+                                        z[o * self.n_cols + fixed.column] = fix_acc[o];
                                     }
                                 }
                             }
                         }
                         Some(Instruments::Delayed) => {
-                            let rot_z = rotation_at(planar.is_some(), psi2, &rot2);
                             let dist: &[f64] = if self.delayed_mean {
                                 &info.measured_mean
                             } else {
@@ -525,7 +530,7 @@ impl EquationWalker<'_> {
                             let sig = Signals {
                                 states: &y2,
                                 inputs: &u1,
-                                rotation: rot_z.as_slice(),
+                                rotation: if planar.is_some() { &rh2 } else { &rot2 },
                                 disturbances: dist,
                             };
                             self.model.regressors(self.kind, &sig, &info.signs, &mut z);
@@ -541,7 +546,7 @@ impl EquationWalker<'_> {
                 }
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
-                    let rot_sim = rotation_at(planar.is_some(), psi_z, &rot1);
+
                     for c in 0..n_comp {
                         sim_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured {
                             d1[c]
@@ -552,7 +557,7 @@ impl EquationWalker<'_> {
                     let sig = Signals {
                         states: &x_sim,
                         inputs: &u1,
-                        rotation: rot_sim.as_slice(),
+                        rotation: if planar.is_some() { &rz } else { &rot1 },
                         disturbances: &sim_dist,
                     };
                     self.model.step(theta_sim, h, &sig, &mut fbuf, &mut x_next);
@@ -577,6 +582,7 @@ impl EquationWalker<'_> {
                     change.y_n += 1;
                     if let Some((theta_ref, mu_ref)) = reference {
                         let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
+
                         for c in 0..n_comp {
                             ref_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured
                             {
@@ -617,6 +623,10 @@ impl EquationWalker<'_> {
             rot1.copy_from_slice(row.rotation);
             d1.copy_from_slice(row.disturbances);
             psi1 = row.heading;
+            if planar.is_some() {
+                rh2 = rh1;
+                rh1 = planar_rotation(row.heading);
+            }
             k += 1;
         });
         if diverged { Err(Diverged) } else { Ok(change) }
@@ -1667,6 +1677,13 @@ impl<'a> Estimator<'a> {
                     / count.max(1) as f64
             })
             .collect();
+        // Dense values by column, and each ζ row's index within its block.
+        let dense: Vec<f64> = (0..n).map(|c| values.get(&c).copied().unwrap_or(0.0)).collect();
+        let local: Vec<Vec<usize>> = sol
+            .iter()
+            .zip(&self.blocks)
+            .map(|(s, b)| s.rows.iter().map(|c| b.cols.iter().position(|x| x == c).unwrap_or(0)).collect())
+            .collect();
         let mut cov = DMatrix::zeros(
             sol.iter().map(|s| s.kept.len()).sum(),
             sol.iter().map(|s| s.kept.len()).sum(),
@@ -1705,18 +1722,13 @@ impl<'a> Estimator<'a> {
                     }
                     let mut res = target;
                     for c in &block.cols {
-                        res -= phi[o * n + c] * values.get(c).copied().unwrap_or(0.0);
+                        res -= phi[o * n + c] * dense[*c];
                     }
                     res -= mean_res[o];
                     let s = &sol[bi];
-                    for (r, c) in s.rows.iter().enumerate() {
-                        let j = block.cols.iter().position(|x| x == c).unwrap_or(0);
-                        let zc = if self.options.method == Method::Ls {
-                            phi[o * n + c]
-                        } else {
-                            z[o * n + c]
-                        };
-                        zeta[offsets[bi] + r] += (zc - centres[o][j]) * res;
+                    let source = if self.options.method == Method::Ls { phi } else { z };
+                    for (r, (c, j)) in s.rows.iter().zip(&local[bi]).enumerate() {
+                        zeta[offsets[bi] + r] += (source[o * n + c] - centres[o][*j]) * res;
                     }
                 }
                 lr.push(&zeta);

@@ -11,16 +11,19 @@ use nalgebra::{DMatrix, DVector};
 pub struct CrossMoments {
     /// Samples.
     pub n: usize,
-    z0: DVector<f64>,
-    phi0: DVector<f64>,
+    m: usize,
+    p: usize,
+    z0: Vec<f64>,
+    phi0: Vec<f64>,
     t0: f64,
-    s_zphi: DMatrix<f64>,
-    s_zt: DVector<f64>,
-    s_z: DVector<f64>,
-    s_phi: DVector<f64>,
+    /// `Σ (z − z₀)(φ − φ₀)ᵀ`, row-major `m × p`.
+    s_zphi: Vec<f64>,
+    s_zt: Vec<f64>,
+    s_z: Vec<f64>,
+    s_phi: Vec<f64>,
     s_t: f64,
-    dz: DVector<f64>,
-    dphi: DVector<f64>,
+    dz: Vec<f64>,
+    dphi: Vec<f64>,
 }
 
 impl CrossMoments {
@@ -28,16 +31,18 @@ impl CrossMoments {
     pub fn new(m: usize, p: usize) -> CrossMoments {
         CrossMoments {
             n: 0,
-            z0: DVector::zeros(m),
-            phi0: DVector::zeros(p),
+            m,
+            p,
+            z0: vec![0.0; m],
+            phi0: vec![0.0; p],
             t0: 0.0,
-            s_zphi: DMatrix::zeros(m, p),
-            s_zt: DVector::zeros(m),
-            s_z: DVector::zeros(m),
-            s_phi: DVector::zeros(p),
+            s_zphi: vec![0.0; m * p],
+            s_zt: vec![0.0; m],
+            s_z: vec![0.0; m],
+            s_phi: vec![0.0; p],
             s_t: 0.0,
-            dz: DVector::zeros(m),
-            dphi: DVector::zeros(p),
+            dz: vec![0.0; m],
+            dphi: vec![0.0; p],
         }
     }
 
@@ -45,40 +50,42 @@ impl CrossMoments {
     #[inline]
     pub fn push(&mut self, z: &[f64], phi: &[f64], t: f64) {
         if self.n == 0 {
-            self.z0.as_mut_slice().copy_from_slice(z);
-            self.phi0.as_mut_slice().copy_from_slice(phi);
+            self.z0.copy_from_slice(&z[..self.m]);
+            self.phi0.copy_from_slice(&phi[..self.p]);
             self.t0 = t;
         }
-        for (d, (a, b)) in self.dz.iter_mut().zip(z.iter().zip(self.z0.iter())) {
+        for ((d, a), b) in self.dz.iter_mut().zip(z).zip(&self.z0) {
             *d = a - b;
         }
-        for (d, (a, b)) in self.dphi.iter_mut().zip(phi.iter().zip(self.phi0.iter())) {
+        for ((d, a), b) in self.dphi.iter_mut().zip(phi).zip(&self.phi0) {
             *d = a - b;
         }
         let dt = t - self.t0;
-        self.s_zphi.ger(1.0, &self.dz, &self.dphi, 1.0);
-        self.s_zt.axpy(dt, &self.dz, 1.0);
-        self.s_z += &self.dz;
-        self.s_phi += &self.dphi;
+        for (row, &zi) in self.s_zphi.chunks_exact_mut(self.p).zip(&self.dz) {
+            for (s, &f) in row.iter_mut().zip(&self.dphi) {
+                *s += zi * f;
+            }
+        }
+        for ((s, sz), &zi) in self.s_zt.iter_mut().zip(self.s_z.iter_mut()).zip(&self.dz) {
+            *s += zi * dt;
+            *sz += zi;
+        }
+        for (s, &f) in self.s_phi.iter_mut().zip(&self.dphi) {
+            *s += f;
+        }
         self.s_t += dt;
         self.n += 1;
     }
 
     /// Mean of the instruments.
     pub fn mean_z(&self) -> DVector<f64> {
-        if self.n == 0 {
-            self.z0.clone()
-        } else {
-            &self.z0 + &self.s_z / self.n as f64
-        }
+        let n = self.n.max(1) as f64;
+        DVector::from_iterator(self.m, self.z0.iter().zip(&self.s_z).map(|(a, s)| a + s / n))
     }
     /// Mean of the regressors.
     pub fn mean_phi(&self) -> DVector<f64> {
-        if self.n == 0 {
-            self.phi0.clone()
-        } else {
-            &self.phi0 + &self.s_phi / self.n as f64
-        }
+        let n = self.n.max(1) as f64;
+        DVector::from_iterator(self.p, self.phi0.iter().zip(&self.s_phi).map(|(a, s)| a + s / n))
     }
     /// Mean of the target.
     pub fn mean_t(&self) -> f64 {
@@ -93,17 +100,10 @@ impl CrossMoments {
     /// the moment equations `Σ (z − z̄)(t − φᵀϑ)` with instruments centred per
     /// experiment.
     pub fn centred(&self) -> (DMatrix<f64>, DVector<f64>) {
-        if self.n == 0 {
-            return (
-                DMatrix::zeros(self.s_zphi.nrows(), self.s_zphi.ncols()),
-                DVector::zeros(self.s_zt.len()),
-            );
-        }
-        let n = self.n as f64;
-        (
-            &self.s_zphi - &self.s_z * self.s_phi.transpose() / n,
-            &self.s_zt - &self.s_z * (self.s_t / n),
-        )
+        let n = self.n.max(1) as f64;
+        let h = DMatrix::from_fn(self.m, self.p, |i, j| self.s_zphi[i * self.p + j] - self.s_z[i] * self.s_phi[j] / n);
+        let g = DVector::from_fn(self.m, |i, _| self.s_zt[i] - self.s_z[i] * self.s_t / n);
+        (h, g)
     }
 
     /// The moment equations `Σ (z − c)(t − φᵀϑ) = g − Hϑ` with instruments
@@ -125,11 +125,16 @@ impl CrossMoments {
 /// Long-run covariance sums of a vector series `ζ_k` truncated at `lags`
 /// (uniform weights, the right kernel for the MA(1) residual of an Euler
 /// difference): `Σ ζ_k ζ_kᵀ + Σ_{j=1..L} Σ (ζ_k ζ_{k−j}ᵀ + ζ_{k−j} ζ_kᵀ)`.
+/// The symmetric part is accumulated as its upper triangle, each lag once.
 #[derive(Clone, Debug)]
 pub struct LongRun {
     lags: usize,
-    sum: DMatrix<f64>,
-    history: Vec<DVector<f64>>,
+    dim: usize,
+    /// Upper triangle of `Σ ζζᵀ`, row-major `dim × dim`.
+    own: Vec<f64>,
+    /// `Σ_j Σ_k ζ_k ζ_{k−j}ᵀ`, row-major.
+    cross: Vec<f64>,
+    history: Vec<Vec<f64>>,
     next: usize,
     filled: usize,
     /// Samples seen.
@@ -142,8 +147,10 @@ impl LongRun {
         let lags = lags.max(1);
         LongRun {
             lags,
-            sum: DMatrix::zeros(m, m),
-            history: vec![DVector::zeros(m); lags],
+            dim: m,
+            own: vec![0.0; m * m],
+            cross: vec![0.0; m * m],
+            history: vec![vec![0.0; m]; lags],
             next: 0,
             filled: 0,
             n: 0,
@@ -151,14 +158,32 @@ impl LongRun {
     }
     /// Adds `ζ_k`.
     pub fn push(&mut self, zeta: &DVector<f64>) {
-        self.sum.ger(1.0, zeta, zeta, 1.0);
+        let m = self.dim;
+        let z = zeta.as_slice();
+        for i in 0..m {
+            let zi = z[i];
+            if zi == 0.0 {
+                continue;
+            }
+            let row = &mut self.own[i * m..(i + 1) * m];
+            for j in i..m {
+                row[j] += zi * z[j];
+            }
+        }
         for j in 0..self.filled.min(self.lags) {
             let idx = (self.next + self.lags - 1 - j) % self.lags;
             let past = &self.history[idx];
-            self.sum.ger(1.0, zeta, past, 1.0);
-            self.sum.ger(1.0, past, zeta, 1.0);
+            for (i, &zi) in z.iter().enumerate() {
+                if zi == 0.0 {
+                    continue;
+                }
+                let row = &mut self.cross[i * m..(i + 1) * m];
+                for (c, &p) in row.iter_mut().zip(past) {
+                    *c += zi * p;
+                }
+            }
         }
-        self.history[self.next].copy_from(zeta);
+        self.history[self.next].copy_from_slice(z);
         self.next = (self.next + 1) % self.lags;
         self.filled = (self.filled + 1).min(self.lags);
         self.n += 1;
@@ -166,7 +191,11 @@ impl LongRun {
     /// The long-run sum, made positive semi-definite by clipping negative
     /// eigenvalues (truncated kernels need not be PSD in finite samples).
     pub fn sum_psd(&self) -> DMatrix<f64> {
-        let sym = (&self.sum + self.sum.transpose()) * 0.5;
+        let m = self.dim;
+        let sym = DMatrix::from_fn(m, m, |i, j| {
+            let own = if i <= j { self.own[i * m + j] } else { self.own[j * m + i] };
+            own + self.cross[i * m + j] + self.cross[j * m + i]
+        });
         let eig = sym.clone().symmetric_eigen();
         if eig.eigenvalues.iter().all(|v| *v >= 0.0) {
             return sym;

@@ -77,29 +77,46 @@ pub fn true_system(wind: f64) -> TrueSystem {
 
 /// The estimation input: offset plus smoothed pulses of varying width.
 pub fn estimation_input(design: &InputDesign, n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut current = [0.0; 3];
-    let mut target = [0.0; 3];
-    let mut left = [0usize; 3];
-    (0..n)
-        .map(|_| {
-            for i in 0..3 {
-                if left[i] == 0 {
-                    left[i] =
-                        rng.random_range(design.width.0..design.width.1.max(design.width.0 + 1));
-                    target[i] = design.pulse[i] * rng.random_range(-1.0..1.0);
-                }
-                left[i] -= 1;
-                // First-order smoothing (time constant ≈ 5 samples).
-                current[i] += design.smoothing * (target[i] - current[i]);
+    Pulses::new(design, seed).take(n).collect()
+}
+
+/// The estimation input as an endless stream (offset plus smoothed pulses),
+/// for experiments too long to hold.
+#[derive(Clone, Debug)]
+pub struct Pulses {
+    design: InputDesign,
+    rng: ChaCha8Rng,
+    current: [f64; 3],
+    target: [f64; 3],
+    left: [usize; 3],
+}
+
+impl Pulses {
+    /// The pulse stream of a design and seed.
+    pub fn new(design: &InputDesign, seed: u64) -> Pulses {
+        Pulses { design: design.clone(), rng: ChaCha8Rng::seed_from_u64(seed), current: [0.0; 3], target: [0.0; 3], left: [0; 3] }
+    }
+}
+
+impl Iterator for Pulses {
+    type Item = Vec<f64>;
+    fn next(&mut self) -> Option<Vec<f64>> {
+        let d = &self.design;
+        for i in 0..3 {
+            if self.left[i] == 0 {
+                self.left[i] = self.rng.random_range(d.width.0..d.width.1.max(d.width.0 + 1));
+                self.target[i] = d.pulse[i] * self.rng.random_range(-1.0..1.0);
             }
-            vec![
-                design.offset[0] + current[0],
-                design.offset[1] + current[1] + design.sway_from_yaw * current[2],
-                design.offset[2] + current[2],
-            ]
-        })
-        .collect()
+            self.left[i] -= 1;
+            // First-order smoothing.
+            self.current[i] += d.smoothing * (self.target[i] - self.current[i]);
+        }
+        Some(vec![
+            d.offset[0] + self.current[0],
+            d.offset[1] + self.current[1] + d.sway_from_yaw * self.current[2],
+            d.offset[2] + self.current[2],
+        ])
+    }
 }
 
 /// The validation input: zigzag forward (rudder-like sway/yaw steps every
