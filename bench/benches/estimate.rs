@@ -6,9 +6,9 @@
 //! `cargo bench -p leeway-bench --bench estimate`
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use leeway::runtime::Source;
 use leeway::runtime::estimate::{Method, Options, estimate};
 use leeway::runtime::study;
-use leeway::runtime::Source;
 use leeway::{Interpreter, Model};
 use std::hint::black_box;
 
@@ -21,16 +21,26 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("estimate-ship-5000");
     group.sample_size(20);
     for method in Method::ALL {
-        let options = Options { method, aggregate: true, ..Options::default() };
+        let options = Options {
+            method,
+            aggregate: true,
+            ..Options::default()
+        };
         let refinements = estimate(&generated, &[&data as &dyn Source], &options)
             .map(|e| e.diagnostics.refinements)
             .unwrap_or(0);
         eprintln!("{}: {refinements} refinements", method.name());
         group.bench_function(format!("{}/generated", method.name()), |b| {
-            b.iter(|| black_box(estimate(&generated, &[&data as &dyn Source], &options).map(|e| e.theta)))
+            b.iter(|| {
+                black_box(estimate(&generated, &[&data as &dyn Source], &options).map(|e| e.theta))
+            })
         });
         group.bench_function(format!("{}/interpreted", method.name()), |b| {
-            b.iter(|| black_box(estimate(&interpreted, &[&data as &dyn Source], &options).map(|e| e.theta)))
+            b.iter(|| {
+                black_box(
+                    estimate(&interpreted, &[&data as &dyn Source], &options).map(|e| e.theta),
+                )
+            })
         });
     }
     group.finish();

@@ -142,6 +142,10 @@ pub struct Options {
     pub heading_spread: f64,
     /// Compute standard errors and disturbance moments (one more pass).
     pub covariance: bool,
+    /// Stop a refinement whose simulation tracks the data markedly worse than
+    /// an earlier iterate, and report the best iterate (small-sample runaway
+    /// guard). `false` gives the plain refined IV of the paper.
+    pub runaway_guard: bool,
 }
 
 impl Default for Options {
@@ -160,6 +164,7 @@ impl Default for Options {
             rank_tolerance: 1e-9,
             heading_spread: 0.05,
             covariance: true,
+            runaway_guard: true,
         }
     }
 }
@@ -1575,7 +1580,7 @@ impl<'a> Estimator<'a> {
             }
             // A refinement whose simulation tracks the data markedly worse than
             // an earlier iterate is running away (small samples): stop there.
-            if let (Some(b), Some(f)) = (&best, cur.fit)
+            if let (true, Some(b), Some(f)) = (self.options.runaway_guard, &best, cur.fit)
                 && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
             {
                 self.warnings.push(format!(
@@ -1589,7 +1594,7 @@ impl<'a> Estimator<'a> {
         }
         if refine && !converged {
             // Report the iterate whose own simulation tracks the data best.
-            if let Some(b) = best
+            if let (true, Some(b)) = (self.options.runaway_guard, best)
                 && cur.fit.is_none_or(|f| f < b.fit.unwrap_or(f))
             {
                 cur = b;
@@ -1678,11 +1683,18 @@ impl<'a> Estimator<'a> {
             })
             .collect();
         // Dense values by column, and each ζ row's index within its block.
-        let dense: Vec<f64> = (0..n).map(|c| values.get(&c).copied().unwrap_or(0.0)).collect();
+        let dense: Vec<f64> = (0..n)
+            .map(|c| values.get(&c).copied().unwrap_or(0.0))
+            .collect();
         let local: Vec<Vec<usize>> = sol
             .iter()
             .zip(&self.blocks)
-            .map(|(s, b)| s.rows.iter().map(|c| b.cols.iter().position(|x| x == c).unwrap_or(0)).collect())
+            .map(|(s, b)| {
+                s.rows
+                    .iter()
+                    .map(|c| b.cols.iter().position(|x| x == c).unwrap_or(0))
+                    .collect()
+            })
             .collect();
         let mut cov = DMatrix::zeros(
             sol.iter().map(|s| s.kept.len()).sum(),
@@ -1726,7 +1738,11 @@ impl<'a> Estimator<'a> {
                     }
                     res -= mean_res[o];
                     let s = &sol[bi];
-                    let source = if self.options.method == Method::Ls { phi } else { z };
+                    let source = if self.options.method == Method::Ls {
+                        phi
+                    } else {
+                        z
+                    };
                     for (r, (c, j)) in s.rows.iter().zip(&local[bi]).enumerate() {
                         zeta[offsets[bi] + r] += (source[o * n + c] - centres[o][*j]) * res;
                     }

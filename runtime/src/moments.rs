@@ -80,12 +80,18 @@ impl CrossMoments {
     /// Mean of the instruments.
     pub fn mean_z(&self) -> DVector<f64> {
         let n = self.n.max(1) as f64;
-        DVector::from_iterator(self.m, self.z0.iter().zip(&self.s_z).map(|(a, s)| a + s / n))
+        DVector::from_iterator(
+            self.m,
+            self.z0.iter().zip(&self.s_z).map(|(a, s)| a + s / n),
+        )
     }
     /// Mean of the regressors.
     pub fn mean_phi(&self) -> DVector<f64> {
         let n = self.n.max(1) as f64;
-        DVector::from_iterator(self.p, self.phi0.iter().zip(&self.s_phi).map(|(a, s)| a + s / n))
+        DVector::from_iterator(
+            self.p,
+            self.phi0.iter().zip(&self.s_phi).map(|(a, s)| a + s / n),
+        )
     }
     /// Mean of the target.
     pub fn mean_t(&self) -> f64 {
@@ -101,7 +107,9 @@ impl CrossMoments {
     /// experiment.
     pub fn centred(&self) -> (DMatrix<f64>, DVector<f64>) {
         let n = self.n.max(1) as f64;
-        let h = DMatrix::from_fn(self.m, self.p, |i, j| self.s_zphi[i * self.p + j] - self.s_z[i] * self.s_phi[j] / n);
+        let h = DMatrix::from_fn(self.m, self.p, |i, j| {
+            self.s_zphi[i * self.p + j] - self.s_z[i] * self.s_phi[j] / n
+        });
         let g = DVector::from_fn(self.m, |i, _| self.s_zt[i] - self.s_z[i] * self.s_t / n);
         (h, g)
     }
@@ -193,7 +201,11 @@ impl LongRun {
     pub fn sum_psd(&self) -> DMatrix<f64> {
         let m = self.dim;
         let sym = DMatrix::from_fn(m, m, |i, j| {
-            let own = if i <= j { self.own[i * m + j] } else { self.own[j * m + i] };
+            let own = if i <= j {
+                self.own[i * m + j]
+            } else {
+                self.own[j * m + i]
+            };
             own + self.cross[i * m + j] + self.cross[j * m + i]
         });
         let eig = sym.clone().symmetric_eigen();

@@ -89,16 +89,35 @@ pub fn run(
         }
         let y_psi = psi + system.heading_noise * g();
         for c in 0..n_comp {
-            m[c] = if ir.disturbances[ir.components[c].disturbance].measured { v[c] + system.aux_noise * g() } else { 0.0 };
+            m[c] = if ir.disturbances[ir.components[c].disturbance].measured {
+                v[c] + system.aux_noise * g()
+            } else {
+                0.0
+            };
         }
         f(&TrueSample {
-            measured: Row { states: &y, inputs: &u, heading: y_psi, rotation: &[], disturbances: &m },
+            measured: Row {
+                states: &y,
+                inputs: &u,
+                heading: y_psi,
+                rotation: &[],
+                disturbances: &m,
+            },
             states: &x,
             heading: psi,
             disturbances: &v,
         });
-        let rot = if planar { planar_rotation(psi) } else { [0.0; 2] };
-        let sig = Signals { states: &x, inputs: &u, rotation: if planar { &rot } else { &[] }, disturbances: &v };
+        let rot = if planar {
+            planar_rotation(psi)
+        } else {
+            [0.0; 2]
+        };
+        let sig = Signals {
+            states: &x,
+            inputs: &u,
+            rotation: if planar { &rot } else { &[] },
+            disturbances: &v,
+        };
         model.step(&system.theta, system.h, &sig, &mut rhs, &mut next);
         for o in 0..n_out {
             next[o] += system.process_noise.get(o).copied().unwrap_or(0.0) * g();
@@ -126,16 +145,24 @@ pub fn experiment(
         heading: Vec::new(),
         disturbances: vec![Vec::new(); ir.components.len()],
     };
-    run(model, system, x0, psi0, &mut inputs.iter().cloned(), seed, &mut |s| {
-        e.push(ir, &s.measured);
-        for (t, x) in truth.states.iter_mut().zip(s.states) {
-            t.push(*x);
-        }
-        truth.heading.push(s.heading);
-        for (t, v) in truth.disturbances.iter_mut().zip(s.disturbances) {
-            t.push(*v);
-        }
-    });
+    run(
+        model,
+        system,
+        x0,
+        psi0,
+        &mut inputs.iter().cloned(),
+        seed,
+        &mut |s| {
+            e.push(ir, &s.measured);
+            for (t, x) in truth.states.iter_mut().zip(s.states) {
+                t.push(*x);
+            }
+            truth.heading.push(s.heading);
+            for (t, v) in truth.disturbances.iter_mut().zip(s.disturbances) {
+                t.push(*v);
+            }
+        },
+    );
     (e, truth)
 }
 
@@ -173,6 +200,14 @@ impl Source for Stream<'_> {
     }
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
         let mut input = (self.input)().take(self.n);
-        run(self.model, &self.system, &self.x0, self.psi0, &mut input, self.seed, &mut |s| f(&s.measured));
+        run(
+            self.model,
+            &self.system,
+            &self.x0,
+            self.psi0,
+            &mut input,
+            self.seed,
+            &mut |s| f(&s.measured),
+        );
     }
 }

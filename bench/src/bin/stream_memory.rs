@@ -4,10 +4,10 @@
 //!
 //! `cargo run --release -p leeway-bench --bin stream-memory -- 10000000`
 
+use leeway::runtime::Source;
 use leeway::runtime::estimate::{Method, Options, estimate};
 use leeway::runtime::study::{self, InputDesign, Pulses};
 use leeway::runtime::synth::Stream;
-use leeway::runtime::Source;
 
 leeway::include_model!("../../../examples/models/ship.som");
 
@@ -19,7 +19,10 @@ fn peak_rss_kib() -> Option<u64> {
 }
 
 fn main() {
-    let n: usize = std::env::args().nth(1).and_then(|s| s.parse().ok()).unwrap_or(10_000_000);
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000_000);
     let design = InputDesign::default();
     let stream = Stream {
         model: &Ship,
@@ -33,14 +36,28 @@ fn main() {
     };
     let before = peak_rss_kib();
     let start = std::time::Instant::now();
-    let result = estimate(&Ship, &[&stream as &dyn Source], &Options { method: Method::Iv3, ..Options::default() });
+    let result = estimate(
+        &Ship,
+        &[&stream as &dyn Source],
+        &Options {
+            method: Method::Iv3,
+            ..Options::default()
+        },
+    );
     let seconds = start.elapsed().as_secs_f64();
     match result {
         Ok(est) => {
             let current: Vec<String> = est
                 .disturbances
                 .iter()
-                .map(|d| format!("{} {:.4} ± {:.4}", d.component, d.mean, d.std_error.unwrap_or(f64::NAN)))
+                .map(|d| {
+                    format!(
+                        "{} {:.4} ± {:.4}",
+                        d.component,
+                        d.mean,
+                        d.std_error.unwrap_or(f64::NAN)
+                    )
+                })
                 .collect();
             println!(
                 "N = {n}: {seconds:.1} s, {} refinements, aggregate error {:.5}, current {}",
