@@ -15,8 +15,10 @@ pub mod signs;
 pub mod simulate;
 pub mod study;
 pub mod synth;
+pub mod write;
 
 pub use data::{DataError, Experiment, Row, Source, load_csv};
+pub use write::write_csv;
 pub use estimate::{
     Centring, Estimate, EstimateError, Initial, Instruments, Method, Options, estimate,
 };
