@@ -2,7 +2,7 @@
 //! (regressors, nuisance reduction, required experiments) and diagnostics,
 //! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
 
-mod json;
+pub mod json;
 
 use crate::output::{Status, err, out, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};

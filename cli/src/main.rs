@@ -2,12 +2,20 @@
 //! terminal (colours, exit codes). Each subcommand is a sibling module;
 //! `main` parses the arguments and dispatches.
 //!
-//! Exit codes, for scripts: 0 success (the model is identifiable, or valid and
-//! aggregated with `--aggregate`); 1 the model is valid but θ is not
-//! identifiable; 2 a usage, input/output, syntax or semantic error.
+//! Exit codes, for scripts: 0 success (for `check`: the model is
+//! identifiable, or valid and aggregated with `--aggregate`; warnings
+//! allowed); 1 the model and data are valid but cannot support the result
+//! (`check`: θ not identifiable; `estimate`: θ not identifiable or not
+//! excited by these data, or a sign violation under `--strict`; `simulate`,
+//! `validate`: the simulation diverges); 2 a usage, input/output, syntax,
+//! semantic, data or parameter-file error.
 
 mod check;
+mod estimate;
+mod model;
 mod output;
+mod params;
+mod problem;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -24,6 +32,8 @@ struct Cli {
 enum Command {
     /// Derive a model's regressors and prove whether θ is identifiable, and from which experiments.
     Check(check::CheckArgs),
+    /// Estimate θ, the nuisance parameters and the disturbance means from experiments (CSV).
+    Estimate(estimate::EstimateArgs),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +41,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let status = match cli.command {
         Command::Check(args) => check::run(&args),
+        Command::Estimate(args) => estimate::run(&args),
     };
     status.code()
 }
