@@ -12,10 +12,14 @@
 
 mod check;
 mod estimate;
+mod input;
 mod model;
 mod output;
 mod params;
+mod plot;
 mod problem;
+mod simulate;
+mod validate;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -34,6 +38,10 @@ enum Command {
     Check(check::CheckArgs),
     /// Estimate θ, the nuisance parameters and the disturbance means from experiments (CSV).
     Estimate(estimate::EstimateArgs),
+    /// Simulate a model with given parameters on an input file; write the trajectory as CSV.
+    Simulate(simulate::SimulateArgs),
+    /// Fit of a model with given parameters on validation data, and a plot of measured against simulated.
+    Validate(validate::ValidateArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +50,8 @@ fn main() -> ExitCode {
     let status = match cli.command {
         Command::Check(args) => check::run(&args),
         Command::Estimate(args) => estimate::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
+        Command::Validate(args) => validate::run(&args),
     };
     status.code()
 }

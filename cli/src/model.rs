@@ -150,3 +150,54 @@ fn heading_warning(ir: &Ir, e: &Experiment, heading: &str, gain: f64) -> String 
         e.name
     )
 }
+
+/// Parses `--disturbance` values (`name=value` or `disturbance.name=value`,
+/// comma-separated) into one constant per disturbance component, in the
+/// disturbance's own frame (earth for earth-frame media). Only unmeasured
+/// components can be given (measured ones come from the data); components
+/// not given are zero.
+pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem> {
+    let mut values = vec![0.0; ir.components.len()];
+    let mut given = vec![false; ir.components.len()];
+    let unmeasured: Vec<String> = ir
+        .components
+        .iter()
+        .filter(|c| !ir.disturbances[c.disturbance].measured)
+        .map(|c| format!("{}.{}", ir.disturbances[c.disturbance].name, c.name))
+        .collect();
+    let help = if unmeasured.is_empty() {
+        format!("model `{}` has no unmeasured disturbance", ir.name)
+    } else {
+        format!("the unmeasured components are {}", unmeasured.join(", "))
+    };
+    for spec in specs {
+        for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let bad = |why: String| Problem::error("invalid-option", format!("--disturbance `{item}`: {why}")).help(&help);
+            let Some((name, value)) = item.split_once('=') else {
+                return Err(bad("expected NAME=VALUE, e.g. current.north=0.2".to_string()));
+            };
+            let name = name.trim();
+            let found = ir.components.iter().position(|c| {
+                let d = &ir.disturbances[c.disturbance].name;
+                name == c.name || name == format!("{d}.{}", c.name)
+            });
+            let Some(i) = found else {
+                return Err(bad(format!("`{name}` is not a disturbance component")));
+            };
+            if ir.disturbances[ir.components[i].disturbance].measured {
+                return Err(bad(format!(
+                    "`{name}` is measured: its values come from the data file"
+                )));
+            }
+            if given[i] {
+                return Err(bad(format!("`{name}` is given twice")));
+            }
+            values[i] = match value.trim().parse::<f64>() {
+                Ok(v) if v.is_finite() => v,
+                _ => return Err(bad(format!("`{}` is not a finite number", value.trim()))),
+            };
+            given[i] = true;
+        }
+    }
+    Ok(values)
+}

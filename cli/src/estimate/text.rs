@@ -2,38 +2,10 @@
 //! on stdout (warnings and errors go to stderr).
 
 use super::Outcome;
-use crate::output::number;
+use crate::output::{number, table};
 use leeway_runtime::estimate::ColumnEstimate;
 use leeway_runtime::signs::ArgSign;
 use std::fmt::Write;
-
-/// Left-aligned columns separated by two spaces; the last column is not padded.
-fn table(rows: &[Vec<String>]) -> String {
-    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
-    let widths: Vec<usize> = (0..n)
-        .map(|i| {
-            rows.iter()
-                .filter_map(|r| r.get(i))
-                .map(|c| c.chars().count())
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    let mut out = String::new();
-    for row in rows {
-        let mut line = String::from("  ");
-        for (i, cell) in row.iter().enumerate() {
-            line.push_str(cell);
-            if i + 1 < row.len() {
-                let pad = widths[i] - cell.chars().count() + 2;
-                line.extend(std::iter::repeat_n(' ', pad));
-            }
-        }
-        out.push_str(line.trim_end());
-        out.push('\n');
-    }
-    out
-}
 
 fn optional(v: Option<f64>) -> String {
     v.map_or("-".to_string(), number)
