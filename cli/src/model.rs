@@ -139,9 +139,10 @@ fn heading_warning(ir: &Ir, e: &Experiment, heading: &str, gain: f64) -> String 
         }
         _ => "r",
     };
-    let degrees = 180.0 / std::f64::consts::PI;
-    let why = if (gain / degrees - 1.0).abs() < 0.1 {
-        "≈ 57.3 means the heading is in degrees while the model works in radians"
+    // Far above 1 points at degrees (57.3 = 180/π); the figure itself is
+    // reported as measured, whatever it is.
+    let why = if gain > 20.0 {
+        "a gain near 57.3 (180/π) means the heading is in degrees while the model works in radians"
     } else {
         "check the units and frame of both columns"
     };
@@ -172,9 +173,14 @@ pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem
     };
     for spec in specs {
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
-            let bad = |why: String| Problem::error("invalid-option", format!("--disturbance `{item}`: {why}")).help(&help);
+            let bad = |why: String| {
+                Problem::error("invalid-option", format!("--disturbance `{item}`: {why}"))
+                    .help(&help)
+            };
             let Some((name, value)) = item.split_once('=') else {
-                return Err(bad("expected NAME=VALUE, e.g. current.north=0.2".to_string()));
+                return Err(bad(
+                    "expected NAME=VALUE, e.g. current.north=0.2".to_string()
+                ));
             };
             let name = name.trim();
             let found = ir.components.iter().position(|c| {

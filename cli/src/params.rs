@@ -95,9 +95,12 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
         match value.as_f64() {
             Some(v) if v.is_finite() => theta[i] = v,
             _ => problems.push(
-                Problem::error("invalid-params", format!("`{key}` is {value}, not a number"))
-                    .at(at)
-                    .help("give every parameter a finite number"),
+                Problem::error(
+                    "invalid-params",
+                    format!("`{key}` is {value}, not a number"),
+                )
+                .at(at)
+                .help("give every parameter a finite number"),
             ),
         }
     }
@@ -140,7 +143,10 @@ impl<'de> serde::Deserialize<'de> for Entries {
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("a JSON object")
             }
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<Entries, A::Error> {
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Entries, A::Error> {
                 let mut v = Vec::new();
                 while let Some(entry) = map.next_entry::<String, Value>()? {
                     v.push(entry);
@@ -205,7 +211,9 @@ mod tests {
     fn unknown_missing_and_non_numeric_entries_are_located() {
         let ir = ir();
         let text = "{\n  \"d\": 2,\n  \"a\": 1,\n  \"c\": \"x\",\n  \"a\": 3\n}";
-        let problems = parse("p.json", text, &ir, "--params").err().unwrap_or_default();
+        let problems = parse("p.json", text, &ir, "--params")
+            .err()
+            .unwrap_or_default();
         let shown: Vec<String> = problems
             .iter()
             .map(|p| format!("{} {}", p.location.clone().unwrap_or_default(), p.message))

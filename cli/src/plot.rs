@@ -95,9 +95,10 @@ fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
 /// simulation runs far off (then it leaves the panel rather than flatten the data).
 fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) {
     let bounds = |pts: &[(f64, f64)]| {
-        pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.1), hi.max(p.1))
-        })
+        pts.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.1), hi.max(p.1))
+            })
     };
     let (mut lo, mut hi) = bounds(measured);
     if !lo.is_finite() {
@@ -133,7 +134,10 @@ fn draw_on<DB: DrawingBackend>(
         };
         let (y0, y1) = y_range(&measured, &simulated);
         let mut chart = ChartBuilder::on(area)
-            .caption(&p.title, ("sans-serif", 22).into_font().style(FontStyle::Bold))
+            .caption(
+                &p.title,
+                ("sans-serif", 22).into_font().style(FontStyle::Bold),
+            )
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)

@@ -66,7 +66,10 @@ impl Problem {
     /// command (options, nominal values).
     pub fn estimate(e: &EstimateError) -> Problem {
         let mut p = Problem::error(e.code, &e.message).help(&e.hint);
-        if matches!(e.code, "unidentifiable" | "rank-deficient" | "sign-violation") {
+        if matches!(
+            e.code,
+            "unidentifiable" | "rank-deficient" | "sign-violation"
+        ) {
             p.status = Status::Unsupported;
         }
         p

@@ -81,16 +81,12 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Fa
     };
     result = result.truncated(finite);
     let mut buffer = Vec::new();
-    write_csv(&ir, &[&result], input.t0, &mut buffer).map_err(|error| {
-        Problem::error("io", format!("cannot write the trajectory: {error}"))
-    })?;
+    write_csv(&ir, &[&result], input.t0, &mut buffer)
+        .map_err(|error| Problem::error("io", format!("cannot write the trajectory: {error}")))?;
     match &args.out {
         Some(path) => std::fs::write(path, &buffer).map_err(|error| {
-            Problem::error(
-                "io",
-                format!("cannot write `{}`: {error}", path.display()),
-            )
-            .at(path.display().to_string())
+            Problem::error("io", format!("cannot write `{}`: {error}", path.display()))
+                .at(path.display().to_string())
         })?,
         None => out(&String::from_utf8_lossy(&buffer)),
     }

@@ -1,4 +1,5 @@
 //! Input-design search: margins, IV3 spread and fits for candidate designs.
+#![allow(clippy::unwrap_used)] // an exploration script: a panic is its error report
 use leeway_runtime::estimate::{Method, Options, estimate};
 use leeway_runtime::simulate::{Disturbances, fits, simulate};
 use leeway_runtime::study::{self, InputDesign};

@@ -1,4 +1,5 @@
 //! Exploration: IV1 with zero-mean vs non-zero-mean disturbances.
+#![allow(clippy::unwrap_used)] // an exploration script: a panic is its error report
 use leeway_runtime::estimate::{Method, Options, estimate};
 use leeway_runtime::{Interpreter, Source, study, synth};
 fn main() {

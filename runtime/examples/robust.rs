@@ -1,4 +1,5 @@
 //! Robustness of the refined IV over many seeds: failures per start.
+#![allow(clippy::unwrap_used)] // an exploration script: a panic is its error report
 use leeway_runtime::estimate::{Initial, Method, Options, estimate};
 use leeway_runtime::simulate::{Disturbances, fits, simulate};
 use leeway_runtime::{Interpreter, Source, study};

@@ -16,15 +16,20 @@ use std::path::PathBuf;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let dir = PathBuf::from(args.first().ok_or("usage: ship_csv DIR [N] [WIND] [SEED]")?);
+    let dir = PathBuf::from(
+        args.first()
+            .ok_or("usage: ship_csv DIR [N] [WIND] [SEED]")?,
+    );
     let n: usize = args.get(1).map_or(Ok(5000), |s| s.parse())?;
     let wind: f64 = args.get(2).map_or(Ok(1.0), |s| s.parse())?;
     let seed: u64 = args.get(3).map_or(Ok(1), |s| s.parse())?;
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/models/ship.som");
-    let c = leeway_runtime::structure::compile(&std::fs::read_to_string(path)?, &Default::default());
+    let c =
+        leeway_runtime::structure::compile(&std::fs::read_to_string(path)?, &Default::default());
     let ir = c.ir.ok_or("ship.som does not compile")?;
     let model = Interpreter::new(ir.clone());
-    let (e, _) = study::estimation_experiment(&model, &study::InputDesign::default(), wind, n, seed);
+    let (e, _) =
+        study::estimation_experiment(&model, &study::InputDesign::default(), wind, n, seed);
     let val = study::validation_experiment(&model, 1000);
     std::fs::create_dir_all(&dir)?;
     for (name, exp) in [("estimation.csv", &e), ("validation.csv", &val)] {

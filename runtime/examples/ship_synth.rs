@@ -1,4 +1,5 @@
 //! Exploration: the study's synthetic ship data, all four estimators.
+#![allow(clippy::unwrap_used)] // an exploration script: a panic is its error report
 use leeway_runtime::estimate::{Method, Options, estimate};
 use leeway_runtime::simulate::{Disturbances, fits, simulate};
 use leeway_runtime::{Interpreter, Source, study};

@@ -100,10 +100,9 @@ pub fn render(o: &Outcome) -> String {
                 vec![
                     format!("{}.{}", m.disturbance, m.component),
                     number(m.mean),
-                    m.std_error
-                        .map_or("(no standard error)".to_string(), |se| {
-                            format!("± {}", number(se))
-                        }),
+                    m.std_error.map_or("(no standard error)".to_string(), |se| {
+                        format!("± {}", number(se))
+                    }),
                 ]
             })
             .collect();
