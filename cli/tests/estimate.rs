@@ -764,3 +764,28 @@ fn simulate_writes_a_data_file_that_validates() {
     assert!(rows > 2 && rows < 401, "{rows} rows");
     assert!(!stdout(&o).contains("NaN"));
 }
+
+/// What a person reads, for review: the tables of `estimate` and `validate`
+/// on fixed-seed data (paths replaced by `[dir]`).
+#[test]
+fn text_output_snapshots() {
+    let dir = Scratch::new("snapshots");
+    let model = ship();
+    let data = dir.write("ship.csv", &estimation_csv(2000, 10.0, 42));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let here = dir.0.display().to_string();
+    insta::assert_snapshot!("estimate_stdout", stdout(&o));
+    insta::assert_snapshot!("estimate_stderr", stderr(&o).replace(&here, "[dir]"));
+    let est = dir.write(
+        "est.json",
+        &stdout(&leeway(&["estimate", SHIP, "--data", &data, "--json"])),
+    );
+    let val = dir.write(
+        "val.csv",
+        &csv_text(&model, &[&study::validation_experiment(&model, 600)]),
+    );
+    let o = leeway(&["validate", SHIP, "--params", &est, "--data", &val]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    insta::assert_snapshot!("validate_stdout", stdout(&o).replace(&here, "[dir]"));
+}
