@@ -46,7 +46,9 @@ fn register_fonts() -> Result<(), String> {
 /// half-written file is left behind.
 pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
     register_fonts()?;
-    let height = PANEL_HEIGHT * u32::try_from(panels.len().max(1)).unwrap_or(1);
+    let height = u32::try_from(panels.len().max(1))
+        .unwrap_or(u32::MAX)
+        .saturating_mul(PANEL_HEIGHT);
     let png = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));

@@ -76,6 +76,8 @@ struct Outcome {
     outputs: Vec<String>,
     experiments: Vec<ExperimentFit>,
     plot: Option<PathBuf>,
+    /// The plot could not be drawn (the fits are still reported; exit 2).
+    plot_problem: Option<Problem>,
 }
 
 /// The default plot path: beside the first data file.
@@ -96,6 +98,7 @@ pub fn run(args: &ValidateArgs) -> Status {
     let mut warnings = Vec::new();
     let result = execute(args, &mut warnings);
     let status = match &result {
+        Ok(o) if o.plot_problem.is_some() => Status::Error,
         Ok(o) if o.experiments.iter().any(|e| e.diverged) => Status::Unsupported,
         Ok(_) => Status::Success,
         Err(f) => f.status(),
@@ -115,7 +118,10 @@ pub fn run(args: &ValidateArgs) -> Status {
             Ok(o) => {
                 report.model = Some(o.model);
                 report.experiments = o.experiments;
-                report.plot = o.plot.map(|p| p.display().to_string());
+                match o.plot_problem {
+                    Some(p) => report.errors = Failure::from(p).json(),
+                    None => report.plot = o.plot.map(|p| p.display().to_string()),
+                }
             }
             Err(f) => report.errors = f.json(),
         }
@@ -128,8 +134,13 @@ pub fn run(args: &ValidateArgs) -> Status {
         for w in &warnings {
             err(&headline(style, "warning", None, w));
         }
-        if let Err(f) = &result {
-            err(&f.render(style, "validated"));
+        match &result {
+            Err(f) => err(&f.render(style, "validated")),
+            Ok(Outcome {
+                plot_problem: Some(p),
+                ..
+            }) => err(&p.render(style)),
+            Ok(_) => {}
         }
     }
     status
@@ -201,17 +212,17 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
         });
     }
     let plot = default_plot(args);
-    if let Some(path) = &plot {
-        draw(path, &panels).map_err(|e| {
-            Problem::error("io", format!("cannot draw `{}`: {e}", path.display()))
-                .at(path.display().to_string())
-        })?;
-    }
+    let plot_problem = plot.as_ref().and_then(|path| {
+        draw(path, &panels)
+            .err()
+            .map(|e| Problem::error("io", format!("cannot draw `{}`: {e}", path.display())))
+    });
     Ok(Outcome {
         model: ir.name.clone(),
         outputs: ir.states.clone(),
         experiments: results,
         plot,
+        plot_problem,
     })
 }
 
@@ -238,7 +249,7 @@ fn render(args: &ValidateArgs, o: &Outcome) -> String {
         rows.push(r);
     }
     s.push_str(&table(&rows));
-    if let Some(p) = &o.plot {
+    if let (Some(p), None) = (&o.plot, &o.plot_problem) {
         let _ = writeln!(s, "\nplot: {}", p.display());
     }
     s

@@ -630,6 +630,23 @@ fn estimate_then_validate_round_trips_the_parameters() {
             .unwrap_or_default()
             .starts_with(b"\x89PNG")
     );
+    // A plot that cannot be written: exit 2, the fits still printed.
+    let nowhere = dir.path("no/such/dir/fit.svg").display().to_string();
+    let o = leeway(&[
+        "validate", SHIP, "--params", &truth, "--data", &val_file, "--plot", &nowhere,
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    assert!(
+        stdout(&o).contains("100.00  100.00  100.00"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(
+        stderr(&o).starts_with(&format!("error[io]: cannot draw `{nowhere}`")),
+        "{}",
+        stderr(&o)
+    );
     // A parameter file missing a name, or naming an unknown one: exit 2.
     let partial = dir.write("partial.json", "{\"X_u\": -0.05}");
     let o = leeway(&[
