@@ -2,9 +2,9 @@
 //! (regressors, nuisance reduction, required experiments) and diagnostics,
 //! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
 
-mod json;
+pub mod json;
 
-use crate::output::{Status, err, out, stderr_style};
+use crate::output::{Status, err, out, print_json, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use leeway_structure::identify::parse_pattern;
 use leeway_structure::{Compilation, Options, compile, render};
@@ -141,16 +141,5 @@ fn fail(args: &CheckArgs, file: &str, code: &str, message: String) -> Status {
 
 /// `error: message` and a newline, bold red on a terminal.
 fn headline(style: RenderStyle, message: &str) -> String {
-    match style {
-        RenderStyle::Color => format!("\x1b[1;31merror\x1b[0m\x1b[1m: {message}\x1b[0m\n"),
-        RenderStyle::Plain => format!("error: {message}\n"),
-    }
-}
-
-fn print_json(report: &json::Report) {
-    match serde_json::to_string_pretty(report) {
-        Ok(text) => out(&format!("{text}\n")),
-        // Serialising plain structs of strings and numbers cannot fail; say so if it ever does.
-        Err(e) => err(&format!("error: cannot serialise the report: {e}\n")),
-    }
+    crate::output::headline(style, "error", None, message)
 }

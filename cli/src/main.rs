@@ -2,12 +2,24 @@
 //! terminal (colours, exit codes). Each subcommand is a sibling module;
 //! `main` parses the arguments and dispatches.
 //!
-//! Exit codes, for scripts: 0 success (the model is identifiable, or valid and
-//! aggregated with `--aggregate`); 1 the model is valid but θ is not
-//! identifiable; 2 a usage, input/output, syntax or semantic error.
+//! Exit codes, for scripts: 0 success (for `check`: the model is
+//! identifiable, or valid and aggregated with `--aggregate`; warnings
+//! allowed); 1 the model and data are valid but cannot support the result
+//! (`check`: θ not identifiable; `estimate`: θ not identifiable or not
+//! excited by these data, or a sign violation under `--strict`; `simulate`,
+//! `validate`: the simulation diverges); 2 a usage, input/output, syntax,
+//! semantic, data or parameter-file error.
 
 mod check;
+mod estimate;
+mod input;
+mod model;
 mod output;
+mod params;
+mod plot;
+mod problem;
+mod simulate;
+mod validate;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -24,6 +36,12 @@ struct Cli {
 enum Command {
     /// Derive a model's regressors and prove whether θ is identifiable, and from which experiments.
     Check(check::CheckArgs),
+    /// Estimate θ, the nuisance parameters and the disturbance means from experiments (CSV).
+    Estimate(estimate::EstimateArgs),
+    /// Simulate a model with given parameters on an input file; write the trajectory as CSV.
+    Simulate(simulate::SimulateArgs),
+    /// Fit of a model with given parameters on validation data, and a plot of measured against simulated.
+    Validate(validate::ValidateArgs),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +49,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let status = match cli.command {
         Command::Check(args) => check::run(&args),
+        Command::Estimate(args) => estimate::run(&args),
+        Command::Simulate(args) => simulate::run(&args),
+        Command::Validate(args) => validate::run(&args),
     };
     status.code()
 }

@@ -12,6 +12,10 @@ pub enum Status {
     Success,
     /// Exit 1: the model is valid but θ is not identifiable.
     NotIdentifiable,
+    /// Exit 1: model, data and options are valid, but the data cannot support
+    /// the result: θ not identifiable or not excited by these experiments, a
+    /// sign assumption violated under `--strict`, a simulation that diverges.
+    Unsupported,
     /// Exit 2: usage, input/output, syntax or semantic error.
     Error,
 }
@@ -21,7 +25,7 @@ impl Status {
     pub fn code(self) -> ExitCode {
         match self {
             Status::Success => ExitCode::SUCCESS,
-            Status::NotIdentifiable => ExitCode::from(1),
+            Status::NotIdentifiable | Status::Unsupported => ExitCode::from(1),
             Status::Error => ExitCode::from(2),
         }
     }
@@ -57,4 +61,114 @@ pub fn out(text: &str) {
 pub fn err(text: &str) {
     use std::io::Write;
     let _ = std::io::stderr().lock().write_all(text.as_bytes());
+}
+
+/// `severity[code]: message` (or `severity: message` without a code) and a
+/// newline, bold and coloured on a terminal.
+pub fn headline(style: RenderStyle, severity: &str, code: Option<&str>, message: &str) -> String {
+    let tag = match code {
+        Some(c) => format!("{severity}[{c}]"),
+        None => severity.to_string(),
+    };
+    match style {
+        RenderStyle::Color => {
+            let colour = if severity == "error" { "31" } else { "33" };
+            format!("\x1b[1;{colour}m{tag}\x1b[0m\x1b[1m: {message}\x1b[0m\n")
+        }
+        RenderStyle::Plain => format!("{tag}: {message}\n"),
+    }
+}
+
+/// Writes a document as pretty JSON and a newline on stdout.
+pub fn print_json<T: serde::Serialize>(document: &T) {
+    match serde_json::to_string_pretty(document) {
+        Ok(text) => out(&format!("{text}\n")),
+        // Serialising plain structs of strings and numbers cannot fail; say so if it ever does.
+        Err(e) => err(&format!("error: cannot serialise the report: {e}\n")),
+    }
+}
+
+/// A number for a table: five significant digits, in positional notation
+/// between 10⁻³ and 10⁵ and with an exponent outside.
+pub fn number(x: f64) -> String {
+    if x == 0.0 {
+        return "0".to_string();
+    }
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor();
+    if (-3.0..5.0).contains(&magnitude) {
+        // 0 ≤ decimals ≤ 7 here, so the cast is exact.
+        let decimals = (4.0 - magnitude).max(0.0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.4e}")
+    }
+}
+
+/// Left-aligned columns separated by two spaces; the last column is not padded.
+pub fn table(rows: &[Vec<String>]) -> String {
+    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widths: Vec<usize> = (0..n)
+        .map(|i| {
+            rows.iter()
+                .filter_map(|r| r.get(i))
+                .map(|c| c.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = String::new();
+    for row in rows {
+        let mut line = String::from("  ");
+        for (i, cell) in row.iter().enumerate() {
+            line.push_str(cell);
+            if i + 1 < row.len() {
+                let pad = widths[i] - cell.chars().count() + 2;
+                line.extend(std::iter::repeat_n(' ', pad));
+            }
+        }
+        out.push_str(line.trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+/// A JSON object whose keys keep the order given (the model's order), not
+/// the alphabetical order of a map.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ordered<T>(pub Vec<(String, T)>);
+
+impl<T> Default for Ordered<T> {
+    fn default() -> Ordered<T> {
+        Ordered(Vec::new())
+    }
+}
+
+impl<T: serde::Serialize> serde::Serialize for Ordered<T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::number;
+
+    #[test]
+    fn numbers_keep_five_significant_digits() {
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(-0.050123456), "-0.050123");
+        assert_eq!(number(1.0), "1.0000");
+        assert_eq!(number(12345.678), "12346");
+        assert_eq!(number(0.00030012), "3.0012e-4");
+        assert_eq!(number(2.5e7), "2.5000e7");
+        assert_eq!(number(f64::NAN), "NaN");
+    }
 }

@@ -121,7 +121,7 @@ struct Aggregate {
 /// A diagnostic: stable code, severity, message, `file:line:col` of its
 /// primary span (null for model-wide findings), help and notes.
 #[derive(Debug, Serialize)]
-struct JsonDiagnostic {
+pub struct JsonDiagnostic {
     code: String,
     severity: &'static str,
     message: String,
@@ -154,7 +154,7 @@ fn severity(s: Severity) -> &'static str {
     }
 }
 
-fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
+pub fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
     let at = |offset: usize| grammar::line_col(source, offset);
     let primary = d.primary_span();
     let (line, column) = primary.map(|s| at(s.start)).unzip();

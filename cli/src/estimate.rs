@@ -1,0 +1,215 @@
+//! `leeway estimate MODEL --data A.csv [--data B.csv]... --method iv3`:
+//! load and validate the experiments, estimate θ and the nuisance parameters,
+//! and print the table, disturbance means, sign patterns, diagnostics and
+//! warnings — or one JSON document (README, "Estimating"). Exit 0 on success
+//! (warnings allowed), 1 when the data cannot support the model, 2 on any
+//! model, data or option error.
+
+mod json;
+mod text;
+
+use crate::model::{heading_gains, heading_warnings, load, load_data, load_options};
+use crate::output::{Status, err, headline, out, print_json, stderr_style};
+use crate::problem::{Failure, Problem};
+use leeway_runtime::{
+    Centring, Estimate, Initial, Instruments, Interpreter, Method, Options, Source, estimate,
+};
+use std::path::PathBuf;
+
+/// Arguments of `leeway estimate`.
+#[derive(Debug, clap::Args)]
+pub struct EstimateArgs {
+    /// The `.som` model file.
+    #[arg(value_name = "MODEL.som")]
+    pub model: PathBuf,
+    /// A CSV file of experiments (one, or several with an `experiment` column). Repeat for more files.
+    #[arg(long = "data", value_name = "FILE.csv", required = true)]
+    pub data: Vec<PathBuf>,
+    /// The estimator: least squares, or instrumental variables on the basic (iv1),
+    /// augmented (iv2) or augmented-plus-measured-medium (iv3) predictor.
+    #[arg(long, value_enum, default_value_t = MethodArg::Iv3)]
+    pub method: MethodArg,
+    /// Nominal θ for the instruments' first simulation (an `estimate --json`
+    /// output or `{"name": value}`), instead of the model's `nominal { }`.
+    #[arg(long, value_name = "FILE.json")]
+    pub nominal: Option<PathBuf>,
+    /// Print one JSON document on stdout instead of text (the contract is in the README).
+    #[arg(long)]
+    pub json: bool,
+    /// Instruments: simulated (the nominal model, refined) or delayed (measurements one sample earlier).
+    #[arg(long, value_enum, default_value_t = InstrumentsArg::Simulated)]
+    pub instruments: InstrumentsArg,
+    /// θ of the first instrument simulation: a delayed-instrument estimate, or the nominal model.
+    #[arg(long, value_enum, default_value_t = InitialArg::Delayed)]
+    pub initial: InitialArg,
+    /// Centre the instruments per experiment (consistent under a disturbance mean), pooled, or not at all.
+    #[arg(long, value_enum, default_value_t = CentringArg::Experiment)]
+    pub centring: CentringArg,
+    /// When θ is not identifiable from these data, estimate its identifiable combinations
+    /// (absorbed parameters held at their nominal values).
+    #[arg(long)]
+    pub aggregate: bool,
+    /// A sign assumption violated in the data (paper A7) is an error, not a warning.
+    #[arg(long)]
+    pub strict: bool,
+    /// Lags of the robust (long-run) covariance; at least 1 (the Euler residual is MA(1)).
+    #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    pub lags: u16,
+    /// Most re-simulations of the refined IV.
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    pub max_refinements: usize,
+    /// Sample time for data without a time column when the model declares no `step`.
+    #[arg(long, value_name = "H", value_parser = positive)]
+    pub step: Option<f64>,
+}
+
+/// `--method`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Least squares (biased under noise and disturbances; a baseline).
+    Ls,
+    /// IV on the basic predictor (consistent only for zero-mean disturbances).
+    Iv1,
+    /// IV on the augmented predictor, every medium unmeasured.
+    Iv2,
+    /// IV on the augmented predictor plus measured media pointwise.
+    Iv3,
+}
+
+/// `--instruments`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum InstrumentsArg {
+    /// Noise-free regressors of a simulated nominal model, refined.
+    Simulated,
+    /// Regressors of the measurements one sample earlier.
+    Delayed,
+}
+
+/// `--initial`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum InitialArg {
+    /// A delayed-instrument estimate.
+    Delayed,
+    /// The nominal model.
+    Nominal,
+}
+
+/// `--centring`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CentringArg {
+    /// Zero-mean instruments per experiment.
+    Experiment,
+    /// Zero mean over all experiments pooled.
+    Pooled,
+    /// No centring.
+    None,
+}
+
+/// A positive, finite number (`--step`).
+pub fn positive(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a positive number of seconds")),
+    }
+}
+
+impl EstimateArgs {
+    fn options(&self, nominal: Option<Vec<f64>>) -> Options {
+        Options {
+            method: match self.method {
+                MethodArg::Ls => Method::Ls,
+                MethodArg::Iv1 => Method::Iv1,
+                MethodArg::Iv2 => Method::Iv2,
+                MethodArg::Iv3 => Method::Iv3,
+            },
+            instruments: match self.instruments {
+                InstrumentsArg::Simulated => Instruments::Simulated,
+                InstrumentsArg::Delayed => Instruments::Delayed,
+            },
+            initial: match self.initial {
+                InitialArg::Delayed => Initial::Delayed,
+                InitialArg::Nominal => Initial::Nominal,
+            },
+            centring: match self.centring {
+                CentringArg::Experiment => Centring::Experiment,
+                CentringArg::Pooled => Centring::Pooled,
+                CentringArg::None => Centring::None,
+            },
+            nominal,
+            max_refinements: self.max_refinements,
+            aggregate: self.aggregate,
+            strict: self.strict,
+            lags: usize::from(self.lags),
+            ..Options::default()
+        }
+    }
+}
+
+/// What a successful run produced.
+pub struct Outcome {
+    /// The model's name.
+    pub model: String,
+    /// The estimate.
+    pub estimate: Estimate,
+    /// Experiment names with their sample counts.
+    pub experiments: Vec<(String, usize)>,
+    /// The heading's unit check per experiment (planar heading only).
+    pub heading_gains: Vec<(String, Option<f64>)>,
+}
+
+/// Runs `leeway estimate`.
+pub fn run(args: &EstimateArgs) -> Status {
+    let mut warnings = Vec::new();
+    let result = execute(args, &mut warnings);
+    if args.json {
+        print_json(&json::report(args, &result, warnings));
+    } else {
+        let style = stderr_style();
+        if let Ok(o) = &result {
+            out(&text::render(o));
+        }
+        for w in &warnings {
+            err(&headline(style, "warning", None, w));
+        }
+        if let Err(f) = &result {
+            err(&f.render(style, "estimated"));
+        }
+    }
+    match &result {
+        Ok(_) => Status::Success,
+        Err(f) => f.status(),
+    }
+}
+
+/// Warnings of the model, the data checks and the estimator go to `warnings`,
+/// in that order, also when a later step fails.
+fn execute(args: &EstimateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
+    let loaded = load(&args.model, args.aggregate)?;
+    let ir = loaded.ir;
+    let load_options = load_options(&ir, args.step)?;
+    let nominal = match &args.nominal {
+        Some(path) => Some(crate::params::read(path, &ir, "--nominal")?),
+        None => None,
+    };
+    let experiments = load_data(&ir, &args.data, &load_options)?;
+    warnings.extend(loaded.warnings);
+    warnings.extend(heading_warnings(&ir, &experiments));
+    let model = Interpreter::new(ir.clone());
+    let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
+    let est = estimate(&model, &sources, &args.options(nominal))
+        .map_err(|e| Failure::from(Problem::estimate(&e)))?;
+    warnings.extend(est.warnings.iter().cloned());
+    Ok(Outcome {
+        model: ir.name.clone(),
+        experiments: experiments
+            .iter()
+            .map(|e| (e.name.clone(), e.len()))
+            .collect(),
+        heading_gains: if matches!(ir.rotation, leeway_structure::ir::Rotation::Planar { .. }) {
+            heading_gains(&ir, &experiments)
+        } else {
+            Vec::new()
+        },
+        estimate: est,
+    })
+}

@@ -1,0 +1,191 @@
+//! The human-readable result of `leeway estimate`: aligned plain-text tables
+//! on stdout (warnings and errors go to stderr).
+
+use super::Outcome;
+use crate::output::{number, table};
+use leeway_runtime::estimate::ColumnEstimate;
+use leeway_runtime::signs::ArgSign;
+use std::fmt::Write;
+
+fn optional(v: Option<f64>) -> String {
+    v.map_or("-".to_string(), number)
+}
+
+fn column_row(c: &ColumnEstimate) -> Vec<String> {
+    vec![
+        c.name.clone(),
+        optional(c.value),
+        optional(c.std_error),
+        c.status.clone(),
+    ]
+}
+
+fn percent(f: f64) -> String {
+    if f == 0.0 {
+        "0%".to_string()
+    } else {
+        format!("{:.2}%", 100.0 * f)
+    }
+}
+
+fn signs(args: &[ArgSign]) -> String {
+    args.iter()
+        .map(|a| {
+            format!(
+                "{} {} (other sign {})",
+                a.argument,
+                if a.sign < 0 { '-' } else { '+' },
+                percent(a.minority_fraction)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The whole text.
+pub fn render(o: &Outcome) -> String {
+    let e = &o.estimate;
+    let d = &e.diagnostics;
+    let mut s = String::new();
+    let n = o.experiments.len();
+    let _ = writeln!(
+        s,
+        "{}: {} estimate from {} experiment{} ({} equations)\n",
+        o.model,
+        e.method.name(),
+        n,
+        if n == 1 { "" } else { "s" },
+        d.equations
+    );
+
+    s.push_str("parameters\n");
+    let mut rows = vec![vec![
+        "name".to_string(),
+        "estimate".to_string(),
+        "std error".to_string(),
+        "status".to_string(),
+    ]];
+    rows.extend(
+        e.columns
+            .iter()
+            .filter(|c| c.kind == "theta")
+            .map(column_row),
+    );
+    s.push_str(&table(&rows));
+
+    let nuisance: Vec<&ColumnEstimate> = e.columns.iter().filter(|c| c.kind != "theta").collect();
+    if !nuisance.is_empty() {
+        s.push_str("\nnuisance parameters\n");
+        let mut rows = vec![vec![
+            "name".to_string(),
+            "estimate".to_string(),
+            "std error".to_string(),
+            "status".to_string(),
+            "estimates".to_string(),
+        ]];
+        rows.extend(nuisance.iter().map(|c| {
+            let mut r = column_row(c);
+            r.push(c.estimates.clone());
+            r
+        }));
+        s.push_str(&table(&rows));
+    }
+
+    if !e.disturbances.is_empty() {
+        s.push_str("\nunmeasured disturbance means (paper Corollary 1)\n");
+        let rows: Vec<Vec<String>> = e
+            .disturbances
+            .iter()
+            .map(|m| {
+                vec![
+                    format!("{}.{}", m.disturbance, m.component),
+                    number(m.mean),
+                    m.std_error.map_or("(no standard error)".to_string(), |se| {
+                        format!("± {}", number(se))
+                    }),
+                ]
+            })
+            .collect();
+        s.push_str(&table(&rows));
+    }
+
+    if e.sign_patterns
+        .iter()
+        .any(|p| !p.arguments.is_empty() || !p.pointwise.is_empty())
+    {
+        s.push_str("\nsign patterns (paper A7: each argument keeps one sign per experiment)\n");
+        let mut rows = Vec::new();
+        for p in &e.sign_patterns {
+            if !p.arguments.is_empty() {
+                rows.push(vec![p.experiment.clone(), signs(&p.arguments)]);
+            }
+            if !p.pointwise.is_empty() {
+                rows.push(vec![
+                    if p.arguments.is_empty() {
+                        p.experiment.clone()
+                    } else {
+                        String::new()
+                    },
+                    format!("pointwise (measured medium): {}", signs(&p.pointwise)),
+                ]);
+            }
+        }
+        s.push_str(&table(&rows));
+    }
+
+    s.push_str("\ndiagnostics\n");
+    let mut rows = vec![
+        vec![
+            "predictor".to_string(),
+            format!("{} ({})", d.predictor, e.method.name()),
+        ],
+        vec![
+            "experiments".to_string(),
+            o.experiments
+                .iter()
+                .map(|(name, k)| format!("{name} ({k} samples)"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        ],
+        vec![
+            "columns".to_string(),
+            format!(
+                "{} in the predictor, {} estimated, numerical rank {}",
+                d.columns, d.estimated, d.rank
+            ),
+        ],
+        vec!["condition number".to_string(), number(d.condition_number)],
+        vec![
+            "refinements".to_string(),
+            format!(
+                "{} ({})",
+                d.refinements,
+                if d.converged {
+                    "converged"
+                } else {
+                    "not converged"
+                }
+            ),
+        ],
+        vec!["instruments".to_string(), d.instruments.clone()],
+        vec!["centring".to_string(), d.centring.clone()],
+        vec!["covariance lags".to_string(), d.lags.to_string()],
+    ];
+    for (name, gain) in &o.heading_gains {
+        rows.push(vec![
+            "heading gain".to_string(),
+            match gain {
+                Some(g) => format!("{name}: {g:.3} (Δψ/h on the yaw rate; 1 when consistent)"),
+                None => format!("{name}: too little yaw motion to check"),
+            },
+        ]);
+    }
+    for u in &d.unexcited {
+        rows.push(vec!["unexcited".to_string(), u.clone()]);
+    }
+    for a in &d.aggregates {
+        rows.push(vec!["aggregate".to_string(), a.clone()]);
+    }
+    s.push_str(&table(&rows));
+    s
+}

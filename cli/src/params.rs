@@ -1,0 +1,245 @@
+//! Parameter files (`--params`, `--nominal`): the output of
+//! `leeway estimate --json` (its `estimates` object is read) or a plain
+//! `{"name": value}` object. Every model parameter must be given exactly once
+//! and every name must be a model parameter: nothing is silently ignored or
+//! filled in. Problems are located at `file:line:column` of the offending key.
+
+use crate::model::read_text;
+use crate::problem::{Failure, Problem};
+use leeway_structure::grammar::line_col;
+use leeway_structure::ir::Ir;
+use serde_json::Value;
+use std::path::Path;
+
+/// θ in the model's parameter order, read from `path` (given with `flag`).
+pub fn read(path: &Path, ir: &Ir, flag: &str) -> Result<Vec<f64>, Failure> {
+    let file = path.display().to_string();
+    let text = read_text(path, &format!("the {flag} file"))?;
+    parse(&file, &text, ir, flag).map_err(Failure::Problems)
+}
+
+/// Parses a parameter file's text; `file` names it in problems.
+pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Vec<Problem>> {
+    let help = format!(
+        "{flag} takes the output of `leeway estimate --json` or an object {{\"name\": value}} with one number per parameter"
+    );
+    let invalid = |e: serde_json::Error| {
+        vec![
+            Problem::error("invalid-params", format!("not valid JSON: {e}"))
+                .at(format!("{file}:{}:{}", e.line(), e.column()))
+                .help(&help),
+        ]
+    };
+    let document: Value = serde_json::from_str(text).map_err(invalid)?;
+    let Value::Object(top) = &document else {
+        return Err(vec![
+            Problem::error("invalid-params", "the file is not a JSON object")
+                .at(file)
+                .help(&help),
+        ]);
+    };
+    // An estimate document: read its `estimates`; otherwise the object itself.
+    // Entries are re-read in file order with duplicates kept, so a repeated
+    // name is reported rather than silently overwritten.
+    let (entries, start) = if matches!(top.get("estimates"), Some(Value::Object(_))) {
+        let doc: EstimateDocument = serde_json::from_str(text).map_err(invalid)?;
+        (doc.estimates.0, key_offset(text, 0, "estimates", true))
+    } else {
+        let entries: Entries = serde_json::from_str(text).map_err(invalid)?;
+        (entries.0, text.find('{'))
+    };
+    let place = |offset: Option<usize>| match offset {
+        Some(o) => {
+            let (l, c) = line_col(text, o);
+            format!("{file}:{l}:{c}")
+        }
+        None => file.to_string(),
+    };
+    let names: Vec<&str> = ir.parameters.iter().map(|p| p.name.as_str()).collect();
+    let mut theta = vec![f64::NAN; names.len()];
+    let mut named: Vec<Option<String>> = vec![None; names.len()];
+    let mut problems = Vec::new();
+    let mut from = start.unwrap_or(0);
+    for (key, value) in &entries {
+        let offset = key_offset(text, from, key, false);
+        if let Some(o) = offset {
+            from = o + key.len();
+        }
+        let at = place(offset);
+        let Some(i) = names.iter().position(|n| n == key) else {
+            problems.push(
+                Problem::error(
+                    "invalid-params",
+                    format!(
+                        "unknown parameter `{key}`: model `{}` has no such parameter",
+                        ir.name
+                    ),
+                )
+                .at(at)
+                .help(format!("the parameters are {}", names.join(", "))),
+            );
+            continue;
+        };
+        if let Some(first) = &named[i] {
+            problems.push(
+                Problem::error(
+                    "invalid-params",
+                    format!("parameter `{key}` is given twice (first at {first})"),
+                )
+                .at(at)
+                .help("keep one value per parameter"),
+            );
+            continue;
+        }
+        named[i] = Some(at.clone());
+        match value.as_f64() {
+            Some(v) if v.is_finite() => theta[i] = v,
+            _ => problems.push(
+                Problem::error(
+                    "invalid-params",
+                    format!("`{key}` is {value}, not a number"),
+                )
+                .at(at)
+                .help("give every parameter a finite number"),
+            ),
+        }
+    }
+    let missing: Vec<String> = names
+        .iter()
+        .zip(&named)
+        .filter(|(_, seen)| seen.is_none())
+        .map(|(n, _)| format!("`{n}`"))
+        .collect();
+    if !missing.is_empty() {
+        let plural = if missing.len() == 1 { "" } else { "s" };
+        problems.push(
+            Problem::error(
+                "invalid-params",
+                format!(
+                    "missing parameter{plural} {}: every parameter of model `{}` needs a value",
+                    missing.join(", "),
+                    ir.name
+                ),
+            )
+            .at(place(start))
+            .help(help),
+        );
+    }
+    if problems.is_empty() {
+        Ok(theta)
+    } else {
+        Err(problems)
+    }
+}
+
+/// The entries of a JSON object in file order, duplicates kept.
+struct Entries(Vec<(String, Value)>);
+
+impl<'de> serde::Deserialize<'de> for Entries {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Entries, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = Entries;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Entries, A::Error> {
+                let mut v = Vec::new();
+                while let Some(entry) = map.next_entry::<String, Value>()? {
+                    v.push(entry);
+                }
+                Ok(Entries(v))
+            }
+        }
+        d.deserialize_map(Visitor)
+    }
+}
+
+/// The part of an `estimate --json` document a parameter file needs.
+#[derive(serde::Deserialize)]
+struct EstimateDocument {
+    estimates: Entries,
+}
+
+/// The byte offset of `"key"` used as an object key (followed by `:`) at or
+/// after `from`; with `object`, only where its value is an object.
+fn key_offset(text: &str, from: usize, key: &str, object: bool) -> Option<usize> {
+    let quoted = serde_json::to_string(key).ok()?;
+    let mut search = from;
+    while let Some(found) = text.get(search..)?.find(&quoted) {
+        let at = search + found;
+        let rest = text[at + quoted.len()..].trim_start();
+        if let Some(after) = rest.strip_prefix(':')
+            && (!object || after.trim_start().starts_with('{'))
+        {
+            return Some(at);
+        }
+        search = at + quoted.len();
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ir() -> Ir {
+        let src = "model M { step 1 state x input u der x = a*x + b*u nominal { a = -1 } }";
+        let c = leeway_structure::compile(src, &Default::default());
+        c.ir.unwrap_or_else(|| panic!("{:?}", c.diagnostics))
+    }
+
+    #[test]
+    fn plain_and_estimate_documents_are_read_in_model_order() {
+        let ir = ir();
+        assert_eq!(
+            parse("p.json", r#"{"b": 2.5, "a": -1}"#, &ir, "--params").map_err(|p| p.len()),
+            Ok(vec![-1.0, 2.5])
+        );
+        let doc = r#"{"method": "iv3", "nuisance": [{"estimates": "E[a]"}],
+            "estimates": {"a": -0.5, "b": 0.25}, "std_errors": {"a": null, "b": 0.1}}"#;
+        assert_eq!(
+            parse("e.json", doc, &ir, "--params").map_err(|p| p.len()),
+            Ok(vec![-0.5, 0.25])
+        );
+    }
+
+    #[test]
+    fn unknown_missing_and_non_numeric_entries_are_located() {
+        let ir = ir();
+        let text = "{\n  \"d\": 2,\n  \"a\": 1,\n  \"c\": \"x\",\n  \"a\": 3\n}";
+        let problems = parse("p.json", text, &ir, "--params")
+            .err()
+            .unwrap_or_default();
+        let shown: Vec<String> = problems
+            .iter()
+            .map(|p| format!("{} {}", p.location.clone().unwrap_or_default(), p.message))
+            .collect();
+        assert_eq!(
+            shown,
+            [
+                "p.json:2:3 unknown parameter `d`: model `M` has no such parameter",
+                "p.json:4:3 unknown parameter `c`: model `M` has no such parameter",
+                "p.json:5:3 parameter `a` is given twice (first at p.json:3:3)",
+                "p.json:1:1 missing parameter `b`: every parameter of model `M` needs a value",
+            ]
+        );
+        let problems = parse("p.json", "{\"a\": null, \"b\": 1}", &ir, "--params")
+            .err()
+            .unwrap_or_default();
+        assert_eq!(problems.len(), 1);
+        assert_eq!(problems[0].message, "`a` is null, not a number");
+        let problems = parse("p.json", "{\"a\": 1,", &ir, "--params")
+            .err()
+            .unwrap_or_default();
+        assert!(problems[0].message.starts_with("not valid JSON"));
+        assert_eq!(problems[0].location.as_deref(), Some("p.json:1:8"));
+        let problems = parse("p.json", "[1, 2]", &ir, "--params")
+            .err()
+            .unwrap_or_default();
+        assert_eq!(problems[0].message, "the file is not a JSON object");
+    }
+}

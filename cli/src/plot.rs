@@ -1,0 +1,235 @@
+//! Plots of measured against simulated signals (plotters, no system fonts:
+//! DejaVu Sans is compiled in and registered before drawing). The backend
+//! follows the file's extension: `.png` a bitmap, anything else SVG.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One panel: a measured and a simulated series over time.
+#[derive(Clone, Debug)]
+pub struct Panel {
+    /// Title above the panel.
+    pub title: String,
+    /// The y-axis label.
+    pub y_label: String,
+    /// Sample times.
+    pub time: Vec<f64>,
+    /// The measurement.
+    pub measured: Vec<f64>,
+    /// The simulation (non-finite values after a divergence are not drawn).
+    pub simulated: Vec<f64>,
+}
+
+const WIDTH: u32 = 1000;
+const PANEL_HEIGHT: u32 = 280;
+/// Most points drawn per series; longer records keep each bucket's extremes.
+const MAX_POINTS: usize = 4000;
+
+fn register_fonts() -> Result<(), String> {
+    static FONTS: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    FONTS
+        .get_or_init(|| {
+            for (style, bytes) in [
+                (FontStyle::Normal, dejavu::sans::regular()),
+                (FontStyle::Bold, dejavu::sans::bold()),
+            ] {
+                plotters::style::register_font("sans-serif", style, bytes)
+                    .map_err(|_| "the compiled-in DejaVu font is invalid".to_string())?;
+            }
+            Ok(())
+        })
+        .clone()
+}
+
+/// Draws the panels, stacked vertically, into `path`. On an error no
+/// half-written file is left behind.
+pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
+    register_fonts()?;
+    let height = u32::try_from(panels.len().max(1))
+        .unwrap_or(u32::MAX)
+        .saturating_mul(PANEL_HEIGHT);
+    let png = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    let result = if png {
+        let root = BitMapBackend::new(path, (WIDTH, height)).into_drawing_area();
+        draw_on(&root, panels).and_then(|()| root.present().map_err(|e| e.to_string()))
+    } else {
+        let root = SVGBackend::new(path, (WIDTH, height)).into_drawing_area();
+        draw_on(&root, panels).and_then(|()| root.present().map_err(|e| e.to_string()))
+    };
+    if result.is_err() {
+        let _ = std::fs::remove_file(path);
+    }
+    result
+}
+
+/// At most [`MAX_POINTS`] points: the smallest and largest value of each
+/// bucket, in time order, so peaks survive.
+fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
+    let points: Vec<(f64, f64)> = time
+        .iter()
+        .copied()
+        .zip(values.iter().copied())
+        .filter(|(t, v)| t.is_finite() && v.is_finite())
+        .collect();
+    if points.len() <= MAX_POINTS {
+        return points;
+    }
+    let bucket = points.len().div_ceil(MAX_POINTS / 2);
+    let mut out = Vec::with_capacity(MAX_POINTS);
+    for chunk in points.chunks(bucket) {
+        let lo = chunk.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+        let hi = chunk.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            if lo.0 <= hi.0 {
+                out.extend([*lo, *hi]);
+            } else {
+                out.extend([*hi, *lo]);
+            }
+        }
+    }
+    out
+}
+
+/// The y range: the measurement's, widened to the simulation's unless the
+/// simulation runs far off (then it leaves the panel rather than flatten the data).
+fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) {
+    let bounds = |pts: &[(f64, f64)]| {
+        pts.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.1), hi.max(p.1))
+            })
+    };
+    let (mut lo, mut hi) = bounds(measured);
+    if !lo.is_finite() {
+        (lo, hi) = (-1.0, 1.0);
+    }
+    let span = (hi - lo).max(1e-9 * lo.abs().max(1.0));
+    let (slo, shi) = bounds(simulated);
+    if slo.is_finite() {
+        lo = lo.min(slo.max(lo - span));
+        hi = hi.max(shi.min(hi + span));
+    }
+    let pad = 0.05 * (hi - lo).max(1e-9);
+    (lo - pad, hi + pad)
+}
+
+fn draw_on<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    panels: &[Panel],
+) -> Result<(), String> {
+    let e = |err: DrawingAreaErrorKind<DB::ErrorType>| err.to_string();
+    root.fill(&WHITE).map_err(e)?;
+    let areas = root.split_evenly((panels.len().max(1), 1));
+    // The measurement wide and grey, the simulation thin and red on top: both stay visible.
+    let measured_style = ShapeStyle::from(&BLACK.mix(0.45)).stroke_width(3);
+    let simulated_style = ShapeStyle::from(&RED).stroke_width(1);
+    for (area, p) in areas.iter().zip(panels) {
+        let measured = decimate(&p.time, &p.measured);
+        let simulated = decimate(&p.time, &p.simulated);
+        let (x0, x1) = match (p.time.first(), p.time.last()) {
+            (Some(a), Some(b)) if b > a => (*a, *b),
+            (Some(a), _) => (*a, *a + 1.0),
+            _ => (0.0, 1.0),
+        };
+        let (y0, y1) = y_range(&measured, &simulated);
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                &p.title,
+                ("sans-serif", 22).into_font().style(FontStyle::Bold),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(e)?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc(&p.y_label)
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 17))
+            .x_label_formatter(&|x| format!("{x}"))
+            .light_line_style(BLACK.mix(0.04))
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()
+            .map_err(e)?;
+        let clip = |pts: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+            pts.into_iter().map(|(t, v)| (t, v.clamp(y0, y1))).collect()
+        };
+        chart
+            .draw_series(LineSeries::new(clip(measured), measured_style))
+            .map_err(e)?
+            .label("measured")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], measured_style));
+        chart
+            .draw_series(LineSeries::new(clip(simulated), simulated_style))
+            .map_err(e)?
+            .label("simulated")
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], simulated_style));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", 15))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .map_err(e)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decimation_keeps_extremes_and_order() {
+        let n = 100_000;
+        let time: Vec<f64> = (0..n).map(|k| k as f64).collect();
+        let mut values = vec![0.0; n];
+        values[12_345] = 7.0;
+        values[54_321] = -3.0;
+        let pts = decimate(&time, &values);
+        assert!(pts.len() <= MAX_POINTS);
+        assert!(pts.windows(2).all(|w| w[0].0 <= w[1].0));
+        assert!(pts.contains(&(12_345.0, 7.0)) && pts.contains(&(54_321.0, -3.0)));
+    }
+
+    #[test]
+    fn a_runaway_simulation_does_not_flatten_the_measurement() {
+        let measured = [(0.0, 0.0), (1.0, 1.0)];
+        let (lo, hi) = y_range(&measured, &[(0.0, 0.5), (1.0, 1e9)]);
+        assert!(hi < 2.5 && lo < 0.0, "{lo} {hi}");
+        let (lo, hi) = y_range(&measured, &[(0.0, -0.5)]);
+        assert!(lo < -0.5 && hi > 1.0, "{lo} {hi}");
+    }
+
+    #[test]
+    fn svg_and_png_plots_render_text() {
+        let dir = std::env::temp_dir().join(format!("leeway-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        let time: Vec<f64> = (0..200).map(f64::from).collect();
+        let panel = Panel {
+            title: "u: fit 97.5 %".to_string(),
+            y_label: "u".to_string(),
+            measured: time.iter().map(|t| (t / 20.0).sin()).collect(),
+            simulated: time.iter().map(|t| 0.9 * (t / 20.0).sin()).collect(),
+            time,
+        };
+        let svg = dir.join("p.svg");
+        draw(&svg, &[panel.clone(), panel.clone()]).unwrap_or_else(|e| panic!("{e}"));
+        let text = std::fs::read_to_string(&svg).unwrap_or_default();
+        assert!(text.contains("<svg") && text.contains("</svg>"));
+        for label in ["u: fit 97.5 %", "measured", "simulated", "time (s)"] {
+            assert!(text.contains(label), "{label} missing from the SVG");
+        }
+        let png = dir.join("p.png");
+        draw(&png, &[panel]).unwrap_or_else(|e| panic!("{e}"));
+        let bytes = std::fs::read(&png).unwrap_or_default();
+        assert!(bytes.starts_with(b"\x89PNG"));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,108 @@
+//! `leeway simulate MODEL --params EST.json --input IN.csv [--out OUT.csv]`:
+//! simulate the model with the given θ on an input file, from its first row
+//! (see `input.rs` for what the file holds), and write the trajectory as a
+//! CSV data file. Exit 0 on success, 1 when the simulation diverges (the rows
+//! before the divergence are still written), 2 on any model, file or option error.
+
+use crate::input::{initial_values, load_input};
+use crate::model::{disturbance_values, load, load_options};
+use crate::output::{Status, err, headline, out, stderr_style};
+use crate::problem::{Failure, Problem};
+use leeway_runtime::simulate::{Disturbances, simulate};
+use leeway_runtime::{Experiment, Interpreter, write_csv};
+use std::path::PathBuf;
+
+/// Arguments of `leeway simulate`.
+#[derive(Debug, clap::Args)]
+pub struct SimulateArgs {
+    /// The `.som` model file.
+    #[arg(value_name = "MODEL.som")]
+    pub model: PathBuf,
+    /// θ: the output of `leeway estimate --json`, or `{"name": value}` with every parameter.
+    #[arg(long, value_name = "FILE.json")]
+    pub params: PathBuf,
+    /// The input (CSV): every input column on every row; the states and heading
+    /// on the first row (or --x0); measured disturbances and rotation columns
+    /// on every row.
+    #[arg(long, value_name = "IN.csv")]
+    pub input: PathBuf,
+    /// Write the trajectory here instead of stdout.
+    #[arg(long, value_name = "OUT.csv")]
+    pub out: Option<PathBuf>,
+    /// Initial values, e.g. `u=5,v=0,r=0.1,psi=0` (override the first row of the input).
+    #[arg(long = "x0", value_name = "NAME=VALUE,...")]
+    pub x0: Vec<String>,
+    /// A constant unmeasured disturbance component, e.g. `current.north=0.2`
+    /// (earth frame for earth-fixed media); components not given are zero.
+    #[arg(long = "disturbance", value_name = "NAME=VALUE,...")]
+    pub disturbances: Vec<String>,
+    /// Sample time for an input without a time column when the model declares no `step`.
+    #[arg(long, value_name = "H", value_parser = crate::estimate::positive)]
+    pub step: Option<f64>,
+}
+
+/// Runs `leeway simulate`.
+pub fn run(args: &SimulateArgs) -> Status {
+    let style = stderr_style();
+    let mut warnings = Vec::new();
+    let result = execute(args, &mut warnings);
+    for w in &warnings {
+        err(&headline(style, "warning", None, w));
+    }
+    match result {
+        Ok(status) => status,
+        Err(f) => {
+            err(&f.render(style, "simulated"));
+            f.status()
+        }
+    }
+}
+
+fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Failure> {
+    let loaded = load(&args.model, false)?;
+    warnings.extend(loaded.warnings);
+    let ir = loaded.ir;
+    let options = load_options(&ir, args.step)?;
+    let theta = crate::params::read(&args.params, &ir, "--params")?;
+    let x0 = initial_values(&ir, &args.x0)?;
+    let dist = disturbance_values(&ir, &args.disturbances)?;
+    let input = load_input(&args.input, &ir, &options, &x0)?;
+    let model = Interpreter::new(ir.clone());
+    let e = &input.experiment;
+    let trajectory = simulate(&model, &theta, e, Disturbances::Constant(&dist));
+    let finite = trajectory
+        .states
+        .first()
+        .map_or(0, |s| s.iter().take_while(|v| v.is_finite()).count());
+    let mut result = Experiment {
+        states: trajectory.states,
+        heading: trajectory.heading,
+        ..e.clone()
+    };
+    result = result.truncated(finite);
+    let mut buffer = Vec::new();
+    write_csv(&ir, &[&result], input.t0, &mut buffer)
+        .map_err(|error| Problem::error("io", format!("cannot write the trajectory: {error}")))?;
+    match &args.out {
+        Some(path) => std::fs::write(path, &buffer).map_err(|error| {
+            Problem::error("io", format!("cannot write `{}`: {error}", path.display()))
+                .at(path.display().to_string())
+        })?,
+        None => out(&String::from_utf8_lossy(&buffer)),
+    }
+    if trajectory.diverged {
+        let t = input.t0 + finite as f64 * e.h;
+        return Err(Problem {
+            status: Status::Unsupported,
+            ..Problem::error(
+                "diverged",
+                format!(
+                    "the simulation diverged at sample {finite} (time {t}): the states left the finite numbers; the {finite} rows before are written"
+                ),
+            )
+            .help("check the parameters (a positive damping term makes the model unstable) and the units of the input")
+        }
+        .into());
+    }
+    Ok(Status::Success)
+}
