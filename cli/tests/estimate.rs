@@ -289,7 +289,7 @@ fn every_malformed_csv_gives_its_located_error_and_exit_2() {
         (
             "inconsistent-time",
             mutate(&|r| r[8][0] = "6.5".to_string()),
-            ":9:time: inconsistent sample time".to_string(),
+            ":9:1 (time): inconsistent sample time".to_string(),
         ),
         (
             "step-mismatch",
@@ -298,7 +298,7 @@ fn every_malformed_csv_gives_its_located_error_and_exit_2() {
                     row[0] = format!("{:?}", 0.5 * (k - 1) as f64);
                 }
             }),
-            ":2:time: the data are sampled every 0.5 s but the model declares step 1".to_string(),
+            ":2:1 (time): the data are sampled every 0.5 s but the model declares step 1".to_string(),
         ),
         (
             "non-contiguous-experiment",
@@ -418,15 +418,14 @@ fn a_heading_in_degrees_gives_the_gain_warning() {
         w.starts_with("experiment `deg`: the heading `psi` does not integrate `r`: Δpsi/h ≈ "),
         "{w}"
     );
-    // The measured gain, as the runtime reports it: ≈ 57 for degrees (it reads
-    // lower where the runtime's unwrapping mistakes 4.7°–7.9° steps for 2π wraps).
+    // The measured gain: 180/π ≈ 57.3 for degrees (whatever the step sizes).
     let gain: f64 = w
         .split("(gain ")
         .nth(1)
         .and_then(|r| r.split(',').next())
         .and_then(|g| g.parse().ok())
         .unwrap_or(f64::NAN);
-    assert!(gain > 40.0 && gain < 60.0, "{w}");
+    assert!((gain - 57.3).abs() < 1.0, "{w}");
     assert!(w.contains("the heading is in degrees"), "{w}");
     // The same data in radians: no such warning.
     let data = dir.write("rad.csv", &estimation_csv(2000, 1.0, 11));
@@ -498,6 +497,30 @@ fn data_that_cannot_support_the_model_exit_1() {
         "iv2",
     ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // Data that excite nothing (all zeros): a clear error naming the cause, exit 1.
+    let mut zeros = String::from("time,u,v,r,tau1,tau2,tau3,psi,wind_n,wind_e\n");
+    for k in 0..200 {
+        zeros.push_str(&format!("{k},0,0,0,0,0,0,0,0,0\n"));
+    }
+    let data = dir.write("zeros.csv", &zeros);
+    for method in ["ls", "iv3"] {
+        let o = leeway(&[
+            "estimate",
+            SHIP,
+            "--data",
+            &data,
+            "--method",
+            method,
+            "--aggregate",
+        ]);
+        no_panic(&o);
+        assert_eq!(code(&o), 1, "{method}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains("error[rank-deficient]"),
+            "{method}: {}",
+            stderr(&o)
+        );
+    }
 }
 
 #[test]

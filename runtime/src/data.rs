@@ -439,7 +439,14 @@ pub fn parse_csv(
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
-        e.h = sample_time(file, ir, &times, first_line, options)?;
+        e.h = sample_time(
+            file,
+            ir,
+            &times,
+            first_line,
+            time_col.map_or(0, |c| c + 1),
+            options,
+        )?;
         out.push(e);
     }
     Ok(out)
@@ -450,6 +457,7 @@ fn sample_time(
     ir: &Ir,
     times: &[f64],
     first_line: usize,
+    time_column: usize,
     options: &LoadOptions,
 ) -> Result<f64, DataError> {
     let declared = ir.step.or(options.step);
@@ -467,7 +475,7 @@ fn sample_time(
         let dt = w[1] - w[0];
         if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
             return Err(DataError::new(
-                format!("{file}:{}:time", first_line + k + 1),
+                format!("{file}:{}:{time_column} (time)", first_line + k + 1),
                 format!("inconsistent sample time: step {dt} here, {h} at the start"),
                 "leeway needs uniformly sampled data; resample the log or split it into experiments at the gaps",
             ));
@@ -479,7 +487,7 @@ fn sample_time(
         && (mean - d).abs() > 1e-3 * d
     {
         return Err(DataError::new(
-            format!("{file}:{first_line}:time"),
+            format!("{file}:{first_line}:{time_column} (time)"),
             format!("the data are sampled every {mean} s but the model declares step {d}"),
             "make `step` in the model match the data, or resample the data",
         ));
@@ -495,18 +503,32 @@ pub fn heading_gain(ir: &Ir, e: &Experiment) -> Option<f64> {
         return None;
     };
     let r = &e.states[*integrates];
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for k in 1..e.heading.len() {
-        // Unwrap jumps of ±2π (or ±360) so a wrapped log does not spoil the fit.
-        let mut d = e.heading[k] - e.heading[k - 1];
-        for period in [2.0 * std::f64::consts::PI, 360.0] {
-            if d.abs() > 0.75 * period && d.abs() < 1.25 * period {
-                d -= period * d.signum();
+    // A log may wrap its heading at ±π (radians) or ±180 (degrees), or not at
+    // all. Fit the gain of Δψ/h on r under each hypothesis (removing whole
+    // periods from every step) and keep the one that explains Δψ/h best: a
+    // threshold on the step size would mistake large steps in degrees for
+    // wraps in radians.
+    let fit = |period: Option<f64>| -> Option<(f64, f64)> {
+        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+        for k in 1..e.heading.len().min(r.len()) {
+            let mut d = e.heading[k] - e.heading[k - 1];
+            if let Some(p) = period {
+                d -= p * (d / p).round();
             }
+            let y = d / e.h;
+            let x = r[k - 1];
+            sxy += x * y;
+            sxx += x * x;
+            syy += y * y;
         }
-        let x = r[k - 1];
-        sxy += x * d / e.h;
-        sxx += x * x;
-    }
-    (sxx > 1e-12).then(|| sxy / sxx)
+        (sxx > 1e-12).then(|| {
+            let gain = sxy / sxx;
+            (gain, syy - gain * sxy)
+        })
+    };
+    [None, Some(2.0 * std::f64::consts::PI), Some(360.0)]
+        .into_iter()
+        .filter_map(fit)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(gain, _)| gain)
 }

@@ -313,6 +313,10 @@ struct Block {
     cols: Vec<usize>,
 }
 
+/// Fewest equations per column of the largest block (a bare minimum for the
+/// moment matrices to have full rank with some margin).
+const MIN_EQUATIONS_PER_COLUMN: usize = 3;
+
 /// Fit points by which a refinement's simulation may fall below the best
 /// earlier iterate before the refinement counts as running away.
 const RUNAWAY_FIT_DROP: f64 = 5.0;
@@ -362,6 +366,13 @@ struct EquationWalker<'a> {
 
 #[derive(Debug)]
 struct Diverged;
+
+/// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
+type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
+
+/// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
+/// estimates in terms of disturbance means and θ.
+type MomentEquation = (usize, Vec<(usize, usize, f64)>);
 
 /// How far an instrument simulation moved from a reference one, per output:
 /// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
@@ -419,7 +430,7 @@ impl EquationWalker<'_> {
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
-        f: &mut dyn FnMut(&[f64], &[f64], &[f64]),
+        f: &mut EquationSink,
     ) -> Result<SimChange, Diverged> {
         let ir = self.ir;
         let n_out = ir.states.len();
@@ -578,11 +589,10 @@ impl EquationWalker<'_> {
                         psi_z = psi1 + h * x_sim[yaw];
                     }
                     x_sim.copy_from_slice(&x_next);
-                    for o in 0..n_out {
-                        let e = row.states[o] - x_sim[o];
-                        change.err2[o] += e * e;
-                        change.y_sum[o] += row.states[o];
-                        change.y_sum2[o] += row.states[o] * row.states[o];
+                    for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
+                        change.err2[o] += (y - x) * (y - x);
+                        change.y_sum[o] += y;
+                        change.y_sum2[o] += y * y;
                     }
                     change.y_n += 1;
                     if let Some((theta_ref, mu_ref)) = reference {
@@ -767,7 +777,7 @@ pub fn estimate(
             warnings.push(format!(
                 "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
                 e.name(),
-                info.spread
+                info.spread.max(0.0)
             ));
         }
     }
@@ -780,6 +790,7 @@ pub fn estimate(
         &sign_patterns,
         warnings,
     )?;
+    est.check_length(experiments)?;
     est.run(experiments, sign_patterns)
 }
 
@@ -1010,7 +1021,7 @@ impl<'a> Estimator<'a> {
         }
         let mut blocks: Vec<Block> = Vec::new();
         let mut block_of_output = vec![0; n_out];
-        for o in 0..n_out {
+        for (o, slot) in block_of_output.iter_mut().enumerate() {
             let root = find(&mut parent, o);
             let b = match blocks
                 .iter()
@@ -1026,7 +1037,7 @@ impl<'a> Estimator<'a> {
                 }
             };
             blocks[b].outputs.push(o);
-            block_of_output[o] = b;
+            *slot = b;
         }
         for (c, col) in columns.iter().enumerate() {
             if red.pivot[c]
@@ -1057,6 +1068,31 @@ impl<'a> Estimator<'a> {
             aggregates,
             terms: crate::interp::term_plans(ir),
         })
+    }
+
+    /// Refuses records too short for the number of columns estimated together.
+    fn check_length(&self, experiments: &[&dyn Source]) -> Result<(), EstimateError> {
+        let equations: usize = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
+        if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
+            let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
+            if equations < needed {
+                let outputs: Vec<&str> = block
+                    .outputs
+                    .iter()
+                    .map(|o| self.ir.states[*o].as_str())
+                    .collect();
+                return Err(err(
+                    "too-few-samples",
+                    format!(
+                        "{equations} equations for {} columns estimated together (outputs {}): at least {needed} are needed",
+                        block.cols.len(),
+                        outputs.join(", ")
+                    ),
+                    "record longer experiments (hundreds of samples per parameter give useful standard errors)",
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn walker(&self) -> EquationWalker<'_> {
@@ -1233,18 +1269,26 @@ impl<'a> Estimator<'a> {
                         if p.measured && self.kind == PredictorKind::Measured {
                             if record {
                                 self.warnings.push(format!(
-                                    "{text}: the measured {} barely varies relative to the craft, so `{}` is not separately excited by these data; it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
-                                    self.ir.disturbances[p.medium.unwrap_or(0)].name, p.name, value
+                                    "{text}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
+                                    p.name,
+                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
+                                    p.name,
+                                    value
                                 ));
                                 self.unexcited.push(text.clone());
                                 for (k, a) in combo {
+                                    let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
+                                    let held = if value == 0.0 {
+                                        p.name.clone()
+                                    } else {
+                                        format!("({} - {value})", p.name)
+                                    };
+                                    let coef = round_sig(*a);
                                     self.aggregates.push(format!(
-                                        "{} estimates {} + {:.4}*({} - {})",
-                                        self.ir.predictors.get(self.kind)[cols[*k]].name,
-                                        self.ir.predictors.get(self.kind)[cols[*k]].name,
-                                        a,
-                                        p.name,
-                                        value
+                                        "{kept} estimates {kept} {} {}*{held}",
+                                        if coef < 0.0 { "-" } else { "+" },
+                                        coef.abs()
                                     ));
                                 }
                             }
@@ -1367,7 +1411,7 @@ impl<'a> Estimator<'a> {
             return Vec::new();
         }
         // Equations: value_k = Σ_{(d, q) ∈ meaning_k} q · μ_comp(d) · θ_param(d), for kept ρ-only columns.
-        let mut eqs: Vec<(usize, Vec<(usize, usize, f64)>)> = Vec::new();
+        let mut eqs: Vec<MomentEquation> = Vec::new();
         for (k, items) in &self.meaning {
             if !values.contains_key(k) {
                 continue;
@@ -1484,6 +1528,7 @@ impl<'a> Estimator<'a> {
             self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
         let mut refinements = 0usize;
         let mut converged = !refine;
+        let mut stopped = false;
         let bootstrap = refine && self.options.initial == Initial::Delayed;
         let first: Vec<f64> = if bootstrap {
             Vec::new()
@@ -1541,7 +1586,10 @@ impl<'a> Estimator<'a> {
                 step *= 0.5;
             }
             let Some((trial, trial_mu, (m, change, fit))) = accepted else {
-                self.warnings.push("refinement stopped: the simulation with the refined estimate diverges even when damped".to_string());
+                self.warnings.push(format!(
+                    "refinement stopped after {refinements}: the simulation with the refined estimate diverges even when damped; the iterate whose simulation fits the data best is reported"
+                ));
+                stopped = true;
                 break;
             };
             if step < 1.0 {
@@ -1588,6 +1636,7 @@ impl<'a> Estimator<'a> {
                     b.fit.unwrap_or(f) - f
                 ));
                 cur = next;
+                stopped = true;
                 break;
             }
             cur = next;
@@ -1599,10 +1648,12 @@ impl<'a> Estimator<'a> {
             {
                 cur = b;
             }
-            self.warnings.push(format!(
-                "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
-                refinements, self.options.tolerance
-            ));
+            if !stopped {
+                self.warnings.push(format!(
+                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
+                    refinements, self.options.tolerance
+                ));
+            }
         }
         let theta_sim = cur.theta_sim.clone();
         let mu = cur.mu.clone();
@@ -1614,6 +1665,18 @@ impl<'a> Estimator<'a> {
             cur.sol
         };
         let theta = self.theta_of(&sol);
+        let columns = self.ir.predictors.get(self.kind);
+        if !sol
+            .iter()
+            .flat_map(|s| &s.kept)
+            .any(|c| !columns[*c].kind.is_nuisance())
+        {
+            return Err(err(
+                "rank-deficient",
+                "no physical parameter could be estimated from these data: every θ column is unexcited or held",
+                "record experiments that excite the craft (varying inputs, turning), or check the data columns",
+            ));
+        }
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
         let cov = if self.options.covariance {
             self.covariance(experiments, &moments, &sol, &theta_sim, &mu)
@@ -2011,7 +2074,7 @@ pub(crate) fn solve_equilibrated(
     g: &DVector<f64>,
 ) -> (DVector<f64>, DMatrix<f64>, f64) {
     let cols = m.ncols();
-    if cols == 0 {
+    if cols == 0 || m.nrows() == 0 {
         return (DVector::zeros(0), DMatrix::zeros(0, m.nrows()), 1.0);
     }
     let d: Vec<f64> = (0..cols)

@@ -7,7 +7,6 @@
 // style lints for both fire on code that predates the `-D warnings` check of
 // this crate (estimate.rs, simulate.rs, synth.rs). Allowed here, crate-wide,
 // until the runtime's owner rewrites or keeps those loops.
-#![allow(clippy::needless_range_loop, clippy::type_complexity)]
 
 pub mod interp;
 pub mod model;

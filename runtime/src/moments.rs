@@ -200,6 +200,9 @@ impl LongRun {
     /// eigenvalues (truncated kernels need not be PSD in finite samples).
     pub fn sum_psd(&self) -> DMatrix<f64> {
         let m = self.dim;
+        if m == 0 {
+            return DMatrix::zeros(0, 0);
+        }
         let sym = DMatrix::from_fn(m, m, |i, j| {
             let own = if i <= j {
                 self.own[i * m + j]

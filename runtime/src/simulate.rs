@@ -60,8 +60,8 @@ pub fn simulate(
         if planar {
             heading.push(psi);
         }
-        for c in 0..n_comp {
-            dist[c] = if ir.disturbances[ir.components[c].disturbance].measured {
+        for (c, value) in dist.iter_mut().enumerate() {
+            *value = if ir.disturbances[ir.components[c].disturbance].measured {
                 row.disturbances[c]
             } else {
                 match disturbances {

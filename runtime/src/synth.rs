@@ -81,8 +81,8 @@ pub fn run(
     let mut y = vec![0.0; n_out];
     let mut m = vec![0.0; n_comp];
     for u in inputs {
-        for c in 0..n_comp {
-            v[c] = system.disturbance_mean[c] + system.disturbance_std[c] * g();
+        for (c, value) in v.iter_mut().enumerate() {
+            *value = system.disturbance_mean[c] + system.disturbance_std[c] * g();
         }
         for o in 0..n_out {
             y[o] = x[o] + system.state_noise[o] * g();
@@ -119,8 +119,8 @@ pub fn run(
             disturbances: &v,
         };
         model.step(&system.theta, system.h, &sig, &mut rhs, &mut next);
-        for o in 0..n_out {
-            next[o] += system.process_noise.get(o).copied().unwrap_or(0.0) * g();
+        for (o, value) in next.iter_mut().enumerate() {
+            *value += system.process_noise.get(o).copied().unwrap_or(0.0) * g();
         }
         psi = next_heading(ir, psi, system.h, &x);
         x.copy_from_slice(&next);
