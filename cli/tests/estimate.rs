@@ -298,7 +298,8 @@ fn every_malformed_csv_gives_its_located_error_and_exit_2() {
                     row[0] = format!("{:?}", 0.5 * (k - 1) as f64);
                 }
             }),
-            ":2:1 (time): the data are sampled every 0.5 s but the model declares step 1".to_string(),
+            ":2:1 (time): the data are sampled every 0.5 s but the model declares step 1"
+                .to_string(),
         ),
         (
             "non-contiguous-experiment",

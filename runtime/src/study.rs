@@ -421,3 +421,280 @@ pub fn mean_std(values: impl Iterator<Item = f64>) -> (f64, f64, usize) {
     };
     (mean, var.sqrt(), v.len())
 }
+
+/// Output names in the study's tables and JSON.
+pub const OUTPUTS: [&str; 3] = ["surge", "sway", "yaw"];
+
+/// Estimator names in the study's tables and JSON, in `Method::ALL` order.
+pub const ESTIMATORS: [&str; 4] = ["LS", "IV1", "IV2", "IV3"];
+
+/// One estimator's figures in one case, arrays aligned with `N`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct EstimatorSummary {
+    /// Mean validation fit per output (over runs whose model did not diverge).
+    pub fit_mean: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Standard deviation of the fit per output.
+    pub fit_std: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Median fit per output (robust to the occasional wild run).
+    pub fit_median: std::collections::BTreeMap<String, Vec<f64>>,
+    /// Mean relative error on the identifiable aggregates.
+    pub param_error: Vec<f64>,
+    /// Median of that error.
+    pub param_error_median: Vec<f64>,
+    /// Runs whose estimate failed or whose model diverged on the validation input.
+    pub diverged: Vec<usize>,
+}
+
+/// One case's figures.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CaseSummary {
+    /// Mean wind, m/s.
+    pub wind: f64,
+    /// Record lengths.
+    #[serde(rename = "N")]
+    pub n: Vec<usize>,
+    /// By estimator name (`LS`, `IV1`, `IV2`, `IV3`).
+    pub estimators: std::collections::BTreeMap<String, EstimatorSummary>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        0.5 * (v[m - 1] + v[m])
+    }
+}
+
+/// Summarises the outcomes per case (in a fixed order: bit-identical for the
+/// same outcomes).
+pub fn summarise(out: &StudyOutcomes) -> std::collections::BTreeMap<String, CaseSummary> {
+    let cfg = &out.config;
+    let mut cases = std::collections::BTreeMap::new();
+    for (c, case) in cfg.cases.iter().enumerate() {
+        let mut estimators = std::collections::BTreeMap::new();
+        for (mi, name) in ESTIMATORS.iter().enumerate() {
+            let mut s = EstimatorSummary::default();
+            for (k, output) in OUTPUTS.iter().enumerate() {
+                let (mut means, mut stds, mut medians) = (Vec::new(), Vec::new(), Vec::new());
+                for ni in 0..cfg.n.len() {
+                    let fits = out.outcomes[c]
+                        .iter()
+                        .map(|r| &r[ni][mi])
+                        .filter(|o| !o.diverged)
+                        .map(|o| o.fit[k]);
+                    let (m, sd, _) = mean_std(fits.clone());
+                    means.push(m);
+                    stds.push(sd);
+                    medians.push(median(fits.collect()));
+                }
+                s.fit_mean.insert(output.to_string(), means);
+                s.fit_std.insert(output.to_string(), stds);
+                s.fit_median.insert(output.to_string(), medians);
+            }
+            for ni in 0..cfg.n.len() {
+                let runs: Vec<&Outcome> = out.outcomes[c].iter().map(|r| &r[ni][mi]).collect();
+                s.param_error
+                    .push(mean_std(runs.iter().filter(|o| !o.diverged).map(|o| o.param_error)).0);
+                s.param_error_median.push(median(
+                    runs.iter()
+                        .filter(|o| !o.diverged)
+                        .map(|o| o.param_error)
+                        .collect(),
+                ));
+                s.diverged.push(runs.iter().filter(|o| o.diverged).count());
+            }
+            estimators.insert(name.to_string(), s);
+        }
+        cases.insert(
+            case.name.clone(),
+            CaseSummary {
+                wind: case.wind,
+                n: cfg.n.clone(),
+                estimators,
+            },
+        );
+    }
+    cases
+}
+
+/// One of the paper's claims, checked against the study's figures.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Claim {
+    /// `a`, `b`, `c`, `d`.
+    pub id: String,
+    /// The paper's statement.
+    pub statement: String,
+    /// How it is checked.
+    pub criterion: String,
+    /// Whether the figures bear it out (`None` when a needed case was not run).
+    pub holds: Option<bool>,
+    /// The figures behind the verdict.
+    pub evidence: String,
+}
+
+fn mean_fit(s: &EstimatorSummary, ni: usize) -> f64 {
+    OUTPUTS.iter().map(|o| s.fit_mean[*o][ni]).sum::<f64>() / OUTPUTS.len() as f64
+}
+
+fn fits_text(s: &EstimatorSummary, ni: usize) -> String {
+    OUTPUTS
+        .iter()
+        .map(|o| format!("{:.1}", s.fit_mean[*o][ni]))
+        .collect::<Vec<_>>()
+        .join("/")
+}
+
+/// Checks the paper's four claims (§V) against the summaries. Criteria:
+/// (a) at the smallest N, LS's mean fit (averaged over the outputs) is at
+///     least IV2's and IV3's, and at the largest N both exceed LS;
+/// (b) at low wind and the largest N, IV2 and IV3 are within 2 fit points in
+///     every output;
+/// (c) at high wind and the largest N, IV3 beats IV2 by more than 2 points in
+///     surge, surge is where IV2 loses most, and IV3 stays within 5 points of
+///     its low-wind fit in every output;
+/// (d) IV1's mean fit is below IV2's and IV3's by more than 10 points in
+///     surge or sway at every N of every case.
+pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Claim> {
+    let est =
+        |case: &CaseSummary, name: &str| case.estimators.get(name).cloned().unwrap_or_default();
+    let mut out = Vec::new();
+    // (a)
+    let mut holds_a = None;
+    let mut ev_a = Vec::new();
+    for (name, case) in cases {
+        let (ls, iv2, iv3) = (est(case, "LS"), est(case, "IV2"), est(case, "IV3"));
+        let last = case.n.len().saturating_sub(1);
+        if case.n.is_empty() {
+            continue;
+        }
+        let small = mean_fit(&ls, 0) >= mean_fit(&iv2, 0).max(mean_fit(&iv3, 0));
+        let large = mean_fit(&iv2, last).min(mean_fit(&iv3, last)) > mean_fit(&ls, last);
+        let breakpoint = (0..case.n.len())
+            .find(|&i| mean_fit(&iv2, i).min(mean_fit(&iv3, i)) > mean_fit(&ls, i))
+            .map(|i| case.n[i]);
+        holds_a = Some(holds_a.unwrap_or(true) && small && large);
+        ev_a.push(format!(
+            "{name}: N = {} LS {} vs IV2 {} IV3 {}; N = {} LS {} vs IV2 {} IV3 {}; IV2 and IV3 both above LS from N = {}",
+            case.n[0],
+            fits_text(&ls, 0),
+            fits_text(&iv2, 0),
+            fits_text(&iv3, 0),
+            case.n[last],
+            fits_text(&ls, last),
+            fits_text(&iv2, last),
+            fits_text(&iv3, last),
+            breakpoint.map_or("no N run".to_string(), |n| n.to_string())
+        ));
+    }
+    out.push(Claim {
+        id: "a".into(),
+        statement: "LS fits best at the smallest N; IV2 and IV3 overtake it beyond a breakpoint".into(),
+        criterion: "mean fit over outputs: LS ≥ IV2, IV3 at the smallest N, and IV2, IV3 > LS at the largest N, in every case".into(),
+        holds: holds_a,
+        evidence: ev_a.join("; "),
+    });
+    // (b)
+    let (holds_b, ev_b) = match cases.get("low") {
+        Some(case) if !case.n.is_empty() => {
+            let last = case.n.len() - 1;
+            let (iv2, iv3) = (est(case, "IV2"), est(case, "IV3"));
+            let gaps: Vec<f64> = OUTPUTS
+                .iter()
+                .map(|o| (iv2.fit_mean[*o][last] - iv3.fit_mean[*o][last]).abs())
+                .collect();
+            (
+                Some(gaps.iter().all(|g| *g <= 2.0)),
+                format!(
+                    "low wind, N = {}: IV2 {} vs IV3 {} (largest gap {:.1})",
+                    case.n[last],
+                    fits_text(&iv2, last),
+                    fits_text(&iv3, last),
+                    gaps.iter().copied().fold(0.0, f64::max)
+                ),
+            )
+        }
+        _ => (None, "the low-wind case was not run".to_string()),
+    };
+    out.push(Claim {
+        id: "b".into(),
+        statement: "at low wind IV2 and IV3 perform equally well".into(),
+        criterion: "low wind, largest N: |IV2 − IV3| ≤ 2 fit points in every output".into(),
+        holds: holds_b,
+        evidence: ev_b,
+    });
+    // (c)
+    let (holds_c, ev_c) = match (cases.get("high"), cases.get("low")) {
+        (Some(high), Some(low)) if !high.n.is_empty() && !low.n.is_empty() => {
+            let (lh, ll) = (high.n.len() - 1, low.n.len() - 1);
+            let (iv2, iv3, iv3_low) = (est(high, "IV2"), est(high, "IV3"), est(low, "IV3"));
+            let loss: Vec<f64> = OUTPUTS
+                .iter()
+                .map(|o| iv3.fit_mean[*o][lh] - iv2.fit_mean[*o][lh])
+                .collect();
+            let stays = OUTPUTS
+                .iter()
+                .all(|o| iv3.fit_mean[*o][lh] >= iv3_low.fit_mean[*o][ll] - 5.0);
+            let surge_most = loss[0] >= loss[1] && loss[0] >= loss[2];
+            (
+                Some(loss[0] > 2.0 && surge_most && stays),
+                format!(
+                    "high wind, N = {}: IV2 {} vs IV3 {} (IV2 loses {:.1}/{:.1}/{:.1}); IV3 at low wind {}",
+                    high.n[lh],
+                    fits_text(&iv2, lh),
+                    fits_text(&iv3, lh),
+                    loss[0],
+                    loss[1],
+                    loss[2],
+                    fits_text(&iv3_low, ll)
+                ),
+            )
+        }
+        _ => (
+            None,
+            "needs both the low- and the high-wind case".to_string(),
+        ),
+    };
+    out.push(Claim {
+        id: "c".into(),
+        statement: "at high wind IV2 degrades, in surge most, while IV3 stays good".into(),
+        criterion: "high wind, largest N: IV3 − IV2 > 2 points in surge, largest in surge, and IV3 within 5 points of its low-wind fit".into(),
+        holds: holds_c,
+        evidence: ev_c,
+    });
+    // (d)
+    let mut holds_d = None;
+    let mut ev_d = Vec::new();
+    for (name, case) in cases {
+        let (iv1, iv2, iv3) = (est(case, "IV1"), est(case, "IV2"), est(case, "IV3"));
+        let poor = (0..case.n.len()).all(|i| {
+            ["surge", "sway"]
+                .iter()
+                .any(|o| iv1.fit_mean[*o][i] < iv2.fit_mean[*o][i].min(iv3.fit_mean[*o][i]) - 10.0)
+        });
+        holds_d = Some(holds_d.unwrap_or(true) && poor);
+        let last = case.n.len().saturating_sub(1);
+        if !case.n.is_empty() {
+            ev_d.push(format!(
+                "{name}, N = {}: IV1 {} (diverged {}) vs IV3 {}",
+                case.n[last],
+                fits_text(&iv1, last),
+                iv1.diverged[last],
+                fits_text(&iv3, last)
+            ));
+        }
+    }
+    out.push(Claim {
+        id: "d".into(),
+        statement: "IV1 fits poorly".into(),
+        criterion: "IV1 more than 10 points below IV2 and IV3 in surge or sway at every N".into(),
+        holds: holds_d,
+        evidence: ev_d.join("; "),
+    });
+    out
+}
