@@ -58,6 +58,10 @@ pub struct EstimateArgs {
     /// Most re-simulations of the refined IV.
     #[arg(long, value_name = "N", default_value_t = 8)]
     pub max_refinements: usize,
+    /// Run the plain refined IV: do not stop a refinement whose simulation tracks
+    /// the data markedly worse than an earlier iterate (docs/estimation.md).
+    #[arg(long)]
+    pub no_runaway_guard: bool,
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,
@@ -140,6 +144,7 @@ impl EstimateArgs {
             aggregate: self.aggregate,
             strict: self.strict,
             lags: usize::from(self.lags),
+            runaway_guard: !self.no_runaway_guard,
             ..Options::default()
         }
     }

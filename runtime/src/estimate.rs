@@ -411,7 +411,8 @@ impl SimChange {
         let n = self.n.max(1) as f64;
         (0..self.diff2.len())
             .map(|o| {
-                let var = (self.sum2[o] / n - (self.sum[o] / n).powi(2)).max(0.0) * n;
+                let mean = self.sum[o] / n;
+                let var = (self.sum2[o] / n - mean * mean).max(0.0) * n;
                 if var > 0.0 {
                     (self.diff2[o] / var).sqrt()
                 } else {
@@ -835,7 +836,8 @@ fn experiment_info(
         .collect();
     let (spread, frozen) = match &ir.rotation {
         Rotation::Planar { .. } => {
-            let r = ((sc / nf).powi(2) + (ss / nf).powi(2)).sqrt().min(1.0);
+            let (mc, ms) = (sc / nf, ss / nf);
+            let r = (mc * mc + ms * ms).sqrt().min(1.0);
             let spread = (-2.0 * r.max(1e-300).ln()).sqrt();
             let frozen = (spread < options.heading_spread)
                 .then(|| vec![sc / nf / r.max(1e-300), ss / nf / r.max(1e-300)]);
@@ -843,7 +845,10 @@ fn experiment_info(
         }
         Rotation::Measured { .. } => {
             let spread = (0..n_rot)
-                .map(|i| (rot_sq[i] / nf - (rot_sum[i] / nf).powi(2)).max(0.0).sqrt())
+                .map(|i| {
+                    let mean = rot_sum[i] / nf;
+                    (rot_sq[i] / nf - mean * mean).max(0.0).sqrt()
+                })
                 .fold(0.0, f64::max);
             (
                 spread,
@@ -1988,8 +1993,7 @@ fn round_sig(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
     }
-    let mag = 10f64.powi(3 - v.abs().log10().ceil() as i32);
-    (v * mag).round() / mag
+    format!("{v:.2e}").parse().unwrap_or(v)
 }
 
 fn linear_text_f(items: &[(String, Q)]) -> String {

@@ -82,8 +82,18 @@ pub fn to_f64(q: &Q) -> f64 {
     } else {
         n / (d << (-shift) as usize)
     };
-    let v = scaled.to_f64().unwrap_or(f64::INFINITY) * 2f64.powi(-shift as i32);
+    let v = scale_by_pow2(scaled.to_f64().unwrap_or(f64::INFINITY), -shift);
     if neg { -v } else { v }
+}
+
+/// `x · 2^e`, exactly (each factor is a power of two built from its bits).
+fn scale_by_pow2(mut x: f64, mut e: i64) -> f64 {
+    while e != 0 {
+        let step = e.clamp(-1000, 1000);
+        x *= f64::from_bits(((1023 + step) as u64) << 52);
+        e -= step;
+    }
+    x
 }
 
 /// Exact rational rendering: `3`, `-1/2`.
