@@ -418,7 +418,7 @@ fn least_squares_is_ahead_only_far_below_n_1000() {
             serde_json::json!([150])
         );
     }
-    assert!(stdout(&o).contains("investigation: LS's median parameter error over every estimate is below IV3's high: at N = 150; low: at N = 150"));
+    assert!(stdout(&o).contains("investigation: LS's median parameter error over every estimate is below IV3's: high wind at N = 150; low wind at N = 150"));
 }
 
 #[test]

@@ -233,16 +233,16 @@ fn claims(report: &Report) -> String {
                 .iter()
                 .map(|(case, ns)| {
                     if ns.is_empty() {
-                        format!("{case}: at no N run")
+                        format!("{case} wind at no N run")
                     } else {
                         let ns: Vec<String> = ns.iter().map(ToString::to_string).collect();
-                        format!("{case}: at N = {}", ns.join(", "))
+                        format!("{case} wind at N = {}", ns.join(", "))
                     }
                 })
                 .collect();
             let _ = writeln!(
                 s,
-                "      investigation: LS's median parameter error over every estimate is below IV3's {} \
+                "      investigation: LS's median parameter error over every estimate is below IV3's: {} \
                  (the breakpoint lies below the smallest N where it is not; try --n 150,200,300,400,600)",
                 ahead.join("; ")
             );
