@@ -501,3 +501,28 @@ fn paper_iv_and_one_case_write_their_own_document() {
     assert!(claim(&j, "b")["holds"].is_null() && claim(&j, "c")["holds"].is_null());
     assert!(dir.path("fit-high.png").exists() && !dir.path("fit-low.png").exists());
 }
+
+#[test]
+fn a_study_where_every_estimate_fails_writes_null_figures() {
+    // Ten samples cannot support an estimate: every run diverges, every mean
+    // is undefined — `null` in results.json, `-` in the table, still exit 0.
+    let dir = Scratch::new("nulls");
+    let o = reproduce(&dir.0, &["--runs", "2", "--n", "10", "--case", "low"]);
+    succeeded(&o);
+    let text = std::fs::read_to_string(dir.path("results.json")).unwrap_or_default();
+    let j: Value = serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"));
+    for est in ESTIMATORS {
+        let e = estimator(&j, "low", est);
+        assert_eq!(e["diverged"], serde_json::json!([2]), "{est}");
+        assert!(
+            e["fit_mean"]["surge"][0].is_null() && e["param_error"][0].is_null(),
+            "{e}"
+        );
+    }
+    assert!(
+        stdout(&o).contains("  LS         10  -      -     -    -"),
+        "{}",
+        stdout(&o)
+    );
+    assert!(dir.path("fit-low.svg").exists() && dir.path("validation-low.png").exists());
+}
