@@ -8,7 +8,9 @@
 //! (`check`: θ not identifiable; `estimate`: θ not identifiable or not
 //! excited by these data, or a sign violation under `--strict`; `simulate`,
 //! `validate`: the simulation diverges); 2 a usage, input/output, syntax,
-//! semantic, data or parameter-file error.
+//! semantic, data or parameter-file error (for `reproduce`: an option error
+//! or a result file that cannot be written; the verdicts on the paper's
+//! claims never change the exit code).
 
 mod check;
 mod estimate;
@@ -18,6 +20,7 @@ mod output;
 mod params;
 mod plot;
 mod problem;
+mod reproduce;
 mod simulate;
 mod validate;
 
@@ -42,6 +45,8 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Fit of a model with given parameters on validation data, and a plot of measured against simulated.
     Validate(validate::ValidateArgs),
+    /// Re-run the paper's simulation study (§V): tables, claims, results.json and figures.
+    Reproduce(reproduce::ReproduceArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +57,7 @@ fn main() -> ExitCode {
         Command::Estimate(args) => estimate::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::Validate(args) => validate::run(&args),
+        Command::Reproduce(args) => reproduce::run(&args),
     };
     status.code()
 }

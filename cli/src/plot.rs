@@ -26,7 +26,9 @@ const PANEL_HEIGHT: u32 = 280;
 /// Most points drawn per series; longer records keep each bucket's extremes.
 const MAX_POINTS: usize = 4000;
 
-fn register_fonts() -> Result<(), String> {
+/// Registers DejaVu Sans (regular and bold) as `sans-serif`, once: plotters
+/// draws text only with registered fonts, for SVG too.
+pub fn register_fonts() -> Result<(), String> {
     static FONTS: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
     FONTS
         .get_or_init(|| {
@@ -42,22 +44,32 @@ fn register_fonts() -> Result<(), String> {
         .clone()
 }
 
-/// Draws the panels, stacked vertically, into `path`. On an error no
-/// half-written file is left behind.
-pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
+/// A figure that draws itself on any plotters backend.
+pub trait Figure {
+    /// Width and height in pixels.
+    fn size(&self) -> (u32, u32);
+    /// Draws the whole figure on `root`.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Draws a figure into `path`: a bitmap for a `.png` name, SVG otherwise.
+/// On an error no half-written file is left behind.
+pub fn save(path: &Path, figure: &impl Figure) -> Result<(), String> {
     register_fonts()?;
-    let height = u32::try_from(panels.len().max(1))
-        .unwrap_or(u32::MAX)
-        .saturating_mul(PANEL_HEIGHT);
+    let size = figure.size();
     let png = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
     let result = if png {
-        let root = BitMapBackend::new(path, (WIDTH, height)).into_drawing_area();
-        draw_on(&root, panels).and_then(|()| root.present().map_err(|e| e.to_string()))
+        let root = BitMapBackend::new(path, size).into_drawing_area();
+        figure
+            .draw(&root)
+            .and_then(|()| root.present().map_err(|e| e.to_string()))
     } else {
-        let root = SVGBackend::new(path, (WIDTH, height)).into_drawing_area();
-        draw_on(&root, panels).and_then(|()| root.present().map_err(|e| e.to_string()))
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        figure
+            .draw(&root)
+            .and_then(|()| root.present().map_err(|e| e.to_string()))
     };
     if result.is_err() {
         let _ = std::fs::remove_file(path);
@@ -65,9 +77,30 @@ pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
     result
 }
 
+/// Measured against simulated, one panel per signal, stacked.
+struct Panels<'a>(&'a [Panel]);
+
+impl Figure for Panels<'_> {
+    fn size(&self) -> (u32, u32) {
+        let height = u32::try_from(self.0.len().max(1))
+            .unwrap_or(u32::MAX)
+            .saturating_mul(PANEL_HEIGHT);
+        (WIDTH, height)
+    }
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        draw_on(root, self.0)
+    }
+}
+
+/// Draws the panels, stacked vertically, into `path`. On an error no
+/// half-written file is left behind.
+pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
+    save(path, &Panels(panels))
+}
+
 /// At most [`MAX_POINTS`] points: the smallest and largest value of each
 /// bucket, in time order, so peaks survive.
-fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
+pub fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
     let points: Vec<(f64, f64)> = time
         .iter()
         .copied()
@@ -93,9 +126,58 @@ fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
     out
 }
 
+/// The pieces of a polyline inside `lo ≤ y ≤ hi`: segments that leave the
+/// band are cut where they cross its edge, non-finite points break the line.
+/// Pieces have at least two points.
+pub fn clip_band(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>> {
+    fn flush(piece: &mut Vec<(f64, f64)>, pieces: &mut Vec<Vec<(f64, f64)>>) {
+        if piece.len() >= 2 {
+            pieces.push(std::mem::take(piece));
+        } else {
+            piece.clear();
+        }
+    }
+    let mut pieces = Vec::new();
+    let mut piece: Vec<(f64, f64)> = Vec::new();
+    for w in points.windows(2) {
+        let (p, q) = (w[0], w[1]);
+        if ![p.0, p.1, q.0, q.1].iter().all(|v| v.is_finite()) {
+            flush(&mut piece, &mut pieces);
+            continue;
+        }
+        let dy = q.1 - p.1;
+        let (mut t0, mut t1) = (0.0f64, 1.0f64);
+        if dy == 0.0 {
+            if p.1 < lo || p.1 > hi {
+                flush(&mut piece, &mut pieces);
+                continue;
+            }
+        } else {
+            let (ta, tb) = ((lo - p.1) / dy, (hi - p.1) / dy);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+            if t0 > t1 {
+                flush(&mut piece, &mut pieces);
+                continue;
+            }
+        }
+        let at = |t: f64| (p.0 + t * (q.0 - p.0), (p.1 + t * dy).clamp(lo, hi));
+        if t0 > 0.0 || piece.is_empty() {
+            flush(&mut piece, &mut pieces);
+            piece.push(at(t0));
+        }
+        piece.push(at(t1));
+        if t1 < 1.0 {
+            flush(&mut piece, &mut pieces);
+        }
+    }
+    flush(&mut piece, &mut pieces);
+    pieces
+}
+
 /// The y range: the measurement's, widened to the simulation's unless the
 /// simulation runs far off (then it leaves the panel rather than flatten the data).
-fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) {
+pub fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) {
     let bounds = |pts: &[(f64, f64)]| {
         pts.iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
@@ -196,6 +278,36 @@ mod tests {
         assert!(pts.len() <= MAX_POINTS);
         assert!(pts.windows(2).all(|w| w[0].0 <= w[1].0));
         assert!(pts.contains(&(12_345.0, 7.0)) && pts.contains(&(54_321.0, -3.0)));
+    }
+
+    #[test]
+    fn clipping_cuts_at_the_band_edges() {
+        let pts = [
+            (0.0, 50.0),
+            (1.0, 150.0),
+            (2.0, 50.0),
+            (3.0, 60.0),
+            (4.0, f64::NAN),
+            (5.0, 10.0),
+            (6.0, 20.0),
+        ];
+        let pieces = clip_band(&pts, 0.0, 100.0);
+        assert_eq!(
+            pieces,
+            vec![
+                vec![(0.0, 50.0), (0.5, 100.0)],
+                vec![(1.5, 100.0), (2.0, 50.0), (3.0, 60.0)],
+                vec![(5.0, 10.0), (6.0, 20.0)],
+            ]
+        );
+        // Entirely outside, or a single point: nothing to draw.
+        assert!(clip_band(&[(0.0, -5.0), (1.0, -1.0)], 0.0, 100.0).is_empty());
+        assert!(clip_band(&[(0.0, 5.0)], 0.0, 100.0).is_empty());
+        // Crossing the whole band keeps the part inside.
+        assert_eq!(
+            clip_band(&[(0.0, -100.0), (2.0, 200.0)], 0.0, 100.0),
+            vec![vec![(2.0 / 3.0, 0.0), (4.0 / 3.0, 100.0)]]
+        );
     }
 
     #[test]

@@ -15,6 +15,7 @@ pub use interp::Interpreter;
 pub use leeway_structure as structure;
 pub use model::{Model, Signals, next_heading, planar_rotation};
 pub mod data;
+pub mod design;
 pub mod estimate;
 pub mod moments;
 pub mod signs;
