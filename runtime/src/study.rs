@@ -290,11 +290,14 @@ pub struct StudyOutcomes {
     pub outcomes: Vec<Vec<Vec<Vec<Outcome>>>>,
 }
 
-/// The seed of run `run` of case `case`.
-pub fn run_seed(seed: u64, case: usize, run: usize) -> u64 {
-    // SplitMix64 of the three numbers: distinct, well-mixed seeds per run.
+/// The seed of run `run` of a case. Keyed by the case's name (not its place
+/// in the list), so a study of one case draws the same experiments as that
+/// case of a study of both.
+pub fn run_seed(seed: u64, case: &Case, run: usize) -> u64 {
+    // FNV-1a of the name, then SplitMix64 of the three numbers.
+    let key = case.name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3));
     let mut z = seed
-        ^ (case as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (run as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
@@ -385,7 +388,7 @@ pub fn run_study(
                 &config.design,
                 config.cases[c].wind,
                 n_max,
-                run_seed(config.seed, c, r),
+                run_seed(config.seed, &config.cases[c], r),
             );
             let per_n = config
                 .n

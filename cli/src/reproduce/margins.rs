@@ -91,7 +91,7 @@ pub fn check(model: &dyn Model, config: &StudyConfig) -> DesignCheck {
                 &config.design,
                 config.cases[c].wind,
                 samples,
-                study::run_seed(config.seed, c, r),
+                study::run_seed(config.seed, &config.cases[c], r),
             );
             let arguments = sign_argument_ranges(model, &truth);
             let yaw_rate = [
