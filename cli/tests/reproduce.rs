@@ -533,7 +533,10 @@ fn high_wind_degrades_iv2_most_in_surge_on_paired_runs() {
     let config = StudyConfig {
         runs: 100,
         n: vec![5000],
-        cases: vec![Case { name: "high".into(), wind: 10.0 }],
+        cases: vec![Case {
+            name: "high".into(),
+            wind: 10.0,
+        }],
         ..StudyConfig::default()
     };
     let out = study::run_study(&Ship, &config, &|| {});
@@ -555,6 +558,9 @@ fn high_wind_degrades_iv2_most_in_surge_on_paired_runs() {
         .collect();
     eprintln!("IV3 − IV2 (mean, standard error) surge/sway/yaw: {stats:?}");
     let (surge, se) = stats[0];
-    assert!(surge > 2.0 && surge > 3.0 * se, "IV2 loses in surge: {stats:?}");
+    assert!(
+        surge > 2.0 && surge > 3.0 * se,
+        "IV2 loses in surge: {stats:?}"
+    );
     assert!(surge > stats[2].0, "more in surge than in yaw: {stats:?}");
 }

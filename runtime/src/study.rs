@@ -300,7 +300,9 @@ pub struct StudyOutcomes {
 /// case of a study of both.
 pub fn run_seed(seed: u64, case: &Case, run: usize) -> u64 {
     // FNV-1a of the name, then SplitMix64 of the three numbers.
-    let key = case.name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3));
+    let key = case.name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
+    });
     let mut z = seed
         ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         ^ (run as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
