@@ -230,20 +230,6 @@ pub struct AllEstimates {
     pub median: Vec<f64>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| !x.is_nan());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let m = v.len() / 2;
-    if v.len() % 2 == 1 {
-        v[m]
-    } else {
-        0.5 * (v[m - 1] + v[m])
-    }
-}
-
 /// Per case, the record lengths at which LS's median parameter error over
 /// every estimate is below IV3's: where LS is ahead (claim (a)'s breakpoint
 /// lies above the largest of them).
@@ -282,7 +268,7 @@ fn all_estimates(out: &StudyOutcomes) -> BTreeMap<String, BTreeMap<String, AllEs
                     .map(|o| o.param_error)
                     .collect();
                 a.estimated.push(errors.len());
-                a.median.push(median(errors));
+                a.median.push(study::median(errors));
             }
             estimators.insert(name.to_string(), a);
         }

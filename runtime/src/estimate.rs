@@ -466,6 +466,11 @@ impl EquationWalker<'_> {
         let mut fbuf = vec![0.0; n_out];
         let mut psi_z = 0.0;
         let mut sim_dist = vec![0.0; n_comp];
+        let measured: Vec<bool> = ir
+            .components
+            .iter()
+            .map(|c| ir.disturbances[c.disturbance].measured)
+            .collect();
         let mut k = 0usize;
         let mut diverged = false;
         // The reference simulation (previous instruments), stepped in lockstep.
@@ -564,13 +569,7 @@ impl EquationWalker<'_> {
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
 
-                    for c in 0..n_comp {
-                        sim_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured {
-                            d1[c]
-                        } else {
-                            mu[c]
-                        };
-                    }
+                    simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
                     let sig = Signals {
                         states: &x_sim,
                         inputs: &u1,
@@ -599,14 +598,7 @@ impl EquationWalker<'_> {
                     if let Some((theta_ref, mu_ref)) = reference {
                         let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
 
-                        for c in 0..n_comp {
-                            ref_dist[c] = if ir.disturbances[ir.components[c].disturbance].measured
-                            {
-                                d1[c]
-                            } else {
-                                mu_ref[c]
-                            };
-                        }
+                        simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
                         let sig = Signals {
                             states: &x_ref,
                             inputs: &u1,
@@ -646,6 +638,15 @@ impl EquationWalker<'_> {
             k += 1;
         });
         if diverged { Err(Diverged) } else { Ok(change) }
+    }
+}
+
+/// The disturbance values a simulation step uses: measured components as
+/// recorded (one sample back), unmeasured ones at the current estimate of
+/// their means.
+fn simulation_disturbances(measured: &[bool], recorded: &[f64], means: &[f64], out: &mut [f64]) {
+    for (((o, m), r), mean) in out.iter_mut().zip(measured).zip(recorded).zip(means) {
+        *o = if *m { *r } else { *mean };
     }
 }
 

@@ -467,7 +467,8 @@ pub struct CaseSummary {
     pub estimators: std::collections::BTreeMap<String, EstimatorSummary>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
+/// The median of the finite values (NaN when there are none).
+pub fn median(mut v: Vec<f64>) -> f64 {
     v.retain(|x| x.is_finite());
     if v.is_empty() {
         return f64::NAN;
