@@ -2,7 +2,9 @@
 //! DejaVu Sans is compiled in and registered before drawing). The backend
 //! follows the file's extension: `.png` a bitmap, anything else SVG.
 
+use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -175,6 +177,23 @@ pub fn clip_band(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>
     pieces
 }
 
+/// The mesh of every figure: the same fonts and grid, with these axis
+/// descriptions; callers add label formatters and draw it.
+pub fn styled_mesh<'a, 'b, DB: DrawingBackend>(
+    chart: &'a mut ChartContext<'b, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    x_desc: &str,
+    y_desc: &str,
+) -> MeshStyle<'b, 'a, RangedCoordf64, RangedCoordf64, DB> {
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(x_desc)
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 16))
+        .light_line_style(BLACK.mix(0.04))
+        .bold_line_style(BLACK.mix(0.12));
+    mesh
+}
+
 /// The y range: the measurement's, widened to the simulation's unless the
 /// simulation runs far off (then it leaves the panel rather than flatten the data).
 pub fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) {
@@ -227,15 +246,8 @@ fn draw_on<DB: DrawingBackend>(
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(e)?;
-        chart
-            .configure_mesh()
-            .x_desc("time (s)")
-            .y_desc(&p.y_label)
-            .label_style(("sans-serif", 15))
-            .axis_desc_style(("sans-serif", 17))
+        styled_mesh(&mut chart, "time (s)", &p.y_label)
             .x_label_formatter(&|x| format!("{x}"))
-            .light_line_style(BLACK.mix(0.04))
-            .bold_line_style(BLACK.mix(0.12))
             .draw()
             .map_err(e)?;
         let clip = |pts: Vec<(f64, f64)>| -> Vec<(f64, f64)> {

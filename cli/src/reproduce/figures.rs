@@ -6,7 +6,7 @@
 //! run 0 at the largest N).
 
 use super::Report;
-use crate::plot::{Figure, clip_band, save, y_range};
+use crate::plot::{Figure, clip_band, save, styled_mesh, y_range};
 use leeway_runtime::design::track;
 use leeway_runtime::simulate::{Disturbances, simulate};
 use leeway_runtime::study::{self, ESTIMATORS, OUTPUTS};
@@ -290,18 +290,15 @@ impl Figure for FitFigure {
                 .y_label_area_size(64)
                 .build_cartesian_2d(x0..x1, 0f64..100f64)
                 .map_err(e::<DB>)?;
-            chart
-                .configure_mesh()
-                .x_desc("N (samples in the estimation record)")
-                .y_desc("fit (%)")
-                .label_style((FONT, 15))
-                .axis_desc_style((FONT, 16))
-                .x_label_formatter(&|x| format!("{x:.0}"))
-                .y_label_formatter(&|y| format!("{y:.0}"))
-                .light_line_style(BLACK.mix(0.04))
-                .bold_line_style(BLACK.mix(0.12))
-                .draw()
-                .map_err(e::<DB>)?;
+            styled_mesh(
+                &mut chart,
+                "N (samples in the estimation record)",
+                "fit (%)",
+            )
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&|y| format!("{y:.0}"))
+            .draw()
+            .map_err(e::<DB>)?;
             for (i, (series, colour)) in self.series.iter().zip(COLOURS).enumerate() {
                 let offset = (i as f64 - 1.5) * dodge;
                 let points: Vec<(f64, f64)> = self
@@ -469,16 +466,9 @@ fn track_panel<DB: DrawingBackend>(
         .y_label_area_size(yl)
         .build_cartesian_2d((ce - ex)..(ce + ex), (cn - ny)..(cn + ny))
         .map_err(e::<DB>)?;
-    chart
-        .configure_mesh()
-        .x_desc("east (m)")
-        .y_desc("north (m)")
-        .label_style((FONT, 15))
-        .axis_desc_style((FONT, 16))
+    styled_mesh(&mut chart, "east (m)", "north (m)")
         .x_label_formatter(&|x| format!("{x:.0}"))
         .y_label_formatter(&|y| format!("{y:.0}"))
-        .light_line_style(BLACK.mix(0.04))
-        .bold_line_style(BLACK.mix(0.12))
         .draw()
         .map_err(e::<DB>)?;
     let en: Vec<(f64, f64)> = points.iter().map(|(n, east)| (*east, *n)).collect();
@@ -664,18 +654,9 @@ impl Figure for ValidationFigure {
                 .y_label_area_size(76)
                 .build_cartesian_2d(t0..t1, y0..y1)
                 .map_err(e::<DB>)?;
-            chart
-                .configure_mesh()
-                .x_desc("time (s)")
-                .y_desc(format!(
-                    "{} ({unit})",
-                    name.rsplit(' ').next().unwrap_or(name)
-                ))
-                .label_style((FONT, 15))
-                .axis_desc_style((FONT, 16))
+            let y_desc = format!("{} ({unit})", name.rsplit(' ').next().unwrap_or(name));
+            styled_mesh(&mut chart, "time (s)", &y_desc)
                 .x_label_formatter(&|x| format!("{x:.0}"))
-                .light_line_style(BLACK.mix(0.04))
-                .bold_line_style(BLACK.mix(0.12))
                 .draw()
                 .map_err(e::<DB>)?;
             let truth_style = ShapeStyle::from(&BLACK.mix(0.35)).stroke_width(5);
