@@ -28,6 +28,20 @@ pub struct CheckArgs {
     /// smallest set of experiments that identifies θ.
     #[arg(long = "pattern", value_name = "SPEC")]
     pub patterns: Vec<String>,
+    /// The instrument centring to analyse (it decides which constants are
+    /// annihilated). Default: the model's, as `leeway estimate` would choose it.
+    #[arg(long, value_enum)]
+    pub centring: Option<crate::estimate::CentringArg>,
+}
+
+impl CheckArgs {
+    fn options(&self, patterns: Option<Vec<leeway_structure::ir::SignPattern>>) -> Options {
+        Options {
+            aggregate: self.aggregate,
+            patterns,
+            centring: self.centring.map(crate::estimate::CentringArg::centring),
+        }
+    }
 }
 
 /// Runs `leeway check`.
@@ -80,23 +94,11 @@ pub fn run(args: &CheckArgs) -> Status {
 /// Compiles with the experiments given on the command line, if any.
 fn analyse(args: &CheckArgs, source: &str) -> Result<Compilation, String> {
     if args.patterns.is_empty() {
-        return Ok(compile(
-            source,
-            &Options {
-                aggregate: args.aggregate,
-                patterns: None,
-            },
-        ));
+        return Ok(compile(source, &args.options(None)));
     }
     // The sign arguments are known only after compiling: a first pass analyses one
     // all-plus experiment (no search), then the given experiments are analysed.
-    let probe = compile(
-        source,
-        &Options {
-            aggregate: args.aggregate,
-            patterns: Some(vec![Vec::new()]),
-        },
-    );
+    let probe = compile(source, &args.options(Some(vec![Vec::new()])));
     let Some(ir) = &probe.ir else {
         return Ok(probe);
     };
@@ -107,13 +109,7 @@ fn analyse(args: &CheckArgs, source: &str) -> Result<Compilation, String> {
             parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}"))
         })
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(compile(
-        source,
-        &Options {
-            aggregate: args.aggregate,
-            patterns: Some(patterns),
-        },
-    ))
+    Ok(compile(source, &args.options(Some(patterns))))
 }
 
 fn status_of(c: &Compilation) -> Status {

@@ -12,7 +12,8 @@ use crate::model::{heading_gains, heading_warnings, load, load_data, load_option
 use crate::output::{Status, err, headline, out, print_json, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_runtime::{
-    Centring, Estimate, Initial, Instruments, Interpreter, Method, Options, Source, estimate,
+    Centring, Combine, Estimate, Initial, Instruments, Interpreter, Method, Options, Source,
+    estimate,
 };
 use std::path::PathBuf;
 
@@ -42,9 +43,15 @@ pub struct EstimateArgs {
     /// θ of the first instrument simulation: a delayed-instrument estimate, or the nominal model.
     #[arg(long, value_enum, default_value_t = InitialArg::Delayed)]
     pub initial: InitialArg,
-    /// Centre the instruments per experiment (consistent under a disturbance mean), pooled, or not at all.
-    #[arg(long, value_enum, default_value_t = CentringArg::Experiment)]
-    pub centring: CentringArg,
+    /// Centre the instruments per experiment (consistent under a disturbance mean), pooled,
+    /// or not at all. Default: per experiment when the model has a disturbance the method
+    /// does not take from data, none otherwise (the output says which and why).
+    #[arg(long, value_enum)]
+    pub centring: Option<CentringArg>,
+    /// Combine the experiments' moment equations summed (the pooled IV estimator) or
+    /// stacked and solved by least squares (the paper's eq. IV_problem as written).
+    #[arg(long, value_enum, default_value_t = CombineArg::Summed)]
+    pub combine: CombineArg,
     /// When θ is not identifiable from these data, estimate its identifiable combinations
     /// (absorbed parameters held at their nominal values).
     #[arg(long)]
@@ -109,6 +116,26 @@ pub enum CentringArg {
     None,
 }
 
+impl CentringArg {
+    /// The runtime's centring.
+    pub fn centring(self) -> Centring {
+        match self {
+            CentringArg::Experiment => Centring::Experiment,
+            CentringArg::Pooled => Centring::Pooled,
+            CentringArg::None => Centring::None,
+        }
+    }
+}
+
+/// `--combine`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CombineArg {
+    /// `(Σ H_i) ϑ = Σ g_i`: one system over all experiments.
+    Summed,
+    /// `[H_1/n_1; …] ϑ = [g_1/n_1; …]` by least squares.
+    Stacked,
+}
+
 /// A positive, finite number (`--step`).
 pub fn positive(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
@@ -134,10 +161,10 @@ impl EstimateArgs {
                 InitialArg::Delayed => Initial::Delayed,
                 InitialArg::Nominal => Initial::Nominal,
             },
-            centring: match self.centring {
-                CentringArg::Experiment => Centring::Experiment,
-                CentringArg::Pooled => Centring::Pooled,
-                CentringArg::None => Centring::None,
+            centring: self.centring.map(CentringArg::centring),
+            combine: match self.combine {
+                CombineArg::Summed => Combine::Summed,
+                CombineArg::Stacked => Combine::Stacked,
             },
             nominal,
             max_refinements: self.max_refinements,

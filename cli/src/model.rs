@@ -42,6 +42,7 @@ pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
         &Options {
             aggregate,
             patterns: None,
+            centring: None,
         },
     );
     let Some(ir) = compilation.ir else {

@@ -96,6 +96,7 @@ impl MacroInput {
         Options {
             aggregate: self.aggregate,
             patterns: None,
+            centring: None,
         }
     }
 }

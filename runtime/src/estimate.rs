@@ -21,8 +21,10 @@ use crate::moments::{CrossMoments, LongRun};
 use crate::signs::{ExperimentSigns, detect};
 use leeway_structure::exact::Q;
 use leeway_structure::grammar::EquationKind;
+pub use leeway_structure::identify::Centring;
 use leeway_structure::identify::{
-    Analysis, ExperimentStructure, Patterns, linear_text, patterns_text, verdict,
+    Analysis, ExperimentStructure, Patterns, constant_parameters, linear_text, patterns_text,
+    verdict,
 };
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, Rotation};
 use nalgebra::{DMatrix, DVector};
@@ -100,16 +102,27 @@ pub enum Initial {
     Delayed,
 }
 
-/// How instruments are centred.
+/// How the experiments' moment equations are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Centring {
-    /// Zero mean per experiment (consistent when disturbances have a mean).
-    Experiment,
-    /// Zero mean over all experiments pooled.
-    Pooled,
-    /// No centring.
-    None,
+pub enum Combine {
+    /// `(Σᵢ Hᵢ) ϑ = Σᵢ gᵢ`: the pooled IV estimator (default). With model
+    /// error every run's equations have their own solution; summing weighs
+    /// runs by their length and keeps one consistent system.
+    Summed,
+    /// `[H₁/n₁; …; H_E/n_E] ϑ = [g₁/n₁; …]` solved by least squares: the
+    /// paper's eq. (IV_problem) as written.
+    Stacked,
+}
+
+impl Combine {
+    /// `summed`, `stacked`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Combine::Summed => "summed",
+            Combine::Stacked => "stacked",
+        }
+    }
 }
 
 /// Estimation options.
@@ -121,8 +134,12 @@ pub struct Options {
     pub instruments: Instruments,
     /// The θ the first instrument simulation uses (simulated instruments).
     pub initial: Initial,
-    /// Instrument centring.
-    pub centring: Centring,
+    /// Instrument centring (`None`: the model's default,
+    /// [`Centring::for_model`]: per experiment when the model has a
+    /// disturbance the predictor does not take from data, none otherwise).
+    pub centring: Option<Centring>,
+    /// How the experiments' moment equations are combined.
+    pub combine: Combine,
     /// θ of the nominal model (default: the model's `nominal { }`).
     pub nominal: Option<Vec<f64>>,
     /// Most re-simulations of the refined IV.
@@ -154,7 +171,8 @@ impl Default for Options {
             method: Method::Iv3,
             instruments: Instruments::Simulated,
             initial: Initial::Delayed,
-            centring: Centring::Experiment,
+            centring: None,
+            combine: Combine::Summed,
             nominal: None,
             max_refinements: 8,
             tolerance: 1e-3,
@@ -224,6 +242,8 @@ pub struct Diagnostics {
     pub instruments: String,
     /// Centring used, and why it is valid.
     pub centring: String,
+    /// `summed` or `stacked`: how the experiments' equations were combined.
+    pub combine: String,
     /// Lags of the long-run covariance.
     pub lags: usize,
     /// Combinations the data did not excite, in the model's names.
@@ -253,6 +273,9 @@ pub struct Estimate {
     pub diagnostics: Diagnostics,
     /// Warnings.
     pub warnings: Vec<String>,
+    /// Notes: facts about the data worth knowing that need no action (e.g.
+    /// where a pointwise modulus of a noisy state crosses zero).
+    pub notes: Vec<String>,
 }
 
 impl Estimate {
@@ -299,6 +322,10 @@ struct FixedSignColumn {
 #[derive(Clone, Debug)]
 struct ExperimentInfo {
     signs: Vec<f64>,
+    /// Pointwise sign arguments on plain states whose sign changes in this
+    /// experiment: `(sign argument, state)`; their sign is taken sample by
+    /// sample from the point the regressors are evaluated at.
+    varying: Vec<(usize, usize)>,
     fixed_sign_columns: Vec<FixedSignColumn>,
     measured_mean: Vec<f64>,
     bound: Vec<f64>,
@@ -316,6 +343,14 @@ struct Block {
 /// Fewest equations per column of the largest block (a bare minimum for the
 /// moment matrices to have full rank with some margin).
 const MIN_EQUATIONS_PER_COLUMN: usize = 3;
+
+/// A moment column below this many machine epsilons per equation of its
+/// Cauchy–Schwarz scale is rounding residue, not information.
+const RESIDUE_EPSILONS: f64 = 64.0;
+
+/// Condition number of the equilibrated moment matrix above which an
+/// estimate is reported as ill-conditioned, naming the columns involved.
+const CONDITION_WARNING: f64 = 1e8;
 
 /// Fit points by which a refinement's simulation may fall below the best
 /// earlier iterate before the refinement counts as running away.
@@ -348,6 +383,8 @@ struct BlockSolution {
     /// Instrument rows (predictor columns) of ζ.
     rows: Vec<usize>,
     condition: f64,
+    /// Columns that dominate the weakest direction when ill-conditioned.
+    weak: Vec<usize>,
 }
 
 /// Visits every equation of an experiment: `f(z, φ, t)` with dense buffers
@@ -493,6 +530,8 @@ impl EquationWalker<'_> {
         let (mut rh1, mut rh2) = ([1.0, 0.0], [1.0, 0.0]);
         let mut fix_acc = vec![0.0; n_out];
         let mut fix_set = vec![false; n_out];
+        // Signs of the pointwise moduli, sample by sample where they change.
+        let mut signs = info.signs.clone();
         e.visit(&mut |row| {
             if diverged {
                 return;
@@ -512,8 +551,8 @@ impl EquationWalker<'_> {
                         rotation: if planar.is_some() { &rh1 } else { &rot1 },
                         disturbances: &d1,
                     };
-                    self.model
-                        .regressors(self.kind, &sig, &info.signs, &mut phi);
+                    pointwise_signs(&mut signs, &info.varying, &y1);
+                    self.model.regressors(self.kind, &sig, &signs, &mut phi);
                     match self.instruments {
                         None => z.copy_from_slice(&phi),
                         Some(Instruments::Simulated) => {
@@ -523,7 +562,8 @@ impl EquationWalker<'_> {
                                 rotation: if planar.is_some() { &rz } else { &rot2 },
                                 disturbances: &info.measured_mean,
                             };
-                            self.model.regressors(self.kind, &sig, &info.signs, &mut z);
+                            pointwise_signs(&mut signs, &info.varying, &x_sim);
+                            self.model.regressors(self.kind, &sig, &signs, &mut z);
                             for fixed in &info.fixed_sign_columns {
                                 fix_set.fill(false);
                                 for (term, o, signs) in &fixed.terms {
@@ -555,7 +595,8 @@ impl EquationWalker<'_> {
                                 rotation: if planar.is_some() { &rh2 } else { &rot2 },
                                 disturbances: dist,
                             };
-                            self.model.regressors(self.kind, &sig, &info.signs, &mut z);
+                            pointwise_signs(&mut signs, &info.varying, &y2);
+                            self.model.regressors(self.kind, &sig, &signs, &mut z);
                         }
                     }
                     for (o, eq) in ir.equations.iter().enumerate() {
@@ -641,6 +682,16 @@ impl EquationWalker<'_> {
     }
 }
 
+/// Sets the sign of each pointwise modulus whose argument (a plain state)
+/// changes sign in the experiment from the states the regressors are
+/// evaluated at: `|x| = sign(x)·x`, exactly as the simulation evaluates it.
+#[inline]
+fn pointwise_signs(signs: &mut [f64], varying: &[(usize, usize)], states: &[f64]) {
+    for &(i, l) in varying {
+        signs[i] = if states[l] < 0.0 { -1.0 } else { 1.0 };
+    }
+}
+
 /// The disturbance values a simulation step uses: measured components as
 /// recorded (one sample back), unmeasured ones at the current estimate of
 /// their means.
@@ -679,6 +730,11 @@ struct Estimator<'a> {
     ir: &'a Ir,
     options: &'a Options,
     kind: PredictorKind,
+    /// The centring used (the option, or the model's default).
+    centring: Centring,
+    /// Constant θ columns (`X_0`): under pooled centring their instrument,
+    /// the constant, is not centred.
+    constant_cols: Vec<bool>,
     n_cols: usize,
     blocks: Vec<Block>,
     block_of_output: Vec<usize>,
@@ -710,13 +766,6 @@ pub fn estimate(
             "pass at least one --data file",
         ));
     }
-    if options.method == Method::Ls && options.centring == Centring::None {
-        return Err(err(
-            "invalid-option",
-            "least squares needs an intercept: --centring none is not available for ls",
-            "use --centring experiment (an intercept per output and experiment) or pooled",
-        ));
-    }
     let nominal = match &options.nominal {
         Some(v) if v.len() == ir.parameters.len() => v.clone(),
         Some(v) => {
@@ -733,7 +782,11 @@ pub fn estimate(
         None => ir.parameters.iter().map(|p| p.nominal).collect(),
     };
     let kind = options.method.predictor();
+    let centring = options
+        .centring
+        .unwrap_or_else(|| Centring::for_model(ir, kind));
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     // Sign patterns, measured means, bounds and heading spread, in one visit each.
     let mut sign_patterns = Vec::new();
     let mut infos = Vec::new();
@@ -771,6 +824,23 @@ pub fn estimate(
                 warnings.push(msg);
             }
         }
+        for (a, crossings) in s.pointwise.iter().zip(&s.crossings) {
+            let plain = ir
+                .sign_args
+                .iter()
+                .any(|x| x.pointwise && x.name == a.argument);
+            if plain && a.minority_fraction > 0.0 {
+                notes.push(format!(
+                    "experiment `{}`: {} changes sign {crossings} time{} ({:.1}% of the samples have the minority sign): |{}| is evaluated pointwise, as the simulation does; where it is within the noise of zero, measurement noise biases |{}| slightly upwards",
+                    s.experiment,
+                    a.argument,
+                    if *crossings == 1 { "" } else { "s" },
+                    100.0 * a.minority_fraction,
+                    a.argument,
+                    a.argument
+                ));
+            }
+        }
         infos.push(experiment_info(ir, *e, &s, options));
         sign_patterns.push(s);
     }
@@ -787,13 +857,16 @@ pub fn estimate(
         model,
         options,
         kind,
+        centring,
         nominal,
         infos,
         &sign_patterns,
         warnings,
     )?;
     est.check_length(experiments)?;
-    est.run(experiments, sign_patterns)
+    let mut estimate = est.run(experiments, sign_patterns)?;
+    estimate.notes = notes;
+    Ok(estimate)
 }
 
 fn experiment_info(
@@ -900,8 +973,24 @@ fn experiment_info(
             }
         }
     }
+    let varying = s
+        .pointwise
+        .iter()
+        .filter(|a| a.minority_fraction > 0.0)
+        .filter_map(|a| {
+            let i = ir
+                .sign_args
+                .iter()
+                .position(|x| x.pointwise && x.name == a.argument)?;
+            match ir.sign_args[i].arg.signal {
+                leeway_structure::ir::Signal::State(l) => Some((i, l)),
+                leeway_structure::ir::Signal::Input(_) => None,
+            }
+        })
+        .collect();
     ExperimentInfo {
         signs: s.pattern.iter().map(|v| f64::from(*v)).collect(),
+        varying,
         fixed_sign_columns,
         measured_mean,
         bound: max_abs.iter().map(|m| 100.0 * (1.0 + m)).collect(),
@@ -915,6 +1004,7 @@ impl<'a> Estimator<'a> {
         model: &'a dyn Model,
         options: &'a Options,
         kind: PredictorKind,
+        centring: Centring,
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,
         signs: &[ExperimentSigns],
@@ -923,7 +1013,10 @@ impl<'a> Estimator<'a> {
         let ir = model.ir();
         let columns = ir.predictors.get(kind);
         let n_cols = columns.len();
-        let analysis = Analysis::new(ir, kind);
+        let analysis = Analysis::with_centring(ir, kind, centring);
+        let constant_cols: Vec<bool> = (0..n_cols)
+            .map(|c| !columns[c].kind.is_nuisance() && analysis.structural.is_constant(c))
+            .collect();
         let exps: Vec<ExperimentStructure> = signs
             .iter()
             .zip(&infos)
@@ -955,9 +1048,18 @@ impl<'a> Estimator<'a> {
             };
             let combos: Vec<String> = v.combinations.iter().map(|c| c.message.clone()).collect();
             let remark2 = infos.iter().any(|i| i.frozen.is_some());
+            let constants = constant_parameters(ir);
+            let only_constants = v
+                .combinations
+                .iter()
+                .all(|c| c.parameters.iter().all(|p| constants.contains(p)));
             if !options.aggregate {
                 let required = analysis.required_patterns();
                 let hint = match (&required, remark2) {
+                    _ if only_constants && centring != Centring::None => format!(
+                        "a constant term is estimable with uncentred instruments (--centring none: {}), or with --centring pooled; or remove the term",
+                        Centring::None.reason(ir, kind)
+                    ),
                     (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
                     (Some(r), false) if !r.is_empty() => format!(
                         "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",
@@ -1061,6 +1163,8 @@ impl<'a> Estimator<'a> {
             ir,
             options,
             kind,
+            centring,
+            constant_cols,
             n_cols,
             blocks,
             block_of_output,
@@ -1074,6 +1178,10 @@ impl<'a> Estimator<'a> {
             aggregates,
             terms: crate::interp::term_plans(ir),
         })
+    }
+
+    fn combine(&self) -> Combine {
+        self.options.combine
     }
 
     /// Refuses records too short for the number of columns estimated together.
@@ -1175,35 +1283,59 @@ impl<'a> Estimator<'a> {
         Ok((all, change, fit))
     }
 
-    /// Moment equations `(H_i, g_i)` of experiment `i`, block `b` (sums, not means).
+    /// The centre of output `o`'s instruments in experiment `i`: their mean
+    /// there (per experiment), over all experiments (pooled; a constant
+    /// column's instrument stays uncentred, it is the intercept), or zero.
+    fn centre(&self, moments: &[Vec<CrossMoments>], i: usize, o: usize) -> DVector<f64> {
+        let m = self.blocks[self.block_of_output[o]].cols.len();
+        match self.centring {
+            Centring::Experiment => moments[i][o].mean_z(),
+            Centring::None => DVector::zeros(m),
+            Centring::Pooled => {
+                let total: usize = moments.iter().map(|e| e[o].n).sum();
+                let mut pooled = moments
+                    .iter()
+                    .fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64)
+                    / total.max(1) as f64;
+                for (j, c) in self.blocks[self.block_of_output[o]].cols.iter().enumerate() {
+                    if self.constant_cols[*c] {
+                        pooled[j] = 0.0;
+                    }
+                }
+                pooled
+            }
+        }
+    }
+
+    /// Moment equations `(H_i, g_i)` of experiment `i`, block `b` (sums, not
+    /// means), and for each column the scale `Σ_o ‖z̃_o‖·‖φ_o,j‖` that bounds
+    /// its moments (Cauchy–Schwarz): a column far below it is rounding residue.
     fn equations(
         &self,
         moments: &[Vec<CrossMoments>],
         i: usize,
         b: usize,
-    ) -> (DMatrix<f64>, DVector<f64>) {
+    ) -> (DMatrix<f64>, DVector<f64>, Vec<f64>) {
         let block = &self.blocks[b];
         let m = block.cols.len();
         let mut h = DMatrix::zeros(m, m);
         let mut g = DVector::zeros(m);
+        let mut bound = vec![0.0; m];
         for &o in &block.outputs {
             let acc = &moments[i][o];
-            let (ho, go) = match self.options.centring {
+            let c = self.centre(moments, i, o);
+            let (ho, go) = match self.centring {
                 Centring::Experiment => acc.centred(),
-                Centring::None => acc.about(&DVector::zeros(m)),
-                Centring::Pooled => {
-                    let total: usize = moments.iter().map(|e| e[o].n).sum();
-                    let pooled = moments
-                        .iter()
-                        .fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64)
-                        / total.max(1) as f64;
-                    acc.about(&pooled)
-                }
+                _ => acc.about(&c),
             };
+            let zn = acc.z_energy(&c).sqrt();
+            for (bj, pe) in bound.iter_mut().zip(acc.phi_energy()) {
+                *bj += zn * pe.sqrt();
+            }
             h += ho;
             g += go;
         }
-        (h, g)
+        (h, g, bound)
     }
 
     /// Solves every block; collects numeric rank findings.
@@ -1218,30 +1350,54 @@ impl<'a> Estimator<'a> {
             let cols = self.blocks[b].cols.clone();
             let m = cols.len();
             let e_count = moments.len();
-            // The stacked system M ϑ = g (IV), or pooled normal equations (LS).
-            let (mat, rhs, scale_rows): (DMatrix<f64>, DVector<f64>, Vec<f64>) =
-                if self.options.method == Method::Ls {
+            // The summed system (Σ H_i) ϑ = Σ g_i (IV by default, and LS's
+            // normal equations), or the stacked one [H_i/n_i] ϑ = [g_i/n_i].
+            let summed = self.options.method == Method::Ls || self.combine() == Combine::Summed;
+            let (mut mat, rhs, scale_rows, bound): (DMatrix<f64>, DVector<f64>, Vec<f64>, Vec<f64>) =
+                if summed {
                     let mut a = DMatrix::zeros(m, m);
                     let mut g = DVector::zeros(m);
+                    let mut bound = vec![0.0; m];
                     for i in 0..e_count {
-                        let (h, gi) = self.equations(moments, i, b);
+                        let (h, gi, bi) = self.equations(moments, i, b);
                         a += h;
                         g += gi;
+                        for (s, v) in bound.iter_mut().zip(bi) {
+                            *s += v;
+                        }
                     }
-                    (a, g, vec![1.0; e_count])
+                    (a, g, vec![1.0; e_count], bound)
                 } else {
                     let mut a = DMatrix::zeros(m * e_count, m);
                     let mut g = DVector::zeros(m * e_count);
                     let mut scales = Vec::new();
+                    let mut bound = vec![0.0; m];
                     for i in 0..e_count {
-                        let (h, gi) = self.equations(moments, i, b);
+                        let (h, gi, bi) = self.equations(moments, i, b);
                         let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
                         a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
                         g.rows_mut(i * m, m).copy_from(&(gi / n));
                         scales.push(1.0 / n);
+                        for (s, v) in bound.iter_mut().zip(bi) {
+                            *s += v / n;
+                        }
                     }
-                    (a, g, scales)
+                    (a, g, scales, bound)
                 };
+            // Scale-aware residue test over the whole system: a column whose
+            // moments are at the rounding level of its own scale carries no
+            // information, whatever the units (equilibration would otherwise
+            // blow the residue up into a column).
+            let equations: usize = moments
+                .iter()
+                .map(|e| e[self.blocks[b].outputs[0]].n)
+                .sum();
+            let residue = RESIDUE_EPSILONS * f64::EPSILON * (equations.max(1) as f64);
+            for (j, bj) in bound.iter().enumerate() {
+                if mat.column(j).norm() <= residue * bj {
+                    mat.column_mut(j).fill(0.0);
+                }
+            }
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by_key(|j| self.preference[cols[*j]]);
             let sel = select_columns(&mat, &order, self.options.rank_tolerance);
@@ -1330,12 +1486,22 @@ impl<'a> Estimator<'a> {
             let kj: Vec<usize> = sel.kept.clone();
             let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
             let (values, pinv, condition) = solve_equilibrated(&mk, &g);
+            let weak = if condition > CONDITION_WARNING {
+                weakest_direction(&mk)
+                    .into_iter()
+                    .map(|k| kept[k])
+                    .collect()
+            } else {
+                Vec::new()
+            };
             // B_i: ϑ_K = pinv · g, with g's experiment-i rows = (Σ_k ζ_k)·scale_i.
             let b_list = if self.options.method == Method::Ls {
                 // ϑ = A⁻¹ Σ ζ restricted to the kept rows.
                 let rows_idx = kj.clone();
                 let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
                 vec![sub; e_count]
+            } else if summed {
+                vec![pinv.clone(); e_count]
             } else {
                 (0..e_count)
                     .map(|i| pinv.columns(i * m, m) * scale_rows[i])
@@ -1353,6 +1519,7 @@ impl<'a> Estimator<'a> {
                 b: b_list,
                 rows,
                 condition,
+                weak,
             });
         }
         if !errors.is_empty() {
@@ -1741,16 +1908,6 @@ impl<'a> Estimator<'a> {
             offsets.push(total);
             total += s.rows.len();
         }
-        let pooled: Vec<DVector<f64>> = (0..self.ir.states.len())
-            .map(|o| {
-                let m = self.blocks[self.block_of_output[o]].cols.len();
-                let count: usize = moments.iter().map(|e| e[o].n).sum();
-                moments
-                    .iter()
-                    .fold(DVector::zeros(m), |s, e| s + e[o].mean_z() * e[o].n as f64)
-                    / count.max(1) as f64
-            })
-            .collect();
         // Dense values by column, and each ζ row's index within its block.
         let dense: Vec<f64> = (0..n)
             .map(|c| values.get(&c).copied().unwrap_or(0.0))
@@ -1772,11 +1929,7 @@ impl<'a> Estimator<'a> {
         for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
             // Centres and mean residuals per output.
             let centres: Vec<DVector<f64>> = (0..self.ir.states.len())
-                .map(|o| match self.options.centring {
-                    Centring::Experiment => moments[i][o].mean_z(),
-                    Centring::Pooled => pooled[o].clone(),
-                    Centring::None => DVector::zeros(moments[i][o].mean_z().len()),
-                })
+                .map(|o| self.centre(moments, i, o))
                 .collect();
             let mean_res: Vec<f64> = (0..self.ir.states.len())
                 .map(|o| {
@@ -1869,6 +2022,7 @@ impl<'a> Estimator<'a> {
         let names = leeway_structure::identify::Names {
             ir: self.ir,
             columns: cols,
+            centring: self.centring,
         };
         let columns: Vec<ColumnEstimate> = cols
             .iter()
@@ -1934,16 +2088,25 @@ impl<'a> Estimator<'a> {
             self.disturbance_means(&values, &theta, cov.as_ref())
         };
         let condition = sol.iter().map(|s| s.condition).fold(0.0, f64::max);
-        if condition > 1e8 {
-            self.warnings.push(format!("the moment matrix is ill-conditioned (condition number {condition:.2e}): some directions are weakly excited"));
+        for s in sol.iter().filter(|s| s.condition > CONDITION_WARNING) {
+            let weak: Vec<&str> = s.weak.iter().map(|c| cols[*c].name.as_str()).collect();
+            self.warnings.push(format!(
+                "the moment matrix is ill-conditioned (condition number {:.2e}): the weakest direction involves {}, whose estimates are unreliable (nearly collinear, or barely excited by these data)",
+                s.condition,
+                if weak.is_empty() { "several columns".to_string() } else { weak.join(", ") }
+            ));
         }
         let structural_kept: usize = self.blocks.iter().map(|b| b.cols.len()).sum();
-        let centring = match (self.options.method, self.options.centring) {
-            (Method::Ls, Centring::Experiment) => "intercept per output and experiment (least squares keeps the constants that cos² = 1 − sin² and the disturbance means create)".to_string(),
-            (Method::Ls, _) => "one intercept per output over all experiments".to_string(),
-            (_, Centring::Experiment) => "instruments centred per experiment: they annihilate constant regressors and the means of w and v, which keeps IV consistent when disturbances have a mean (paper A9)".to_string(),
-            (_, Centring::Pooled) => "instruments centred over all experiments pooled: keeps between-experiment information of regressors nearly constant within a run; valid when the disturbance means and constant regressors are the same in every experiment".to_string(),
-            (_, Centring::None) => "instruments not centred: valid only when every disturbance and every constant regressor has zero mean".to_string(),
+        let how = if self.options.centring.is_some() {
+            "as asked"
+        } else {
+            "the default for this model"
+        };
+        let centring = match (self.options.method, self.centring) {
+            (Method::Ls, Centring::Experiment) => format!("experiment ({how}): an intercept per output and experiment — least squares keeps the constants that cos² = 1 − sin² and the disturbance means create; {}", self.centring.reason(self.ir, self.kind)),
+            (Method::Ls, Centring::Pooled) => format!("pooled ({how}): one intercept per output over all experiments (the model's constant term where it has one); {}", self.centring.reason(self.ir, self.kind)),
+            (Method::Ls, Centring::None) => format!("none ({how}): no intercept beyond the model's constant terms; {}", self.centring.reason(self.ir, self.kind)),
+            (_, c) => format!("{} ({how}): {}", c.name(), c.reason(self.ir, self.kind)),
         };
         let instruments = match (self.options.method, self.options.instruments) {
             (Method::Ls, _) => "none (least squares: the regressors themselves)".to_string(),
@@ -1980,11 +2143,17 @@ impl<'a> Estimator<'a> {
                 converged,
                 instruments,
                 centring,
+                combine: if self.options.method == Method::Ls {
+                    "summed (least squares: the normal equations of all experiments)".to_string()
+                } else {
+                    self.combine().name().to_string()
+                },
                 lags: self.options.lags,
                 unexcited: self.unexcited.clone(),
                 aggregates: self.aggregates.clone(),
             },
             warnings: self.warnings.clone(),
+            notes: Vec::new(),
         })
     }
 }
@@ -2070,6 +2239,27 @@ pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Sel
         })
         .collect();
     Selection { kept, dropped }
+}
+
+/// The columns (indices into `m`) that dominate the right singular vector
+/// of the smallest singular value of the column-equilibrated `m`.
+fn weakest_direction(m: &DMatrix<f64>) -> Vec<usize> {
+    let cols = m.ncols();
+    if cols == 0 || m.nrows() == 0 {
+        return Vec::new();
+    }
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let svd = scaled.svd(false, true);
+    let Some(vt) = svd.v_t else {
+        return Vec::new();
+    };
+    let (weakest, _) = svd.singular_values.argmin();
+    let v = vt.row(weakest);
+    let top = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    (0..cols).filter(|j| v[*j].abs() >= 0.3 * top).collect()
 }
 
 /// Least-squares solution of `M x = g` with column equilibration; returns

@@ -26,6 +26,6 @@ pub mod write;
 
 pub use data::{DataError, Experiment, Row, Source, load_csv};
 pub use estimate::{
-    Centring, Estimate, EstimateError, Initial, Instruments, Method, Options, estimate,
+    Centring, Combine, Estimate, EstimateError, Initial, Instruments, Method, Options, estimate,
 };
 pub use write::write_csv;

@@ -22,6 +22,10 @@ pub struct CrossMoments {
     s_z: Vec<f64>,
     s_phi: Vec<f64>,
     s_t: f64,
+    /// `Σ (z − z₀)²` and `Σ (φ − φ₀)²` per entry: the scales against which a
+    /// moment is judged to be rounding residue.
+    s_zz: Vec<f64>,
+    s_pp: Vec<f64>,
     dz: Vec<f64>,
     dphi: Vec<f64>,
 }
@@ -41,6 +45,8 @@ impl CrossMoments {
             s_z: vec![0.0; m],
             s_phi: vec![0.0; p],
             s_t: 0.0,
+            s_zz: vec![0.0; m],
+            s_pp: vec![0.0; p],
             dz: vec![0.0; m],
             dphi: vec![0.0; p],
         }
@@ -66,12 +72,20 @@ impl CrossMoments {
                 *s += zi * f;
             }
         }
-        for ((s, sz), &zi) in self.s_zt.iter_mut().zip(self.s_z.iter_mut()).zip(&self.dz) {
+        for (((s, sz), szz), &zi) in self
+            .s_zt
+            .iter_mut()
+            .zip(self.s_z.iter_mut())
+            .zip(self.s_zz.iter_mut())
+            .zip(&self.dz)
+        {
             *s += zi * dt;
             *sz += zi;
+            *szz += zi * zi;
         }
-        for (s, &f) in self.s_phi.iter_mut().zip(&self.dphi) {
+        for ((s, spp), &f) in self.s_phi.iter_mut().zip(self.s_pp.iter_mut()).zip(&self.dphi) {
             *s += f;
+            *spp += f * f;
         }
         self.s_t += dt;
         self.n += 1;
@@ -100,6 +114,27 @@ impl CrossMoments {
         } else {
             self.t0 + self.s_t / self.n as f64
         }
+    }
+
+    /// `Σ_k ‖z(k) − c‖²`: the instruments' energy about a centre `c`.
+    pub fn z_energy(&self, c: &DVector<f64>) -> f64 {
+        let n = self.n as f64;
+        (0..self.m)
+            .map(|i| {
+                let d = self.z0[i] - c[i];
+                (self.s_zz[i] + 2.0 * d * self.s_z[i] + n * d * d).max(0.0)
+            })
+            .sum()
+    }
+    /// `Σ_k φ_j(k)²` per regressor (uncentred).
+    pub fn phi_energy(&self) -> Vec<f64> {
+        let n = self.n as f64;
+        (0..self.p)
+            .map(|j| {
+                let a = self.phi0[j];
+                (self.s_pp[j] + 2.0 * a * self.s_phi[j] + n * a * a).max(0.0)
+            })
+            .collect()
     }
 
     /// The centred co-moments `Σ (z − z̄)(φ − φ̄)ᵀ` and `Σ (z − z̄)(t − t̄)`:

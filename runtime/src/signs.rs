@@ -5,7 +5,7 @@
 use crate::data::Source;
 use crate::interp::{ArgPlan, arg_plan};
 use crate::model::planar_rotation;
-use leeway_structure::identify::relevant_signs;
+use leeway_structure::identify::{pointwise_signs, relevant_signs};
 use leeway_structure::ir::{Ir, PredictorKind, Rotation, SignPattern};
 use serde::Serialize;
 
@@ -31,9 +31,12 @@ pub struct ExperimentSigns {
     pub pattern: SignPattern,
     /// The arguments the predictor fixes.
     pub arguments: Vec<ArgSign>,
-    /// Arguments relative to measured media that IV3 evaluates pointwise
-    /// (their signs may change; reported for information).
+    /// Arguments the predictor evaluates pointwise — plain states always,
+    /// measured media in IV3 — whose signs may change within the experiment
+    /// (the crossings are counted in `crossings`).
     pub pointwise: Vec<ArgSign>,
+    /// Zero crossings of each pointwise argument (same order as `pointwise`).
+    pub crossings: Vec<usize>,
 }
 
 impl ExperimentSigns {
@@ -55,12 +58,14 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
     } else {
         relevant_signs(ir, kind)
     };
-    let extra: Vec<usize> = if kind == PredictorKind::Measured {
+    // Plain states are pointwise in every predictor (IV1's too: its sign
+    // changes decide the structure seen by the data).
+    let extra: Vec<usize> = if kind == PredictorKind::Basic {
         (0..ir.sign_args.len())
-            .filter(|i| ir.sign_args[*i].measured)
+            .filter(|i| ir.sign_args[*i].pointwise)
             .collect()
     } else {
-        Vec::new()
+        pointwise_signs(ir, kind)
     };
     let n_fixed = args.len();
     let plans: Vec<(usize, ArgPlan, bool)> = args
@@ -73,6 +78,8 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         .collect();
     let mut pos = vec![0usize; plans.len()];
     let mut neg = vec![0usize; plans.len()];
+    let mut crossings = vec![0usize; plans.len()];
+    let mut last = vec![0i8; plans.len()];
     let mut n = 0usize;
     let planar = matches!(ir.rotation, Rotation::Planar { .. });
     source.visit(&mut |row| {
@@ -91,11 +98,17 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         };
         for (k, (_, plan, measured)) in plans.iter().enumerate() {
             let v = plan.eval(&sig, *measured);
-            if v > 0.0 {
+            let sign = if v > 0.0 {
                 pos[k] += 1;
+                1
             } else {
                 neg[k] += 1;
+                -1
+            };
+            if last[k] != 0 && last[k] != sign {
+                crossings[k] += 1;
             }
+            last[k] = sign;
         }
         n += 1;
     });
@@ -105,9 +118,9 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         .enumerate()
         .map(|(k, (i, _, measured))| {
             let sign = if neg[k] > pos[k] { -1 } else { 1 };
-            if k < n_fixed {
-                pattern[*i] = sign;
-            }
+            // Pointwise arguments get their majority sign too: it is the sign
+            // wherever they do not change sign (then the analysis uses it).
+            pattern[*i] = sign;
             let minority = pos[k].min(neg[k]);
             ArgSign {
                 argument: ir.sign_args[*i].name.clone(),
@@ -127,5 +140,6 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         pattern,
         arguments,
         pointwise,
+        crossings: crossings.split_off(n_fixed),
     }
 }

@@ -8,7 +8,7 @@ use crate::exact::{Q, fmt_q, to_f64};
 use crate::ir::{
     Arg, Column, ColumnKind, Entry, EvalVar, Pointwise, SignArg, Signal, StructVar, StructuralEntry,
 };
-use crate::poly::{Monomial, NormalForm, Poly, Var};
+use crate::poly::{NormalForm, Poly, Var};
 use crate::resolve::{Resolved, RotationDecl};
 use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
 use num_traits::One;
@@ -30,7 +30,11 @@ pub fn normal_form(r: &Resolved) -> NormalForm {
     }
 }
 
-/// Sign arguments: every state argument under a modulus, in order of first use.
+/// Sign arguments: every state argument under a modulus, in order of first
+/// use. Its modulus is `s·a` with a sign variable `s`: fixed per experiment
+/// for an argument relative to an unmeasured medium (paper A7), evaluated
+/// pointwise (`s = sign(a)` sample by sample) for a plain state, and for a
+/// measured medium in IV3.
 pub fn sign_args(r: &Resolved, terms: &[TermDecl]) -> Vec<SignArg> {
     let mut out: Vec<SignArg> = Vec::new();
     for t in terms {
@@ -39,8 +43,10 @@ pub fn sign_args(r: &Resolved, terms: &[TermDecl]) -> Vec<SignArg> {
                 && matches!(f.arg.signal, Signal::State(_))
                 && !out.iter().any(|s| s.arg == f.arg)
             {
-                let measured = arg_medium(r, &f.arg).is_some_and(|d| r.disturbances[d].measured);
+                let medium = arg_medium(r, &f.arg);
+                let measured = medium.is_some_and(|d| r.disturbances[d].measured);
                 out.push(SignArg {
+                    pointwise: medium.is_none(),
                     name: factors_text(
                         r,
                         &[crate::ir::Factor {
@@ -209,15 +215,9 @@ fn eval_entries(output: usize, p: &Poly) -> Vec<Entry> {
         .collect()
 }
 
-/// True for a monomial that is constant within an experiment (only signs).
-pub fn is_constant(m: &Monomial) -> bool {
-    m.iter().all(|(v, _)| matches!(v, Var::Sign(_)))
-}
-
 fn structural_entries(output: usize, p: &Poly) -> Vec<StructuralEntry> {
     p.terms
         .iter()
-        .filter(|(m, _)| !is_constant(m))
         .map(|(m, q)| StructuralEntry {
             output,
             coefficient: fmt_q(q),

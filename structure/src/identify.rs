@@ -17,7 +17,79 @@ use crate::ir::{
     PredictorKind, Report, Separation, SignArg, SignPattern, StructVar,
 };
 use num_traits::{One, Signed, Zero};
+use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
+
+/// How the instruments are centred, which decides which constants they
+/// annihilate (paper A9): a monomial that is constant within an experiment
+/// (the `1` of `cos² = 1 − sin²`, a constant term `X_0`, a sign alone).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Centring {
+    /// Zero mean per experiment: every constant within an experiment is
+    /// annihilated, and with it the means of the disturbances.
+    Experiment,
+    /// Zero mean over all experiments pooled: a constant common to every
+    /// experiment is annihilated unless the model has a constant term in that
+    /// output (whose own instrument, the constant, is kept: it spans the same
+    /// instruments as no centring); constants that differ between
+    /// experiments are kept.
+    Pooled,
+    /// No centring: constants are columns like any other.
+    None,
+}
+
+impl Centring {
+    /// `experiment`, `pooled`, `none`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Centring::Experiment => "experiment",
+            Centring::Pooled => "pooled",
+            Centring::None => "none",
+        }
+    }
+
+    /// The default for a predictor of a model: per experiment when the model
+    /// has a disturbance the predictor does not take from data (its mean must
+    /// be annihilated), none when it has none (uncentred instruments are then
+    /// consistent and keep the between-experiment information).
+    pub fn for_model(ir: &Ir, kind: PredictorKind) -> Centring {
+        if unmeasured_media(ir, kind).is_empty() {
+            Centring::None
+        } else {
+            Centring::Experiment
+        }
+    }
+
+    /// Why this centring is valid for the model, one sentence.
+    pub fn reason(self, ir: &Ir, kind: PredictorKind) -> String {
+        let media = unmeasured_media(ir, kind);
+        let list = media.join(", ");
+        match (self, media.is_empty()) {
+            (Centring::Experiment, false) => format!(
+                "the {list} is not taken from data by this predictor: zero-mean instruments per experiment annihilate its mean and every constant (paper A9)"
+            ),
+            (Centring::Experiment, true) => "zero-mean instruments per experiment annihilate every constant within an experiment (and any mean of the process disturbance)".to_string(),
+            (Centring::Pooled, false) => format!(
+                "valid when the means of the {list} and of the process disturbance are the same in every experiment: pooled centring keeps the between-experiment information"
+            ),
+            (Centring::Pooled, true) => "valid when the process disturbance has the same mean in every experiment: pooled centring keeps the between-experiment information".to_string(),
+            (Centring::None, false) => format!(
+                "valid only when the {list} and the process disturbance have zero mean, or their means are modelled (constant terms, nuisance columns)"
+            ),
+            (Centring::None, true) => "the model has no disturbance this predictor does not take from data, so uncentred instruments are consistent and keep the between-experiment information".to_string(),
+        }
+    }
+}
+
+/// Names of the media a predictor does not evaluate from data.
+fn unmeasured_media(ir: &Ir, kind: PredictorKind) -> Vec<String> {
+    ir.disturbances
+        .iter()
+        .filter(|d| !(d.measured && kind == PredictorKind::Measured))
+        .map(|d| d.name.clone())
+        .collect()
+}
 
 /// Largest number of sign arguments for which every single pattern is checked.
 pub const MAX_ENUMERATED_SIGNS: usize = 8;
@@ -31,12 +103,15 @@ type StructMonomial = (usize, Q, Vec<(StructVar, u32)>);
 #[derive(Clone, Debug)]
 pub struct Structural {
     cols: Vec<Vec<StructMonomial>>,
+    /// Outputs with a constant θ column (a term like `X_0`): under pooled
+    /// centring its instrument is the constant itself, so constants are kept.
+    intercepts: BTreeSet<usize>,
 }
 
 impl Structural {
     /// Parses the columns' structural entries once.
     pub fn new(columns: &[Column]) -> Structural {
-        let cols = columns
+        let cols: Vec<Vec<StructMonomial>> = columns
             .iter()
             .map(|c| {
                 c.structural
@@ -51,7 +126,17 @@ impl Structural {
                     .collect()
             })
             .collect();
-        Structural { cols }
+        let intercepts = columns
+            .iter()
+            .zip(&cols)
+            .filter(|(c, m)| !c.kind.is_nuisance() && is_constant_column(m))
+            .flat_map(|(_, m)| m.iter().map(|(o, _, _)| *o))
+            .collect();
+        Structural { cols, intercepts }
+    }
+    /// True when column `col` is a constant (every monomial without variables).
+    pub fn is_constant(&self, col: usize) -> bool {
+        is_constant_column(&self.cols[col])
     }
     /// Number of columns.
     pub fn len(&self) -> usize {
@@ -94,6 +179,10 @@ impl Structural {
     }
 }
 
+fn is_constant_column(monomials: &[StructMonomial]) -> bool {
+    !monomials.is_empty() && monomials.iter().all(|(_, _, vars)| vars.is_empty())
+}
+
 /// Which sign patterns the analysis covers.
 #[derive(Clone, Copy, Debug)]
 pub enum Patterns<'a> {
@@ -115,8 +204,9 @@ pub struct ExperimentStructure {
     pub pattern: SignPattern,
     /// Constant rotation variables (exact values), if `R` did not vary.
     pub frozen_rotation: Option<Vec<Q>>,
-    /// Sign arguments (of measured media, evaluated pointwise) whose sign
-    /// changes within the experiment: kept symbolic, as if every sign occurred.
+    /// Sign arguments evaluated pointwise (plain states; measured media in
+    /// IV3) whose sign changes within the experiment: kept symbolic, as if
+    /// every sign occurred.
     pub varying: Vec<usize>,
 }
 
@@ -164,8 +254,14 @@ pub fn preference_order(
 
 type RowKey = (usize, usize, Vec<(StructVar, u32)>);
 
-/// Exact reduction of the columns for the given patterns, in `order`.
-pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction {
+/// Exact reduction of the columns for the given patterns, in `order`, with
+/// the constants the centring annihilates removed.
+pub fn reduce(
+    s: &Structural,
+    patterns: Patterns,
+    order: &[usize],
+    centring: Centring,
+) -> Reduction {
     let n = s.len();
     // Blocks: columns connected through shared outputs.
     let mut parent: BTreeMap<usize, usize> = BTreeMap::new();
@@ -214,8 +310,18 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
             for (o, q, vars) in &s.cols[c] {
                 match patterns {
                     Patterns::All => {
-                        let key = (0, *o, vars.clone());
-                        rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j] += q;
+                        // Signs stay symbolic: only a monomial without any
+                        // variable is the same constant in every experiment.
+                        let constant = vars.iter().all(|(v, _)| matches!(v, StructVar::Sign(_)));
+                        let kept = match centring {
+                            Centring::Experiment => !constant,
+                            Centring::Pooled => !vars.is_empty() || s.intercepts.contains(o),
+                            Centring::None => true,
+                        };
+                        if kept {
+                            let key = (0, *o, vars.clone());
+                            rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j] += q;
+                        }
                     }
                     Patterns::Set(set) => {
                         for (pi, pat) in set.iter().enumerate() {
@@ -223,6 +329,7 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                                 pattern: pat,
                                 frozen: None,
                                 varying: &[],
+                                keep_constants: centring != Centring::Experiment,
                             };
                             add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
                         }
@@ -233,12 +340,16 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
                                 pattern: &e.pattern,
                                 frozen: e.frozen_rotation.as_deref(),
                                 varying: &e.varying,
+                                keep_constants: centring != Centring::Experiment,
                             };
                             add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
                         }
                     }
                 }
             }
+        }
+        if centring == Centring::Pooled && !matches!(patterns, Patterns::All) {
+            pool_constants(&mut rows, &s.intercepts);
         }
         let matrix: Vec<Vec<Q>> = rows
             .into_values()
@@ -263,11 +374,51 @@ pub fn reduce(s: &Structural, patterns: Patterns, order: &[usize]) -> Reduction 
     }
 }
 
+/// Pooled centring removes, per output, the constant common to every
+/// experiment: the constant rows `(experiment, output, 1)` become their
+/// differences from the first experiment's (the same rank as the projection
+/// onto the complement of the common constant). Outputs with a constant θ
+/// column keep their constants: that column's own instrument is uncentred.
+fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usize>) {
+    let constant: Vec<RowKey> = rows
+        .keys()
+        .filter(|(_, o, vars)| vars.is_empty() && !intercepts.contains(o))
+        .cloned()
+        .collect();
+    let mut base: BTreeMap<usize, Vec<Q>> = BTreeMap::new();
+    for key in &constant {
+        let Some(row) = rows.remove(key) else { continue };
+        match base.get(&key.1) {
+            // The first experiment with this output's constant is the reference.
+            None => {
+                base.insert(key.1, row);
+            }
+            Some(b) => {
+                let diff: Vec<Q> = row.iter().zip(b).map(|(a, c)| a - c).collect();
+                rows.insert(key.clone(), diff);
+            }
+        }
+    }
+    // An experiment without a constant row has the constant 0 there.
+    let experiments: BTreeSet<usize> = rows.keys().map(|(e, _, _)| *e).collect();
+    for (o, b) in base {
+        for &e in &experiments {
+            let key = (e, o, Vec::new());
+            if !constant.contains(&key) {
+                let neg: Vec<Q> = b.iter().map(|q| -q.clone()).collect();
+                rows.insert(key, neg);
+            }
+        }
+    }
+}
+
 /// How one experiment evaluates structural monomials.
 struct RowContext<'a> {
     pattern: &'a [i8],
     frozen: Option<&'a [Q]>,
     varying: &'a [usize],
+    /// Constants within the experiment stay rows (no per-experiment centring).
+    keep_constants: bool,
 }
 
 /// Adds one structural monomial of column `j` to the rows of experiment `pi`:
@@ -308,7 +459,7 @@ fn add_row(
         }
     }
     // A monomial that became constant is annihilated by zero-mean instruments.
-    if rest.is_empty() {
+    if rest.is_empty() && !experiment.keep_constants {
         return;
     }
     let slot = &mut rows
@@ -323,6 +474,8 @@ pub struct Names<'a> {
     pub ir: &'a Ir,
     /// The predictor's columns.
     pub columns: &'a [Column],
+    /// The centring the analysis assumes (messages name the alternatives).
+    pub centring: Centring,
 }
 
 impl Names<'_> {
@@ -475,7 +628,23 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
                 .map(|p| names.param(*p).to_string())
                 .collect::<Vec<_>>(),
         );
-        let mut message = if idents.is_empty() {
+        let constant_terms: Vec<String> = lost
+            .iter()
+            .filter(|d| red.combination[**d].is_empty() && is_constant_term(names, **d))
+            .filter_map(|d| param_of(*d))
+            .map(|p| format!("`{}`", names.param(p)))
+            .collect();
+        let mut message = if idents.is_empty() && !constant_terms.is_empty() {
+            format!(
+                "{} {} a constant term, annihilated by {} (zero-mean instruments remove every constant)",
+                constant_terms.join(", "),
+                if constant_terms.len() == 1 { "is" } else { "are" },
+                match names.centring {
+                    Centring::Experiment => "per-experiment centring",
+                    _ => "pooled centring",
+                }
+            )
+        } else if idents.is_empty() {
             let empty: Vec<String> = lost
                 .iter()
                 .filter(|d| red.combination[**d].is_empty())
@@ -509,6 +678,14 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
         combinations,
         aggregates,
     }
+}
+
+/// True for a θ column whose terms are all constants (`X_0`).
+fn is_constant_term(names: &Names, col: usize) -> bool {
+    let c = &names.columns[col];
+    !c.kind.is_nuisance()
+        && !c.structural.is_empty()
+        && c.structural.iter().all(|e| e.vars.is_empty())
 }
 
 fn quoted_list(items: &[String]) -> String {
@@ -597,12 +774,21 @@ pub struct Analysis<'a> {
 }
 
 impl<'a> Analysis<'a> {
-    /// Prepares the analysis of one predictor of a model.
+    /// Prepares the analysis of one predictor of a model, with the model's
+    /// default centring ([`Centring::for_model`]).
     pub fn new(ir: &'a Ir, kind: PredictorKind) -> Analysis<'a> {
+        Analysis::with_centring(ir, kind, Centring::for_model(ir, kind))
+    }
+    /// Prepares the analysis of one predictor with a given centring.
+    pub fn with_centring(ir: &'a Ir, kind: PredictorKind, centring: Centring) -> Analysis<'a> {
         let columns = ir.predictors.get(kind);
         let measured = |p: usize| kind == PredictorKind::Measured && ir.parameters[p].measured;
         Analysis {
-            names: Names { ir, columns },
+            names: Names {
+                ir,
+                columns,
+                centring,
+            },
             structural: Structural::new(columns),
             order: preference_order(columns, &measured),
             n_signs: ir.sign_args.len(),
@@ -612,7 +798,12 @@ impl<'a> Analysis<'a> {
     }
     /// Reduction for a pattern set.
     pub fn reduce(&self, patterns: Patterns) -> Reduction {
-        reduce(&self.structural, patterns, &self.order)
+        reduce(
+            &self.structural,
+            patterns,
+            &self.order,
+            self.names.centring,
+        )
     }
     /// θ identifiable from these patterns.
     pub fn identifiable(&self, patterns: Patterns) -> bool {
@@ -742,7 +933,12 @@ impl<'a> Analysis<'a> {
         );
         let sign_name = |i: &usize| {
             let a = &self.names.ir.sign_args[*i];
-            if a.measured && self.kind == PredictorKind::Measured {
+            if a.pointwise {
+                format!(
+                    "{} (pointwise: a sign change within one experiment suffices)",
+                    a.name
+                )
+            } else if a.measured && self.kind == PredictorKind::Measured {
                 format!(
                     "{} (measured medium, pointwise: a sign change within one experiment suffices)",
                     a.name
@@ -838,10 +1034,26 @@ fn next_combination(idx: &mut [usize], n: usize) -> bool {
     false
 }
 
-/// The sign arguments a predictor fixes per experiment.
+/// The sign arguments a predictor fixes per experiment (paper A7): those
+/// relative to a medium it does not take from data. Plain states are
+/// evaluated pointwise by every predictor.
 pub fn relevant_signs(ir: &Ir, kind: PredictorKind) -> Vec<usize> {
     (0..ir.sign_args.len())
-        .filter(|i| kind != PredictorKind::Measured || !ir.sign_args[*i].measured)
+        .filter(|i| {
+            let a = &ir.sign_args[*i];
+            !a.pointwise && (kind != PredictorKind::Measured || !a.measured)
+        })
+        .collect()
+}
+
+/// The sign arguments a predictor evaluates pointwise (their sign may
+/// change within an experiment).
+pub fn pointwise_signs(ir: &Ir, kind: PredictorKind) -> Vec<usize> {
+    (0..ir.sign_args.len())
+        .filter(|i| {
+            let a = &ir.sign_args[*i];
+            a.pointwise || (kind == PredictorKind::Measured && a.measured)
+        })
         .collect()
 }
 
@@ -955,11 +1167,103 @@ pub struct Options {
     pub aggregate: bool,
     /// Analyse these experiments instead of searching.
     pub patterns: Option<Vec<SignPattern>>,
+    /// The centring to analyse (default: the model's, [`Centring::for_model`]).
+    pub centring: Option<Centring>,
+}
+
+/// θ indices of constant terms (`X_0`): parameters all of whose terms have no factor.
+pub fn constant_parameters(ir: &Ir) -> Vec<usize> {
+    (0..ir.parameters.len())
+        .filter(|p| {
+            let mut terms = ir.terms.iter().filter(|t| t.parameter == *p).peekable();
+            terms.peek().is_some() && terms.all(|t| t.factors.is_empty())
+        })
+        .collect()
+}
+
+/// What the analysis says about constant terms under each centring: a note
+/// per constant, and for a group of constants that the centring annihilates,
+/// the option that makes them estimable.
+fn constant_notes(ir: &Ir, centring: Centring, patterns: &[SignPattern]) -> (Vec<String>, Vec<(Vec<usize>, String)>) {
+    let constants = constant_parameters(ir);
+    if constants.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let identifiable_under = |c: Centring| {
+        let a = Analysis::with_centring(ir, PredictorKind::Measured, c);
+        let red = a.reduce(Patterns::Set(patterns));
+        let theta: Vec<usize> = a
+            .names
+            .columns
+            .iter()
+            .enumerate()
+            .filter(|(_, col)| matches!(col.kind, ColumnKind::Theta { parameter } if constants.contains(&parameter)))
+            .map(|(i, _)| i)
+            .collect();
+        red.null_space()
+            .iter()
+            .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
+    };
+    let names: Vec<String> = constants
+        .iter()
+        .map(|p| format!("`{}`", ir.parameters[*p].name))
+        .collect();
+    let list = quoted_join(&names);
+    let here = identifiable_under(centring);
+    let none = identifiable_under(Centring::None);
+    let pooled = identifiable_under(Centring::Pooled);
+    let mut notes = Vec::new();
+    let mut separations = Vec::new();
+    let alternatives: Vec<&str> = [(Centring::None, none), (Centring::Pooled, pooled)]
+        .iter()
+        .filter(|(c, ok)| *ok && *c != centring)
+        .map(|(c, _)| match c {
+            Centring::None => "`--centring none` (uncentred instruments)",
+            _ => "`--centring pooled`",
+        })
+        .collect();
+    if here {
+        notes.push(format!(
+            "{list}: constant term{} (a constant force), identifiable with {} centring; least squares estimates {} as its intercept",
+            if constants.len() == 1 { "" } else { "s" },
+            centring.name(),
+            if constants.len() == 1 { "it" } else { "them" }
+        ));
+    } else {
+        let message = if alternatives.is_empty() {
+            format!(
+                "{list}: constant term{} that no centring separates from the constant parts of the other columns (e.g. the nuisance moments of `cos² = 1 − sin²`); remove {} or estimate the aggregate with --aggregate",
+                if constants.len() == 1 { "" } else { "s" },
+                if constants.len() == 1 { "it" } else { "them" }
+            )
+        } else {
+            format!(
+                "{list} {} estimable with {}: {} centring annihilates every constant ({})",
+                if constants.len() == 1 { "is" } else { "are" },
+                alternatives.join(" or "),
+                centring.name(),
+                Centring::None.reason(ir, PredictorKind::Measured)
+            )
+        };
+        separations.push((constants.clone(), message));
+    }
+    (notes, separations)
+}
+
+fn quoted_join(q: &[String]) -> String {
+    match q.len() {
+        0 => String::new(),
+        1 => q[0].clone(),
+        n => format!("{} and {}", q[..n - 1].join(", "), q[n - 1]),
+    }
 }
 
 /// The compile-time identifiability report (measured predictor).
 pub fn report(ir: &Ir, options: &Options) -> Report {
-    let a = Analysis::new(ir, PredictorKind::Measured);
+    let centring = options
+        .centring
+        .unwrap_or_else(|| Centring::for_model(ir, PredictorKind::Measured));
+    let a = Analysis::with_centring(ir, PredictorKind::Measured, centring);
     let baseline = vec![vec![1i8; a.n_signs]];
     let check_set = options.patterns.clone().unwrap_or_else(|| baseline.clone());
     let red_check = a.reduce(Patterns::Set(&check_set));
@@ -981,12 +1285,28 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
     };
     let red = a.reduce(Patterns::Set(&reduction_set));
     let v = verdict(&a.names, &red);
+    let (notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
     let separations = v_check
         .combinations
         .iter()
-        .map(|c| a.separation(c))
+        .map(|c| {
+            // A group of constant terms is separated by the centring, not by signs.
+            match constant_separations
+                .iter()
+                .find(|(ps, _)| c.parameters.iter().all(|p| ps.contains(p)))
+            {
+                Some((_, message)) => Separation {
+                    parameters: c.parameters.clone(),
+                    patterns: None,
+                    message: message.clone(),
+                },
+                None => a.separation(c),
+            }
+        })
         .collect();
     Report {
+        centring: Some(centring),
+        centring_reason: centring.reason(ir, PredictorKind::Measured),
         identifiable,
         any_single_pattern: a.any_single_pattern().unwrap_or(v_check.identifiable),
         required_patterns: required,
@@ -999,6 +1319,6 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
         } else {
             Vec::new()
         },
-        notes: Vec::new(),
+        notes,
     }
 }

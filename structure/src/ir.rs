@@ -247,6 +247,12 @@ pub struct SignArg {
     /// True when the argument is relative to a measured medium: IV3 evaluates
     /// it pointwise, IV2 (all media unmeasured) needs its sign fixed.
     pub measured: bool,
+    /// True when the argument holds no disturbance at all (a plain state such
+    /// as `v` in `v*|v|`): every predictor evaluates its modulus pointwise,
+    /// exactly as the simulation does, so its sign may change within an
+    /// experiment (the sign variable then stays symbolic in the analysis).
+    #[serde(default)]
+    pub pointwise: bool,
 }
 
 /// The three predictors of the paper.
@@ -332,8 +338,10 @@ pub struct Column {
     /// Evaluation: the column's value in output `o` is the sum, in order, of
     /// its entries with `output == o`.
     pub entries: Vec<Entry>,
-    /// Structural polynomial per output, constants dropped (zero-mean
-    /// instruments annihilate them), sign variables symbolic.
+    /// Structural polynomial per output, sign variables symbolic. Monomials
+    /// that are constant within an experiment (no variable but signs) are
+    /// kept: whether the instruments annihilate them depends on the centring
+    /// ([`crate::identify::Centring`]).
     pub structural: Vec<StructuralEntry>,
 }
 
@@ -464,8 +472,15 @@ pub struct Report {
     pub nuisance: NuisanceReport,
     /// With aggregation: what each kept parameter estimates.
     pub aggregates: Vec<Aggregate>,
-    /// Notes for the user (common state-dependent terms, ...).
+    /// Notes for the user (common state-dependent terms, constant terms, ...).
     pub notes: Vec<String>,
+    /// The instrument centring the verdicts assume (the model's default
+    /// unless asked otherwise): it decides which constants are annihilated.
+    #[serde(default)]
+    pub centring: Option<crate::identify::Centring>,
+    /// Why that centring is valid for this model.
+    #[serde(default)]
+    pub centring_reason: String,
 }
 
 /// A set of parameters that enter only through combinations.

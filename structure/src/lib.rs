@@ -105,11 +105,13 @@ pub fn compile(source: &str, options: &Options) -> Compilation {
     }
     ir.report = identify::report(&ir, options);
     identifiability_diagnostics(&ir, options, &mut diagnostics);
-    ir.report.notes = diagnostics
+    let mut notes: Vec<String> = diagnostics
         .iter()
         .filter(|d| d.severity == Severity::Note)
         .map(|d| d.message.clone())
         .collect();
+    notes.append(&mut ir.report.notes);
+    ir.report.notes = notes;
     Compilation {
         ir: Some(ir),
         diagnostics,
@@ -200,8 +202,11 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             };
             d.labels = labels_for(&c.parameters);
             d = d.with_note(s.message.clone());
+            let constants = identify::constant_parameters(ir);
             d = if options.aggregate {
                 d.with_help("the absorbed parameters are held at their nominal values; the kept ones estimate the combinations above")
+            } else if c.parameters.iter().all(|p| constants.contains(p)) {
+                d.with_help("estimate with the centring named in the note (`leeway check --centring`, `leeway estimate --centring`), or remove the constant term")
             } else if s.patterns.is_some() {
                 d.with_help("run the experiments named in the note, or estimate the identifiable combinations with --aggregate")
             } else {

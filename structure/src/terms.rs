@@ -421,6 +421,10 @@ fn arg_text(r: &Resolved, a: &Arg) -> String {
 
 /// The factor text of a term in the user's names, e.g. `water.u*|water.u|`.
 pub fn factors_text(r: &Resolved, factors: &[Factor]) -> String {
+    if factors.is_empty() {
+        // A constant term: its regressor is the number 1.
+        return "1".to_string();
+    }
     factors
         .iter()
         .map(|f| {
@@ -527,14 +531,9 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         ));
         ok = false;
     }
-    if ok && factors.is_empty() {
-        ctx.diags.push(
-            Diagnostic::error("constant-regressor", format!("`{}` multiplies a constant", params[0].name))
-                .with_primary(p.span, "no signal in this term")
-                .with_help("zero-mean instruments annihilate a constant regressor, so this parameter cannot be identified; remove the term (a constant force is absorbed as the mean of w)"),
-        );
-        ok = false;
-    }
+    // A parameter alone is a constant force (thrust at a constant propeller
+    // rate, a trim offset): a column like any other wherever the instruments
+    // keep constants; `identify` decides under which centring it is identifiable.
     if factors.len() > 2 {
         ctx.diags.push(
             Diagnostic::error(
