@@ -883,6 +883,36 @@ mod tests {
         assert!(b.mean.iter().all(|f| f.is_finite()));
     }
 
+    /// `examples/models/pending/tanker.som` is well formed; until constant
+    /// regressors are supported its only errors are `constant-regressor`,
+    /// after that it must read every zigzag run.
+    #[test]
+    fn zigzag_tanker_model_matches_the_runs() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/models/pending/tanker.som"
+        );
+        let source = std::fs::read_to_string(path).expect("tanker.som");
+        let comp = leeway_structure::compile(&source, &leeway_structure::Options::default());
+        let errors: Vec<&str> = comp
+            .diagnostics
+            .iter()
+            .filter(|d| d.is_error())
+            .map(|d| d.code.as_str())
+            .collect();
+        assert!(
+            errors.iter().all(|c| *c == "constant-regressor"),
+            "{errors:?}"
+        );
+        if let Some(ir) = comp.ir.filter(|_| errors.is_empty()) {
+            assert_eq!(ir.parameters.len(), PARAMETERS.len());
+            for run in &campaign(&noise_free()).train {
+                let e = run.experiment(&ir).expect("experiment");
+                assert_eq!(e.states, vec![run.u.clone(), run.v.clone(), run.r.clone()]);
+            }
+        }
+    }
+
     #[test]
     fn zigzag_run_to_experiment_by_name() {
         let src = "model T { state u, v, r\n input delta\n der u = X_uu*u*|u| + X_vr*v*r\n der v = Y_uv*u*v + Y_ud*u*delta\n der r = N_ur*u*r + N_ud*u*delta }";
