@@ -23,6 +23,7 @@ pub mod simulate;
 pub mod study;
 pub mod synth;
 pub mod write;
+pub mod zigzag;
 
 pub use data::{DataError, Experiment, Row, Source, load_csv};
 pub use estimate::{
