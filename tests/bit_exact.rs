@@ -27,6 +27,10 @@ mod models {
     pub mod rov {
         leeway::include_model!("../examples/models/rov.som");
     }
+    pub mod tanker {
+        // Constant terms and pointwise moduli of plain states.
+        leeway::include_model!("../examples/models/tanker.som");
+    }
     pub mod ship_iv2 {
         // θ is not identifiable from one sign pattern when both media are unmeasured.
         leeway::include_model!("../examples/models/ship_iv2.som", aggregate);
@@ -64,6 +68,7 @@ fn cases() -> Vec<Case> {
         ),
         case("examples/models/rov.som", &models::rov::Rov, false),
         case("examples/models/ship.som", &models::ship::Ship, false),
+        case("examples/models/tanker.som", &models::tanker::Tanker, false),
         case(
             "examples/models/ship_iv2.som",
             &models::ship_iv2::ShipIv2,
@@ -95,6 +100,7 @@ fn compiled(case: &Case) -> Ir {
         &Options {
             aggregate: case.aggregate,
             patterns: None,
+            centring: None,
         },
     );
     c.ir.unwrap_or_else(|| panic!("{} must compile: {:?}", case.file, c.diagnostics))

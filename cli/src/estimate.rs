@@ -203,6 +203,11 @@ pub fn run(args: &EstimateArgs) -> Status {
         for w in &warnings {
             err(&headline(style, "warning", None, w));
         }
+        if let Ok(o) = &result {
+            for n in &o.estimate.notes {
+                err(&headline(style, "note", None, n));
+            }
+        }
         if let Err(f) = &result {
             err(&f.render(style, "estimated"));
         }

@@ -58,7 +58,8 @@ fn ship_iv2_aggregated() {
         "ship_iv2.som",
         &Options {
             aggregate: true,
-            patterns: None
+            patterns: None,
+            centring: None,
         }
     ));
 }

@@ -1366,7 +1366,21 @@ impl<'a> Estimator<'a> {
                             *s += v;
                         }
                     }
-                    (a, g, vec![1.0; e_count], bound)
+                    if self.options.method == Method::Ls {
+                        (a, g, vec![1.0; e_count], bound)
+                    } else {
+                        // Divided by the total count, the summed system of one
+                        // experiment is the stacked one bit for bit.
+                        let total: usize = moments
+                            .iter()
+                            .map(|e| e[self.blocks[b].outputs[0]].n)
+                            .sum();
+                        let n = total.max(1) as f64;
+                        for v in &mut bound {
+                            *v /= n;
+                        }
+                        (a / n, g / n, vec![1.0 / n; e_count], bound)
+                    }
                 } else {
                     let mut a = DMatrix::zeros(m * e_count, m);
                     let mut g = DVector::zeros(m * e_count);
@@ -1501,7 +1515,7 @@ impl<'a> Estimator<'a> {
                 let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
                 vec![sub; e_count]
             } else if summed {
-                vec![pinv.clone(); e_count]
+                (0..e_count).map(|i| &pinv * scale_rows[i]).collect()
             } else {
                 (0..e_count)
                     .map(|i| pinv.columns(i * m, m) * scale_rows[i])

@@ -883,14 +883,13 @@ mod tests {
         assert!(b.mean.iter().all(|f| f.is_finite()));
     }
 
-    /// `examples/models/pending/tanker.som` is well formed; until constant
-    /// regressors are supported its only errors are `constant-regressor`,
-    /// after that it must read every zigzag run.
+    /// `examples/models/tanker.som` compiles as written and reads every
+    /// zigzag run.
     #[test]
     fn zigzag_tanker_model_matches_the_runs() {
         let path = concat!(
             env!("CARGO_MANIFEST_DIR"),
-            "/../examples/models/pending/tanker.som"
+            "/../examples/models/tanker.som"
         );
         let source = std::fs::read_to_string(path).expect("tanker.som");
         let comp = leeway_structure::compile(&source, &leeway_structure::Options::default());
@@ -900,16 +899,12 @@ mod tests {
             .filter(|d| d.is_error())
             .map(|d| d.code.as_str())
             .collect();
-        assert!(
-            errors.iter().all(|c| *c == "constant-regressor"),
-            "{errors:?}"
-        );
-        if let Some(ir) = comp.ir.filter(|_| errors.is_empty()) {
-            assert_eq!(ir.parameters.len(), PARAMETERS.len());
-            for run in &campaign(&noise_free()).train {
-                let e = run.experiment(&ir).expect("experiment");
-                assert_eq!(e.states, vec![run.u.clone(), run.v.clone(), run.r.clone()]);
-            }
+        assert!(errors.is_empty(), "{errors:?}");
+        let ir = comp.ir.expect("tanker.som compiles");
+        assert_eq!(ir.parameters.len(), PARAMETERS.len());
+        for run in &campaign(&noise_free()).train {
+            let e = run.experiment(&ir).expect("experiment");
+            assert_eq!(e.states, vec![run.u.clone(), run.v.clone(), run.r.clone()]);
         }
     }
 

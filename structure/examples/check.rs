@@ -10,6 +10,7 @@ fn main() {
         &leeway_structure::Options {
             aggregate,
             patterns: None,
+            centring: None,
         },
     );
     let el = t.elapsed();

@@ -17,6 +17,7 @@ fn with(path: &str, aggregate: bool, patterns: Option<Vec<SignPattern>>) -> Comp
         &Options {
             aggregate,
             patterns,
+            centring: None,
         },
     )
 }

@@ -41,6 +41,7 @@ fn ship_iv2_aggregated() {
     let options = Options {
         aggregate: true,
         patterns: None,
+        centring: None,
     };
     insta::assert_snapshot!(derived(&models().join("ship_iv2.som"), &options));
 }
@@ -51,6 +52,7 @@ fn rov_from_one_experiment() {
     let options = Options {
         aggregate: false,
         patterns: Some(vec![Vec::new()]),
+        centring: None,
     };
     insta::assert_snapshot!(derived(&models().join("rov.som"), &options));
 }

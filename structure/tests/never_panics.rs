@@ -209,6 +209,7 @@ fn check(source: &str, aggregate: bool) -> Result<(), TestCaseError> {
         &Options {
             aggregate,
             patterns: None,
+            centring: None,
         },
     );
     for d in &c.diagnostics {

@@ -38,6 +38,8 @@ pub struct Report {
     /// How the estimate was computed (an empty object on error).
     diagnostics: serde_json::Value,
     warnings: Vec<String>,
+    /// Facts worth knowing that need no action (e.g. pointwise moduli crossing zero).
+    notes: Vec<String>,
     errors: Vec<JsonError>,
 }
 
@@ -145,6 +147,7 @@ pub fn report(
         sign_patterns: Vec::new(),
         diagnostics: serde_json::Value::Object(serde_json::Map::new()),
         warnings,
+        notes: Vec::new(),
         errors: Vec::new(),
     };
     let o = match result {
@@ -156,6 +159,7 @@ pub fn report(
     };
     let e = &o.estimate;
     r.model = Some(o.model.clone());
+    r.notes = e.notes.clone();
     r.experiments = o
         .experiments
         .iter()

@@ -126,7 +126,10 @@ pub fn render(o: &Outcome) -> String {
                     } else {
                         String::new()
                     },
-                    format!("pointwise (measured medium): {}", signs(&p.pointwise)),
+                    format!(
+                        "pointwise (|x| evaluated sample by sample): {}",
+                        signs(&p.pointwise)
+                    ),
                 ]);
             }
         }
@@ -169,6 +172,16 @@ pub fn render(o: &Outcome) -> String {
         ],
         vec!["instruments".to_string(), d.instruments.clone()],
         vec!["centring".to_string(), d.centring.clone()],
+        vec![
+            "experiments combined".to_string(),
+            if d.combine == "stacked" {
+                "stacked: [H_i/n_i] ϑ = [g_i/n_i] by least squares (paper eq. IV_problem)".to_string()
+            } else if d.combine == "summed" {
+                "summed: (Σ H_i) ϑ = Σ g_i (pooled IV)".to_string()
+            } else {
+                d.combine.clone()
+            },
+        ],
         vec!["covariance lags".to_string(), d.lags.to_string()],
     ];
     for (name, gain) in &o.heading_gains {
