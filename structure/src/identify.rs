@@ -64,10 +64,19 @@ impl Centring {
     /// Why this centring is valid for the model, one sentence.
     pub fn reason(self, ir: &Ir, kind: PredictorKind) -> String {
         let media = unmeasured_media(ir, kind);
-        let list = media.join(", ");
+        let list = match media.as_slice() {
+            [one] => one.clone(),
+            [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+            [] => String::new(),
+        };
+        let (is, its) = if media.len() == 1 {
+            ("is", "its mean")
+        } else {
+            ("are", "their means")
+        };
         match (self, media.is_empty()) {
             (Centring::Experiment, false) => format!(
-                "the {list} is not taken from data by this predictor: zero-mean instruments per experiment annihilate its mean and every constant (paper A9)"
+                "the {list} {is} not taken from data by this predictor: zero-mean instruments per experiment annihilate {its} and every constant (paper A9)"
             ),
             (Centring::Experiment, true) => "zero-mean instruments per experiment annihilate every constant within an experiment (and any mean of the process disturbance)".to_string(),
             (Centring::Pooled, false) => format!(
@@ -931,20 +940,27 @@ impl<'a> Analysis<'a> {
                 .map(|p| self.names.param(*p).to_string())
                 .collect::<Vec<_>>(),
         );
-        let sign_name = |i: &usize| {
-            let a = &self.names.ir.sign_args[*i];
-            if a.pointwise {
-                format!(
-                    "{} (pointwise: a sign change within one experiment suffices)",
-                    a.name
-                )
-            } else if a.measured && self.kind == PredictorKind::Measured {
-                format!(
-                    "{} (measured medium, pointwise: a sign change within one experiment suffices)",
-                    a.name
-                )
-            } else {
-                a.name.clone()
+        let sign_name = |i: &usize| self.names.ir.sign_args[*i].name.clone();
+        // Arguments evaluated pointwise need no separate experiments: a sign
+        // change within one suffices. Said once, after the sentence.
+        let pointwise_note = |args: &[usize]| -> String {
+            let pw: Vec<String> = args
+                .iter()
+                .filter(|i| {
+                    let a = &self.names.ir.sign_args[**i];
+                    a.pointwise || (a.measured && self.kind == PredictorKind::Measured)
+                })
+                .map(|i| self.names.ir.sign_args[*i].name.clone())
+                .collect();
+            match pw.as_slice() {
+                [] => String::new(),
+                [one] => format!(
+                    " ({one} is evaluated pointwise: a sign change within one experiment suffices)"
+                ),
+                many => format!(
+                    " ({} are evaluated pointwise: a sign change within one experiment suffices)",
+                    many.join(", ")
+                ),
             }
         };
         let theta_signs: Vec<Option<BTreeSet<usize>>> = group
@@ -987,13 +1003,15 @@ impl<'a> Analysis<'a> {
                 let diff: Vec<usize> = a.symmetric_difference(b).copied().collect();
                 match diff.as_slice() {
                     [x] => format!(
-                        "{list} are separated by experiments with both signs of {}",
-                        sign_name(x)
+                        "{list} are separated by experiments with both signs of {}{}",
+                        sign_name(x),
+                        pointwise_note(&[*x])
                     ),
                     [x, y] => format!(
-                        "{list} are separated by an experiment where sign({}) ≠ sign({}) together with one where they agree",
+                        "{list} are separated by an experiment where sign({}) ≠ sign({}) together with one where they agree{}",
                         sign_name(x),
-                        sign_name(y)
+                        sign_name(y),
+                        pointwise_note(&[*x, *y])
                     ),
                     _ => format!(
                         "{list} are separated by the sign patterns {}",
@@ -1224,9 +1242,13 @@ fn constant_notes(ir: &Ir, centring: Centring, patterns: &[SignPattern]) -> (Vec
         .collect();
     if here {
         notes.push(format!(
-            "{list}: constant term{} (a constant force), identifiable with {} centring; least squares estimates {} as its intercept",
+            "{list}: constant term{} (a constant force), identifiable with {}; least squares estimates {} as its intercept",
             if constants.len() == 1 { "" } else { "s" },
-            centring.name(),
+            match centring {
+                Centring::None => "uncentred instruments (centring none)",
+                Centring::Pooled => "pooled centring (a constant's own instrument stays uncentred)",
+                Centring::Experiment => "per-experiment centring",
+            },
             if constants.len() == 1 { "it" } else { "them" }
         ));
     } else {

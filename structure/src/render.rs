@@ -177,30 +177,44 @@ pub fn render(ir: &Ir) -> String {
     let fixed: Vec<&str> = ir
         .sign_args
         .iter()
-        .filter(|s| !s.measured)
+        .filter(|s| !s.measured && !s.pointwise)
         .map(|s| s.name.as_str())
         .collect();
-    let pointwise: Vec<&str> = ir
+    let measured: Vec<&str> = ir
         .sign_args
         .iter()
         .filter(|s| s.measured)
         .map(|s| s.name.as_str())
         .collect();
+    let plain: Vec<&str> = ir
+        .sign_args
+        .iter()
+        .filter(|s| s.pointwise)
+        .map(|s| s.name.as_str())
+        .collect();
+    let mut parts = Vec::new();
+    if !fixed.is_empty() {
+        parts.push(format!("{} (one sign per experiment)", fixed.join(", ")));
+    }
+    if !measured.is_empty() {
+        parts.push(format!(
+            "{} (measured medium, pointwise in IV3, fixed in IV2)",
+            measured.join(", ")
+        ));
+    }
+    if !plain.is_empty() {
+        parts.push(format!(
+            "{} (plain states: pointwise in every predictor, as simulated)",
+            plain.join(", ")
+        ));
+    }
     let _ = writeln!(
         o,
-        "  sign arguments: {}{}",
-        if fixed.is_empty() {
+        "  sign arguments: {}",
+        if parts.is_empty() {
             "none".to_string()
         } else {
-            fixed.join(", ")
-        },
-        if pointwise.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " (measured medium, pointwise in IV3, fixed in IV2: {})",
-                pointwise.join(", ")
-            )
+            parts.join("; ")
         }
     );
 
@@ -281,6 +295,14 @@ pub fn render(ir: &Ir) -> String {
         let _ = writeln!(o, "  dropped {:<24} {}", d.name, d.reason);
     }
     let _ = writeln!(o, "\nIdentifiability of θ");
+    if let Some(c) = r.centring {
+        let _ = writeln!(
+            o,
+            "  instrument centring: {} ({})",
+            c.name(),
+            r.centring_reason
+        );
+    }
     if r.identifiable && r.required_patterns.len() <= 1 {
         if r.any_single_pattern {
             let _ = writeln!(o, "  identifiable from one experiment of any sign pattern");

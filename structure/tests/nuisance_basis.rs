@@ -6,7 +6,7 @@
 //! of the sign variables, not the compiler's.
 
 use leeway_structure::exact::{Q, echelon, parse_q};
-use leeway_structure::identify::{Analysis, Patterns, relevant_signs};
+use leeway_structure::identify::{Analysis, Centring, Patterns, relevant_signs};
 use leeway_structure::ir::{Column, Entry, EvalVar, Ir, PredictorKind, SignPattern, StructVar};
 use leeway_structure::{Options, compile};
 use num_traits::Zero;
@@ -46,8 +46,9 @@ fn compile_examples() -> Vec<(String, Ir)> {
 }
 
 /// A column as a sparse vector over (experiment, output, monomial), signs
-/// substituted for each experiment's pattern.
-fn vector(col: &Column, set: &[SignPattern]) -> BTreeMap<Row, Q> {
+/// substituted for each experiment's pattern; constants within an experiment
+/// dropped unless the centring keeps them.
+fn vector(col: &Column, set: &[SignPattern], keep_constants: bool) -> BTreeMap<Row, Q> {
     let mut v: BTreeMap<Row, Q> = BTreeMap::new();
     for (x, pattern) in set.iter().enumerate() {
         for e in &col.structural {
@@ -63,6 +64,9 @@ fn vector(col: &Column, set: &[SignPattern]) -> BTreeMap<Row, Q> {
                     StructVar::Sign(_) => {}
                     other => rest.push((*other, *power)),
                 }
+            }
+            if rest.is_empty() && !keep_constants {
+                continue;
             }
             *v.entry((x, e.output, rest)).or_insert_with(Q::zero) += q;
         }
@@ -118,7 +122,10 @@ fn reduced_nuisance_basis_spans_the_unreduced_one() {
             for set in pattern_sets(ir, kind) {
                 let red = analysis.reduce(Patterns::Set(&set));
                 let vectors: Vec<BTreeMap<Row, Q>> =
-                    columns.iter().map(|c| vector(c, &set)).collect();
+                    columns
+                        .iter()
+                        .map(|c| vector(c, &set, analysis.names.centring != Centring::Experiment))
+                        .collect();
                 let kept: Vec<usize> = nuisance.iter().copied().filter(|c| red.pivot[*c]).collect();
                 for &d in nuisance.iter().filter(|c| !red.pivot[**c]) {
                     // Rebuild the dropped column from the kept nuisance columns.
@@ -182,9 +189,6 @@ fn structural_polynomials_match_the_evaluated_entries() {
                     else {
                         continue;
                     };
-                    if vars.is_empty() {
-                        continue; // constant within an experiment: dropped for the rank
-                    }
                     let mut powers: BTreeMap<StructVar, u32> = BTreeMap::new();
                     for s in signs {
                         *powers.entry(StructVar::Sign(*s)).or_insert(0) += 1;
@@ -232,7 +236,7 @@ proptest! {
         let columns = ir.predictors.get(PredictorKind::Augmented);
         let p: SignPattern = (0..ir.sign_args.len()).map(|i| if pattern >> i & 1 == 1 { -1 } else { 1 }).collect();
         let set = vec![p];
-        let vectors: Vec<_> = columns.iter().map(|c| vector(c, &set)).collect();
+        let vectors: Vec<_> = columns.iter().map(|c| vector(c, &set, false)).collect();
         let mut shuffled = vectors.clone();
         // Fisher–Yates with a small LCG seeded by proptest.
         let mut state = seed;
