@@ -346,8 +346,8 @@ fn json_of_the_rov() {
     assert_eq!(
         v["required_sign_patterns"],
         serde_json::json!([
-            {"water.u": "+", "water.v": "+", "r": "+"},
-            {"water.u": "+", "water.v": "-", "r": "+"}
+            {"water.u": "+", "water.v": "+"},
+            {"water.u": "+", "water.v": "-"}
         ])
     );
     insta::assert_snapshot!(stdout(&o));

@@ -173,7 +173,7 @@ pub fn render(o: &Outcome) -> String {
         vec!["instruments".to_string(), d.instruments.clone()],
         vec!["centring".to_string(), d.centring.clone()],
         vec![
-            "experiments combined".to_string(),
+            "combination".to_string(),
             if d.combine == "stacked" {
                 "stacked: [H_i/n_i] ϑ = [g_i/n_i] by least squares (paper eq. IV_problem)".to_string()
             } else if d.combine == "summed" {
