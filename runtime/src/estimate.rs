@@ -18,7 +18,7 @@
 use crate::data::Source;
 use crate::model::{Model, Signals, planar_rotation};
 use crate::moments::{CrossMoments, LongRun};
-use crate::signs::{ExperimentSigns, detect};
+use crate::signs::{ExperimentSigns, detect, plain_sign_args, set_pointwise_signs};
 use leeway_structure::exact::Q;
 use leeway_structure::grammar::EquationKind;
 pub use leeway_structure::identify::Centring;
@@ -551,7 +551,7 @@ impl EquationWalker<'_> {
                         rotation: if planar.is_some() { &rh1 } else { &rot1 },
                         disturbances: &d1,
                     };
-                    pointwise_signs(&mut signs, &info.varying, &y1);
+                    set_pointwise_signs(&mut signs, &info.varying, &y1);
                     self.model.regressors(self.kind, &sig, &signs, &mut phi);
                     match self.instruments {
                         None => z.copy_from_slice(&phi),
@@ -562,7 +562,7 @@ impl EquationWalker<'_> {
                                 rotation: if planar.is_some() { &rz } else { &rot2 },
                                 disturbances: &info.measured_mean,
                             };
-                            pointwise_signs(&mut signs, &info.varying, &x_sim);
+                            set_pointwise_signs(&mut signs, &info.varying, &x_sim);
                             self.model.regressors(self.kind, &sig, &signs, &mut z);
                             for fixed in &info.fixed_sign_columns {
                                 fix_set.fill(false);
@@ -595,7 +595,7 @@ impl EquationWalker<'_> {
                                 rotation: if planar.is_some() { &rh2 } else { &rot2 },
                                 disturbances: dist,
                             };
-                            pointwise_signs(&mut signs, &info.varying, &y2);
+                            set_pointwise_signs(&mut signs, &info.varying, &y2);
                             self.model.regressors(self.kind, &sig, &signs, &mut z);
                         }
                     }
@@ -679,16 +679,6 @@ impl EquationWalker<'_> {
             k += 1;
         });
         if diverged { Err(Diverged) } else { Ok(change) }
-    }
-}
-
-/// Sets the sign of each pointwise modulus whose argument (a plain state)
-/// changes sign in the experiment from the states the regressors are
-/// evaluated at: `|x| = sign(x)·x`, exactly as the simulation evaluates it.
-#[inline]
-fn pointwise_signs(signs: &mut [f64], varying: &[(usize, usize)], states: &[f64]) {
-    for &(i, l) in varying {
-        signs[i] = if states[l] < 0.0 { -1.0 } else { 1.0 };
     }
 }
 
@@ -973,19 +963,14 @@ fn experiment_info(
             }
         }
     }
-    let varying = s
-        .pointwise
-        .iter()
-        .filter(|a| a.minority_fraction > 0.0)
-        .filter_map(|a| {
-            let i = ir
-                .sign_args
+    // Only the plain arguments whose sign changes need a sign per sample; the
+    // others keep the experiment's (only) sign from the pattern.
+    let varying = plain_sign_args(ir)
+        .into_iter()
+        .filter(|(i, _)| {
+            s.pointwise
                 .iter()
-                .position(|x| x.pointwise && x.name == a.argument)?;
-            match ir.sign_args[i].arg.signal {
-                leeway_structure::ir::Signal::State(l) => Some((i, l)),
-                leeway_structure::ir::Signal::Input(_) => None,
-            }
+                .any(|a| a.argument == ir.sign_args[*i].name && a.minority_fraction > 0.0)
         })
         .collect();
     ExperimentInfo {
@@ -1353,59 +1338,57 @@ impl<'a> Estimator<'a> {
             // The summed system (Σ H_i) ϑ = Σ g_i (IV by default, and LS's
             // normal equations), or the stacked one [H_i/n_i] ϑ = [g_i/n_i].
             let summed = self.options.method == Method::Ls || self.combine() == Combine::Summed;
-            let (mut mat, rhs, scale_rows, bound): (DMatrix<f64>, DVector<f64>, Vec<f64>, Vec<f64>) =
-                if summed {
-                    let mut a = DMatrix::zeros(m, m);
-                    let mut g = DVector::zeros(m);
-                    let mut bound = vec![0.0; m];
-                    for i in 0..e_count {
-                        let (h, gi, bi) = self.equations(moments, i, b);
-                        a += h;
-                        g += gi;
-                        for (s, v) in bound.iter_mut().zip(bi) {
-                            *s += v;
-                        }
+            let (mut mat, rhs, scale_rows, bound): (
+                DMatrix<f64>,
+                DVector<f64>,
+                Vec<f64>,
+                Vec<f64>,
+            ) = if summed {
+                let mut a = DMatrix::zeros(m, m);
+                let mut g = DVector::zeros(m);
+                let mut bound = vec![0.0; m];
+                for i in 0..e_count {
+                    let (h, gi, bi) = self.equations(moments, i, b);
+                    a += h;
+                    g += gi;
+                    for (s, v) in bound.iter_mut().zip(bi) {
+                        *s += v;
                     }
-                    if self.options.method == Method::Ls {
-                        (a, g, vec![1.0; e_count], bound)
-                    } else {
-                        // Divided by the total count, the summed system of one
-                        // experiment is the stacked one bit for bit.
-                        let total: usize = moments
-                            .iter()
-                            .map(|e| e[self.blocks[b].outputs[0]].n)
-                            .sum();
-                        let n = total.max(1) as f64;
-                        for v in &mut bound {
-                            *v /= n;
-                        }
-                        (a / n, g / n, vec![1.0 / n; e_count], bound)
-                    }
+                }
+                if self.options.method == Method::Ls {
+                    (a, g, vec![1.0; e_count], bound)
                 } else {
-                    let mut a = DMatrix::zeros(m * e_count, m);
-                    let mut g = DVector::zeros(m * e_count);
-                    let mut scales = Vec::new();
-                    let mut bound = vec![0.0; m];
-                    for i in 0..e_count {
-                        let (h, gi, bi) = self.equations(moments, i, b);
-                        let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
-                        a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
-                        g.rows_mut(i * m, m).copy_from(&(gi / n));
-                        scales.push(1.0 / n);
-                        for (s, v) in bound.iter_mut().zip(bi) {
-                            *s += v / n;
-                        }
+                    // Divided by the total count, the summed system of one
+                    // experiment is the stacked one bit for bit.
+                    let total: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
+                    let n = total.max(1) as f64;
+                    for v in &mut bound {
+                        *v /= n;
                     }
-                    (a, g, scales, bound)
-                };
+                    (a / n, g / n, vec![1.0 / n; e_count], bound)
+                }
+            } else {
+                let mut a = DMatrix::zeros(m * e_count, m);
+                let mut g = DVector::zeros(m * e_count);
+                let mut scales = Vec::new();
+                let mut bound = vec![0.0; m];
+                for i in 0..e_count {
+                    let (h, gi, bi) = self.equations(moments, i, b);
+                    let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
+                    a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
+                    g.rows_mut(i * m, m).copy_from(&(gi / n));
+                    scales.push(1.0 / n);
+                    for (s, v) in bound.iter_mut().zip(bi) {
+                        *s += v / n;
+                    }
+                }
+                (a, g, scales, bound)
+            };
             // Scale-aware residue test over the whole system: a column whose
             // moments are at the rounding level of its own scale carries no
             // information, whatever the units (equilibration would otherwise
             // blow the residue up into a column).
-            let equations: usize = moments
-                .iter()
-                .map(|e| e[self.blocks[b].outputs[0]].n)
-                .sum();
+            let equations: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
             let residue = RESIDUE_EPSILONS * f64::EPSILON * (equations.max(1) as f64);
             for (j, bj) in bound.iter().enumerate() {
                 if mat.column(j).norm() <= residue * bj {
@@ -2117,9 +2100,18 @@ impl<'a> Estimator<'a> {
             "the default for this model"
         };
         let centring = match (self.options.method, self.centring) {
-            (Method::Ls, Centring::Experiment) => format!("experiment ({how}): an intercept per output and experiment — least squares keeps the constants that cos² = 1 − sin² and the disturbance means create; {}", self.centring.reason(self.ir, self.kind)),
-            (Method::Ls, Centring::Pooled) => format!("pooled ({how}): one intercept per output over all experiments (the model's constant term where it has one); {}", self.centring.reason(self.ir, self.kind)),
-            (Method::Ls, Centring::None) => format!("none ({how}): no intercept beyond the model's constant terms; {}", self.centring.reason(self.ir, self.kind)),
+            (Method::Ls, Centring::Experiment) => format!(
+                "experiment ({how}): an intercept per output and experiment — least squares keeps the constants that cos² = 1 − sin² and the disturbance means create; {}",
+                self.centring.reason(self.ir, self.kind)
+            ),
+            (Method::Ls, Centring::Pooled) => format!(
+                "pooled ({how}): one intercept per output over all experiments (the model's constant term where it has one); {}",
+                self.centring.reason(self.ir, self.kind)
+            ),
+            (Method::Ls, Centring::None) => format!(
+                "none ({how}): no intercept beyond the model's constant terms; {}",
+                self.centring.reason(self.ir, self.kind)
+            ),
             (_, c) => format!("{} ({how}): {}", c.name(), c.reason(self.ir, self.kind)),
         };
         let instruments = match (self.options.method, self.options.instruments) {

@@ -83,7 +83,12 @@ impl CrossMoments {
             *sz += zi;
             *szz += zi * zi;
         }
-        for ((s, spp), &f) in self.s_phi.iter_mut().zip(self.s_pp.iter_mut()).zip(&self.dphi) {
+        for ((s, spp), &f) in self
+            .s_phi
+            .iter_mut()
+            .zip(self.s_pp.iter_mut())
+            .zip(&self.dphi)
+        {
             *s += f;
             *spp += f * f;
         }

@@ -143,3 +143,27 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         crossings: crossings.split_off(n_fixed),
     }
 }
+
+/// The sign arguments on plain states, `(sign argument, state)`: every
+/// predictor evaluates their moduli pointwise, `|x| = sign(x)·x`.
+pub fn plain_sign_args(ir: &Ir) -> Vec<(usize, usize)> {
+    ir.sign_args
+        .iter()
+        .enumerate()
+        .filter(|(_, a)| a.pointwise)
+        .filter_map(|(i, a)| match a.arg.signal {
+            leeway_structure::ir::Signal::State(l) => Some((i, l)),
+            leeway_structure::ir::Signal::Input(_) => None,
+        })
+        .collect()
+}
+
+/// Sets the sign of each given plain-state argument from the states the
+/// regressors are about to be evaluated at, so that a pattern-taking
+/// regressor evaluation computes `x·|x|` exactly as the simulation does.
+#[inline]
+pub fn set_pointwise_signs(signs: &mut [f64], args: &[(usize, usize)], states: &[f64]) {
+    for &(i, l) in args {
+        signs[i] = if states[l] < 0.0 { -1.0 } else { 1.0 };
+    }
+}

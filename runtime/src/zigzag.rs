@@ -887,10 +887,7 @@ mod tests {
     /// zigzag run.
     #[test]
     fn zigzag_tanker_model_matches_the_runs() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../examples/models/tanker.som"
-        );
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/models/tanker.som");
         let source = std::fs::read_to_string(path).expect("tanker.som");
         let comp = leeway_structure::compile(&source, &leeway_structure::Options::default());
         let errors: Vec<&str> = comp

@@ -396,7 +396,9 @@ fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usi
         .collect();
     let mut base: BTreeMap<usize, Vec<Q>> = BTreeMap::new();
     for key in &constant {
-        let Some(row) = rows.remove(key) else { continue };
+        let Some(row) = rows.remove(key) else {
+            continue;
+        };
         match base.get(&key.1) {
             // The first experiment with this output's constant is the reference.
             None => {
@@ -647,7 +649,11 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
             format!(
                 "{} {} a constant term, annihilated by {} (zero-mean instruments remove every constant)",
                 constant_terms.join(", "),
-                if constant_terms.len() == 1 { "is" } else { "are" },
+                if constant_terms.len() == 1 {
+                    "is"
+                } else {
+                    "are"
+                },
                 match names.centring {
                     Centring::Experiment => "per-experiment centring",
                     _ => "pooled centring",
@@ -807,12 +813,7 @@ impl<'a> Analysis<'a> {
     }
     /// Reduction for a pattern set.
     pub fn reduce(&self, patterns: Patterns) -> Reduction {
-        reduce(
-            &self.structural,
-            patterns,
-            &self.order,
-            self.names.centring,
-        )
+        reduce(&self.structural, patterns, &self.order, self.names.centring)
     }
     /// θ identifiable from these patterns.
     pub fn identifiable(&self, patterns: Patterns) -> bool {
@@ -1202,7 +1203,11 @@ pub fn constant_parameters(ir: &Ir) -> Vec<usize> {
 /// What the analysis says about constant terms under each centring: a note
 /// per constant, and for a group of constants that the centring annihilates,
 /// the option that makes them estimable.
-fn constant_notes(ir: &Ir, centring: Centring, patterns: &[SignPattern]) -> (Vec<String>, Vec<(Vec<usize>, String)>) {
+fn constant_notes(
+    ir: &Ir,
+    centring: Centring,
+    patterns: &[SignPattern],
+) -> (Vec<String>, Vec<(Vec<usize>, String)>) {
     let constants = constant_parameters(ir);
     if constants.is_empty() {
         return (Vec::new(), Vec::new());

@@ -2,8 +2,10 @@
 //! hand analysis of the paper (§IV-A, Remark 1): which sign patterns identify
 //! θ, which parameter pairs enter only as aggregates, and what separates them.
 
-use leeway_structure::identify::{all_patterns, parse_pattern};
-use leeway_structure::ir::{ColumnKind, Ir, SignPattern};
+use leeway_structure::identify::{
+    Analysis, Centring, ExperimentStructure, Patterns, all_patterns, parse_pattern,
+};
+use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, SignPattern};
 use leeway_structure::{Compilation, Options, compile, render};
 
 fn source(path: &str) -> String {
@@ -479,4 +481,147 @@ fn measured_medium_modulus_is_separated_by_a_sign_change() {
     assert_eq!(signs, [1, -1], "both signs of the measured air.u");
     let sep = &ir.report.separations[0].message;
     assert!(sep.contains("within one experiment"), "{sep}");
+}
+
+fn compile_with(source: &str, centring: Option<Centring>) -> Compilation {
+    compile(
+        source,
+        &Options {
+            aggregate: false,
+            patterns: None,
+            centring,
+        },
+    )
+}
+
+const CONSTANT_WITH_CURRENT: &str = "model S {
+    state u, v, r
+    input tau
+    heading psi integrates r
+    disturbance current unmeasured earth(north, east)
+    water = relative(current)
+    der u = X_u*water.u + X_t*tau + X_0
+    der v = Y_v*water.v
+    der r = N_r*r
+}";
+
+/// A constant term is identifiable exactly when the instruments keep
+/// constants: the tanker (no disturbance) by default, a craft in a current
+/// only with uncentred or pooled instruments — and the verdict says so.
+#[test]
+fn constant_terms_are_identifiable_where_the_centring_keeps_constants() {
+    let tanker = with("tanker.som", false, None);
+    assert!(errors(&tanker).is_empty(), "{:?}", errors(&tanker));
+    let ir = ir_of(&tanker);
+    assert_eq!(ir.report.centring, Some(Centring::None));
+    assert!(ir.report.identifiable && ir.report.any_single_pattern);
+    assert!(
+        ir.report
+            .notes
+            .iter()
+            .any(|n| n.contains("`X_0`, `Y_0` and `N_0`: constant terms")),
+        "{:?}",
+        ir.report.notes
+    );
+    // The same model analysed with per-experiment centring loses its constants.
+    let centred = compile_with(&source("tanker.som"), Some(Centring::Experiment));
+    assert_eq!(
+        groups(ir_of(&centred)),
+        vec![vec!["N_0"], vec!["X_0"], vec!["Y_0"]]
+    );
+
+    let current = compile_with(CONSTANT_WITH_CURRENT, None);
+    let ir = ir_of(&current);
+    assert_eq!(ir.report.centring, Some(Centring::Experiment));
+    assert!(!ir.report.identifiable);
+    assert_eq!(groups(ir), vec![vec!["X_0"]]);
+    assert!(
+        ir.report.unidentifiable[0]
+            .message
+            .contains("annihilated by per-experiment centring")
+    );
+    let sep = &ir.report.separations[0].message;
+    assert!(
+        sep.contains("`--centring none`") && sep.contains("`--centring pooled`"),
+        "{sep}"
+    );
+    for centring in [Centring::None, Centring::Pooled] {
+        let c = compile_with(CONSTANT_WITH_CURRENT, Some(centring));
+        assert!(errors(&c).is_empty(), "{centring:?}: {:?}", errors(&c));
+        assert!(ir_of(&c).report.identifiable, "{centring:?}");
+    }
+}
+
+/// Pooled centring annihilates a constant common to every experiment but
+/// keeps one that differs between experiments (here through a sign).
+#[test]
+fn pooled_centring_keeps_constants_that_differ_between_experiments() {
+    // |water.u| = s·(u − cos ψ·north − sin ψ·east): its λ moments give the
+    // sign-only constant s·E[…] once cos² = 1 − sin² is applied.
+    let src = "model P {
+        state u, v, r
+        heading psi integrates r
+        disturbance current unmeasured earth(north, east)
+        water = relative(current)
+        der u = X_uu*water.u*|water.u| + X_r*r
+        der v = Y_v*water.v
+        der r = N_r*r
+    }";
+    let ir = ir_of(&compile_with(src, Some(Centring::Pooled))).clone();
+    let s = sign_index(&ir, "water.u");
+    let plus = vec![1i8; ir.sign_args.len()];
+    let mut minus = plus.clone();
+    minus[s] = -1;
+    let kept = |centring: Centring, set: &[SignPattern]| {
+        Analysis::with_centring(&ir, PredictorKind::Measured, centring)
+            .reduce(Patterns::Set(set))
+            .kept()
+            .len()
+    };
+    let one = std::slice::from_ref(&plus);
+    let both = [plus.clone(), minus];
+    // One experiment: pooled is per-experiment centring.
+    assert_eq!(kept(Centring::Pooled, one), kept(Centring::Experiment, one));
+    // Two experiments of opposite sign: the sign-only constant differs between
+    // them, so pooled centring keeps a column that per-experiment centring
+    // annihilates; no centring keeps at least as much.
+    let (e, p, n) = (
+        kept(Centring::Experiment, &both),
+        kept(Centring::Pooled, &both),
+        kept(Centring::None, &both),
+    );
+    assert!(e < p && p <= n, "experiment {e}, pooled {p}, none {n}");
+}
+
+/// Moduli of plain states are pointwise: `r*|r|` and `r*r` are told apart
+/// by a sign change of r, which may happen within one experiment.
+#[test]
+fn plain_state_moduli_are_pointwise_and_separated_by_a_sign_change() {
+    let c = compile_with(
+        "model R { state r\n input d\n der r = N_d*d + N_a*r*|r| + N_b*r*r }",
+        None,
+    );
+    let ir = ir_of(&c);
+    assert!(ir.sign_args.iter().all(|a| a.pointwise));
+    assert!(ir.report.identifiable);
+    assert_eq!(ir.report.required_patterns.len(), 2, "{:?}", ir.report);
+    let sep = &ir.report.separations[0].message;
+    assert!(
+        sep.contains("both signs of r")
+            && sep.contains("a sign change within one experiment suffices"),
+        "{sep}"
+    );
+    // One experiment in which r changes sign identifies θ.
+    let analysis = Analysis::new(ir, PredictorKind::Measured);
+    let varying = ExperimentStructure {
+        pattern: vec![1],
+        frozen_rotation: None,
+        varying: vec![0],
+    };
+    let fixed = ExperimentStructure {
+        varying: Vec::new(),
+        ..varying.clone()
+    };
+    assert!(analysis.identifiable(Patterns::Experiments(std::slice::from_ref(&varying))));
+    assert!(!analysis.identifiable(Patterns::Experiments(std::slice::from_ref(&fixed))));
 }

@@ -121,11 +121,10 @@ fn reduced_nuisance_basis_spans_the_unreduced_one() {
                 .collect();
             for set in pattern_sets(ir, kind) {
                 let red = analysis.reduce(Patterns::Set(&set));
-                let vectors: Vec<BTreeMap<Row, Q>> =
-                    columns
-                        .iter()
-                        .map(|c| vector(c, &set, analysis.names.centring != Centring::Experiment))
-                        .collect();
+                let vectors: Vec<BTreeMap<Row, Q>> = columns
+                    .iter()
+                    .map(|c| vector(c, &set, analysis.names.centring != Centring::Experiment))
+                    .collect();
                 let kept: Vec<usize> = nuisance.iter().copied().filter(|c| red.pivot[*c]).collect();
                 for &d in nuisance.iter().filter(|c| !red.pivot[**c]) {
                     // Rebuild the dropped column from the kept nuisance columns.

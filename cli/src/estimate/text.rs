@@ -175,7 +175,8 @@ pub fn render(o: &Outcome) -> String {
         vec![
             "combination".to_string(),
             if d.combine == "stacked" {
-                "stacked: [H_i/n_i] ϑ = [g_i/n_i] by least squares (paper eq. IV_problem)".to_string()
+                "stacked: [H_i/n_i] ϑ = [g_i/n_i] by least squares (paper eq. IV_problem)"
+                    .to_string()
             } else if d.combine == "summed" {
                 "summed: (Σ H_i) ϑ = Σ g_i (pooled IV)".to_string()
             } else {
