@@ -1395,9 +1395,48 @@ impl<'a> Estimator<'a> {
                     mat.column_mut(j).fill(0.0);
                 }
             }
+            // Rows equilibrated too (each instrument's equation to unit norm):
+            // an instrument in large units must not drown the others, so the
+            // rank decision and the conditioning do not depend on the units.
+            // One scale per instrument, the same in every experiment's rows
+            // (stacked), so the experiments keep their relative weights.
+            let instrument_norm: Vec<f64> = (0..m)
+                .map(|r| {
+                    (0..mat.nrows() / m)
+                        .map(|i| mat.row(i * m + r).norm_squared())
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            let row_scale: Vec<f64> = (0..mat.nrows())
+                .map(|r| {
+                    let norm = instrument_norm[r % m];
+                    if norm > 0.0 && norm.is_finite() {
+                        1.0 / norm
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            let mut scaled = mat.clone();
+            for (r, d) in row_scale.iter().enumerate() {
+                scaled.row_mut(r).scale_mut(*d);
+            }
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by_key(|j| self.preference[cols[*j]]);
-            let sel = select_columns(&mat, &order, self.options.rank_tolerance);
+            let sel = select_columns(&scaled, &order, self.options.rank_tolerance);
+            // The square summed system is solved equilibrated (its solution
+            // does not depend on row scaling); the stacked one as the paper
+            // writes it, by unweighted least squares over the rows.
+            let (mat, rhs, row_scale) = if summed {
+                let mut rhs = rhs;
+                for (r, d) in row_scale.iter().enumerate() {
+                    rhs[r] *= d;
+                }
+                (scaled.clone(), rhs, row_scale)
+            } else {
+                (mat, rhs, vec![1.0; row_scale.len()])
+            };
             let mut held = Vec::new();
             for (j, combo) in &sel.dropped {
                 let c = cols[*j];
@@ -1482,9 +1521,21 @@ impl<'a> Estimator<'a> {
             }
             let kj: Vec<usize> = sel.kept.clone();
             let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
-            let (values, pinv, condition) = solve_equilibrated(&mk, &g);
+            let (values, mut pinv, condition) = solve_equilibrated(&mk, &g);
+            // The map from the unscaled moment sums to ϑ includes the row scaling.
+            for (c, d) in row_scale.iter().enumerate() {
+                pinv.column_mut(c).scale_mut(*d);
+            }
+            // Conditioning judged on the equilibrated system, whatever the units.
+            let condition = if summed {
+                condition
+            } else {
+                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
+                solve_equilibrated(&ks, &DVector::zeros(scaled.nrows())).2
+            };
             let weak = if condition > CONDITION_WARNING {
-                weakest_direction(&mk)
+                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
+                weakest_direction(&ks)
                     .into_iter()
                     .map(|k| kept[k])
                     .collect()

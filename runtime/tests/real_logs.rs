@@ -235,8 +235,9 @@ fn zigzag_campaign_summed_iv_matches_the_structure_and_beats_least_squares() {
     let iv_noisy = fit_of(&noisy, Method::Iv3, Combine::Summed);
     let ls_noisy = fit_of(&noisy, Method::Ls, Combine::Summed);
     let stacked_noisy = fit_of(&noisy, Method::Iv3, Combine::Stacked);
+    let stacked_clean = fit_of(&clean, Method::Iv3, Combine::Stacked);
     eprintln!(
-        "reference {reference:.1?} iv3 clean {iv_clean:.1?} noisy {iv_noisy:.1?}; ls noisy {ls_noisy:.1?}; stacked noisy {stacked_noisy:.1?}"
+        "reference {reference:.1?} iv3 clean {iv_clean:.1?} noisy {iv_noisy:.1?}; ls noisy {ls_noisy:.1?}; stacked clean {stacked_clean:.1?} noisy {stacked_noisy:.1?}"
     );
     for o in 0..3 {
         assert!(
@@ -252,8 +253,120 @@ fn zigzag_campaign_summed_iv_matches_the_structure_and_beats_least_squares() {
         iv_noisy[0] >= ls_noisy[0] + 10.0,
         "{iv_noisy:?} vs LS {ls_noisy:?}"
     );
+    let mean = |f: [f64; 3]| f.iter().sum::<f64>() / 3.0;
+    for (summed, stacked) in [(iv_clean, stacked_clean), (iv_noisy, stacked_noisy)] {
+        assert!(
+            mean(summed) >= mean(stacked) + 2.0,
+            "summed {summed:?} vs stacked {stacked:?}"
+        );
+    }
+}
+
+/// A rudder log plus a propeller rate held constant (a real log's rpm
+/// channel): `X_n*n*n` is then a constant, collinear with `X_0`.
+fn with_rpm(jitter: f64) -> (Interpreter, Vec<Experiment>) {
+    let source = "model T {
+        state u, v, r
+        input delta, n
+        der u = X_0 + X_n*n*n + X_uu*u*|u| + X_vr*v*r + X_dd*delta*delta + X_rr*r*r
+        der v = Y_0 + Y_uv*u*v + Y_ur*u*r + Y_ud*u*delta + Y_vv*v*|v| + Y_rr*r*|r|
+        der r = N_0 + N_uv*u*v + N_ur*u*r + N_ud*u*delta + N_vv*v*|v| + N_rr*r*|r|
+    }";
+    let c = leeway_runtime::structure::compile(source, &Default::default());
+    let model = Interpreter::new(c.ir.expect("compiles"));
+    let base = tanker();
+    let data = experiments(&base, &campaign(false).train)
+        .into_iter()
+        .map(|mut e| {
+            let n: Vec<f64> = (0..e.len())
+                .map(|k| 8.0 * (1.0 + jitter * ((k * 7919 % 13) as f64 - 6.0)))
+                .collect();
+            e.inputs.push(n);
+            e
+        })
+        .collect();
+    (model, data)
+}
+
+/// Honest numerics: a constant rpm makes `X_n` collinear with `X_0` — an
+/// error naming it, never an absurd estimate with exit 0; with logger
+/// jitter on the rpm the column is real but nearly collinear, and the
+/// estimate warns with the condition number and the columns involved.
+#[test]
+fn a_constant_input_is_reported_not_estimated_from_rounding() {
+    let (model, data) = with_rpm(0.0);
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    for method in [Method::Ls, Method::Iv3] {
+        let err = estimate(
+            &model,
+            &sources,
+            &Options {
+                method,
+                ..Options::default()
+            },
+        )
+        .expect_err("X_n is not separately excited");
+        assert_eq!(err.code, "rank-deficient", "{method:?}");
+        assert!(err.message.contains("X_n"), "{}", err.message);
+    }
+    // Logger jitter of 0.1 %: a real but barely excited column, estimated
+    // with a standard error that says so.
+    let (model, data) = with_rpm(1e-3);
+    let est = run(&model, &data, &Options::default());
+    let (x_n, se) = (est.theta[1], est.std_errors[1].unwrap_or(f64::INFINITY));
     assert!(
-        iv_noisy[0] >= stacked_noisy[0] + 5.0,
-        "summed {iv_noisy:?} vs stacked {stacked_noisy:?}"
+        se > x_n.abs(),
+        "X_n = {x_n} ± {se}: more precise than the data allow"
     );
+    // Jitter at 1e-7: numerically collinear — an error or a warning naming X_n.
+    let (model, data) = with_rpm(1e-7);
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    match estimate(&model, &sources, &Options::default()) {
+        Err(e) => {
+            assert_eq!(e.code, "rank-deficient");
+            assert!(e.message.contains("X_n"), "{}", e.message);
+        }
+        Ok(est) => assert!(
+            est.warnings
+                .iter()
+                .any(|w| w.contains("ill-conditioned") && w.contains("X_n")),
+            "{:?}",
+            est.warnings
+        ),
+    }
+}
+
+/// Results do not depend on the units chosen: the same log in other units
+/// (velocities ×1e4, ×1e-4) gives the same verdict and the same fits.
+#[test]
+fn units_never_change_the_verdict() {
+    let model = tanker();
+    let c = campaign(true);
+    let validation = experiments(&model, &c.validation);
+    let base = run(&model, &experiments(&model, &c.train), &Options::default());
+    let base_fit = validation_fit(&model, &base.theta, &validation);
+    for scale in [1e4, 1e-4] {
+        let scaled = |runs: &[zigzag::Run]| -> Vec<Experiment> {
+            experiments(&model, runs)
+                .into_iter()
+                .map(|mut e| {
+                    for s in &mut e.states {
+                        for x in s.iter_mut() {
+                            *x *= scale;
+                        }
+                    }
+                    e
+                })
+                .collect()
+        };
+        let est = run(&model, &scaled(&c.train), &Options::default());
+        assert_eq!(est.diagnostics.estimated, base.diagnostics.estimated);
+        let fit = validation_fit(&model, &est.theta, &scaled(&c.validation));
+        for o in 0..3 {
+            assert!(
+                (fit[o] - base_fit[o]).abs() < 0.5,
+                "×{scale}: {fit:?} vs {base_fit:?}"
+            );
+        }
+    }
 }
