@@ -37,6 +37,10 @@ pub struct Report {
     sign_patterns: Vec<SignPattern>,
     /// How the estimate was computed (an empty object on error).
     diagnostics: serde_json::Value,
+    /// Per data file: comment lines skipped, time-stamp jitter, resampling.
+    data_files: Vec<crate::model::DataFileJson>,
+    /// `{signal: unit}` as declared in the model's `data { }` (values converted to base units).
+    data_units: Ordered<String>,
     warnings: Vec<String>,
     errors: Vec<JsonError>,
 }
@@ -58,6 +62,9 @@ struct Column {
     status: String,
     /// What the value estimates.
     estimates: String,
+    /// For a parameter that estimates an aggregate, the sum it stands for
+    /// (`X_uu + W_uu`); null otherwise.
+    aggregate: Option<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -104,8 +111,9 @@ fn argument(a: &ArgSign) -> Argument {
     }
 }
 
-fn column(c: &ColumnEstimate) -> Column {
+fn column(c: &ColumnEstimate, aggregates: &[String]) -> Column {
     Column {
+        aggregate: super::text::aggregate_of(c, aggregates),
         name: c.name.clone(),
         kind: c.kind,
         value: c.value,
@@ -144,6 +152,8 @@ pub fn report(
         disturbances: Ordered::default(),
         sign_patterns: Vec::new(),
         diagnostics: serde_json::Value::Object(serde_json::Map::new()),
+        data_files: Vec::new(),
+        data_units: Ordered::default(),
         warnings,
         errors: Vec::new(),
     };
@@ -156,6 +166,13 @@ pub fn report(
     };
     let e = &o.estimate;
     r.model = Some(o.model.clone());
+    r.data_files = crate::model::data_files_json(&o.data_notes);
+    r.data_units = Ordered(
+        o.data_units
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
+    );
     r.experiments = o
         .experiments
         .iter()
@@ -176,13 +193,13 @@ pub fn report(
         .columns
         .iter()
         .filter(|c| c.kind == "theta")
-        .map(column)
+        .map(|c| column(c, &e.diagnostics.aggregates))
         .collect();
     r.nuisance = e
         .columns
         .iter()
         .filter(|c| c.kind != "theta")
-        .map(column)
+        .map(|c| column(c, &e.diagnostics.aggregates))
         .collect();
     let mut disturbances: Vec<(String, Ordered<Moment>)> = Vec::new();
     for m in &e.disturbances {
