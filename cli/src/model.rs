@@ -66,7 +66,7 @@ pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
 /// How data files with time stamps are read: shared by `estimate` and `validate`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct TimeArgs {
-    /// Largest relative deviation of a time step from the nominal (median) step,
+    /// Largest relative deviation of a time step from the nominal (mean) step,
     /// as a fraction in (0, 0.5): 0.05 accepts ±5 % logger jitter and still
     /// rejects a dropped sample (a 100 % step).
     #[arg(long, value_name = "TOL", default_value_t = leeway_runtime::data::DEFAULT_TIME_TOLERANCE, value_parser = tolerance)]

@@ -607,10 +607,9 @@ fn unit_factor(ir: &Ir, signal: &str) -> f64 {
 }
 
 /// The sample time of one experiment and the largest relative deviation of
-/// its steps from the nominal (median) step (`None` without time stamps);
-/// every step must lie within `options.time_tolerance` of the nominal step, in
-/// relative terms. The sample time is the mean step. `lines` are the rows'
-/// physical line numbers.
+/// its steps from it (`None` without time stamps). The nominal step is the
+/// mean step; every step must lie within `options.time_tolerance` of it, in
+/// relative terms. `lines` are the rows' physical line numbers.
 fn sample_time(
     file: &str,
     ir: &Ir,
@@ -631,38 +630,50 @@ fn sample_time(
         })?;
         return Ok((h, None));
     }
-    // The mean step is the best estimate of a uniform h under jitter. Steps
-    // are checked against the median step instead: a gap shifts the mean of a
-    // short record enough to blame a good row, never the median.
+    // The nominal step is the mean step, the best estimate of a uniform h
+    // under jitter. A gap shifts the mean of a short record, so that good
+    // steps may fall outside the tolerance too: the error names the worst
+    // step, which is the gap.
     let mean = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
-    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let nominal = steps[steps.len() / 2];
     let tol = options.time_tolerance;
-    let mut worst: f64 = 0.0;
-    for (k, w) in times.windows(2).enumerate() {
-        let dt = w[1] - w[0];
-        let deviation = (dt - nominal).abs() / nominal.abs();
-        // Resampling interpolates over any spacing; only the order matters then.
-        if dt <= 0.0 || (options.resample.is_none() && deviation > tol) {
-            let line = lines.get(k + 1).copied().unwrap_or(first_line);
-            let what = if dt <= 0.0 {
-                format!("time does not increase: step {dt} s here")
-            } else {
-                format!(
-                    "inconsistent sample time: step {dt} s here, {:.1} % off the nominal {nominal} s (tolerance {:.1} %)",
-                    100.0 * deviation,
-                    100.0 * tol
-                )
-            };
-            return Err(DataError::new(
-                format!("{file}:{line}:{time_column} (time)"),
-                what,
-                "leeway needs uniformly sampled data: a larger jitter may be allowed with --time-tolerance, \
-                 --resample H interpolates onto a uniform grid, or split the log into experiments at the gaps",
-            ));
-        }
-        worst = worst.max(deviation);
+    let at = |k: usize| {
+        let line = lines.get(k + 1).copied().unwrap_or(first_line);
+        format!("{file}:{line}:{time_column} (time)")
+    };
+    let hint = "leeway needs uniformly sampled data: a larger jitter may be allowed with --time-tolerance, \
+                --resample H interpolates onto a uniform grid, or split the log into experiments at the gaps";
+    if let Some((k, dt)) = times
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .enumerate()
+        .find(|(_, dt)| *dt <= 0.0)
+    {
+        return Err(DataError::new(
+            at(k),
+            format!("time does not increase: step {dt} s here"),
+            hint,
+        ));
+    }
+    let (worst_k, worst) = times
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) - mean).abs() / mean)
+        .enumerate()
+        .fold(
+            (0, 0.0f64),
+            |best, (k, d)| if d > best.1 { (k, d) } else { best },
+        );
+    // Resampling interpolates over any spacing; only the order matters then.
+    if options.resample.is_none() && worst > tol {
+        let dt = times[worst_k + 1] - times[worst_k];
+        return Err(DataError::new(
+            at(worst_k),
+            format!(
+                "inconsistent sample time: step {dt} s here, {:.1} % off the nominal (mean) step {mean} s; the tolerance is {:.1} %",
+                100.0 * worst,
+                100.0 * tol
+            ),
+            hint,
+        ));
     }
     // Under resampling the grid step is the sample time, checked against the
     // model's step by the caller.

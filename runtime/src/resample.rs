@@ -180,7 +180,14 @@ mod tests {
         let err = parse_csv_noted("j.csv", text.as_bytes(), &ir, &strict)
             .err()
             .unwrap_or_else(|| panic!("jitter beyond 0.1 % is an error"));
-        assert!(err.location.starts_with("j.csv:4:1"), "{err:?}");
+        assert!(
+            err.location.starts_with("j.csv:") && err.location.ends_with(":1 (time)"),
+            "{err:?}"
+        );
+        assert!(
+            err.message.starts_with("inconsistent sample time"),
+            "{err:?}"
+        );
         let loaded = parse_csv_noted("j.csv", text.as_bytes(), &ir, &LoadOptions::default())
             .unwrap_or_else(|e| panic!("{e}"));
         let dev = loaded.notes.experiments[0]
