@@ -82,7 +82,7 @@ pub struct TimeArgs {
 pub fn tolerance(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v > 0.0 && v < 0.5 => Ok(v),
-        Ok(v) if v >= 0.5 && v < 50.0 => Err(format!(
+        Ok(v) if (0.5..50.0).contains(&v) => Err(format!(
             "`{s}` is not a fraction in (0, 0.5) (write 0.05 for 5 %; 0.5 or more would accept a dropped sample)"
         )),
         _ => Err(format!(

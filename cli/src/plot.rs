@@ -341,7 +341,7 @@ fn draw_on<DB: DrawingBackend>(
                 });
             }
         }
-        for m in 0..models.len() {
+        for (m, model) in models.iter().enumerate() {
             let style = model_style(m);
             for (k, seg) in simulated.iter().enumerate() {
                 let Some(pts) = seg.get(m) else { continue };
@@ -350,7 +350,7 @@ fn draw_on<DB: DrawingBackend>(
                     .map_err(e)?;
                 if k == 0 {
                     series
-                        .label(models[m].as_str())
+                        .label(model.as_str())
                         .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
                 }
             }

@@ -50,25 +50,39 @@ pub fn write_csv(
         .filter(|(_, c)| ir.disturbances[c.disturbance].measured)
         .map(|(i, _)| i)
         .collect();
+    // Each column back in the unit the model declares for it (`data { r in
+    // deg/s }`), so that the file reads back as the data it stands for.
+    let unit = |signal: &str| {
+        ir.data_units
+            .get(signal)
+            .map_or(1.0, |u| leeway_structure::units::factor(u))
+    };
+    let states: Vec<f64> = ir.states.iter().map(|s| unit(s)).collect();
+    let inputs: Vec<f64> = ir.inputs.iter().map(|s| unit(s)).collect();
+    let heading = match &ir.rotation {
+        Rotation::Planar { heading, .. } => unit(heading),
+        _ => 1.0,
+    };
+    let time = unit("time");
     let mut line = String::new();
     for e in experiments {
         let n = e.states.first().map_or(0, Vec::len);
         for k in 0..n {
             line.clear();
-            push(&mut line, t0 + k as f64 * e.h);
+            push(&mut line, (t0 + k as f64 * e.h) / time);
             if experiments.len() > 1 {
                 line.push(',');
                 line.push_str(&e.name);
             }
             let value = |c: &Vec<f64>| c.get(k).copied().unwrap_or(f64::NAN);
-            for c in &e.states {
+            for (c, f) in e.states.iter().zip(&states) {
                 line.push(',');
-                push(&mut line, value(c));
+                push(&mut line, value(c) / f);
             }
             match &ir.rotation {
                 Rotation::Planar { .. } => {
                     line.push(',');
-                    push(&mut line, value(&e.heading));
+                    push(&mut line, value(&e.heading) / heading);
                 }
                 Rotation::Measured { .. } => {
                     for c in &e.rotation {
@@ -78,13 +92,14 @@ pub fn write_csv(
                 }
                 Rotation::None => {}
             }
-            for c in &e.inputs {
+            for (c, f) in e.inputs.iter().zip(&inputs) {
                 line.push(',');
-                push(&mut line, value(c));
+                push(&mut line, value(c) / f);
             }
             for &i in &measured {
                 line.push(',');
-                push(&mut line, e.disturbances.get(i).map_or(f64::NAN, value));
+                let f = unit(&ir.components[i].name);
+                push(&mut line, e.disturbances.get(i).map_or(f64::NAN, value) / f);
             }
             writeln!(out, "{line}")?;
         }
