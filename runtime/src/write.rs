@@ -183,4 +183,39 @@ mod tests {
             .unwrap_or_else(|err| panic!("{err}"));
         assert_eq!(back, vec![a, b]);
     }
+
+    #[test]
+    fn declared_units_are_written_back_in_those_units() {
+        let ir = ir(
+            "model M { state u, r input delta der u = X*u + T*delta der r = N*r
+            data { delta = \"rudder_deg\" in deg, u in knots, time in ms } }",
+        );
+        let mut e = Experiment::new(&ir, "m", 0.5);
+        for k in 0..12 {
+            e.states[0].push(1.0);
+            e.states[1].push(0.0);
+            e.inputs[0].push(0.1 * f64::from(k));
+        }
+        let mut buf = Vec::new();
+        write_csv(&ir, &[&e], 0.0, &mut buf).unwrap_or_else(|e| panic!("{e}"));
+        let text = String::from_utf8(buf).unwrap_or_default();
+        assert!(text.starts_with("time,u,r,rudder_deg\n0.0,"), "{text}");
+        // 0.5 s as 500 ms, 1 m/s in knots, 0.1 rad in degrees.
+        let second: Vec<f64> = text
+            .lines()
+            .nth(2)
+            .unwrap_or_default()
+            .split(',')
+            .map(|c| c.parse().unwrap_or(f64::NAN))
+            .collect();
+        assert_eq!(second[0], 500.0);
+        assert!((second[1] - 3600.0 / 1852.0).abs() < 1e-12);
+        assert!((second[3] - 0.1f64.to_degrees()).abs() < 1e-12);
+        let back = parse_csv("m.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back[0].h, 0.5);
+        for (a, b) in back[0].inputs[0].iter().zip(&e.inputs[0]) {
+            assert!((a - b).abs() < 1e-15, "{a} vs {b}");
+        }
+    }
 }
