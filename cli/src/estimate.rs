@@ -8,7 +8,9 @@
 mod json;
 mod text;
 
-use crate::model::{heading_gains, heading_warnings, load, load_data, load_options};
+use crate::model::{
+    TimeArgs, heading_gains, heading_warnings, load, load_data, load_options, unit_warnings,
+};
 use crate::output::{Status, err, headline, out, print_json, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_runtime::{
@@ -72,6 +74,9 @@ pub struct EstimateArgs {
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,
+    /// Time stamps: jitter tolerance and resampling.
+    #[command(flatten)]
+    pub time: TimeArgs,
 }
 
 /// `--method`.
@@ -187,6 +192,12 @@ pub struct Outcome {
     pub experiments: Vec<(String, usize)>,
     /// The heading's unit check per experiment (planar heading only).
     pub heading_gains: Vec<(String, Option<f64>)>,
+    /// What reading each data file noted (comment lines, jitter, resampling).
+    pub data_notes: Vec<leeway_runtime::data::FileNotes>,
+    /// The declared units, one line each (`delta: column rudder in deg, converted to rad`).
+    pub units: Vec<String>,
+    /// The declared units by signal, as written.
+    pub data_units: std::collections::BTreeMap<String, String>,
 }
 
 /// Runs `leeway estimate`.
@@ -223,13 +234,14 @@ pub fn run(args: &EstimateArgs) -> Status {
 fn execute(args: &EstimateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, args.aggregate)?;
     let ir = loaded.ir;
-    let load_options = load_options(&ir, args.step)?;
+    let load_options = load_options(&ir, args.step, Some(&args.time))?;
     let nominal = match &args.nominal {
         Some(path) => Some(crate::params::read(path, &ir, "--nominal")?),
         None => None,
     };
-    let experiments = load_data(&ir, &args.data, &load_options)?;
+    let (experiments, data_notes) = load_data(&ir, &args.data, &load_options)?;
     warnings.extend(loaded.warnings);
+    warnings.extend(unit_warnings(&ir, &experiments));
     warnings.extend(heading_warnings(&ir, &experiments));
     let model = Interpreter::new(ir.clone());
     let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
@@ -248,5 +260,8 @@ fn execute(args: &EstimateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             Vec::new()
         },
         estimate: est,
+        data_notes,
+        units: crate::model::unit_lines(&ir),
+        data_units: ir.data_units.clone(),
     })
 }

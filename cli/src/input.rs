@@ -250,7 +250,13 @@ pub fn parse_input(
         })?;
         let raw = |i: usize| record.get(i).unwrap_or("");
         for (role, i, name) in &required {
-            let v = cell(file, line, *i, name, raw(*i))?;
+            // Declared units are converted to base units, as for data files.
+            let signal = match role {
+                Role::Input(s) => ir.inputs.get(*s),
+                Role::Rotation(s) => ir.rotation_vars.get(*s),
+                Role::Disturbance(s) => ir.components.get(*s).map(|c| &c.name),
+            };
+            let v = cell(file, line, *i, name, raw(*i))? * signal.map_or(1.0, |s| unit(ir, s));
             match role {
                 Role::Input(s) => inputs[*s].push(v),
                 Role::Rotation(s) => rotation[*s].push(v),
@@ -260,12 +266,13 @@ pub fn parse_input(
         if rows == 0 {
             for (name, value, col) in &mut initial {
                 if let Some(i) = *col {
-                    *value = Some(cell(file, line, i, &column_name(ir, name), raw(i))?);
+                    *value =
+                        Some(cell(file, line, i, &column_name(ir, name), raw(i))? * unit(ir, name));
                 }
             }
         }
         if let Some(i) = time_col {
-            times.push(cell(file, line, i, &column_name(ir, "time"), raw(i))?);
+            times.push(cell(file, line, i, &column_name(ir, "time"), raw(i))? * unit(ir, "time"));
         }
         if let Some(i) = exp_col {
             let name = raw(i).to_string();
@@ -323,6 +330,13 @@ pub fn parse_input(
         experiment: e,
         t0: times.first().copied().unwrap_or(0.0),
     })
+}
+
+/// The factor from a signal's declared unit to its base unit (1 without one).
+fn unit(ir: &Ir, signal: &str) -> f64 {
+    ir.data_units
+        .get(signal)
+        .map_or(1.0, |u| leeway_structure::units::factor(u))
 }
 
 /// The sample time: from the time column (uniform, checked against the

@@ -43,7 +43,7 @@ enum Command {
     Estimate(estimate::EstimateArgs),
     /// Simulate a model with given parameters on an input file; write the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
-    /// Fit of a model with given parameters on validation data, and a plot of measured against simulated.
+    /// Fit of models with given parameters on validation data (like MATLAB's compare); a plot with --plot.
     Validate(validate::ValidateArgs),
     /// Re-run the paper's simulation study (§V): tables, claims, results.json and figures.
     Reproduce(reproduce::ReproduceArgs),

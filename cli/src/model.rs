@@ -3,7 +3,7 @@
 
 use crate::problem::{Failure, Problem};
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{LoadOptions, heading_gain, load_csv};
+use leeway_runtime::data::{FileNotes, LoadOptions, heading_gain, load_csv_noted};
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
 use leeway_structure::{Options, compile};
@@ -64,9 +64,41 @@ pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
     Ok(Loaded { ir, warnings })
 }
 
+/// How data files with time stamps are read: shared by `estimate` and `validate`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TimeArgs {
+    /// Largest relative deviation of a time step from the nominal (mean) step,
+    /// as a fraction in (0, 0.5): 0.05 accepts ±5 % logger jitter and still
+    /// rejects a dropped sample (a 100 % step).
+    #[arg(long, value_name = "TOL", default_value_t = leeway_runtime::data::DEFAULT_TIME_TOLERANCE, value_parser = tolerance)]
+    pub time_tolerance: f64,
+    /// Interpolate every experiment linearly onto a uniform grid of H seconds
+    /// from its first time stamp (needs a time column; the heading along the short arc).
+    #[arg(long, value_name = "H", value_parser = crate::estimate::positive)]
+    pub resample: Option<f64>,
+}
+
+/// `--time-tolerance`: a fraction in (0, 0.5). Beyond one half a dropped
+/// sample could pass for jitter.
+pub fn tolerance(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 0.5 => Ok(v),
+        Ok(v) if (0.5..50.0).contains(&v) => Err(format!(
+            "`{s}` is not a fraction in (0, 0.5) (write 0.05 for 5 %; 0.5 or more would accept a dropped sample)"
+        )),
+        _ => Err(format!(
+            "`{s}` is not a fraction in (0, 0.5): the relative step tolerance, e.g. 0.05 for 5 %"
+        )),
+    }
+}
+
 /// `--step H` against the model's own `step`: a conflict is an error, never
-/// silently resolved.
-pub fn load_options(ir: &Ir, step: Option<f64>) -> Result<LoadOptions, Problem> {
+/// silently resolved; so is `--resample H` against it.
+pub fn load_options(
+    ir: &Ir,
+    step: Option<f64>,
+    time: Option<&TimeArgs>,
+) -> Result<LoadOptions, Problem> {
     if let (Some(declared), Some(given)) = (ir.step, step)
         && (declared - given).abs() > 1e-9 * declared.abs()
     {
@@ -76,28 +108,199 @@ pub fn load_options(ir: &Ir, step: Option<f64>) -> Result<LoadOptions, Problem> 
         )
         .help("drop --step (the model's step is used), or change `step` in the model"));
     }
-    Ok(LoadOptions { step })
+    if let (Some(declared), Some(given)) = (ir.step.or(step), time.and_then(|t| t.resample))
+        && (declared - given).abs() > 1e-9 * declared.abs()
+    {
+        return Err(Problem::error(
+            "invalid-option",
+            format!("--resample {given} conflicts with the sample time {declared} (the model's `step` or --step)"),
+        )
+        .help(format!("resample at the model's step: --resample {declared}")));
+    }
+    let mut options = LoadOptions {
+        step,
+        ..LoadOptions::default()
+    };
+    if let Some(t) = time {
+        options.time_tolerance = t.time_tolerance;
+        options.resample = t.resample;
+    }
+    Ok(options)
 }
 
 /// Loads every data file; all files are read and every failing one reported.
+/// What was noted while reading (comment lines, jitter, resampling) comes back
+/// per file, for the output.
 pub fn load_data(
     ir: &Ir,
     files: &[PathBuf],
     options: &LoadOptions,
-) -> Result<Vec<Experiment>, Failure> {
+) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
     let mut experiments = Vec::new();
+    let mut notes = Vec::new();
     let mut problems = Vec::new();
     for path in files {
-        match load_csv(path, ir, options) {
-            Ok(es) => experiments.extend(es),
+        match load_csv_noted(path, ir, options) {
+            Ok(f) => {
+                experiments.extend(f.experiments);
+                notes.push(f.notes);
+            }
             Err(e) => problems.push(Problem::data(&e)),
         }
     }
     if problems.is_empty() {
-        Ok(experiments)
+        Ok((experiments, notes))
     } else {
         Err(Failure::Problems(problems))
     }
+}
+
+/// Below this relative step deviation, time stamps count as uniform: decimal
+/// stamps such as 0.1·k carry rounding of order 1e-15.
+const JITTER_FLOOR: f64 = 1e-6;
+
+/// What loading did, one line each, for the text output: comment lines
+/// skipped, jitter tolerated, experiments resampled.
+pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
+    let mut lines = Vec::new();
+    for f in notes {
+        if f.comment_lines > 0 {
+            lines.push(format!(
+                "{}: {} comment line{} skipped",
+                f.file,
+                f.comment_lines,
+                if f.comment_lines == 1 { "" } else { "s" }
+            ));
+        }
+        for e in &f.experiments {
+            if let Some(n) = e.resampled {
+                lines.push(format!(
+                    "{}: experiment `{}` resampled from {} rows to {n} samples",
+                    f.file, e.experiment, e.rows
+                ));
+            }
+            if let Some(d) = e.max_step_deviation.filter(|d| *d > JITTER_FLOOR) {
+                lines.push(format!(
+                    "{}: experiment `{}` time steps deviate up to {:.2} % from the nominal step{}",
+                    f.file,
+                    e.experiment,
+                    100.0 * d,
+                    if e.resampled.is_some() {
+                        " (before resampling)"
+                    } else {
+                        " (within --time-tolerance)"
+                    }
+                ));
+            }
+        }
+    }
+    lines
+}
+
+/// The JSON form of the loading notes (README: `data_files`).
+#[derive(Debug, serde::Serialize)]
+pub struct DataFileJson {
+    /// The file as given.
+    pub file: String,
+    /// Lines skipped as comments (`#`).
+    pub comment_lines: usize,
+    /// Per experiment: rows read, largest relative step deviation, samples after resampling.
+    pub experiments: Vec<DataExperimentJson>,
+}
+
+/// One experiment of [`DataFileJson`].
+#[derive(Debug, serde::Serialize)]
+pub struct DataExperimentJson {
+    /// The experiment's name.
+    pub name: String,
+    /// Rows read from the file.
+    pub rows: usize,
+    /// Largest `|Δt − h|/h` over the steps (null without a time column).
+    pub max_step_deviation: Option<f64>,
+    /// Samples after `--resample` (null when not resampled).
+    pub resampled: Option<usize>,
+}
+
+/// [`FileNotes`] as JSON.
+pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
+    notes
+        .iter()
+        .map(|f| DataFileJson {
+            file: f.file.clone(),
+            comment_lines: f.comment_lines,
+            experiments: f
+                .experiments
+                .iter()
+                .map(|e| DataExperimentJson {
+                    name: e.experiment.clone(),
+                    rows: e.rows,
+                    max_step_deviation: e.max_step_deviation,
+                    resampled: e.resampled,
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// The declared units, one line each: `delta: column rudder_deg in deg, converted to rad`.
+pub fn unit_lines(ir: &Ir) -> Vec<String> {
+    ir.data_units
+        .iter()
+        .map(|(signal, unit)| {
+            let column = leeway_runtime::data::column_name(ir, signal);
+            let base = leeway_structure::units::unit(unit).map_or("?", |(k, _)| k.base());
+            if base == unit {
+                format!("{signal}: column {column} in {unit}, read as is")
+            } else {
+                format!("{signal}: column {column} in {unit}, converted to {base}")
+            }
+        })
+        .collect()
+}
+
+/// The unit an axis shows for a signal: the base unit its declared unit
+/// converts to, or none (then the axis names the signal only: leeway does
+/// not assume what an undeclared column measures).
+pub fn axis_label(ir: &Ir, signal: &str) -> String {
+    match ir
+        .data_units
+        .get(signal)
+        .and_then(|u| leeway_structure::units::unit(u))
+    {
+        Some((kind, _)) => format!("{signal} ({})", kind.base()),
+        None => signal.to_string(),
+    }
+}
+
+/// Words in an input's name or column that say it is an angle.
+const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
+
+/// An input without a declared unit, named like an angle (`delta`,
+/// `rudder_deg`, ...), whose values exceed π in magnitude is probably an
+/// angle logged in degrees: say so, with the declaration that fixes it. Only
+/// the name can tell an angle from a force of the same magnitude, so inputs
+/// named otherwise are left alone rather than warned about on every run.
+pub fn unit_warnings(ir: &Ir, experiments: &[Experiment]) -> Vec<String> {
+    let mut out = Vec::new();
+    for (i, name) in ir.inputs.iter().enumerate() {
+        let column = leeway_runtime::data::column_name(ir, name).to_lowercase();
+        let angle_like = ANGLE_WORDS
+            .iter()
+            .any(|w| name.to_lowercase().contains(w) || column.contains(w));
+        if ir.data_units.contains_key(name) || !angle_like {
+            continue;
+        }
+        let peak = experiments
+            .iter()
+            .flat_map(|e| e.inputs.get(i).into_iter().flatten())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        if peak > std::f64::consts::PI {
+            out.push(format!(
+                "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
+            ));
+        }
+    }
+    out
 }
 
 /// The heading's unit check (SPEC §5): a warning with the measured gain of

@@ -8,20 +8,45 @@ use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 
-/// One panel: a measured and a simulated series over time.
+/// One panel: a measured signal and its simulation by one or more models,
+/// over experiments drawn end to end on the time axis.
 #[derive(Clone, Debug)]
 pub struct Panel {
     /// Title above the panel.
     pub title: String,
     /// The y-axis label.
     pub y_label: String,
-    /// Sample times.
+    /// The experiments, in order, each on its own stretch of the time axis.
+    pub segments: Vec<Segment>,
+}
+
+/// One experiment's stretch of a panel.
+#[derive(Clone, Debug)]
+pub struct Segment {
+    /// The experiment's name, written at its start when there are several.
+    pub name: String,
+    /// Sample times on the panel's axis (already offset after earlier experiments).
     pub time: Vec<f64>,
     /// The measurement.
     pub measured: Vec<f64>,
-    /// The simulation (non-finite values after a divergence are not drawn).
-    pub simulated: Vec<f64>,
+    /// One simulation per model, in legend order (non-finite values after a
+    /// divergence are not drawn).
+    pub simulated: Vec<Vec<f64>>,
 }
+
+/// The colours of the models' lines, in order (the measurement is grey).
+const MODEL_COLOURS: [RGBColor; 6] = [
+    RGBColor(214, 39, 40),
+    RGBColor(31, 119, 180),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+/// Most experiment names written on a panel; with more, the separators stay
+/// and the names are listed in the text output.
+const MAX_SEGMENT_LABELS: usize = 12;
 
 const WIDTH: u32 = 1000;
 const PANEL_HEIGHT: u32 = 280;
@@ -79,8 +104,9 @@ pub fn save(path: &Path, figure: &impl Figure) -> Result<(), String> {
     result
 }
 
-/// Measured against simulated, one panel per signal, stacked.
-struct Panels<'a>(&'a [Panel]);
+/// Measured against simulated, one panel per signal, stacked; `models`
+/// names the simulations in the legend.
+struct Panels<'a>(&'a [Panel], &'a [String]);
 
 impl Figure for Panels<'_> {
     fn size(&self) -> (u32, u32) {
@@ -90,30 +116,31 @@ impl Figure for Panels<'_> {
         (WIDTH, height)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
-        draw_on(root, self.0)
+        draw_on(root, self.0, self.1)
     }
 }
 
-/// Draws the panels, stacked vertically, into `path`. On an error no
-/// half-written file is left behind.
-pub fn draw(path: &Path, panels: &[Panel]) -> Result<(), String> {
-    save(path, &Panels(panels))
+/// Draws the panels, stacked vertically, into `path`; `models` names the
+/// simulated lines. On an error no half-written file is left behind.
+pub fn draw(path: &Path, panels: &[Panel], models: &[String]) -> Result<(), String> {
+    save(path, &Panels(panels, models))
 }
 
-/// At most [`MAX_POINTS`] points: the smallest and largest value of each
+/// At most `max` points (at least 2): the smallest and largest value of each
 /// bucket, in time order, so peaks survive.
-pub fn decimate(time: &[f64], values: &[f64]) -> Vec<(f64, f64)> {
+pub fn decimate_to(time: &[f64], values: &[f64], max: usize) -> Vec<(f64, f64)> {
+    let max = max.max(2);
     let points: Vec<(f64, f64)> = time
         .iter()
         .copied()
         .zip(values.iter().copied())
         .filter(|(t, v)| t.is_finite() && v.is_finite())
         .collect();
-    if points.len() <= MAX_POINTS {
+    if points.len() <= max {
         return points;
     }
-    let bucket = points.len().div_ceil(MAX_POINTS / 2);
-    let mut out = Vec::with_capacity(MAX_POINTS);
+    let bucket = points.len().div_ceil(max / 2);
+    let mut out = Vec::with_capacity(max);
     for chunk in points.chunks(bucket) {
         let lo = chunk.iter().min_by(|a, b| a.1.total_cmp(&b.1));
         let hi = chunk.iter().max_by(|a, b| a.1.total_cmp(&b.1));
@@ -220,22 +247,43 @@ pub fn y_range(measured: &[(f64, f64)], simulated: &[(f64, f64)]) -> (f64, f64) 
 fn draw_on<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     panels: &[Panel],
+    models: &[String],
 ) -> Result<(), String> {
     let e = |err: DrawingAreaErrorKind<DB::ErrorType>| err.to_string();
     root.fill(&WHITE).map_err(e)?;
     let areas = root.split_evenly((panels.len().max(1), 1));
-    // The measurement wide and grey, the simulation thin and red on top: both stay visible.
+    // The measurement wide and grey, the simulations thin and coloured on top: all stay visible.
     let measured_style = ShapeStyle::from(&BLACK.mix(0.45)).stroke_width(3);
-    let simulated_style = ShapeStyle::from(&RED).stroke_width(1);
+    let model_style =
+        |m: usize| ShapeStyle::from(&MODEL_COLOURS[m % MODEL_COLOURS.len()]).stroke_width(1);
     for (area, p) in areas.iter().zip(panels) {
-        let measured = decimate(&p.time, &p.measured);
-        let simulated = decimate(&p.time, &p.simulated);
-        let (x0, x1) = match (p.time.first(), p.time.last()) {
-            (Some(a), Some(b)) if b > a => (*a, *b),
-            (Some(a), _) => (*a, *a + 1.0),
+        let budget = MAX_POINTS / p.segments.len().max(1);
+        let measured: Vec<Vec<(f64, f64)>> = p
+            .segments
+            .iter()
+            .map(|s| decimate_to(&s.time, &s.measured, budget))
+            .collect();
+        let simulated: Vec<Vec<Vec<(f64, f64)>>> = p
+            .segments
+            .iter()
+            .map(|s| {
+                s.simulated
+                    .iter()
+                    .map(|v| decimate_to(&s.time, v, budget))
+                    .collect()
+            })
+            .collect();
+        let first = p.segments.first().and_then(|s| s.time.first()).copied();
+        let last = p.segments.last().and_then(|s| s.time.last()).copied();
+        let (x0, x1) = match (first, last) {
+            (Some(a), Some(b)) if b > a => (a, b),
+            (Some(a), _) => (a, a + 1.0),
             _ => (0.0, 1.0),
         };
-        let (y0, y1) = y_range(&measured, &simulated);
+        let all_measured: Vec<(f64, f64)> = measured.iter().flatten().copied().collect();
+        let all_simulated: Vec<(f64, f64)> =
+            simulated.iter().flatten().flatten().copied().collect();
+        let (y0, y1) = y_range(&all_measured, &all_simulated);
         let mut chart = ChartBuilder::on(area)
             .caption(
                 &p.title,
@@ -246,23 +294,67 @@ fn draw_on<DB: DrawingBackend>(
             .y_label_area_size(70)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(e)?;
-        styled_mesh(&mut chart, "time (s)", &p.y_label)
+        let x_desc = if p.segments.len() > 1 {
+            "time (s; experiments end to end)"
+        } else {
+            "time (s)"
+        };
+        styled_mesh(&mut chart, x_desc, &p.y_label)
             .x_label_formatter(&|x| format!("{x}"))
             .draw()
             .map_err(e)?;
-        let clip = |pts: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
-            pts.into_iter().map(|(t, v)| (t, v.clamp(y0, y1))).collect()
+        // Experiments after the first start at a dashed separator, named when there is room.
+        if p.segments.len() > 1 {
+            for (k, s) in p.segments.iter().enumerate() {
+                let Some(&t) = s.time.first() else { continue };
+                if k > 0 {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            [(t, y0), (t, y1)],
+                            6,
+                            4,
+                            ShapeStyle::from(&BLACK.mix(0.5)).stroke_width(1),
+                        ))
+                        .map_err(e)?;
+                }
+                if p.segments.len() <= MAX_SEGMENT_LABELS {
+                    chart
+                        .draw_series(std::iter::once(Text::new(
+                            s.name.clone(),
+                            (t, y1),
+                            ("sans-serif", 13).into_font().color(&BLACK.mix(0.7)),
+                        )))
+                        .map_err(e)?;
+                }
+            }
+        }
+        let clip = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
+            pts.iter().map(|(t, v)| (*t, v.clamp(y0, y1))).collect()
         };
-        chart
-            .draw_series(LineSeries::new(clip(measured), measured_style))
-            .map_err(e)?
-            .label("measured")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], measured_style));
-        chart
-            .draw_series(LineSeries::new(clip(simulated), simulated_style))
-            .map_err(e)?
-            .label("simulated")
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], simulated_style));
+        for (k, pts) in measured.iter().enumerate() {
+            let series = chart
+                .draw_series(LineSeries::new(clip(pts), measured_style))
+                .map_err(e)?;
+            if k == 0 {
+                series.label("measured").legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], measured_style)
+                });
+            }
+        }
+        for (m, model) in models.iter().enumerate() {
+            let style = model_style(m);
+            for (k, seg) in simulated.iter().enumerate() {
+                let Some(pts) = seg.get(m) else { continue };
+                let series = chart
+                    .draw_series(LineSeries::new(clip(pts), style))
+                    .map_err(e)?;
+                if k == 0 {
+                    series
+                        .label(model.as_str())
+                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
+                }
+            }
+        }
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperRight)
@@ -286,7 +378,7 @@ mod tests {
         let mut values = vec![0.0; n];
         values[12_345] = 7.0;
         values[54_321] = -3.0;
-        let pts = decimate(&time, &values);
+        let pts = decimate_to(&time, &values, MAX_POINTS);
         assert!(pts.len() <= MAX_POINTS);
         assert!(pts.windows(2).all(|w| w[0].0 <= w[1].0));
         assert!(pts.contains(&(12_345.0, 7.0)) && pts.contains(&(54_321.0, -3.0)));
@@ -335,23 +427,41 @@ mod tests {
     fn svg_and_png_plots_render_text() {
         let dir = std::env::temp_dir().join(format!("leeway-plot-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
-        let time: Vec<f64> = (0..200).map(f64::from).collect();
+        let segment = |name: &str, from: f64| {
+            let time: Vec<f64> = (0..200).map(|k| from + f64::from(k)).collect();
+            Segment {
+                name: name.to_string(),
+                measured: time.iter().map(|t| (t / 20.0).sin()).collect(),
+                simulated: vec![
+                    time.iter().map(|t| 0.9 * (t / 20.0).sin()).collect(),
+                    time.iter().map(|t| 0.8 * (t / 20.0).sin()).collect(),
+                ],
+                time,
+            }
+        };
         let panel = Panel {
             title: "u: fit 97.5 %".to_string(),
-            y_label: "u".to_string(),
-            measured: time.iter().map(|t| (t / 20.0).sin()).collect(),
-            simulated: time.iter().map(|t| 0.9 * (t / 20.0).sin()).collect(),
-            time,
+            y_label: "u (m/s)".to_string(),
+            segments: vec![segment("run1", 0.0), segment("run2", 201.0)],
         };
+        let models = ["est-a".to_string(), "est-b".to_string()];
         let svg = dir.join("p.svg");
-        draw(&svg, &[panel.clone(), panel.clone()]).unwrap_or_else(|e| panic!("{e}"));
+        draw(&svg, &[panel.clone(), panel.clone()], &models).unwrap_or_else(|e| panic!("{e}"));
         let text = std::fs::read_to_string(&svg).unwrap_or_default();
         assert!(text.contains("<svg") && text.contains("</svg>"));
-        for label in ["u: fit 97.5 %", "measured", "simulated", "time (s)"] {
+        for label in [
+            "u: fit 97.5 %",
+            "measured",
+            "est-a",
+            "est-b",
+            "run2",
+            "u (m/s)",
+            "time (s; experiments end to end)",
+        ] {
             assert!(text.contains(label), "{label} missing from the SVG");
         }
         let png = dir.join("p.png");
-        draw(&png, &[panel]).unwrap_or_else(|e| panic!("{e}"));
+        draw(&png, &[panel], &models).unwrap_or_else(|e| panic!("{e}"));
         let bytes = std::fs::read(&png).unwrap_or_default();
         assert!(bytes.starts_with(b"\x89PNG"));
         let _ = std::fs::remove_dir_all(&dir);

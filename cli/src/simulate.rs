@@ -62,7 +62,7 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Fa
     let loaded = load(&args.model, false)?;
     warnings.extend(loaded.warnings);
     let ir = loaded.ir;
-    let options = load_options(&ir, args.step)?;
+    let options = load_options(&ir, args.step, None)?;
     let theta = crate::params::read(&args.params, &ir, "--params")?;
     let x0 = initial_values(&ir, &args.x0)?;
     let dist = disturbance_values(&ir, &args.disturbances)?;

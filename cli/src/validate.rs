@@ -1,19 +1,26 @@
-//! `leeway validate MODEL --params EST.json --data VAL.csv [--plot OUT.svg]`:
-//! simulate the model with θ on recorded experiments (from each experiment's
-//! first sample, with its inputs and measured disturbances) and report the fit
-//! per output, `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)` %, with a plot of measured against
-//! simulated. Exit 0 on success (whatever the fit), 1 when a simulation
-//! diverges, 2 on any model, data, parameter-file or option error.
+//! `leeway validate MODEL --params EST.json [--params OTHER.json]... --data
+//! VAL.csv [--plot OUT.svg]`: simulate the model with each θ on recorded
+//! experiments (from each experiment's first sample, with its inputs and
+//! measured disturbances) and report the fit per output,
+//! `100·(1 − ‖y − ŷ‖/‖y − ȳ‖)` %, per model and experiment with the mean over
+//! experiments — as MATLAB's `compare` does — and, only when asked with
+//! `--plot`, one figure of the measurement against every model. Exit 0 on
+//! success (whatever the fit), 1 when a simulation diverges, 2 on any model,
+//! data, parameter-file or option error.
 
-use crate::model::{disturbance_values, heading_warnings, load, load_data, load_options};
+use crate::model::{
+    TimeArgs, axis_label, data_files_json, data_notes, disturbance_values, heading_warnings, load,
+    load_data, load_options, unit_lines, unit_warnings,
+};
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
-use crate::plot::{Panel, draw};
+use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
-use leeway_runtime::simulate::{Disturbances, fits, simulate};
+use leeway_runtime::simulate::{Disturbances, fit, fits, simulate};
 use leeway_runtime::{Interpreter, Source};
+use leeway_structure::ir::Rotation;
 use serde::Serialize;
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `leeway validate`.
 #[derive(Debug, clap::Args)]
@@ -22,16 +29,17 @@ pub struct ValidateArgs {
     #[arg(value_name = "MODEL.som")]
     pub model: PathBuf,
     /// θ: the output of `leeway estimate --json`, or `{"name": value}` with every parameter.
-    #[arg(long, value_name = "FILE.json")]
-    pub params: PathBuf,
+    /// Repeat to compare several estimates on the same data (named by file stem).
+    #[arg(long, value_name = "FILE.json", required = true)]
+    pub params: Vec<PathBuf>,
     /// Validation data (CSV, the format of `estimate --data`). Repeat for more files.
     #[arg(long = "data", value_name = "VAL.csv", required = true)]
     pub data: Vec<PathBuf>,
-    /// Where to draw measured against simulated (`.svg`, or `.png` for a bitmap).
-    /// Default: `<first data file without .csv>-validation.svg`, beside it.
+    /// Draw measured against simulated into this file (`.svg`, or `.png` for a
+    /// bitmap). Without it nothing is written.
     #[arg(long, value_name = "OUT.svg", conflicts_with = "no_plot")]
     pub plot: Option<PathBuf>,
-    /// Draw no plot.
+    /// Draw no plot (the default; kept so that older scripts still run).
     #[arg(long)]
     pub no_plot: bool,
     /// Print one JSON document on stdout instead of text (the contract is in the README).
@@ -44,20 +52,41 @@ pub struct ValidateArgs {
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = crate::estimate::positive)]
     pub step: Option<f64>,
+    /// Time stamps: jitter tolerance and resampling.
+    #[command(flatten)]
+    pub time: TimeArgs,
 }
 
 /// The fit of one experiment.
-#[derive(Debug, Serialize)]
+#[derive(Clone, Debug, Serialize)]
 struct ExperimentFit {
     name: String,
     samples: usize,
     /// Fit per output in %, null when undefined (constant measurement, or diverged).
     fit: Ordered<Option<f64>>,
+    /// Fit of the integrated heading in % (planar heading only; null when undefined).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    heading_fit: Option<Option<f64>>,
     /// The simulation left the finite numbers.
     diverged: bool,
 }
 
-/// The JSON document of `leeway validate --json` (README, "Estimating").
+/// One parameter file's results.
+#[derive(Debug, Serialize)]
+struct ModelFits {
+    /// The parameter file as given.
+    params: String,
+    /// Its name in tables and the legend: the file stem.
+    name: String,
+    experiments: Vec<ExperimentFit>,
+    /// Mean fit over experiments per output (and `heading`); null when an
+    /// experiment diverged or no experiment defines it.
+    mean: Ordered<Option<f64>>,
+}
+
+/// The JSON document of `leeway validate --json` (README, "Validating").
+/// The fields of the first parameter file stay at the top level as before;
+/// `models` holds every file's.
 #[derive(Debug, Serialize)]
 struct Report {
     model: Option<String>,
@@ -65,6 +94,14 @@ struct Report {
     params: String,
     data: Vec<String>,
     experiments: Vec<ExperimentFit>,
+    /// Mean fit over experiments of the first parameter file.
+    mean: Ordered<Option<f64>>,
+    /// Every parameter file, in the order given.
+    models: Vec<ModelFits>,
+    /// Per data file: comment lines skipped, time-stamp jitter, resampling.
+    data_files: Vec<crate::model::DataFileJson>,
+    /// `{signal: unit}` as declared in the model's `data { }`.
+    data_units: Ordered<String>,
     /// The plot written, or null.
     plot: Option<String>,
     warnings: Vec<String>,
@@ -73,24 +110,35 @@ struct Report {
 
 struct Outcome {
     model: String,
+    /// The outputs in table order: the states, then the heading when integrated.
     outputs: Vec<String>,
-    experiments: Vec<ExperimentFit>,
+    models: Vec<ModelFits>,
+    notes: Vec<leeway_runtime::data::FileNotes>,
+    units: Vec<String>,
+    data_units: Vec<(String, String)>,
     plot: Option<PathBuf>,
     /// The plot could not be drawn (the fits are still reported; exit 2).
     plot_problem: Option<Problem>,
 }
 
-/// The default plot path: beside the first data file.
-fn default_plot(args: &ValidateArgs) -> Option<PathBuf> {
-    if args.no_plot {
-        return None;
-    }
-    if let Some(p) = &args.plot {
-        return Some(p.clone());
-    }
-    let first = args.data.first()?;
-    let stem = first.file_stem()?.to_string_lossy().to_string();
-    Some(first.with_file_name(format!("{stem}-validation.svg")))
+/// A parameter file's name in tables and legends: its stem, made unique by
+/// the whole path when two files share a stem.
+fn model_names(params: &[PathBuf]) -> Vec<String> {
+    let stem = |p: &Path| {
+        p.file_stem()
+            .map_or(p.display().to_string(), |s| s.to_string_lossy().to_string())
+    };
+    params
+        .iter()
+        .map(|p| {
+            let name = stem(p);
+            if params.iter().filter(|q| stem(q) == name).count() > 1 {
+                p.display().to_string()
+            } else {
+                name
+            }
+        })
+        .collect()
 }
 
 /// Runs `leeway validate`.
@@ -99,7 +147,13 @@ pub fn run(args: &ValidateArgs) -> Status {
     let result = execute(args, &mut warnings);
     let status = match &result {
         Ok(o) if o.plot_problem.is_some() => Status::Error,
-        Ok(o) if o.experiments.iter().any(|e| e.diverged) => Status::Unsupported,
+        Ok(o)
+            if o.models
+                .iter()
+                .any(|m| m.experiments.iter().any(|e| e.diverged)) =>
+        {
+            Status::Unsupported
+        }
         Ok(_) => Status::Success,
         Err(f) => f.status(),
     };
@@ -107,17 +161,31 @@ pub fn run(args: &ValidateArgs) -> Status {
         let mut report = Report {
             model: None,
             file: args.model.display().to_string(),
-            params: args.params.display().to_string(),
+            params: args
+                .params
+                .first()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
             data: args.data.iter().map(|p| p.display().to_string()).collect(),
             experiments: Vec::new(),
+            mean: Ordered::default(),
+            models: Vec::new(),
+            data_files: Vec::new(),
+            data_units: Ordered::default(),
             plot: None,
             warnings,
             errors: Vec::new(),
         };
         match result {
-            Ok(o) => {
+            Ok(mut o) => {
                 report.model = Some(o.model);
-                report.experiments = o.experiments;
+                report.data_files = data_files_json(&o.notes);
+                report.data_units = Ordered(o.data_units);
+                if let Some(first) = o.models.first() {
+                    report.experiments = first.experiments.clone();
+                    report.mean = first.mean.clone();
+                }
+                report.models = std::mem::take(&mut o.models);
                 match o.plot_problem {
                     Some(p) => report.errors = Failure::from(p).json(),
                     None => report.plot = o.plot.map(|p| p.display().to_string()),
@@ -129,7 +197,7 @@ pub fn run(args: &ValidateArgs) -> Status {
     } else {
         let style = stderr_style();
         if let Ok(o) = &result {
-            out(&render(args, o));
+            out(&render(o));
         }
         for w in &warnings {
             err(&headline(style, "warning", None, w));
@@ -146,109 +214,261 @@ pub fn run(args: &ValidateArgs) -> Status {
     status
 }
 
+/// The measured heading unwrapped (steps taken along the short arc), so that
+/// it compares with the simulation, which integrates the yaw rate without
+/// wrapping.
+fn unwrapped(heading: &[f64]) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let mut out = Vec::with_capacity(heading.len());
+    let mut acc = 0.0;
+    for (k, psi) in heading.iter().enumerate() {
+        if k == 0 {
+            acc = *psi;
+        } else {
+            let d = psi - heading[k - 1];
+            acc += d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor();
+        }
+        out.push(acc);
+    }
+    out
+}
+
+/// The mean of the experiments' fits of one output: null when an experiment
+/// diverged (a mean would flatter the model) or none defines the fit;
+/// experiments whose measurement is constant (fit undefined) are left out.
+fn mean_fit(fits: &[(Option<f64>, bool)]) -> Option<f64> {
+    if fits.iter().any(|(_, diverged)| *diverged) {
+        return None;
+    }
+    let defined: Vec<f64> = fits.iter().filter_map(|(f, _)| *f).collect();
+    (!defined.is_empty()).then(|| defined.iter().sum::<f64>() / defined.len() as f64)
+}
+
 fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, false)?;
     warnings.extend(loaded.warnings);
     let ir = loaded.ir;
-    let options = load_options(&ir, args.step)?;
-    let theta = crate::params::read(&args.params, &ir, "--params")?;
+    let options = load_options(&ir, args.step, Some(&args.time))?;
+    let mut thetas = Vec::new();
+    for p in &args.params {
+        thetas.push(crate::params::read(p, &ir, "--params")?);
+    }
     let dist = disturbance_values(&ir, &args.disturbances)?;
-    let experiments = load_data(&ir, &args.data, &options)?;
+    let (experiments, notes) = load_data(&ir, &args.data, &options)?;
+    warnings.extend(unit_warnings(&ir, &experiments));
     warnings.extend(heading_warnings(&ir, &experiments));
+    let heading = match &ir.rotation {
+        Rotation::Planar { heading, .. } => Some(heading.clone()),
+        _ => None,
+    };
+    let mut outputs = ir.states.clone();
+    outputs.extend(heading.iter().cloned());
+    let names = model_names(&args.params);
     let model = Interpreter::new(ir.clone());
-    let mut results = Vec::new();
-    let mut panels = Vec::new();
+    // Panels: one per output, experiments end to end, a line per model.
+    let mut panels: Vec<Panel> = outputs
+        .iter()
+        .map(|o| Panel {
+            title: String::new(),
+            y_label: axis_label(&ir, o),
+            segments: Vec::new(),
+        })
+        .collect();
+    let mut offset = 0.0;
     for e in &experiments {
-        let sim = simulate(&model, &theta, e, Disturbances::Constant(&dist));
-        let fit = fits(e, &sim);
-        let time: Vec<f64> = (0..e.len()).map(|k| k as f64 * e.h).collect();
-        for (o, name) in ir.states.iter().enumerate() {
-            let f = fit.get(o).copied().unwrap_or(f64::NAN);
-            if !f.is_finite() && !sim.diverged {
+        let time: Vec<f64> = (0..e.len()).map(|k| offset + k as f64 * e.h).collect();
+        offset += e.len() as f64 * e.h;
+        for (o, panel) in panels.iter_mut().enumerate() {
+            let measured = if o < ir.states.len() {
+                e.states.get(o).cloned().unwrap_or_default()
+            } else {
+                unwrapped(&e.heading)
+            };
+            panel.segments.push(Segment {
+                name: e.name.clone(),
+                time: time.clone(),
+                measured,
+                simulated: Vec::new(),
+            });
+        }
+    }
+    let mut results = Vec::new();
+    for (theta, name) in thetas.iter().zip(&names) {
+        let mut fits_of_model = Vec::new();
+        for (k, e) in experiments.iter().enumerate() {
+            let sim = simulate(&model, theta, e, Disturbances::Constant(&dist));
+            let fit_states = fits(e, &sim);
+            let heading_fit = heading.as_ref().map(|_| {
+                let f = fit(&unwrapped(&e.heading), &sim.heading);
+                f.is_finite().then_some(f)
+            });
+            for (o, out_name) in ir.states.iter().enumerate() {
+                let f = fit_states.get(o).copied().unwrap_or(f64::NAN);
+                // Said once, for the first model: it is a property of the data.
+                if !f.is_finite() && !sim.diverged && results.is_empty() {
+                    warnings.push(format!(
+                        "experiment `{}`: `{out_name}` is constant in the data, so its fit is undefined",
+                        e.name
+                    ));
+                }
+            }
+            if sim.diverged {
                 warnings.push(format!(
-                    "experiment `{}`: `{name}` is constant in the data, so its fit is undefined",
+                    "{name}, experiment `{}`: the simulation diverged (the states left the finite numbers); check the parameters",
                     e.name
                 ));
             }
-            panels.push(Panel {
-                title: format!(
-                    "{name}: {}{}",
-                    if experiments.len() > 1 {
-                        format!("{}, ", e.name)
-                    } else {
-                        String::new()
-                    },
-                    if f.is_finite() {
-                        format!("fit {f:.1} %")
-                    } else if sim.diverged {
-                        "the simulation diverged".to_string()
-                    } else {
-                        "fit undefined".to_string()
-                    }
+            for (o, panel) in panels.iter_mut().enumerate() {
+                let simulated = if o < ir.states.len() {
+                    sim.states.get(o).cloned().unwrap_or_default()
+                } else {
+                    sim.heading.clone()
+                };
+                if let Some(seg) = panel.segments.get_mut(k) {
+                    seg.simulated.push(simulated);
+                }
+            }
+            fits_of_model.push(ExperimentFit {
+                name: e.name.clone(),
+                samples: e.len(),
+                fit: Ordered(
+                    ir.states
+                        .iter()
+                        .zip(&fit_states)
+                        .map(|(n, f)| (n.clone(), f.is_finite().then_some(*f)))
+                        .collect(),
                 ),
-                y_label: name.clone(),
-                time: time.clone(),
-                measured: e.states.get(o).cloned().unwrap_or_default(),
-                simulated: sim.states.get(o).cloned().unwrap_or_default(),
+                heading_fit,
+                diverged: sim.diverged,
             });
         }
-        if sim.diverged {
-            warnings.push(format!(
-                "experiment `{}`: the simulation diverged (the states left the finite numbers); check the parameters",
-                e.name
-            ));
+        let mut mean = Vec::new();
+        for (o, out_name) in outputs.iter().enumerate() {
+            let per: Vec<(Option<f64>, bool)> = fits_of_model
+                .iter()
+                .map(|f| {
+                    let v = if o < ir.states.len() {
+                        f.fit.0.get(o).and_then(|(_, v)| *v)
+                    } else {
+                        f.heading_fit.flatten()
+                    };
+                    (v, f.diverged)
+                })
+                .collect();
+            mean.push((out_name.clone(), mean_fit(&per)));
         }
-        results.push(ExperimentFit {
-            name: e.name.clone(),
-            samples: e.len(),
-            fit: Ordered(
-                ir.states
-                    .iter()
-                    .zip(&fit)
-                    .map(|(n, f)| (n.clone(), f.is_finite().then_some(*f)))
-                    .collect(),
-            ),
-            diverged: sim.diverged,
+        results.push(ModelFits {
+            params: args
+                .params
+                .get(results.len())
+                .map(|p| p.display().to_string())
+                .unwrap_or_default(),
+            name: name.clone(),
+            experiments: fits_of_model,
+            mean: Ordered(mean),
         });
     }
-    let plot = default_plot(args);
+    for (o, panel) in panels.iter_mut().enumerate() {
+        let fits: Vec<String> = results
+            .iter()
+            .map(|m| {
+                let f = m.mean.0.get(o).and_then(|(_, v)| *v);
+                let diverged = m.experiments.iter().any(|e| e.diverged);
+                let value = match f {
+                    Some(f) => format!("{f:.1} %"),
+                    None if diverged => "diverged".to_string(),
+                    None => "undefined".to_string(),
+                };
+                if results.len() > 1 {
+                    format!("{} {value}", m.name)
+                } else {
+                    value
+                }
+            })
+            .collect();
+        let scope = if experiments.len() > 1 {
+            format!("mean fit over {} experiments", experiments.len())
+        } else {
+            "fit".to_string()
+        };
+        panel.title = format!("{}: {scope} {}", outputs[o], fits.join(", "));
+    }
+    let plot = if args.no_plot {
+        None
+    } else {
+        args.plot.clone()
+    };
     let plot_problem = plot.as_ref().and_then(|path| {
-        draw(path, &panels)
+        draw(path, &panels, &names)
             .err()
             .map(|e| Problem::error("io", format!("cannot draw `{}`: {e}", path.display())))
     });
     Ok(Outcome {
         model: ir.name.clone(),
-        outputs: ir.states.clone(),
-        experiments: results,
+        outputs,
+        models: results,
+        notes,
+        units: unit_lines(&ir),
+        data_units: ir
+            .data_units
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
         plot,
         plot_problem,
     })
 }
 
-fn render(args: &ValidateArgs, o: &Outcome) -> String {
+fn cell(f: Option<f64>, diverged: bool) -> String {
+    match f {
+        Some(f) => format!("{f:.2}"),
+        None if diverged => "diverged".to_string(),
+        None => "-".to_string(),
+    }
+}
+
+fn render(o: &Outcome) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{}: simulated with {} (fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖), %)\n",
-        o.model,
-        args.params.display()
+        "{}: fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖), % (mean: over experiments)",
+        o.model
     );
-    let mut rows = vec![{
-        let mut h = vec!["experiment".to_string(), "samples".to_string()];
-        h.extend(o.outputs.iter().cloned());
-        h
-    }];
-    for e in &o.experiments {
-        let mut r = vec![e.name.clone(), e.samples.to_string()];
-        r.extend(e.fit.0.iter().map(|(_, f)| match f {
-            Some(f) => format!("{f:.2}"),
-            None if e.diverged => "diverged".to_string(),
-            None => "-".to_string(),
-        }));
-        rows.push(r);
+    for m in &o.models {
+        let _ = writeln!(s, "\n{} ({})", m.name, m.params);
+        let mut rows = vec![{
+            let mut h = vec!["experiment".to_string(), "samples".to_string()];
+            h.extend(o.outputs.iter().cloned());
+            h
+        }];
+        for e in &m.experiments {
+            let mut r = vec![e.name.clone(), e.samples.to_string()];
+            r.extend(e.fit.0.iter().map(|(_, f)| cell(*f, e.diverged)));
+            if let Some(h) = e.heading_fit {
+                r.push(cell(h, e.diverged));
+            }
+            rows.push(r);
+        }
+        if m.experiments.len() > 1 {
+            let diverged = m.experiments.iter().any(|e| e.diverged);
+            let mut r = vec!["mean".to_string(), String::new()];
+            r.extend(m.mean.0.iter().map(|(_, f)| cell(*f, diverged)));
+            rows.push(r);
+        }
+        s.push_str(&table(&rows));
     }
-    s.push_str(&table(&rows));
+    let mut extra: Vec<String> = o.units.iter().map(|u| format!("unit: {u}")).collect();
+    extra.extend(
+        data_notes(&o.notes)
+            .into_iter()
+            .map(|n| format!("data: {n}")),
+    );
+    if !extra.is_empty() {
+        s.push('\n');
+        for line in extra {
+            let _ = writeln!(s, "{line}");
+        }
+    }
     if let (Some(p), None) = (&o.plot, &o.plot_problem) {
         let _ = writeln!(s, "\nplot: {}", p.display());
     }

@@ -604,19 +604,31 @@ fn estimate_then_validate_round_trips_the_parameters() {
         // IV3 from 5000 noisy samples at 10 m/s wind, on noise-free validation data.
         assert!(f > 85.0, "fit of {output}: {f} ({v})");
     }
-    // The default plot lands beside the data, with its text rendered.
-    let plot = dir.path("val-validation.svg");
-    assert_eq!(v["plot"], plot.display().to_string());
+    // No file is written unless asked: the directory holds what it held.
+    assert_eq!(v["plot"], serde_json::Value::Null);
+    assert!(!dir.path("val-validation.svg").exists());
+    // Asked for, the plot has a panel per output and the integrated heading,
+    // the legend naming the parameter file.
+    let plot = dir.path("val.svg");
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &est,
+        "--data",
+        &val_file,
+        "--plot",
+        &plot.display().to_string(),
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
     let svg = std::fs::read_to_string(&plot).unwrap_or_default();
     for label in [
-        "u: fit",
-        "v: fit",
-        "r: fit",
-        "measured",
-        "simulated",
-        "time (s)",
+        "u: fit", "v: fit", "r: fit", "psi: fit", "measured", "\nest\n", "time (s)",
     ] {
-        assert!(svg.contains(label), "`{label}` missing from the SVG");
+        assert!(
+            svg.contains(label),
+            "`{label}` missing from the SVG:\n{svg}"
+        );
     }
     // The true θ as a plain object: the simulation reproduces the noise-free data.
     let truth = dir.write("truth.json", &true_params());

@@ -171,13 +171,24 @@ pub enum Item {
         /// The block.
         span: Span,
     },
-    /// `data { signal = "column", ... }`.
+    /// `data { signal = "column" in unit, ... }`.
     Data {
-        /// Entries in order: the signal and its column name (with the literal's span).
-        entries: Vec<(Ident, String, Span)>,
+        /// Entries in order.
+        entries: Vec<DataEntry>,
         /// The block.
         span: Span,
     },
+}
+
+/// One entry of `data { }`: a signal with its column name, its unit, or both.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataEntry {
+    /// The model's signal (or `time`, `experiment`).
+    pub signal: Ident,
+    /// The CSV column name, with the string literal's span.
+    pub column: Option<(String, Span)>,
+    /// The unit as written after `in`, with its span.
+    pub unit: Option<(String, Span)>,
 }
 
 /// `base` or `base.field` (a relative-velocity component such as `water.u`).

@@ -159,7 +159,9 @@ fn rule_name(rule: &Rule) -> &'static str {
         // Both start a declaration; listing them separately only lengthens the message.
         Rule::relative_decl | Rule::equation => "a declaration",
         Rule::nominal_entry => "`parameter = value`",
-        Rule::data_entry => "`signal = \"column\"`",
+        Rule::data_entry => "`signal = \"column\"` or `signal in unit`",
+        Rule::unit_clause | Rule::in_word => "`in unit`",
+        Rule::unit => "a unit such as `deg` or `deg/s`",
         Rule::expr | Rule::product => "an expression",
         Rule::factor | Rule::negated => "an operand",
         Rule::modulus => "`|..|`",
@@ -487,15 +489,28 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
                 .filter(|q| q.as_rule() == Rule::data_entry)
                 .filter_map(|e| {
                     let mut it = e.into_inner();
-                    let sig = ident(it.next()?);
-                    let s = it.next()?;
-                    let sspan = span_of(&s);
-                    let text = s
-                        .into_inner()
-                        .next()
-                        .map(|x| x.as_str().to_string())
-                        .unwrap_or_default();
-                    Some((sig, text, sspan))
+                    let signal = ident(it.next()?);
+                    let mut entry = DataEntry {
+                        signal,
+                        column: None,
+                        unit: None,
+                    };
+                    for q in it {
+                        let qspan = span_of(&q);
+                        match q.as_rule() {
+                            Rule::string => {
+                                let text = q
+                                    .into_inner()
+                                    .next()
+                                    .map(|x| x.as_str().to_string())
+                                    .unwrap_or_default();
+                                entry.column = Some((text, qspan));
+                            }
+                            Rule::unit => entry.unit = Some((q.as_str().to_string(), qspan)),
+                            _ => {}
+                        }
+                    }
+                    Some(entry)
                 })
                 .collect();
             Item::Data { entries, span }
@@ -637,7 +652,7 @@ mod tests {
                 next v = +A*air.v*|air.v| - B*-v
                 der r = 1.5e-3*N*r
                 nominal { X = -0.2, Y = +1e-3 }
-                data { u = "surge", time = "t" }
+                data { u = "surge" in knots, time = "t", r in deg/s }
             }
         "#;
         let (model, diags) = parse(src);
@@ -668,7 +683,9 @@ mod tests {
         assert!(
             matches!(&m.items[11], Item::Nominal { entries, .. } if entries[1].1.text == "+1e-3")
         );
-        assert!(matches!(&m.items[12], Item::Data { entries, .. } if entries[0].1 == "surge"));
+        assert!(
+            matches!(&m.items[12], Item::Data { entries, .. } if entries[0].column.as_ref().is_some_and(|c| c.0 == "surge"))
+        );
     }
 
     #[test]

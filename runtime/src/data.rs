@@ -238,16 +238,81 @@ fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
 /// The smallest number of samples an experiment may have.
 pub const MIN_SAMPLES: usize = 10;
 
+/// The default relative tolerance of each time step against the nominal
+/// step: covers a logger's jitter, still catches a dropped sample (a 100 %
+/// step error).
+pub const DEFAULT_TIME_TOLERANCE: f64 = 0.05;
+
 /// Options of CSV loading.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// Sample time to use when the model declares none and there is no time column.
     pub step: Option<f64>,
+    /// Largest relative deviation `|Δt − h|/h` of a time step from the nominal
+    /// step `h` (the mean step of the experiment), as a fraction.
+    pub time_tolerance: f64,
+    /// Resample every experiment onto a uniform grid of this step (seconds),
+    /// by linear interpolation (needs a time column).
+    pub resample: Option<f64>,
+}
+
+impl Default for LoadOptions {
+    fn default() -> LoadOptions {
+        LoadOptions {
+            step: None,
+            time_tolerance: DEFAULT_TIME_TOLERANCE,
+            resample: None,
+        }
+    }
+}
+
+/// What loading a file did besides reading samples, for the user to see:
+/// nothing is skipped, tolerated or converted silently.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FileNotes {
+    /// The file as named in messages.
+    pub file: String,
+    /// Lines skipped because their first non-blank character is `#`.
+    pub comment_lines: usize,
+    /// Per experiment of the file, in order.
+    pub experiments: Vec<TimeNotes>,
+}
+
+/// How one experiment's time stamps were read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TimeNotes {
+    /// The experiment's name.
+    pub experiment: String,
+    /// Rows read from the file.
+    pub rows: usize,
+    /// The largest `|Δt − h|/h` over its steps, when there is a time column
+    /// (0 for exactly uniform stamps, up to the tolerance otherwise).
+    pub max_step_deviation: Option<f64>,
+    /// Samples after resampling (`None` when not resampled).
+    pub resampled: Option<usize>,
+}
+
+/// A loaded file: its experiments and what was noted while reading it.
+#[derive(Clone, Debug)]
+pub struct LoadedFile {
+    /// The experiments, in file order.
+    pub experiments: Vec<Experiment>,
+    /// Comment lines, time-stamp jitter, resampling.
+    pub notes: FileNotes,
 }
 
 /// Loads one CSV file: one experiment, or several when it has an
 /// `experiment` column (each experiment's rows contiguous, in file order).
 pub fn load_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Vec<Experiment>, DataError> {
+    load_csv_noted(path, ir, options).map(|f| f.experiments)
+}
+
+/// [`load_csv`], also returning what was noted on the way ([`FileNotes`]).
+pub fn load_csv_noted(
+    path: &Path,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
     let file = path.display().to_string();
     let text = std::fs::read(path).map_err(|e| {
         DataError::new(
@@ -256,7 +321,7 @@ pub fn load_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Vec<Exper
             "check the path passed to --data",
         )
     })?;
-    parse_csv(&file, &text, ir, options)
+    parse_csv_noted(&file, &text, ir, options)
 }
 
 /// Parses CSV text (see [`load_csv`]); `file` names it in errors.
@@ -266,16 +331,55 @@ pub fn parse_csv(
     ir: &Ir,
     options: &LoadOptions,
 ) -> Result<Vec<Experiment>, DataError> {
+    parse_csv_noted(file, text, ir, options).map(|f| f.experiments)
+}
+
+/// Splits off comment lines (first non-blank character `#`, anywhere in the
+/// file, also before the header): the remaining text, and for each of its
+/// lines the physical line number in the file, so that every error still
+/// names the line an editor shows.
+fn strip_comments(text: &[u8]) -> (Vec<u8>, Vec<usize>, usize) {
+    let mut kept = Vec::with_capacity(text.len());
+    let mut lines = Vec::new();
+    let mut comments = 0;
+    for (i, line) in text.split_inclusive(|b| *b == b'\n').enumerate() {
+        let first = line.iter().find(|b| !b.is_ascii_whitespace());
+        if first == Some(&b'#') {
+            comments += 1;
+            continue;
+        }
+        kept.extend_from_slice(line);
+        lines.push(i + 1);
+    }
+    (kept, lines, comments)
+}
+
+/// [`parse_csv`], also returning what was noted on the way ([`FileNotes`]).
+pub fn parse_csv_noted(
+    file: &str,
+    text: &[u8],
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    let (text, physical, comment_lines) = strip_comments(text);
+    // csv counts lines of the text without comments, from 1; map them back.
+    let line_of = |kept_line: u64| -> usize {
+        usize::try_from(kept_line)
+            .ok()
+            .and_then(|l| physical.get(l.checked_sub(1)?).copied())
+            .unwrap_or_else(|| physical.last().map_or(1, |l| l + 1))
+    };
+    let header_line = line_of(1);
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(false)
         .trim(csv::Trim::All)
-        .from_reader(text);
+        .from_reader(text.as_slice());
     let headers: Vec<String> = reader
         .headers()
         .map_err(|e| {
             DataError::new(
-                format!("{file}:1"),
+                format!("{file}:{header_line}"),
                 format!("cannot read the header row: {e}"),
                 "the first row names the columns",
             )
@@ -287,7 +391,7 @@ pub fn parse_csv(
     for (i, h) in headers.iter().enumerate() {
         if let Some(j) = headers[..i].iter().position(|g| g == h) {
             return Err(DataError::new(
-                format!("{file}:1:{}", i + 1),
+                format!("{file}:{header_line}:{}", i + 1),
                 format!(
                     "column `{h}` appears twice (columns {} and {})",
                     j + 1,
@@ -297,11 +401,11 @@ pub fn parse_csv(
             ));
         }
     }
-    let mut cols: Vec<(Role, usize, String)> = Vec::new();
+    let mut cols: Vec<(Role, usize, String, f64)> = Vec::new();
     for (signal, role) in required_signals(ir) {
         let col = column_name(ir, &signal);
         match find(&col) {
-            Some(i) => cols.push((role, i, col)),
+            Some(i) => cols.push((role, i, col, unit_factor(ir, &signal))),
             None => {
                 let mapped = if col != signal {
                     format!(" (mapped from `{signal}` by the model's data block)")
@@ -309,7 +413,7 @@ pub fn parse_csv(
                     String::new()
                 };
                 return Err(DataError::new(
-                    format!("{file}:1"),
+                    format!("{file}:{header_line}"),
                     format!("missing column `{col}`{mapped}"),
                     format!(
                         "the header has: {}. Name the column `{col}`, or map it in the model: data {{ {signal} = \"<column>\" }}",
@@ -320,11 +424,13 @@ pub fn parse_csv(
         }
     }
     let time_col = find(&column_name(ir, "time"));
+    let time_factor = unit_factor(ir, "time");
     let exp_col = find(&column_name(ir, "experiment"));
     let base_name = Path::new(file)
         .file_stem()
         .map_or(file.to_string(), |s| s.to_string_lossy().to_string());
-    let mut experiments: Vec<(Experiment, Vec<f64>, usize)> = Vec::new();
+    // Each experiment with its time stamps and the physical line of every row.
+    let mut experiments: Vec<(Experiment, Vec<f64>, Vec<usize>)> = Vec::new();
     let mut finished: Vec<String> = Vec::new();
     let n_comp = ir.components.len();
     let mut states = vec![0.0; ir.states.len()];
@@ -332,16 +438,18 @@ pub fn parse_csv(
     let mut rotation = vec![0.0; ir.rotation_vars.len()];
     let mut dist = vec![0.0; n_comp];
     let mut heading = 0.0;
-    for (ri, record) in reader.records().enumerate() {
-        let line = ri + 2;
+    let mut next_line = header_line + 1;
+    for record in reader.records() {
         let record = record.map_err(|e| {
-            let at = e.position().map_or(line as u64, |p| p.line());
+            let at = e.position().map_or(next_line, |p| line_of(p.line()));
             DataError::new(
                 format!("{file}:{at}"),
                 format!("malformed row: {e}"),
                 "every row needs as many cells as the header",
             )
         })?;
+        let line = record.position().map_or(next_line, |p| line_of(p.line()));
+        next_line = line + 1;
         let cell = |i: usize, name: &str| -> Result<f64, DataError> {
             let raw = record.get(i).unwrap_or("");
             let loc = format!("{file}:{line}:{} ({name})", i + 1);
@@ -364,8 +472,9 @@ pub fn parse_csv(
                 )),
             }
         };
-        for (role, i, name) in &cols {
-            let v = cell(*i, name)?;
+        for (role, i, name, factor) in &cols {
+            // Declared units are converted here, once, to the model's base units.
+            let v = cell(*i, name)? * factor;
             match role {
                 Role::State(s) => states[*s] = v,
                 Role::Input(s) => inputs[*s] = v,
@@ -379,7 +488,7 @@ pub fn parse_csv(
             None => base_name.clone(),
         };
         let t = match time_col {
-            Some(i) => Some(cell(i, "time")?),
+            Some(i) => Some(cell(i, "time")? * time_factor),
             None => None,
         };
         let start_new = experiments
@@ -401,9 +510,9 @@ pub fn parse_csv(
             if let Some((e, _, _)) = experiments.last() {
                 finished.push(e.name.clone());
             }
-            experiments.push((Experiment::new(ir, &exp_name, 0.0), Vec::new(), line));
+            experiments.push((Experiment::new(ir, &exp_name, 0.0), Vec::new(), Vec::new()));
         }
-        if let Some((e, times, _)) = experiments.last_mut() {
+        if let Some((e, times, lines)) = experiments.last_mut() {
             e.push(
                 ir,
                 &Row {
@@ -417,17 +526,24 @@ pub fn parse_csv(
             if let Some(t) = t {
                 times.push(t);
             }
+            lines.push(line);
         }
     }
     if experiments.is_empty() {
         return Err(DataError::new(
-            format!("{file}:2"),
+            format!("{file}:{}", header_line + 1),
             "the file has a header but no samples",
             "record at least a few hundred samples per experiment",
         ));
     }
     let mut out = Vec::new();
-    for (mut e, times, first_line) in experiments {
+    let mut notes = FileNotes {
+        file: file.to_string(),
+        comment_lines,
+        experiments: Vec::new(),
+    };
+    for (mut e, times, lines) in experiments {
+        let first_line = lines.first().copied().unwrap_or(header_line + 1);
         let n = e.len();
         if n < MIN_SAMPLES {
             return Err(DataError::new(
@@ -439,60 +555,144 @@ pub fn parse_csv(
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
-        e.h = sample_time(
-            file,
-            ir,
-            &times,
-            first_line,
-            time_col.map_or(0, |c| c + 1),
-            options,
-        )?;
+        let time_column = time_col.map_or(0, |c| c + 1);
+        let (h, deviation) = sample_time(file, ir, &times, &lines, time_column, options)?;
+        e.h = h;
+        let mut time_notes = TimeNotes {
+            experiment: e.name.clone(),
+            rows: n,
+            max_step_deviation: deviation,
+            resampled: None,
+        };
+        if let Some(step) = options.resample {
+            if times.len() != n {
+                return Err(DataError::new(
+                    format!("{file}:{header_line}"),
+                    "--resample needs a time column, and the file has none",
+                    format!(
+                        "add a `{}` column of time stamps (or map one with data {{ time = \"<column>\" }}), or drop --resample",
+                        column_name(ir, "time")
+                    ),
+                ));
+            }
+            e = crate::resample::resample(ir, &e, &times, step);
+            if e.len() < MIN_SAMPLES {
+                return Err(DataError::new(
+                    format!("{file}:{first_line}"),
+                    format!(
+                        "experiment `{}` has {} samples at --resample {step}; at least {MIN_SAMPLES} are needed",
+                        e.name,
+                        e.len()
+                    ),
+                    "choose a smaller --resample step",
+                ));
+            }
+            time_notes.resampled = Some(e.len());
+        }
+        notes.experiments.push(time_notes);
         out.push(e);
     }
-    Ok(out)
+    Ok(LoadedFile {
+        experiments: out,
+        notes,
+    })
 }
 
+/// The factor converting a signal's declared unit to the base unit (1 when
+/// none is declared).
+fn unit_factor(ir: &Ir, signal: &str) -> f64 {
+    ir.data_units
+        .get(signal)
+        .map_or(1.0, |u| leeway_structure::units::factor(u))
+}
+
+/// The sample time of one experiment and the largest relative deviation of
+/// its steps from it (`None` without time stamps). The nominal step is the
+/// mean step; every step must lie within `options.time_tolerance` of it, in
+/// relative terms. `lines` are the rows' physical line numbers.
 fn sample_time(
     file: &str,
     ir: &Ir,
     times: &[f64],
-    first_line: usize,
+    lines: &[usize],
     time_column: usize,
     options: &LoadOptions,
-) -> Result<f64, DataError> {
+) -> Result<(f64, Option<f64>), DataError> {
     let declared = ir.step.or(options.step);
+    let first_line = lines.first().copied().unwrap_or(0);
     if times.len() < 2 {
-        return declared.ok_or_else(|| {
+        let h = declared.ok_or_else(|| {
             DataError::new(
                 file,
                 "no sample time: the model declares no `step` and the data have no `time` column",
                 "declare `step h` in the model or add a `time` column",
             )
-        });
+        })?;
+        return Ok((h, None));
     }
-    let h = times[1] - times[0];
-    for (k, w) in times.windows(2).enumerate() {
-        let dt = w[1] - w[0];
-        if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
-            return Err(DataError::new(
-                format!("{file}:{}:{time_column} (time)", first_line + k + 1),
-                format!("inconsistent sample time: step {dt} here, {h} at the start"),
-                "leeway needs uniformly sampled data; resample the log or split it into experiments at the gaps",
-            ));
-        }
-    }
-    // The mean step is the best estimate of a uniform h.
+    // The nominal step is the mean step, the best estimate of a uniform h
+    // under jitter. A gap shifts the mean of a short record, so that good
+    // steps may fall outside the tolerance too: the error names the worst
+    // step, which is the gap.
     let mean = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
-    if let Some(d) = declared
-        && (mean - d).abs() > 1e-3 * d
+    let tol = options.time_tolerance;
+    let at = |k: usize| {
+        let line = lines.get(k + 1).copied().unwrap_or(first_line);
+        format!("{file}:{line}:{time_column} (time)")
+    };
+    let hint = "leeway needs uniformly sampled data: a larger jitter may be allowed with --time-tolerance, \
+                --resample H interpolates onto a uniform grid, or split the log into experiments at the gaps";
+    if let Some((k, dt)) = times
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .enumerate()
+        .find(|(_, dt)| *dt <= 0.0)
     {
         return Err(DataError::new(
-            format!("{file}:{first_line}:{time_column} (time)"),
-            format!("the data are sampled every {mean} s but the model declares step {d}"),
-            "make `step` in the model match the data, or resample the data",
+            at(k),
+            format!("time does not increase: step {dt} s here"),
+            hint,
         ));
     }
-    Ok(declared.unwrap_or(mean))
+    let (worst_k, worst) = times
+        .windows(2)
+        .map(|w| ((w[1] - w[0]) - mean).abs() / mean)
+        .enumerate()
+        .fold(
+            (0, 0.0f64),
+            |best, (k, d)| if d > best.1 { (k, d) } else { best },
+        );
+    // Resampling interpolates over any spacing; only the order matters then.
+    if options.resample.is_none() && worst > tol {
+        let dt = times[worst_k + 1] - times[worst_k];
+        return Err(DataError::new(
+            at(worst_k),
+            format!(
+                "inconsistent sample time: step {dt} s here, {:.1} % off the nominal (mean) step {mean} s; the tolerance is {:.1} %",
+                100.0 * worst,
+                100.0 * tol
+            ),
+            hint,
+        ));
+    }
+    // Under resampling the grid step is the sample time, checked against the
+    // model's step by the caller.
+    let h = options.resample.unwrap_or(mean);
+    if let Some(d) = declared
+        && (h - d).abs() > 1e-3 * d
+    {
+        let what = if options.resample.is_some() {
+            format!("--resample {h} conflicts with the model's step {d}")
+        } else {
+            format!("the data are sampled every {mean} s but the model declares step {d}")
+        };
+        return Err(DataError::new(
+            format!("{file}:{first_line}:{time_column} (time)"),
+            what,
+            "make `step` in the model match the data, or resample the data (--resample H)",
+        ));
+    }
+    Ok((declared.unwrap_or(h), Some(worst)))
 }
 
 /// Unit check of a heading that integrates a yaw rate: the least-squares gain
@@ -531,4 +731,86 @@ pub fn heading_gain(ir: &Ir, e: &Experiment) -> Option<f64> {
         .filter_map(fit)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(gain, _)| gain)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn model(data: &str) -> Ir {
+        let src = format!(
+            "model M {{ state u, r input delta der u = X*u + T*delta der r = N*r {data} }}"
+        );
+        leeway_structure::compile(&src, &leeway_structure::Options::default())
+            .ir
+            .unwrap_or_else(|| panic!("the test model compiles"))
+    }
+
+    fn rows(from: usize, n: usize) -> String {
+        (from..from + n)
+            .map(|k| format!("{k}.0,1,0.5,35\n"))
+            .collect()
+    }
+
+    #[test]
+    fn comment_lines_are_skipped_counted_and_rows_keep_their_line_numbers() {
+        let ir = model("step 1.0");
+        // Comments before the header, between rows (indented too), and a bad
+        // cell on physical line 16.
+        let mut text = String::from("# logger v2\n# ship: Test\ntime,u,r,delta\n");
+        text.push_str(&rows(0, 5));
+        text.push_str("  # pause\n");
+        text.push_str(&rows(5, 5));
+        text.push_str("10.0,1,x,35\n");
+        let err = parse_csv("c.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("the cell `x` is an error"));
+        assert_eq!(err.location, "c.csv:15:3 (r)");
+        let ok = text.replace("10.0,1,x,35\n", "");
+        let loaded = parse_csv_noted("c.csv", ok.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(loaded.notes.comment_lines, 3);
+        assert_eq!(loaded.experiments[0].len(), 10);
+        // A missing column is located on the header's physical line.
+        let err = parse_csv(
+            "c.csv",
+            ok.replace("delta", "rudder").as_bytes(),
+            &ir,
+            &LoadOptions::default(),
+        )
+        .err()
+        .unwrap_or_else(|| panic!("a missing column is an error"));
+        assert_eq!(err.location, "c.csv:3");
+    }
+
+    #[test]
+    fn declared_units_are_converted_to_base_units() {
+        let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
+        let mut text = String::from("time,u,r,rudder\n");
+        for k in 0..12 {
+            text.push_str(&format!("{},1,{k}.5,35\n", 500 * k));
+        }
+        let e = parse_csv("u.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let e = &e[0];
+        assert_eq!(e.h, 0.5);
+        assert_eq!(e.inputs[0][0], 35.0f64.to_radians());
+        assert_eq!(e.states[1][3], 3.5f64.to_radians());
+        assert_eq!(e.states[0][3], 1.0);
+    }
+
+    #[test]
+    fn a_dropped_sample_is_located_and_names_the_options() {
+        let ir = model("");
+        let mut text = String::from("time,u,r,delta\n");
+        for k in (0..20).filter(|k| *k != 7) {
+            text.push_str(&format!("{},1,0,0\n", f64::from(k) * 0.5));
+        }
+        let err = parse_csv("d.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("a dropped sample is an error"));
+        // Rows 0..6 sit on lines 2..8; the row after the gap is on line 9.
+        assert_eq!(err.location, "d.csv:9:1 (time)");
+        assert!(err.hint.contains("--time-tolerance") && err.hint.contains("--resample"));
+    }
 }

@@ -50,25 +50,39 @@ pub fn write_csv(
         .filter(|(_, c)| ir.disturbances[c.disturbance].measured)
         .map(|(i, _)| i)
         .collect();
+    // Each column back in the unit the model declares for it (`data { r in
+    // deg/s }`), so that the file reads back as the data it stands for.
+    let unit = |signal: &str| {
+        ir.data_units
+            .get(signal)
+            .map_or(1.0, |u| leeway_structure::units::factor(u))
+    };
+    let states: Vec<f64> = ir.states.iter().map(|s| unit(s)).collect();
+    let inputs: Vec<f64> = ir.inputs.iter().map(|s| unit(s)).collect();
+    let heading = match &ir.rotation {
+        Rotation::Planar { heading, .. } => unit(heading),
+        _ => 1.0,
+    };
+    let time = unit("time");
     let mut line = String::new();
     for e in experiments {
         let n = e.states.first().map_or(0, Vec::len);
         for k in 0..n {
             line.clear();
-            push(&mut line, t0 + k as f64 * e.h);
+            push(&mut line, (t0 + k as f64 * e.h) / time);
             if experiments.len() > 1 {
                 line.push(',');
                 line.push_str(&e.name);
             }
             let value = |c: &Vec<f64>| c.get(k).copied().unwrap_or(f64::NAN);
-            for c in &e.states {
+            for (c, f) in e.states.iter().zip(&states) {
                 line.push(',');
-                push(&mut line, value(c));
+                push(&mut line, value(c) / f);
             }
             match &ir.rotation {
                 Rotation::Planar { .. } => {
                     line.push(',');
-                    push(&mut line, value(&e.heading));
+                    push(&mut line, value(&e.heading) / heading);
                 }
                 Rotation::Measured { .. } => {
                     for c in &e.rotation {
@@ -78,13 +92,14 @@ pub fn write_csv(
                 }
                 Rotation::None => {}
             }
-            for c in &e.inputs {
+            for (c, f) in e.inputs.iter().zip(&inputs) {
                 line.push(',');
-                push(&mut line, value(c));
+                push(&mut line, value(c) / f);
             }
             for &i in &measured {
                 line.push(',');
-                push(&mut line, e.disturbances.get(i).map_or(f64::NAN, value));
+                let f = unit(&ir.components[i].name);
+                push(&mut line, e.disturbances.get(i).map_or(f64::NAN, value) / f);
             }
             writeln!(out, "{line}")?;
         }
@@ -167,5 +182,40 @@ mod tests {
         let back = parse_csv("two.csv", &buf, &ir, &LoadOptions::default())
             .unwrap_or_else(|err| panic!("{err}"));
         assert_eq!(back, vec![a, b]);
+    }
+
+    #[test]
+    fn declared_units_are_written_back_in_those_units() {
+        let ir = ir(
+            "model M { state u, r input delta der u = X*u + T*delta der r = N*r
+            data { delta = \"rudder_deg\" in deg, u in knots, time in ms } }",
+        );
+        let mut e = Experiment::new(&ir, "m", 0.5);
+        for k in 0..12 {
+            e.states[0].push(1.0);
+            e.states[1].push(0.0);
+            e.inputs[0].push(0.1 * f64::from(k));
+        }
+        let mut buf = Vec::new();
+        write_csv(&ir, &[&e], 0.0, &mut buf).unwrap_or_else(|e| panic!("{e}"));
+        let text = String::from_utf8(buf).unwrap_or_default();
+        assert!(text.starts_with("time,u,r,rudder_deg\n0.0,"), "{text}");
+        // 0.5 s as 500 ms, 1 m/s in knots, 0.1 rad in degrees.
+        let second: Vec<f64> = text
+            .lines()
+            .nth(2)
+            .unwrap_or_default()
+            .split(',')
+            .map(|c| c.parse().unwrap_or(f64::NAN))
+            .collect();
+        assert_eq!(second[0], 500.0);
+        assert!((second[1] - 3600.0 / 1852.0).abs() < 1e-12);
+        assert!((second[3] - 0.1f64.to_degrees()).abs() < 1e-12);
+        let back = parse_csv("m.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back[0].h, 0.5);
+        for (a, b) in back[0].inputs[0].iter().zip(&e.inputs[0]) {
+            assert!((a - b).abs() < 1e-15, "{a} vs {b}");
+        }
     }
 }

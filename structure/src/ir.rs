@@ -44,6 +44,12 @@ pub struct Ir {
     pub predictors: Predictors,
     /// Data column for each signal whose column name differs (`data { }`).
     pub data_columns: BTreeMap<String, String>,
+    /// The unit each signal's column is logged in, as written (`data { r in
+    /// deg/s }`; see [`crate::units`]); values are converted to the base unit
+    /// on load. Absent from older IR, and left out when empty so that models
+    /// without units embed the same JSON as before.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub data_units: BTreeMap<String, String>,
     /// The identifiability report computed at compile time.
     pub report: Report,
 }

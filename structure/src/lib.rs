@@ -15,6 +15,7 @@ pub mod poly;
 pub mod render;
 pub mod resolve;
 pub mod terms;
+pub mod units;
 
 pub use identify::Options;
 pub use ir::Ir;

@@ -162,6 +162,11 @@ pub fn lower(
             .iter()
             .map(|(id, col, _)| (id.name.clone(), col.clone()))
             .collect(),
+        data_units: r
+            .units
+            .iter()
+            .map(|(id, unit, _)| (id.name.clone(), unit.clone()))
+            .collect(),
         report: Report::default(),
     }
 }

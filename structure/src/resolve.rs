@@ -114,12 +114,60 @@ pub struct Resolved {
     pub nominal: Vec<(Ident, Q, Span)>,
     /// Data column mapping.
     pub data: Vec<(Ident, String, Span)>,
+    /// Declared units of data columns (`data { r in deg/s }`), checked.
+    pub units: Vec<(Ident, String, Span)>,
     /// Name table.
     pub symbols: BTreeMap<String, (Symbol, Span)>,
 }
 
 /// Names in the data mapping that are not signals but are understood.
 pub const SPECIAL_COLUMNS: [&str; 2] = ["time", "experiment"];
+
+/// What is wrong with `signal in unit`, as (message, help), or `None` when the
+/// unit is known and of a kind the signal can have. The kinds follow from the
+/// signal's role where the model fixes it (the heading is an angle, the rate it
+/// integrates an angular rate, its axes speeds, `time` a time); a state, input
+/// or measured component may be any physical quantity except a time.
+fn unit_problem(r: &Resolved, signal: &str, unit: &str) -> Option<(String, String)> {
+    use crate::units::{Kind, names_of};
+    let every = [
+        Kind::Angle,
+        Kind::AngularRate,
+        Kind::Speed,
+        Kind::RotationRate,
+    ];
+    let (allowed, role): (&[Kind], &str) = match (signal, r.symbols.get(signal)) {
+        ("time", _) => (&[Kind::Time], "the time stamps"),
+        ("experiment", _) => (&[], "the experiment names"),
+        (_, Some((Symbol::Heading, _))) => (&[Kind::Angle], "the heading"),
+        (_, Some((Symbol::RotationColumn(_), _))) => (&[], "an entry of a measured rotation"),
+        (_, Some((Symbol::State(i), _))) => match &r.rotation {
+            RotationDecl::Planar { integrates, .. } if integrates == i => {
+                (&[Kind::AngularRate], "the yaw rate the heading integrates")
+            }
+            RotationDecl::Planar { axes, .. } if axes.contains(i) => {
+                (&[Kind::Speed], "a velocity the heading rotates")
+            }
+            _ => (&every, "a state"),
+        },
+        _ => (&every, "a signal"),
+    };
+    let kind = crate::units::unit(unit).map(|(k, _)| k);
+    if kind.is_some_and(|k| allowed.contains(&k)) {
+        return None;
+    }
+    if allowed.is_empty() {
+        return Some((
+            format!("`{signal}` takes no unit: it is {role}"),
+            format!("remove `in {unit}`"),
+        ));
+    }
+    let message = match kind {
+        Some(k) => format!("`{unit}` is {}, but `{signal}` is {role}", k.name()),
+        None => format!("unknown unit `{unit}` for `{signal}`"),
+    };
+    Some((message, format!("units for {role}: {}", names_of(allowed))))
+}
 
 fn duplicate(name: &Ident, first: Span, what: &str) -> Diagnostic {
     Diagnostic::error("duplicate-declaration", format!("`{}` is declared twice", name.name))
@@ -142,6 +190,7 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
         equations: Vec::new(),
         nominal: Vec::new(),
         data: Vec::new(),
+        units: Vec::new(),
         symbols: BTreeMap::new(),
     };
     let declare =
@@ -553,7 +602,8 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                 }
             }
             Item::Data { entries, .. } => {
-                for (id, column, cspan) in entries {
+                for entry in entries {
+                    let id = &entry.signal;
                     if let Some(first) = data_seen.insert(id.name.clone(), id.span) {
                         diags.push(duplicate(id, first, "a data column mapping"));
                         continue;
@@ -570,14 +620,28 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                                 .with_primary(id.span, "cannot map a column to this")
                                 .with_help("map states, inputs, the heading, rotation columns, measured disturbance components, `time` or `experiment`"),
                         );
-                    } else if column.trim().is_empty() {
-                        diags.push(
-                            Diagnostic::error("empty-column-name", format!("the column name for `{}` is empty", id.name))
-                                .with_primary(*cspan, "empty")
-                                .with_help("write the CSV header's name between the quotes"),
-                        );
-                    } else {
-                        r.data.push((id.clone(), column.clone(), *cspan));
+                        continue;
+                    }
+                    if let Some((column, cspan)) = &entry.column {
+                        if column.trim().is_empty() {
+                            diags.push(
+                                Diagnostic::error("empty-column-name", format!("the column name for `{}` is empty", id.name))
+                                    .with_primary(*cspan, "empty")
+                                    .with_help("write the CSV header's name between the quotes"),
+                            );
+                        } else {
+                            r.data.push((id.clone(), column.clone(), *cspan));
+                        }
+                    }
+                    if let Some((unit, uspan)) = &entry.unit {
+                        match unit_problem(&r, &id.name, unit) {
+                            Some((message, help)) => diags.push(
+                                Diagnostic::error("unknown-unit", message)
+                                    .with_primary(*uspan, "not a unit for this column")
+                                    .with_help(help),
+                            ),
+                            None => r.units.push((id.clone(), unit.clone(), *uspan)),
+                        }
                     }
                 }
             }

@@ -37,6 +37,10 @@ pub struct Report {
     sign_patterns: Vec<SignPattern>,
     /// How the estimate was computed (an empty object on error).
     diagnostics: serde_json::Value,
+    /// Per data file: comment lines skipped, time-stamp jitter, resampling.
+    data_files: Vec<crate::model::DataFileJson>,
+    /// `{signal: unit}` as declared in the model's `data { }` (values converted to base units).
+    data_units: Ordered<String>,
     warnings: Vec<String>,
     /// Facts worth knowing that need no action (e.g. pointwise moduli crossing zero).
     notes: Vec<String>,
@@ -60,6 +64,9 @@ struct Column {
     status: String,
     /// What the value estimates.
     estimates: String,
+    /// For a parameter that estimates an aggregate, the sum it stands for
+    /// (`X_uu + W_uu`); null otherwise.
+    aggregate: Option<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -106,8 +113,9 @@ fn argument(a: &ArgSign) -> Argument {
     }
 }
 
-fn column(c: &ColumnEstimate) -> Column {
+fn column(c: &ColumnEstimate, aggregates: &[String]) -> Column {
     Column {
+        aggregate: super::text::aggregate_of(c, aggregates),
         name: c.name.clone(),
         kind: c.kind,
         value: c.value,
@@ -146,6 +154,8 @@ pub fn report(
         disturbances: Ordered::default(),
         sign_patterns: Vec::new(),
         diagnostics: serde_json::Value::Object(serde_json::Map::new()),
+        data_files: Vec::new(),
+        data_units: Ordered::default(),
         warnings,
         notes: Vec::new(),
         errors: Vec::new(),
@@ -160,6 +170,13 @@ pub fn report(
     let e = &o.estimate;
     r.model = Some(o.model.clone());
     r.notes = e.notes.clone();
+    r.data_files = crate::model::data_files_json(&o.data_notes);
+    r.data_units = Ordered(
+        o.data_units
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
+    );
     r.experiments = o
         .experiments
         .iter()
@@ -180,13 +197,13 @@ pub fn report(
         .columns
         .iter()
         .filter(|c| c.kind == "theta")
-        .map(column)
+        .map(|c| column(c, &e.diagnostics.aggregates))
         .collect();
     r.nuisance = e
         .columns
         .iter()
         .filter(|c| c.kind != "theta")
-        .map(column)
+        .map(|c| column(c, &e.diagnostics.aggregates))
         .collect();
     let mut disturbances: Vec<(String, Ordered<Moment>)> = Vec::new();
     for m in &e.disturbances {

@@ -42,6 +42,24 @@ fn signs(args: &[ArgSign]) -> String {
         .join(", ")
 }
 
+/// What an estimated parameter stands for when it is an aggregate (`X_uu +
+/// W_uu`): its column estimates more than itself, or the estimator's
+/// diagnostics name it (`X_uu estimates …`).
+pub fn aggregate_of(c: &ColumnEstimate, aggregates: &[String]) -> Option<String> {
+    if c.kind != "theta" || c.value.is_none() || c.status.starts_with("held") {
+        return None;
+    }
+    if c.estimates != c.name && !c.estimates.is_empty() {
+        return Some(c.estimates.clone());
+    }
+    let prefix = format!("{} estimates ", c.name);
+    aggregates.iter().find_map(|a| {
+        let rest = a.strip_prefix(&prefix)?;
+        // The remark in parentheses is said once, in the diagnostics.
+        Some(rest.split(" (").next().unwrap_or(rest).to_string())
+    })
+}
+
 /// The whole text.
 pub fn render(o: &Outcome) -> String {
     let e = &o.estimate;
@@ -65,12 +83,24 @@ pub fn render(o: &Outcome) -> String {
         "std error".to_string(),
         "status".to_string(),
     ]];
-    rows.extend(
-        e.columns
-            .iter()
-            .filter(|c| c.kind == "theta")
-            .map(column_row),
-    );
+    for c in e.columns.iter().filter(|c| c.kind == "theta") {
+        match aggregate_of(c, &e.diagnostics.aggregates) {
+            // An aggregate says so on its own row, and what it sums on the
+            // next, under the status (the last column, so no column widens).
+            Some(sum) => {
+                let mut r = column_row(c);
+                r[3] = "aggregate".to_string();
+                rows.push(r);
+                rows.push(vec![
+                    String::new(),
+                    String::new(),
+                    String::new(),
+                    format!("= {sum}"),
+                ]);
+            }
+            None => rows.push(column_row(c)),
+        }
+    }
     s.push_str(&table(&rows));
 
     let nuisance: Vec<&ColumnEstimate> = e.columns.iter().filter(|c| c.kind != "theta").collect();
@@ -193,6 +223,12 @@ pub fn render(o: &Outcome) -> String {
                 None => format!("{name}: too little yaw motion to check"),
             },
         ]);
+    }
+    for u in &o.units {
+        rows.push(vec!["unit".to_string(), u.clone()]);
+    }
+    for note in crate::model::data_notes(&o.data_notes) {
+        rows.push(vec!["data".to_string(), note]);
     }
     for u in &d.unexcited {
         rows.push(vec!["unexcited".to_string(), u.clone()]);

@@ -1,0 +1,473 @@
+//! End-to-end tests of real-log data handling: `#` comment lines, time-stamp
+//! jitter and `--time-tolerance`, `--resample`, units declared in the model's
+//! `data { }`, the aggregate rows of the `estimate` table, and `validate` with
+//! several parameter files (the binary on synthetic ship data).
+
+use leeway_runtime::{Experiment, Interpreter, study, write_csv};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A scratch directory, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("leeway-cli-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        Scratch(dir)
+    }
+    fn path(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+    fn write(&self, file: &str, text: &str) -> String {
+        let p = self.path(file);
+        std::fs::write(&p, text).unwrap_or_else(|e| panic!("{e}"));
+        p.display().to_string()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+const SHIP: &str = "examples/models/ship.som";
+
+/// Runs `leeway ARGS` from the workspace root.
+fn leeway(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_leeway"))
+        .args(args)
+        .current_dir(root())
+        .env_remove("NO_COLOR")
+        .output()
+        .expect("run leeway")
+}
+
+fn code(o: &Output) -> i32 {
+    o.status.code().expect("exit code")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> Value {
+    serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {}\n{}", stdout(o), stderr(o)))
+}
+
+fn no_panic(o: &Output) {
+    assert!(!stderr(o).contains("panicked"), "{}", stderr(o));
+}
+
+fn ship() -> Interpreter {
+    let src = std::fs::read_to_string(root().join(SHIP)).unwrap_or_default();
+    let c = leeway_runtime::structure::compile(&src, &Default::default());
+    Interpreter::new(c.ir.unwrap_or_else(|| panic!("{:?}", c.diagnostics)))
+}
+
+fn csv_text(model: &Interpreter, experiments: &[&Experiment]) -> String {
+    let mut buf = Vec::new();
+    write_csv(leeway_runtime::Model::ir(model), experiments, 0.0, &mut buf)
+        .unwrap_or_else(|e| panic!("{e}"));
+    String::from_utf8(buf).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// One estimation experiment of the study as CSV text.
+fn estimation_csv(n: usize, wind: f64, seed: u64) -> String {
+    let model = ship();
+    let (e, _) =
+        study::estimation_experiment(&model, &study::InputDesign::default(), wind, n, seed);
+    csv_text(&model, &[&e])
+}
+
+/// θ0 of the paper as a plain parameter file.
+fn true_params() -> String {
+    let model = ship();
+    let ir = leeway_runtime::Model::ir(&model);
+    let entries: Vec<String> = ir
+        .parameters
+        .iter()
+        .zip(study::THETA0)
+        .map(|(p, v)| format!("  \"{}\": {v:?}", p.name))
+        .collect();
+    format!("{{\n{}\n}}\n", entries.join(",\n"))
+}
+
+fn rows_of(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+fn join(rows: &[Vec<String>]) -> String {
+    rows.iter().map(|r| r.join(",") + "\n").collect()
+}
+
+/// The ship's data (its time column, step 1 as the model's) with stamps
+/// jittered by `jitter(k)` seconds.
+fn with_time(text: &str, jitter: impl Fn(usize) -> f64) -> String {
+    let mut rows = rows_of(text);
+    assert_eq!(rows[0][0], "time");
+    for (k, row) in rows.iter_mut().enumerate().skip(1) {
+        let t = (k - 1) as f64 + jitter(k - 1);
+        row[0] = format!("{t:?}");
+    }
+    join(&rows)
+}
+
+fn files_in(dir: &Scratch) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(&dir.0)
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().to_string())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+#[test]
+fn comment_lines_are_skipped_counted_and_shown_with_physical_row_numbers() {
+    let dir = Scratch::new("comments");
+    let text = estimation_csv(2000, 1.0, 5);
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    lines.insert(0, "# logger: test rig v2".to_string());
+    lines.insert(0, "# vessel: Ship".to_string());
+    lines.insert(500, "   # operator note: buoy passed".to_string());
+    let commented = lines.join("\n") + "\n";
+    let data = dir.write("log.csv", &commented);
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains(&format!(
+            "data              {data}: 3 comment lines skipped"
+        )),
+        "{}",
+        stdout(&o)
+    );
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    let v = json(&o);
+    assert_eq!(v["data_files"][0]["comment_lines"], 3, "{v}");
+    assert_eq!(v["data_files"][0]["file"], data.as_str());
+    // A bad cell after the comments is located on the line an editor shows:
+    // line 1000 of the file (3 comments + header above data row 996).
+    let mut bad = lines.clone();
+    let mut cells: Vec<String> = bad[999].split(',').map(str::to_string).collect();
+    cells[1] = "n/a".to_string();
+    bad[999] = cells.join(",");
+    let data = dir.write("bad.csv", &(bad.join("\n") + "\n"));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    assert!(
+        stderr(&o).contains(&format!("{data}:1000:2 (u)")),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn jitter_within_the_tolerance_is_accepted_and_reported_beyond_it_located() {
+    let dir = Scratch::new("jitter");
+    let text = estimation_csv(2000, 1.0, 6);
+    // ±2 % of the 1 s step, alternating.
+    let jittered = with_time(&text, |k| if k % 2 == 0 { 0.0 } else { 0.02 });
+    let data = dir.write("jit.csv", &jittered);
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let dev = v["data_files"][0]["experiments"][0]["max_step_deviation"]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    assert!(dev > 0.015 && dev < 0.025, "{v}");
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert!(
+        stdout(&o).contains(
+            "time steps deviate up to 2.00 % from the nominal step (within --time-tolerance)"
+        ),
+        "{}",
+        stdout(&o)
+    );
+    // Tighter than the jitter: the worst step beyond it, located, with the way out.
+    let o = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &data,
+        "--time-tolerance",
+        "0.01",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(
+        err.starts_with(&format!("error[data]: {data}:"))
+            && err.contains(":1 (time): inconsistent sample time"),
+        "{err}"
+    );
+    assert!(err.contains("2.0 % off the nominal (mean) step"), "{err}");
+    assert!(
+        err.contains("--time-tolerance") && err.contains("--resample"),
+        "{err}"
+    );
+    // The tolerance is a fraction in (0, 0.5).
+    for bad in ["5", "0.5", "0", "-0.1", "x"] {
+        let o = leeway(&[
+            "estimate",
+            SHIP,
+            "--data",
+            &data,
+            &format!("--time-tolerance={bad}"),
+        ]);
+        no_panic(&o);
+        assert_eq!(code(&o), 2, "{bad}");
+        assert!(
+            stderr(&o).contains("not a fraction in (0, 0.5)"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    // Resampling a log without time stamps is a located error.
+    let untimed: Vec<Vec<String>> = rows_of(&text)
+        .into_iter()
+        .map(|r| r[1..].to_vec())
+        .collect();
+    let plain = dir.write("plain.csv", &join(&untimed));
+    let o = leeway(&["estimate", SHIP, "--data", &plain, "--resample", "1"]);
+    assert_eq!(code(&o), 2);
+    assert!(
+        stderr(&o).contains(&format!("{plain}:1: --resample needs a time column")),
+        "{}",
+        stderr(&o)
+    );
+    // With a time column, resampled at the model's step: said in the output.
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--resample", "1"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("experiment `jit` resampled from 2000 rows to 2000 samples"),
+        "{}",
+        stdout(&o)
+    );
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--resample", "0.5"]);
+    assert_eq!(code(&o), 2);
+    assert!(
+        stderr(&o).contains("--resample 0.5 conflicts"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn declared_units_are_converted_and_shown() {
+    let dir = Scratch::new("units");
+    let source = std::fs::read_to_string(root().join(SHIP)).unwrap_or_default();
+    let with_units = source.replacen(
+        "    nominal {",
+        "    data { psi = \"heading_deg\" in deg, r in deg/s }\n    nominal {",
+        1,
+    );
+    let model = dir.write("ship_deg.som", &with_units);
+    // High wind: every parameter excited, so the estimate is well conditioned
+    // and the last-bit differences of converted values do not show.
+    let text = estimation_csv(3000, 10.0, 7);
+    let mut rows = rows_of(&text);
+    let col = |name: &str| rows[0].iter().position(|h| h == name).unwrap_or(0);
+    let (psi, r) = (col("psi"), col("r"));
+    rows[0][psi] = "heading_deg".to_string();
+    for row in rows.iter_mut().skip(1) {
+        for c in [psi, r] {
+            let v: f64 = row[c].parse().unwrap_or(f64::NAN);
+            row[c] = format!("{:?}", v.to_degrees());
+        }
+    }
+    let deg = dir.write("deg.csv", &join(&rows));
+    let rad = dir.write("rad.csv", &text);
+    let a = json(&leeway(&["estimate", &model, "--data", &deg, "--json"]));
+    let b = json(&leeway(&["estimate", SHIP, "--data", &rad, "--json"]));
+    assert_eq!(a["errors"], Value::Array(Vec::new()), "{a}");
+    assert_eq!(a["data_units"]["psi"], "deg");
+    assert_eq!(a["data_units"]["r"], "deg/s");
+    // Degrees converted on load give the radians' estimate (to rounding).
+    for (name, x) in a["estimates"].as_object().cloned().unwrap_or_default() {
+        let (x, y) = (
+            x.as_f64().unwrap_or(f64::NAN),
+            b["estimates"][&name].as_f64().unwrap_or(f64::NAN),
+        );
+        assert!(
+            (x - y).abs() <= 1e-6 * y.abs().max(1e-6),
+            "{name}: {x} vs {y}"
+        );
+    }
+    // No heading-unit warning: the check runs on converted values.
+    let warnings = a["warnings"].to_string();
+    assert!(!warnings.contains("does not integrate"), "{warnings}");
+    let o = leeway(&["estimate", &model, "--data", &deg]);
+    let out = stdout(&o);
+    assert!(
+        out.contains("psi: column heading_deg in deg, converted to rad"),
+        "{out}"
+    );
+    assert!(
+        out.contains("r: column r in deg/s, converted to rad/s"),
+        "{out}"
+    );
+    // An unknown unit: the model's located error, exit 2.
+    let broken = dir.write(
+        "ship_bad.som",
+        &source.replacen(
+            "    nominal {",
+            "    data { r in degrees/s }\n    nominal {",
+            1,
+        ),
+    );
+    let o = leeway(&["estimate", &broken, "--data", &rad]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(
+        err.contains("error[unknown-unit]: unknown unit `degrees/s` for `r`"),
+        "{err}"
+    );
+    assert!(err.contains("ship_bad.som:"), "{err}");
+    assert!(
+        err.contains("help: units for the yaw rate the heading integrates: rad/s, deg/s"),
+        "{err}"
+    );
+}
+
+#[test]
+fn aggregates_are_marked_on_their_own_rows() {
+    let dir = Scratch::new("aggregates");
+    let data = dir.write("calm.csv", &estimation_csv(2000, 1.0, 8));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    let line = out
+        .lines()
+        .position(|l| l.trim_start().starts_with("N_uv ") && l.trim_end().ends_with("aggregate"))
+        .unwrap_or_else(|| panic!("no aggregate row for N_uv:\n{out}"));
+    let next = out.lines().nth(line + 1).unwrap_or_default();
+    assert!(
+        next.trim_start().starts_with("= N_uv + ") && next.contains("W_uv"),
+        "{next}"
+    );
+    let v = json(&leeway(&["estimate", SHIP, "--data", &data, "--json"]));
+    let n_uv = v["parameters"]
+        .as_array()
+        .and_then(|p| p.iter().find(|c| c["name"] == "N_uv"))
+        .cloned()
+        .unwrap_or_default();
+    assert!(
+        n_uv["aggregate"]
+            .as_str()
+            .is_some_and(|a| a.contains("W_uv")),
+        "{n_uv}"
+    );
+    // The contract's fields stay.
+    assert!(n_uv["status"].is_string() && n_uv["estimates"].is_string());
+}
+
+#[test]
+fn validate_compares_several_parameter_files_and_writes_only_when_asked() {
+    let dir = Scratch::new("compare");
+    let model = ship();
+    let val = study::validation_experiment(&model, 400);
+    let val2 = study::validation_experiment(&model, 300);
+    let mut second = val2.clone();
+    second.name = "second".to_string();
+    let mut first = val.clone();
+    first.name = "first".to_string();
+    let data = dir.write("val.csv", &csv_text(&model, &[&first, &second]));
+    let truth = dir.write("truth.json", &true_params());
+    let est = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &dir.write("run.csv", &estimation_csv(3000, 1.0, 9)),
+        "--json",
+    ]);
+    let est = dir.write("iv3.json", &stdout(&est));
+    let before = files_in(&dir);
+    let o = leeway(&[
+        "validate", SHIP, "--params", &truth, "--params", &est, "--data", &data, "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // Nothing written without --plot.
+    assert_eq!(files_in(&dir), before);
+    let v = json(&o);
+    // The first file's results stay at the top level, as with one file.
+    assert_eq!(v["params"], truth.as_str());
+    assert_eq!(v["experiments"].as_array().map(Vec::len), Some(2));
+    assert_eq!(v["plot"], Value::Null);
+    let models = v["models"].as_array().cloned().unwrap_or_default();
+    assert_eq!(models.len(), 2);
+    assert_eq!(models[0]["name"], "truth");
+    assert_eq!(models[1]["name"], "iv3");
+    assert_eq!(models[0]["experiments"], v["experiments"]);
+    for m in &models {
+        for o in ["u", "v", "r", "psi"] {
+            let per: Vec<f64> = m["experiments"]
+                .as_array()
+                .map(|es| {
+                    es.iter()
+                        .map(|e| {
+                            if o == "psi" {
+                                &e["heading_fit"]
+                            } else {
+                                &e["fit"][o]
+                            }
+                            .as_f64()
+                            .unwrap_or(f64::NAN)
+                        })
+                        .collect()
+                })
+                .unwrap_or_default();
+            let mean = m["mean"][o].as_f64().unwrap_or(f64::NAN);
+            assert!((mean - (per[0] + per[1]) / 2.0).abs() < 1e-9, "{o}: {m}");
+        }
+    }
+    // The true θ on noise-free data: a perfect fit.
+    assert!(
+        (v["mean"]["u"].as_f64().unwrap_or(0.0) - 100.0).abs() < 1e-6,
+        "{v}"
+    );
+    // Text: a block per file, a mean row; the plot only where asked, one line per file.
+    let plot = dir.path("cmp.svg").display().to_string();
+    let o = leeway(&[
+        "validate", SHIP, "--params", &truth, "--params", &est, "--data", &data, "--plot", &plot,
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains(&format!("truth ({truth})")) && out.contains(&format!("iv3 ({est})")),
+        "{out}"
+    );
+    assert_eq!(out.matches("\n  mean ").count(), 2, "{out}");
+    assert!(
+        out.contains("  experiment  samples  u       v       r       psi"),
+        "{out}"
+    );
+    let svg = std::fs::read_to_string(&plot).unwrap_or_default();
+    for label in [
+        "\ntruth\n",
+        "\niv3\n",
+        "\nmeasured\n",
+        "\nsecond\n",
+        "psi: mean fit over 2 experiments",
+    ] {
+        assert!(svg.contains(label), "`{label}` missing from the SVG");
+    }
+}
