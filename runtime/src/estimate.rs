@@ -772,9 +772,6 @@ pub fn estimate(
         None => ir.parameters.iter().map(|p| p.nominal).collect(),
     };
     let kind = options.method.predictor();
-    let centring = options
-        .centring
-        .unwrap_or_else(|| Centring::for_model(ir, kind));
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
     // Sign patterns, measured means, bounds and heading spread, in one visit each.
@@ -847,7 +844,6 @@ pub fn estimate(
         model,
         options,
         kind,
-        centring,
         nominal,
         infos,
         &sign_patterns,
@@ -989,13 +985,15 @@ impl<'a> Estimator<'a> {
         model: &'a dyn Model,
         options: &'a Options,
         kind: PredictorKind,
-        centring: Centring,
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,
         signs: &[ExperimentSigns],
         warnings: Vec<String>,
     ) -> Result<Estimator<'a>, EstimateError> {
         let ir = model.ir();
+        let centring = options
+            .centring
+            .unwrap_or_else(|| Centring::for_model(ir, kind));
         let columns = ir.predictors.get(kind);
         let n_cols = columns.len();
         let analysis = Analysis::with_centring(ir, kind, centring);

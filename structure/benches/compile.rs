@@ -14,7 +14,7 @@ fn compile(c: &mut Criterion) {
     });
     let aggregate = leeway_structure::Options {
         aggregate: true,
-        patterns: None,
+        ..Default::default()
     };
     c.bench_function("compile ship_iv2.som --aggregate", |b| {
         b.iter(|| leeway_structure::compile(black_box(SHIP_IV2), &aggregate))
