@@ -811,22 +811,32 @@ pub fn estimate(
                 warnings.push(msg);
             }
         }
-        for (a, crossings) in s.pointwise.iter().zip(&s.crossings) {
-            let plain = ir
-                .sign_args
-                .iter()
-                .any(|x| x.pointwise && x.name == a.argument);
-            if plain && a.minority_fraction > 0.0 {
-                notes.push(format!(
-                    "experiment `{}`: {} changes sign {crossings} time{} ({:.1}% of the samples have the minority sign): |{}| is evaluated pointwise, as the simulation does; where it is within the noise of zero, measurement noise biases |{}| slightly upwards",
-                    s.experiment,
+        let crossing: Vec<String> = s
+            .pointwise
+            .iter()
+            .zip(&s.crossings)
+            .filter(|(a, _)| {
+                a.minority_fraction > 0.0
+                    && ir
+                        .sign_args
+                        .iter()
+                        .any(|x| x.pointwise && x.name == a.argument)
+            })
+            .map(|(a, n)| {
+                format!(
+                    "{} ({n} sign change{}, {:.1}% of the samples of the minority sign)",
                     a.argument,
-                    if *crossings == 1 { "" } else { "s" },
-                    100.0 * a.minority_fraction,
-                    a.argument,
-                    a.argument
-                ));
-            }
+                    if *n == 1 { "" } else { "s" },
+                    100.0 * a.minority_fraction
+                )
+            })
+            .collect();
+        if !crossing.is_empty() {
+            notes.push(format!(
+                "experiment `{}`: {} cross zero; their moduli are evaluated pointwise, as the simulation does (within the noise of zero, measurement noise biases |x| slightly upwards)",
+                s.experiment,
+                crossing.join(", ")
+            ));
         }
         infos.push(experiment_info(ir, *e, &s, options));
         sign_patterns.push(s);
