@@ -471,3 +471,130 @@ fn validate_compares_several_parameter_files_and_writes_only_when_asked() {
         assert!(svg.contains(label), "`{label}` missing from the SVG");
     }
 }
+
+/// The tanker zigzag campaign (`runtime::zigzag`) written as a logger would:
+/// comment lines, jittered time stamps, the rudder in degrees.
+fn tanker_log(dir: &Scratch, noisy: bool) -> (String, Vec<String>, Vec<String>) {
+    let source = std::fs::read_to_string(root().join("examples/models/tanker.som"))
+        .unwrap_or_default()
+        .replace(
+            "    nominal {",
+            "    data { delta in deg }\n\n    nominal {",
+        );
+    let model_path = dir.write("tanker-raw.som", &source);
+    let c = leeway_runtime::structure::compile(&source, &Default::default());
+    let model = Interpreter::new(c.ir.expect("the tanker compiles"));
+    let campaign = leeway_runtime::zigzag::campaign(&leeway_runtime::zigzag::Options {
+        noise: noisy.then(leeway_runtime::zigzag::Noise::default),
+        ..Default::default()
+    });
+    let write = |runs: &[leeway_runtime::zigzag::Run]| -> Vec<String> {
+        runs.iter()
+            .map(|run| {
+                let mut e = run
+                    .experiment(leeway_runtime::Model::ir(&model))
+                    .expect("run");
+                for d in &mut e.inputs[0] {
+                    *d = d.to_degrees();
+                }
+                let text = with_time(&csv_text(&model, &[&e]), |k| {
+                    0.5 * k as f64 + 0.001 * (((k * 37) % 3) as f64 - 1.0)
+                });
+                let logged = format!(
+                    "# tanker 1:35, zigzag {}\n# rudder in degrees\n{text}",
+                    run.name
+                );
+                dir.write(&format!("{}.csv", run.name), &logged)
+            })
+            .collect()
+    };
+    (
+        model_path,
+        write(&campaign.train),
+        write(&campaign.validation),
+    )
+}
+
+fn data_args<'a>(files: &'a [String]) -> Vec<&'a str> {
+    files.iter().flat_map(|f| ["--data", f.as_str()]).collect()
+}
+
+/// The model an engineer writes, on logs as a logger writes them: it
+/// compiles as written, estimates with default options (uncentred
+/// instruments, constants estimated, summed experiments), says so, and its
+/// free-run fit on held-out runs beats least squares's under noise.
+#[test]
+fn the_tanker_estimates_from_raw_logs_with_default_options() {
+    let dir = Scratch::new("tanker");
+    let (model, train, validation) = tanker_log(&dir, true);
+    let check = leeway(&["check", &model]);
+    assert_eq!(code(&check), 0, "{}", stderr(&check));
+    assert!(stdout(&check).contains("instrument centring: none"));
+    let mut args = vec!["estimate", model.as_str()];
+    args.extend(data_args(&train));
+    let o = leeway(&args);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    for part in [
+        "X_0",
+        "centring          none (the default for this model)",
+        "combination       summed",
+        "2 comment lines skipped",
+        "delta: column delta in deg, converted to rad",
+    ] {
+        assert!(out.contains(part), "`{part}` missing:\n{out}");
+    }
+    assert!(stderr(&o).contains("cross zero; their moduli are evaluated pointwise"));
+    let mut fits = Vec::new();
+    for method in ["iv3", "ls"] {
+        let mut args = vec!["estimate", model.as_str(), "--method", method, "--json"];
+        args.extend(data_args(&train));
+        let o = leeway(&args);
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        let params = dir.write(&format!("{method}.json"), &stdout(&o));
+        let mut args = vec!["validate", model.as_str(), "--params", &params, "--json"];
+        args.extend(data_args(&validation));
+        let v = leeway(&args);
+        assert_eq!(code(&v), 0, "{}", stderr(&v));
+        fits.push(json(&v)["mean"]["u"].as_f64().unwrap_or(f64::NAN));
+    }
+    assert!(
+        fits[0] > 85.0 && fits[0] >= fits[1] + 10.0,
+        "surge iv3, ls: {fits:?}"
+    );
+
+    // Per-experiment centring annihilates the constants: refused, naming the way out.
+    let mut args = vec!["estimate", model.as_str(), "--centring", "experiment"];
+    args.extend(data_args(&train));
+    let o = leeway(&args);
+    assert_eq!(code(&o), 1, "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("error[unidentifiable]") && err.contains("`X_0`"),
+        "{err}"
+    );
+    assert!(err.contains("--centring none"), "{err}");
+}
+
+/// A constant force on a craft in a current: `check` refuses it under the
+/// default per-experiment centring and names the centring that keeps it.
+#[test]
+fn check_names_the_centring_that_keeps_a_constant() {
+    let dir = Scratch::new("constant");
+    let model = dir.write(
+        "current.som",
+        "model S {\n    state u, v, r\n    input tau\n    heading psi integrates r\n    disturbance current unmeasured earth(north, east)\n    water = relative(current)\n    der u = X_u*water.u + X_t*tau + X_0\n    der v = Y_v*water.v\n    der r = N_r*r\n}\n",
+    );
+    let o = leeway(&["check", &model]);
+    assert_eq!(code(&o), 1);
+    let err = stderr(&o);
+    assert!(
+        err.contains("`X_0` is a constant term, annihilated by per-experiment centring"),
+        "{err}"
+    );
+    assert!(err.contains(&format!("{model}:7:37")), "{err}");
+    assert!(err.contains("`--centring none`"), "{err}");
+    let o = leeway(&["check", &model, "--centring", "none"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+}
