@@ -515,7 +515,7 @@ fn tanker_log(dir: &Scratch, noisy: bool) -> (String, Vec<String>, Vec<String>) 
     )
 }
 
-fn data_args<'a>(files: &'a [String]) -> Vec<&'a str> {
+fn data_args(files: &[String]) -> Vec<&str> {
     files.iter().flat_map(|f| ["--data", f.as_str()]).collect()
 }
 
