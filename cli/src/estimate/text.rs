@@ -143,7 +143,7 @@ pub fn render(o: &Outcome) -> String {
         .iter()
         .any(|p| !p.arguments.is_empty() || !p.pointwise.is_empty())
     {
-        s.push_str("\nsign patterns (paper A7: each argument keeps one sign per experiment)\n");
+        s.push_str("\nsign patterns (paper A7: an argument relative to an unmeasured medium keeps one sign per experiment; pointwise ones may change sign)\n");
         let mut rows = Vec::new();
         for p in &e.sign_patterns {
             if !p.arguments.is_empty() {
