@@ -62,10 +62,10 @@ pub struct EstimateArgs {
     #[arg(long)]
     pub strict: bool,
     /// Lags of the robust (long-run) covariance; at least 1 (the Euler residual is MA(1)).
-    #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=MAX_LAGS as i64))]
     pub lags: u16,
     /// Most re-simulations of the refined IV.
-    #[arg(long, value_name = "N", default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = 8, value_parser = refinements)]
     pub max_refinements: usize,
     /// Run the plain refined IV: do not stop a refinement whose simulation tracks
     /// the data markedly worse than an earlier iterate (docs/estimation.md).
@@ -141,10 +141,32 @@ pub enum CombineArg {
     Stacked,
 }
 
-/// A positive, finite number (`--step`).
+/// Most lags of the robust covariance (`--lags`): each costs one pass of
+/// O(n_ϑ²) work; an MA(1) residual needs one.
+pub const MAX_LAGS: u16 = 1000;
+/// Most re-simulations of the refined IV (`--max-refinements`): each re-reads
+/// the data; one or two give most of the gain.
+pub const MAX_REFINEMENTS: usize = 100;
+/// Sample times (`--step`, `--resample`) in seconds: from a microsecond to a
+/// day (11.6 days at most).
+pub const STEP_RANGE: (f64, f64) = (1e-6, 1e6);
+
+fn refinements(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if v <= MAX_REFINEMENTS => Ok(v),
+        Ok(_) => Err(format!("`{s}` is not in 0..={MAX_REFINEMENTS}")),
+        Err(_) => Err(format!("`{s}` is not a whole number")),
+    }
+}
+
+/// A sample time in seconds within [`STEP_RANGE`] (`--step`, `--resample`).
 pub fn positive(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+    let (lo, hi) = STEP_RANGE;
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        Ok(v) if v.is_finite() && v > 0.0 => Err(format!(
+            "`{s}` s is outside {lo:e}..={hi:e} seconds, the sample times leeway accepts"
+        )),
         _ => Err(format!("`{s}` is not a positive number of seconds")),
     }
 }

@@ -9,6 +9,11 @@ use leeway_structure::ir::Ir;
 use leeway_structure::{Options, compile};
 use std::path::{Path, PathBuf};
 
+/// Largest magnitude of a value given on the command line (`--x0`,
+/// `--disturbance`): squares of larger values approach f64's range inside
+/// the regressors.
+pub const MAX_VALUE: f64 = 1e12;
+
 /// A compiled model.
 #[derive(Clone, Debug)]
 pub struct Loaded {
@@ -403,7 +408,13 @@ pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem
                 return Err(bad(format!("`{name}` is given twice")));
             }
             values[i] = match value.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() => v,
+                Ok(v) if v.is_finite() && v.abs() <= MAX_VALUE => v,
+                Ok(v) if v.is_finite() => {
+                    return Err(bad(format!(
+                        "`{}` exceeds {MAX_VALUE:e} in magnitude",
+                        value.trim()
+                    )));
+                }
                 _ => return Err(bad(format!("`{}` is not a finite number", value.trim()))),
             };
             given[i] = true;
