@@ -78,7 +78,9 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
                             crate::model::MAX_VALUE
                         ),
                     )
-                    .help("initial values are physical states; give them in the model's base units"));
+                    .help(
+                        "initial values are physical states; give them in the model's base units",
+                    ));
                 }
                 _ => {
                     return Err(Problem::error(

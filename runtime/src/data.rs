@@ -429,7 +429,8 @@ impl<R: std::io::BufRead> Filter<R> {
             self.kept += 1;
             if dropped {
                 self.line_jumps.push((self.kept, self.physical - self.kept));
-                self.byte_jumps.push((self.kept_bytes, start - self.kept_bytes));
+                self.byte_jumps
+                    .push((self.kept_bytes, start - self.kept_bytes));
             }
             self.kept_bytes += n as u64;
             let quotes = self.line.iter().filter(|b| **b == b'"').count();
@@ -472,6 +473,15 @@ struct Layout {
     exp_col: Option<usize>,
 }
 
+/// The number of rotation columns read from data (a measured `R`), else 0.
+fn measured_rotation(ir: &Ir) -> usize {
+    if matches!(ir.rotation, Rotation::Measured { .. }) {
+        ir.rotation_vars.len()
+    } else {
+        0
+    }
+}
+
 /// One sample's values, reused from row to row.
 struct RowBuf {
     states: Vec<f64>,
@@ -486,7 +496,7 @@ impl RowBuf {
         RowBuf {
             states: vec![0.0; ir.states.len()],
             inputs: vec![0.0; ir.inputs.len()],
-            rotation: vec![0.0; ir.rotation_vars.len()],
+            rotation: vec![0.0; measured_rotation(ir)],
             dist: vec![0.0; ir.components.len()],
             heading: 0.0,
         }
@@ -553,7 +563,9 @@ fn parse_row(
         }
     }
     match layout.time_col {
-        Some(i) => Ok(Some(cell(file, line, record, i, "time")? * layout.time_factor)),
+        Some(i) => Ok(Some(
+            cell(file, line, record, i, "time")? * layout.time_factor,
+        )),
         None => Ok(None),
     }
 }
@@ -682,6 +694,7 @@ pub struct Block {
 /// A validated file: its experiments' blocks and the notes.
 #[derive(Clone, Debug)]
 struct Scanned {
+    header_line: u64,
     layout: Layout,
     blocks: Vec<Block>,
     notes: FileNotes,
@@ -697,10 +710,16 @@ fn scan<R: std::io::BufRead>(
     options: &LoadOptions,
     sink: &mut dyn FnMut(usize, &Row, Option<f64>),
 ) -> Result<Scanned, DataError> {
-    let mut reader = csv_builder().has_headers(true).from_reader(Filter::new(input));
+    let mut reader = csv_builder()
+        .has_headers(true)
+        .from_reader(Filter::new(input));
     let io_error = |r: &csv::Reader<Filter<R>>, e: &csv::Error| -> Option<DataError> {
         if let csv::ErrorKind::Io(io) = e.kind() {
-            let why = r.get_ref().error.as_ref().map_or(io.to_string(), ToString::to_string);
+            let why = r
+                .get_ref()
+                .error
+                .as_ref()
+                .map_or(io.to_string(), ToString::to_string);
             return Some(DataError::new(
                 file,
                 format!("cannot read the file: {why}"),
@@ -710,7 +729,10 @@ fn scan<R: std::io::BufRead>(
         None
     };
     let headers: Vec<String> = match reader.byte_headers() {
-        Ok(h) => h.iter().map(|c| String::from_utf8_lossy(c).into_owned()).collect(),
+        Ok(h) => h
+            .iter()
+            .map(|c| String::from_utf8_lossy(c).into_owned())
+            .collect(),
         Err(e) => {
             if let Some(d) = io_error(&reader, &e) {
                 return Err(d);
@@ -810,7 +832,10 @@ fn scan<R: std::io::BufRead>(
                 ));
             }
         }
-        let pos = record.position().cloned().unwrap_or_else(csv::Position::new);
+        let pos = record
+            .position()
+            .cloned()
+            .unwrap_or_else(csv::Position::new);
         let line = reader.get_ref().physical_line(pos.line());
         let t = parse_row(file, line, &record, &layout, &mut buf)?;
         let exp_name: &[u8] = match layout.exp_col {
@@ -899,7 +924,11 @@ fn scan<R: std::io::BufRead>(
                     format!(
                         "`{name}` = {v:e} is a gross outlier: the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away{more}",
                         block.name,
-                        if *v > *hi { (v - hi) / (hi - lo) } else { (lo - v) / (hi - lo) }
+                        if *v > *hi {
+                            (v - hi) / (hi - lo)
+                        } else {
+                            (lo - v) / (hi - lo)
+                        }
                     ),
                     format!(
                         "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column is taken for a logging error"
@@ -918,6 +947,7 @@ fn scan<R: std::io::BufRead>(
         });
     }
     Ok(Scanned {
+        header_line,
         layout,
         blocks,
         notes,
@@ -968,7 +998,7 @@ fn read_noted<R: std::io::BufRead>(
             let first_line = block.first_line;
             if times.len() != e.len() {
                 return Err(DataError::new(
-                    file,
+                    format!("{file}:{}", scanned.header_line),
                     "--resample needs a time column, and the file has none",
                     format!(
                         "add a `{}` column of time stamps (or map one with data {{ time = \"<column>\" }}), or drop --resample",
@@ -1131,7 +1161,12 @@ impl Source for CsvSource {
         });
         match at {
             Some(line) => format!("{}:{line}", self.file),
-            None => format!("{}: experiment `{}`, sample {}", self.file, self.block.name, k + 1),
+            None => format!(
+                "{}: experiment `{}`, sample {}",
+                self.file,
+                self.block.name,
+                k + 1
+            ),
         }
     }
 }
@@ -1173,7 +1208,7 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
             },
             n_states: ir.states.len(),
             n_inputs: ir.inputs.len(),
-            n_rotation: ir.rotation_vars.len(),
+            n_rotation: measured_rotation(ir),
             n_comp: ir.components.len(),
             failure: std::sync::Mutex::new(None),
         })
@@ -1183,7 +1218,6 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
         notes: scanned.notes,
     })
 }
-
 
 /// The factor converting a signal's declared unit to the base unit (1 when
 /// none is declared).
@@ -1277,37 +1311,41 @@ fn sample_time(
 /// Unit check of a heading that integrates a yaw rate: the least-squares gain
 /// of `Δψ/h` on `r` (≈ 1 when consistent, ≈ 57.3 when ψ is in degrees and r
 /// in rad/s). `None` without a planar heading or with too little yaw motion.
-pub fn heading_gain(ir: &Ir, e: &Experiment) -> Option<f64> {
+pub fn heading_gain(ir: &Ir, e: &dyn Source) -> Option<f64> {
     let Rotation::Planar { integrates, .. } = &ir.rotation else {
         return None;
     };
-    let r = &e.states[*integrates];
+    let h = e.step();
     // A log may wrap its heading at ±π (radians) or ±180 (degrees), or not at
     // all. Fit the gain of Δψ/h on r under each hypothesis (removing whole
     // periods from every step) and keep the one that explains Δψ/h best: a
     // threshold on the step size would mistake large steps in degrees for
-    // wraps in radians.
-    let fit = |period: Option<f64>| -> Option<(f64, f64)> {
-        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-        for k in 1..e.heading.len().min(r.len()) {
-            let mut d = e.heading[k] - e.heading[k - 1];
-            if let Some(p) = period {
-                d -= p * (d / p).round();
+    // wraps in radians. One visit accumulates all three.
+    let periods = [None, Some(2.0 * std::f64::consts::PI), Some(360.0)];
+    let mut sums = [(0.0, 0.0, 0.0); 3];
+    let mut prev: Option<(f64, f64)> = None;
+    e.visit(&mut |row| {
+        let r = row.states.get(*integrates).copied().unwrap_or(0.0);
+        if let Some((psi1, r1)) = prev {
+            for (period, (sxy, sxx, syy)) in periods.iter().zip(sums.iter_mut()) {
+                let mut d = row.heading - psi1;
+                if let Some(p) = period {
+                    d -= p * (d / p).round();
+                }
+                let y = d / h;
+                *sxy += r1 * y;
+                *sxx += r1 * r1;
+                *syy += y * y;
             }
-            let y = d / e.h;
-            let x = r[k - 1];
-            sxy += x * y;
-            sxx += x * x;
-            syy += y * y;
         }
-        (sxx > 1e-12).then(|| {
+        prev = Some((row.heading, r));
+    });
+    sums.into_iter()
+        .filter(|(_, sxx, _)| *sxx > 1e-12)
+        .map(|(sxy, sxx, syy)| {
             let gain = sxy / sxx;
             (gain, syy - gain * sxy)
         })
-    };
-    [None, Some(2.0 * std::f64::consts::PI), Some(360.0)]
-        .into_iter()
-        .filter_map(fit)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(gain, _)| gain)
 }
@@ -1391,5 +1429,193 @@ mod tests {
         // Rows 0..6 sit on lines 2..8; the row after the gap is on line 9.
         assert_eq!(err.location, "d.csv:9:1 (time)");
         assert!(err.hint.contains("--time-tolerance") && err.hint.contains("--resample"));
+    }
+
+    fn error_of(text: &str) -> DataError {
+        parse_csv(
+            "b.csv",
+            text.as_bytes(),
+            &model("step 1.0"),
+            &LoadOptions::default(),
+        )
+        .err()
+        .unwrap_or_else(|| panic!("an error expected in:\n{text}"))
+    }
+
+    #[test]
+    fn blank_lines_are_counted_and_rows_keep_their_physical_line() {
+        let ir = model("step 1.0");
+        // Blank lines (empty, spaces, CRLF) before the header and between rows.
+        let mut text = String::from("\n  \ntime,u,r,delta\n");
+        text.push_str(&rows(0, 5));
+        text.push_str("\n \t \r\n");
+        text.push_str(&rows(5, 5));
+        let loaded = parse_csv_noted("b.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(loaded.notes.blank_lines, 4);
+        assert_eq!(loaded.experiments[0].len(), 10);
+        // Line 1, 2 blank, 3 header, 4..8 rows, 9 and 10 blank, 11.. rows.
+        text.push_str("10.0,1,x,35\n");
+        assert_eq!(error_of(&text).location, "b.csv:16:3 (r)");
+    }
+
+    #[test]
+    fn a_quoted_cell_holding_line_breaks_keeps_later_rows_on_their_line() {
+        let mut text = String::from("time,u,r,delta,note\n");
+        for k in 0..12 {
+            let note = if k == 3 {
+                "\"two\n# not a comment\n\nlines\""
+            } else {
+                "ok"
+            };
+            text.push_str(&format!("{k}.0,1,0.5,35,{note}\n"));
+        }
+        assert!(
+            parse_csv(
+                "q.csv",
+                text.as_bytes(),
+                &model("step 1.0"),
+                &LoadOptions::default()
+            )
+            .is_ok()
+        );
+        text.push_str("12.0,1,0.5,bad,ok\n");
+        // 1 header, rows 0..2 on 2..4, row 3 on 5..8, rows 4..11 on 9..16.
+        assert_eq!(error_of(&text).location, "b.csv:17:4 (delta)");
+    }
+
+    #[test]
+    fn crlf_line_ends_read_like_lf() {
+        let ir = model("step 1.0");
+        let text = format!("time,u,r,delta\n{}", rows(0, 12)).replace('\n', "\r\n");
+        let a = parse_csv("c.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let b = parse_csv(
+            "c.csv",
+            text.replace("\r\n", "\n").as_bytes(),
+            &ir,
+            &LoadOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn a_gross_outlier_is_located_by_row_and_a_zigzag_is_not_one() {
+        // A zigzag: rudder ±35, switching every 7 samples; u varies a little.
+        let zigzag = |spike: Option<(usize, f64)>| {
+            let mut text = String::from("time,u,r,delta\n");
+            for k in 0..200 {
+                let delta = if (k / 7) % 2 == 0 { 35.0 } else { -35.0 };
+                let mut u = 5.0 + 0.01 * (k % 13) as f64;
+                if let Some((at, v)) = spike
+                    && at == k
+                {
+                    u = v;
+                }
+                text.push_str(&format!("{k}.0,{u:e},{},{delta}\n", 0.01 * (k % 5) as f64));
+            }
+            text
+        };
+        let ir = model("step 1.0");
+        assert!(
+            parse_csv(
+                "z.csv",
+                zigzag(None).as_bytes(),
+                &ir,
+                &LoadOptions::default()
+            )
+            .is_ok()
+        );
+        for v in [1e6, -1e9, 1e300] {
+            let err = parse_csv(
+                "z.csv",
+                zigzag(Some((57, v))).as_bytes(),
+                &ir,
+                &LoadOptions::default(),
+            )
+            .err()
+            .unwrap_or_else(|| panic!("u = {v} is an outlier"));
+            assert_eq!(err.location, "z.csv:59:2 (u)", "{err}");
+            assert!(err.message.contains("gross outlier"), "{err}");
+        }
+        // Scale-free: the same data in other units give the same verdicts.
+        let scaled = |text: &str, f: f64| -> String {
+            text.lines()
+                .enumerate()
+                .map(|(i, l)| {
+                    if i == 0 {
+                        return format!("{l}\n");
+                    }
+                    let c: Vec<f64> = l.split(',').map(|x| x.parse().unwrap_or(0.0)).collect();
+                    format!("{},{:e},{:e},{}\n", c[0], c[1] * f, c[2] * f, c[3])
+                })
+                .collect()
+        };
+        for f in [1e-8, 1e-4, 1e4, 1e8] {
+            assert!(
+                parse_csv(
+                    "z.csv",
+                    scaled(&zigzag(None), f).as_bytes(),
+                    &ir,
+                    &LoadOptions::default()
+                )
+                .is_ok()
+            );
+            let err = parse_csv(
+                "z.csv",
+                scaled(&zigzag(Some((57, 1e6))), f).as_bytes(),
+                &ir,
+                &LoadOptions::default(),
+            )
+            .err()
+            .unwrap_or_else(|| panic!("the outlier at × {f}"));
+            assert_eq!(err.location, "z.csv:59:2 (u)");
+        }
+    }
+
+    #[test]
+    fn streaming_visits_give_the_values_of_loading_bit_for_bit() {
+        let ir = model("step 1.0");
+        let mut text = String::from("# head\ntime,u,r,delta,experiment\n");
+        for k in 0..40 {
+            let e = if k < 25 { "a" } else { "b" };
+            text.push_str(&format!(
+                "{k}.0,{},{},{},{e}\n",
+                1.0 / (k + 1) as f64,
+                0.1 * k as f64,
+                (k as f64).sin()
+            ));
+            if k % 9 == 0 {
+                text.push_str("\n# pause\n");
+            }
+        }
+        let path = std::env::temp_dir().join(format!("leeway-stream-{}.csv", std::process::id()));
+        std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let held = load_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        let streamed =
+            open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(held.len(), 2);
+        assert_eq!(streamed.sources.len(), 2);
+        for (h, s) in held.iter().zip(&streamed.sources) {
+            assert_eq!((h.name(), h.len(), h.step()), (s.name(), s.len(), s.step()));
+            let mut a: Vec<u64> = Vec::new();
+            let mut b: Vec<u64> = Vec::new();
+            h.visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+            // Twice: every visit re-reads.
+            for _ in 0..2 {
+                b.clear();
+                s.visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+                assert_eq!(a, b);
+            }
+            assert!(s.failure().is_none());
+        }
+        // Sample 3 of `b` (row k = 28) sits on line 36: 2 before the header,
+        // 28 rows, and 2 dropped lines after rows 0, 9, 18 and 27.
+        assert_eq!(
+            streamed.sources[1].locate(3),
+            format!("{}:{}", path.display(), 2 + 29 + 2 * 4)
+        );
+        let _ = std::fs::remove_file(&path);
     }
 }
