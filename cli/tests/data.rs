@@ -758,3 +758,105 @@ fn the_same_data_in_other_units_give_the_same_verdict() {
         }
     }
 }
+
+#[test]
+fn every_numeric_option_is_bounded_with_an_error_naming_it() {
+    let dir = Scratch::new("bounds");
+    let data = dir.write("d.csv", &estimation_csv(200, 1.0, 5));
+    let params = dir.write("p.json", &true_params());
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["reproduce", "--n", "10,1000000000000"], "--n"),
+        (vec!["reproduce", "--n", "1000001"], "--n"),
+        (vec!["reproduce", "--runs", "10001"], "--runs"),
+        (
+            vec!["reproduce", "--runs", "200", "--n", "1000000"],
+            "--runs",
+        ),
+        (vec!["reproduce", "--threads", "100000"], "--threads"),
+        (vec!["reproduce", "--threads", "0"], "--threads"),
+        (
+            vec![
+                "estimate",
+                SHIP,
+                "--data",
+                &data,
+                "--max-refinements",
+                "101",
+            ],
+            "--max-refinements",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--lags", "1001"],
+            "--lags",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--lags", "0"],
+            "--lags",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--step", "1e7"],
+            "--step",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--step", "1e-9"],
+            "--step",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--time-tolerance", "0.7"],
+            "--time-tolerance",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--resample", "1e300"],
+            "--resample",
+        ),
+        (
+            vec![
+                "validate", SHIP, "--params", &params, "--data", &data, "--step", "inf",
+            ],
+            "--step",
+        ),
+        (
+            vec![
+                "simulate", SHIP, "--params", &params, "--input", &data, "--x0", "u=1e13",
+            ],
+            "--x0",
+        ),
+        (
+            vec![
+                "simulate",
+                SHIP,
+                "--params",
+                &params,
+                "--input",
+                &data,
+                "--disturbance",
+                "north=1e300",
+            ],
+            "--disturbance",
+        ),
+    ];
+    for (args, option) in cases {
+        let started = std::time::Instant::now();
+        let o = leeway(&args);
+        no_panic(&o);
+        assert_eq!(code(&o), 2, "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(option), "{args:?}: {}", stderr(&o));
+        assert!(
+            started.elapsed().as_secs() < 10,
+            "{args:?} took {:?}",
+            started.elapsed()
+        );
+    }
+    // A resampling step at odds with the model's step is refused before any work.
+    let o = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &data,
+        "--step",
+        "1",
+        "--resample",
+        "1e-6",
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+}
