@@ -437,6 +437,13 @@ impl<R: std::io::BufRead> Filter<R> {
             if quotes % 2 == 1 {
                 self.in_quotes = !self.in_quotes;
             }
+            // CRLF outside quotes becomes " \n" (same length, so byte offsets
+            // hold; the space is trimmed): the csv reader then ends records
+            // at `\n` only and its positions count lines as an editor does.
+            let len = self.line.len();
+            if !self.in_quotes && self.line.ends_with(b"\r\n") {
+                self.line[len - 2] = b' ';
+            }
             return Ok(true);
         }
     }
@@ -572,7 +579,9 @@ fn parse_row(
 
 fn csv_builder() -> csv::ReaderBuilder {
     let mut b = csv::ReaderBuilder::new();
-    b.flexible(false).trim(csv::Trim::All);
+    b.flexible(false)
+        .trim(csv::Trim::All)
+        .terminator(csv::Terminator::Any(b'\n'));
     b
 }
 
@@ -1498,6 +1507,12 @@ mod tests {
         )
         .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(a, b);
+        // Rows keep their lines under CRLF (csv alone puts a record after a
+        // CRLF on the line before).
+        let bad = text.replacen("\r\n0.0,1,", "\r\n,1,", 1);
+        assert_eq!(error_of(&bad).location, "b.csv:2:1 (time)");
+        let bad = text.replace("5.0,1,0.5,35", "5.0,1,0.5,x");
+        assert_eq!(error_of(&bad).location, "b.csv:7:4 (delta)");
     }
 
     #[test]
