@@ -141,6 +141,13 @@ proptest! {
             .output()
             .expect("run leeway");
         let _ = std::fs::remove_file(&path);
+        if std::env::var_os("LEEWAY_LAYOUT_LOG").is_some() {
+            eprintln!(
+                "layout-case exit {} {} ms",
+                o.status.code().unwrap_or(-1),
+                started.elapsed().as_millis()
+            );
+        }
         let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
         prop_assert!(!stderr.contains("panicked"), "{}", stderr);
         let code = o.status.code().unwrap_or(-1);

@@ -551,13 +551,15 @@ fn cell(
 }
 
 /// Reads one record's signals into `buf` (declared units converted to the
-/// model's base units, once, here); returns its time stamp.
+/// model's base units, once, here); returns its time stamp when asked
+/// (visits after the validating pass do not need it).
 fn parse_row(
     file: &str,
     line: u64,
     record: &csv::ByteRecord,
     layout: &Layout,
     buf: &mut RowBuf,
+    with_time: bool,
 ) -> Result<Option<f64>, DataError> {
     for (role, i, name, factor) in &layout.cols {
         let v = cell(file, line, record, *i, name)? * factor;
@@ -570,10 +572,10 @@ fn parse_row(
         }
     }
     match layout.time_col {
-        Some(i) => Ok(Some(
+        Some(i) if with_time => Ok(Some(
             cell(file, line, record, i, "time")? * layout.time_factor,
         )),
-        None => Ok(None),
+        _ => Ok(None),
     }
 }
 
@@ -846,7 +848,7 @@ fn scan<R: std::io::BufRead>(
             .cloned()
             .unwrap_or_else(csv::Position::new);
         let line = reader.get_ref().physical_line(pos.line());
-        let t = parse_row(file, line, &record, &layout, &mut buf)?;
+        let t = parse_row(file, line, &record, &layout, &mut buf, true)?;
         let exp_name: &[u8] = match layout.exp_col {
             Some(i) => record.get(i).unwrap_or(b""),
             None => base_name.as_bytes(),
@@ -1134,7 +1136,7 @@ impl CsvSource {
                 + reader
                     .get_ref()
                     .physical_line(record.position().map_or(1, csv::Position::line));
-            if let Err(e) = parse_row(&self.file, line, &record, &self.layout, &mut buf) {
+            if let Err(e) = parse_row(&self.file, line, &record, &self.layout, &mut buf, false) {
                 return self.fail(changed(e.to_string()));
             }
             if !f(k, line, &buf.row()) {
