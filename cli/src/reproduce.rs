@@ -94,8 +94,8 @@ pub const MAX_THREADS: usize = 256;
 fn runs(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(v) if (1..=MAX_RUNS).contains(&v) => Ok(v),
-        Ok(_) => Err(format!("`{s}` is not in 1..={MAX_RUNS}")),
-        Err(_) => Err(format!("`{s}` is not a positive whole number")),
+        Ok(v) if v > MAX_RUNS => Err(format!("`{s}` is more than {MAX_RUNS} runs")),
+        _ => Err(format!("`{s}` is not a positive whole number")),
     }
 }
 
@@ -109,10 +109,10 @@ fn threads(s: &str) -> Result<usize, String> {
     let max = max_threads();
     match s.trim().parse::<usize>() {
         Ok(v) if (1..=max).contains(&v) => Ok(v),
-        Ok(_) => Err(format!(
-            "`{s}` is not in 1..={max} (8 threads per core of this machine, at most {MAX_THREADS})"
+        Ok(v) if v > max => Err(format!(
+            "`{s}` is more than {max} threads (8 per core of this machine, at most {MAX_THREADS})"
         )),
-        Err(_) => Err(format!("`{s}` is not a positive whole number")),
+        _ => Err(format!("`{s}` is not a positive whole number")),
     }
 }
 
