@@ -1635,4 +1635,42 @@ mod tests {
         );
         let _ = std::fs::remove_file(&path);
     }
+
+    #[test]
+    fn resampling_far_finer_than_the_log_is_refused_before_it_allocates() {
+        let ir = model("");
+        let text = format!("time,u,r,delta\n{}", rows(0, 12));
+        let options = LoadOptions {
+            resample: Some(1e-3),
+            ..LoadOptions::default()
+        };
+        let err = parse_csv("r.csv", text.as_bytes(), &ir, &options)
+            .err()
+            .unwrap_or_else(|| panic!("11001 samples from 12 rows is refused"));
+        assert_eq!(err.location, "r.csv:2");
+        assert!(err.message.contains("at most 100 per row"), "{err}");
+    }
+
+    #[test]
+    fn a_file_that_changes_between_passes_is_reported_not_misread() {
+        let ir = model("step 1.0");
+        let path = std::env::temp_dir().join(format!("leeway-changed-{}.csv", std::process::id()));
+        let text = format!("time,u,r,delta\n{}", rows(0, 20));
+        std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let streamed =
+            open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&path, format!("time,u,r,delta\n{}", rows(0, 5)))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut n = 0;
+        streamed.sources[0].visit(&mut |_| n += 1);
+        assert_eq!(n, 5);
+        let failure = streamed.sources[0]
+            .failure()
+            .unwrap_or_else(|| panic!("a failure"));
+        assert!(
+            failure.message.contains("changed while it was being read"),
+            "{failure}"
+        );
+        let _ = std::fs::remove_file(&path);
+    }
 }
