@@ -9,13 +9,13 @@ mod json;
 mod text;
 
 use crate::model::{
-    TimeArgs, heading_gains, heading_warnings, load, load_data, load_options, unit_warnings,
+    DataSet, TimeArgs, heading_gains, heading_warnings, load, load_options, open_data,
+    unit_warnings,
 };
 use crate::output::{Status, err, headline, out, print_json, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_runtime::{
-    Centring, Combine, Estimate, Initial, Instruments, Interpreter, Method, Options, Source,
-    estimate,
+    Centring, Combine, Estimate, Initial, Instruments, Interpreter, Method, Options, estimate,
 };
 use std::path::PathBuf;
 
@@ -62,10 +62,10 @@ pub struct EstimateArgs {
     #[arg(long)]
     pub strict: bool,
     /// Lags of the robust (long-run) covariance; at least 1 (the Euler residual is MA(1)).
-    #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..))]
+    #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=MAX_LAGS as i64))]
     pub lags: u16,
     /// Most re-simulations of the refined IV.
-    #[arg(long, value_name = "N", default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = 8, value_parser = refinements)]
     pub max_refinements: usize,
     /// Run the plain refined IV: do not stop a refinement whose simulation tracks
     /// the data markedly worse than an earlier iterate (docs/estimation.md).
@@ -141,10 +141,32 @@ pub enum CombineArg {
     Stacked,
 }
 
-/// A positive, finite number (`--step`).
+/// Most lags of the robust covariance (`--lags`): each costs one pass of
+/// O(n_ϑ²) work; an MA(1) residual needs one.
+pub const MAX_LAGS: u16 = 1000;
+/// Most re-simulations of the refined IV (`--max-refinements`): each re-reads
+/// the data; one or two give most of the gain.
+pub const MAX_REFINEMENTS: usize = 100;
+/// Sample times (`--step`, `--resample`) in seconds: from a microsecond to a
+/// day (11.6 days at most).
+pub const STEP_RANGE: (f64, f64) = (1e-6, 1e6);
+
+fn refinements(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if v <= MAX_REFINEMENTS => Ok(v),
+        Ok(_) => Err(format!("`{s}` is not in 0..={MAX_REFINEMENTS}")),
+        Err(_) => Err(format!("`{s}` is not a whole number")),
+    }
+}
+
+/// A sample time in seconds within [`STEP_RANGE`] (`--step`, `--resample`).
 pub fn positive(s: &str) -> Result<f64, String> {
-    match s.parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+    let (lo, hi) = STEP_RANGE;
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (lo..=hi).contains(&v) => Ok(v),
+        Ok(v) if v.is_finite() && v > 0.0 => Err(format!(
+            "`{s}` s is outside {lo:e}..={hi:e} seconds, the sample times leeway accepts"
+        )),
         _ => Err(format!("`{s}` is not a positive number of seconds")),
     }
 }
@@ -203,9 +225,10 @@ pub struct Outcome {
 /// Runs `leeway estimate`.
 pub fn run(args: &EstimateArgs) -> Status {
     let mut warnings = Vec::new();
-    let result = execute(args, &mut warnings);
+    let mut model = None;
+    let result = execute(args, &mut warnings, &mut model);
     if args.json {
-        print_json(&json::report(args, &result, warnings));
+        print_json(&json::report(args, model, &result, warnings));
     } else {
         let style = stderr_style();
         if let Ok(o) = &result {
@@ -230,38 +253,63 @@ pub fn run(args: &EstimateArgs) -> Status {
 }
 
 /// Warnings of the model, the data checks and the estimator go to `warnings`,
-/// in that order, also when a later step fails.
-fn execute(args: &EstimateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
+/// in that order, also when a later step fails; the model's name goes to
+/// `model` as soon as it compiles (the JSON names it also on a data error).
+fn execute(
+    args: &EstimateArgs,
+    warnings: &mut Vec<String>,
+    model_name: &mut Option<String>,
+) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, args.aggregate)?;
     let ir = loaded.ir;
+    *model_name = Some(ir.name.clone());
     let load_options = load_options(&ir, args.step, Some(&args.time))?;
     let nominal = match &args.nominal {
         Some(path) => Some(crate::params::read(path, &ir, "--nominal")?),
         None => None,
     };
-    let (experiments, data_notes) = load_data(&ir, &args.data, &load_options)?;
+    let (data, data_notes) = open_data(&ir, &args.data, &load_options)?;
+    let sources = data.sources();
     warnings.extend(loaded.warnings);
-    warnings.extend(unit_warnings(&ir, &experiments));
-    warnings.extend(heading_warnings(&ir, &experiments));
+    warnings.extend(unit_warnings(&ir, &sources));
+    let gains = heading_gains(&ir, &sources);
+    warnings.extend(heading_warnings(&ir, &gains));
     let model = Interpreter::new(ir.clone());
-    let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
-    let est = estimate(&model, &sources, &args.options(nominal))
-        .map_err(|e| Failure::from(Problem::estimate(&e)))?;
+    let result = estimate(&model, &sources, &args.options(nominal));
+    // A file that changed between passes voids whatever was computed.
+    if let Some(p) = data.failure() {
+        return Err(Failure::from(p));
+    }
+    let est = result.map_err(|e| Failure::from(Problem::estimate(&located(e, &data))))?;
     warnings.extend(est.warnings.iter().cloned());
     Ok(Outcome {
         model: ir.name.clone(),
-        experiments: experiments
+        experiments: sources
             .iter()
-            .map(|e| (e.name.clone(), e.len()))
+            .map(|e| (e.name().to_string(), e.len()))
             .collect(),
-        heading_gains: if matches!(ir.rotation, leeway_structure::ir::Rotation::Planar { .. }) {
-            heading_gains(&ir, &experiments)
-        } else {
-            Vec::new()
-        },
+        heading_gains: gains,
         estimate: est,
         data_notes,
         units: crate::model::unit_lines(&ir),
         data_units: ir.data_units.clone(),
     })
+}
+
+/// An estimator's error with the data's places: `too-few-samples` names every
+/// experiment with its file and sample count.
+fn located(mut e: leeway_runtime::EstimateError, data: &DataSet) -> leeway_runtime::EstimateError {
+    if e.code == "too-few-samples" {
+        let list: Vec<String> = data
+            .sources()
+            .iter()
+            .zip(data.files())
+            .map(|(s, f)| match f {
+                Some(f) => format!("`{}` in {f}: {} samples", s.name(), s.len()),
+                None => format!("`{}`: {} samples", s.name(), s.len()),
+            })
+            .collect();
+        e.message = format!("{} (experiments: {})", e.message, list.join("; "));
+    }
+    e
 }

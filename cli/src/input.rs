@@ -68,7 +68,20 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
                 )));
             }
             let v = match value.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() => v,
+                Ok(v) if v.is_finite() && v.abs() <= crate::model::MAX_VALUE => v,
+                Ok(v) if v.is_finite() => {
+                    return Err(Problem::error(
+                        "invalid-option",
+                        format!(
+                            "--x0 `{item}`: `{}` exceeds {:e} in magnitude",
+                            value.trim(),
+                            crate::model::MAX_VALUE
+                        ),
+                    )
+                    .help(
+                        "initial values are physical states; give them in the model's base units",
+                    ));
+                }
                 _ => {
                     return Err(Problem::error(
                         "invalid-option",

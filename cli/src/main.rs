@@ -30,7 +30,7 @@ use std::process::ExitCode;
 /// Identify grey-box models of vessels under wind and current.
 #[derive(Debug, Parser)]
 #[command(name = "leeway", version, about, long_about = None)]
-struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -57,7 +57,13 @@ fn main() -> ExitCode {
         Command::Estimate(args) => estimate::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::Validate(args) => validate::run(&args),
-        Command::Reproduce(args) => reproduce::run(&args),
+        Command::Reproduce(args) => {
+            // Bounds across options, reported like clap's own (exit 2).
+            if let Err(e) = reproduce::check_work(&args) {
+                e.exit();
+            }
+            reproduce::run(&args)
+        }
     };
     status.code()
 }

@@ -2,12 +2,19 @@
 //! the model, its data files and parameter files, with every problem located.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::Experiment;
-use leeway_runtime::data::{FileNotes, LoadOptions, heading_gain, load_csv_noted};
+use leeway_runtime::data::{
+    CsvSource, FileNotes, LoadOptions, heading_gain, load_csv_noted, open_csv,
+};
+use leeway_runtime::{Experiment, Source};
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
 use leeway_structure::{Options, compile};
 use std::path::{Path, PathBuf};
+
+/// Largest magnitude of a value given on the command line (`--x0`,
+/// `--disturbance`): squares of larger values approach f64's range inside
+/// the regressors.
+pub const MAX_VALUE: f64 = 1e12;
 
 /// A compiled model.
 #[derive(Clone, Debug)]
@@ -155,6 +162,71 @@ pub fn load_data(
     }
 }
 
+/// Experiments for an estimate: streamed from their files (re-read on every
+/// pass, flat memory in N), or held in memory under `--resample`, which
+/// interpolates over a whole experiment.
+pub enum DataSet {
+    /// Re-read per pass.
+    Streamed(Vec<CsvSource>),
+    /// Loaded (resampled).
+    Held(Vec<Experiment>),
+}
+
+impl DataSet {
+    /// Every experiment as a source, in file order.
+    pub fn sources(&self) -> Vec<&dyn Source> {
+        match self {
+            DataSet::Streamed(v) => v.iter().map(|e| e as &dyn Source).collect(),
+            DataSet::Held(v) => v.iter().map(|e| e as &dyn Source).collect(),
+        }
+    }
+    /// Each experiment's file, as named in messages (`None` in memory).
+    pub fn files(&self) -> Vec<Option<&str>> {
+        match self {
+            DataSet::Streamed(v) => v.iter().map(|e| Some(e.file())).collect(),
+            DataSet::Held(v) => v.iter().map(|_| None).collect(),
+        }
+    }
+    /// A problem met by a later pass (a file changed while being read).
+    pub fn failure(&self) -> Option<Problem> {
+        match self {
+            DataSet::Streamed(v) => v
+                .iter()
+                .find_map(CsvSource::failure)
+                .map(|e| Problem::data(&e)),
+            DataSet::Held(_) => None,
+        }
+    }
+}
+
+/// [`load_data`] for an estimate: streamed unless `--resample` is given.
+pub fn open_data(
+    ir: &Ir,
+    files: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(DataSet, Vec<FileNotes>), Failure> {
+    if options.resample.is_some() {
+        return load_data(ir, files, options).map(|(e, n)| (DataSet::Held(e), n));
+    }
+    let mut sources = Vec::new();
+    let mut notes = Vec::new();
+    let mut problems = Vec::new();
+    for path in files {
+        match open_csv(path, ir, options) {
+            Ok(f) => {
+                sources.extend(f.sources);
+                notes.push(f.notes);
+            }
+            Err(e) => problems.push(Problem::data(&e)),
+        }
+    }
+    if problems.is_empty() {
+        Ok((DataSet::Streamed(sources), notes))
+    } else {
+        Err(Failure::Problems(problems))
+    }
+}
+
 /// Below this relative step deviation, time stamps count as uniform: decimal
 /// stamps such as 0.1·k carry rounding of order 1e-15.
 const JITTER_FLOOR: f64 = 1e-6;
@@ -170,6 +242,14 @@ pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
                 f.file,
                 f.comment_lines,
                 if f.comment_lines == 1 { "" } else { "s" }
+            ));
+        }
+        if f.blank_lines > 0 {
+            lines.push(format!(
+                "{}: {} blank line{} skipped",
+                f.file,
+                f.blank_lines,
+                if f.blank_lines == 1 { "" } else { "s" }
             ));
         }
         for e in &f.experiments {
@@ -204,6 +284,8 @@ pub struct DataFileJson {
     pub file: String,
     /// Lines skipped as comments (`#`).
     pub comment_lines: usize,
+    /// Lines skipped as blank (only whitespace).
+    pub blank_lines: usize,
     /// Per experiment: rows read, largest relative step deviation, samples after resampling.
     pub experiments: Vec<DataExperimentJson>,
 }
@@ -228,6 +310,7 @@ pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
         .map(|f| DataFileJson {
             file: f.file.clone(),
             comment_lines: f.comment_lines,
+            blank_lines: f.blank_lines,
             experiments: f
                 .experiments
                 .iter()
@@ -280,20 +363,37 @@ const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
 /// angle logged in degrees: say so, with the declaration that fixes it. Only
 /// the name can tell an angle from a force of the same magnitude, so inputs
 /// named otherwise are left alone rather than warned about on every run.
-pub fn unit_warnings(ir: &Ir, experiments: &[Experiment]) -> Vec<String> {
+pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
     let mut out = Vec::new();
-    for (i, name) in ir.inputs.iter().enumerate() {
-        let column = leeway_runtime::data::column_name(ir, name).to_lowercase();
-        let angle_like = ANGLE_WORDS
-            .iter()
-            .any(|w| name.to_lowercase().contains(w) || column.contains(w));
-        if ir.data_units.contains_key(name) || !angle_like {
-            continue;
-        }
-        let peak = experiments
-            .iter()
-            .flat_map(|e| e.inputs.get(i).into_iter().flatten())
-            .fold(0.0f64, |m, v| m.max(v.abs()));
+    let angle_like: Vec<usize> = ir
+        .inputs
+        .iter()
+        .enumerate()
+        .filter(|(_, name)| {
+            let column = leeway_runtime::data::column_name(ir, name).to_lowercase();
+            let angle_like = ANGLE_WORDS
+                .iter()
+                .any(|w| name.to_lowercase().contains(w) || column.contains(w));
+            !ir.data_units.contains_key(*name) && angle_like
+        })
+        .map(|(i, _)| i)
+        .collect();
+    if angle_like.is_empty() {
+        return out;
+    }
+    // One visit of every experiment for all such inputs.
+    let mut peaks = vec![0.0f64; ir.inputs.len()];
+    for e in experiments {
+        e.visit(&mut |row| {
+            for &i in &angle_like {
+                if let Some(v) = row.inputs.get(i) {
+                    peaks[i] = peaks[i].max(v.abs());
+                }
+            }
+        });
+    }
+    for &i in &angle_like {
+        let (name, peak) = (&ir.inputs[i], peaks[i]);
         if peak > std::f64::consts::PI {
             out.push(format!(
                 "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
@@ -303,27 +403,31 @@ pub fn unit_warnings(ir: &Ir, experiments: &[Experiment]) -> Vec<String> {
     out
 }
 
-/// The heading's unit check (SPEC §5): a warning with the measured gain of
-/// `Δψ/h` on the yaw rate when it is off by more than 20 %.
-pub fn heading_warnings(ir: &Ir, experiments: &[Experiment]) -> Vec<String> {
-    let Some(heading) = heading_name(ir) else {
+/// The heading gain of every experiment (`None` without a planar heading or
+/// with too little yaw motion to tell), one visit each.
+pub fn heading_gains(ir: &Ir, experiments: &[&dyn Source]) -> Vec<(String, Option<f64>)> {
+    if heading_name(ir).is_none() {
         return Vec::new();
-    };
+    }
     experiments
         .iter()
-        .filter_map(|e| {
-            let gain = heading_gain(ir, e)?;
-            ((gain - 1.0).abs() > 0.2).then(|| heading_warning(ir, e, &heading, gain))
-        })
+        .map(|e| (e.name().to_string(), heading_gain(ir, *e)))
         .collect()
 }
 
-/// The heading gain of every experiment (`None` without a planar heading or
-/// with too little yaw motion to tell).
-pub fn heading_gains(ir: &Ir, experiments: &[Experiment]) -> Vec<(String, Option<f64>)> {
-    experiments
+/// The heading's unit check (SPEC §5): a warning with the measured gain of
+/// `Δψ/h` on the yaw rate when it is off by more than 20 %, from the gains of
+/// [`heading_gains`].
+pub fn heading_warnings(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<String> {
+    let Some(heading) = heading_name(ir) else {
+        return Vec::new();
+    };
+    gains
         .iter()
-        .map(|e| (e.name.clone(), heading_gain(ir, e)))
+        .filter_map(|(name, gain)| {
+            let gain = (*gain)?;
+            ((gain - 1.0).abs() > 0.2).then(|| heading_warning(ir, name, &heading, gain))
+        })
         .collect()
 }
 
@@ -336,7 +440,7 @@ fn heading_name(ir: &Ir) -> Option<String> {
     }
 }
 
-fn heading_warning(ir: &Ir, e: &Experiment, heading: &str, gain: f64) -> String {
+fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> String {
     let rate = match &ir.rotation {
         leeway_structure::ir::Rotation::Planar { integrates, .. } => {
             ir.states.get(*integrates).map_or("r", String::as_str)
@@ -351,8 +455,7 @@ fn heading_warning(ir: &Ir, e: &Experiment, heading: &str, gain: f64) -> String 
         "check the units and frame of both columns"
     };
     format!(
-        "experiment `{}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}",
-        e.name
+        "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
     )
 }
 
@@ -403,7 +506,13 @@ pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem
                 return Err(bad(format!("`{name}` is given twice")));
             }
             values[i] = match value.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() => v,
+                Ok(v) if v.is_finite() && v.abs() <= MAX_VALUE => v,
+                Ok(v) if v.is_finite() => {
+                    return Err(bad(format!(
+                        "`{}` exceeds {MAX_VALUE:e} in magnitude",
+                        value.trim()
+                    )));
+                }
                 _ => return Err(bad(format!("`{}` is not a finite number", value.trim()))),
             };
             given[i] = true;

@@ -9,8 +9,8 @@
 //! data, parameter-file or option error.
 
 use crate::model::{
-    TimeArgs, axis_label, data_files_json, data_notes, disturbance_values, heading_warnings, load,
-    load_data, load_options, unit_lines, unit_warnings,
+    TimeArgs, axis_label, data_files_json, data_notes, disturbance_values, heading_gains,
+    heading_warnings, load, load_data, load_options, unit_lines, unit_warnings,
 };
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
@@ -255,8 +255,12 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     }
     let dist = disturbance_values(&ir, &args.disturbances)?;
     let (experiments, notes) = load_data(&ir, &args.data, &options)?;
-    warnings.extend(unit_warnings(&ir, &experiments));
-    warnings.extend(heading_warnings(&ir, &experiments));
+    let sources: Vec<&dyn leeway_runtime::Source> = experiments
+        .iter()
+        .map(|e| e as &dyn leeway_runtime::Source)
+        .collect();
+    warnings.extend(unit_warnings(&ir, &sources));
+    warnings.extend(heading_warnings(&ir, &heading_gains(&ir, &sources)));
     let heading = match &ir.rotation {
         Rotation::Planar { heading, .. } => Some(heading.clone()),
         _ => None,

@@ -598,3 +598,265 @@ fn check_names_the_centring_that_keeps_a_constant() {
     let o = leeway(&["check", &model, "--centring", "none"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
 }
+
+/// Scales the named columns of a CSV text by `f` (other columns as written).
+fn scale_columns(text: &str, names: &[&str], f: f64) -> String {
+    let mut rows = rows_of(text);
+    let idx: Vec<usize> = names
+        .iter()
+        .filter_map(|n| rows[0].iter().position(|h| h == n))
+        .collect();
+    for row in rows.iter_mut().skip(1) {
+        for &i in &idx {
+            let v: f64 = row[i].parse().unwrap_or(f64::NAN);
+            row[i] = format!("{:e}", v * f);
+        }
+    }
+    join(&rows)
+}
+
+#[test]
+fn blank_lines_and_quoted_line_breaks_keep_physical_row_numbers() {
+    let dir = Scratch::new("blank-rows");
+    let text = estimation_csv(400, 1.0, 5);
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    // Rows 1..: a blank line after row 10 (physical line 12), a bad cell on
+    // the data row that was line 100 before it.
+    let bad: Vec<String> = lines[99].split(',').map(str::to_string).collect();
+    lines[99] = format!("{},zzz,{}", bad[0], bad[2..].join(","));
+    lines.insert(11, String::new());
+    lines.insert(12, "   ".to_string());
+    let data = dir.write("blank.csv", &(lines.join("\n") + "\n"));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("{data}:102:2 (u): `zzz` is not a number")),
+        "{}",
+        stderr(&o)
+    );
+    // Without the bad cell: the blank lines are reported, not skipped silently.
+    lines[101] = text.lines().nth(99).unwrap_or_default().to_string();
+    let data = dir.write("blank.csv", &(lines.join("\n") + "\n"));
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert_eq!(json(&o)["data_files"][0]["blank_lines"], 2);
+    // A quoted cell holding two line breaks on row 5 moves later rows down by two.
+    let mut rows = rows_of(&text);
+    for (k, row) in rows.iter_mut().enumerate() {
+        row.push(match k {
+            0 => "note".to_string(),
+            5 => "\"rudder\nstuck,\nfreed\"".to_string(),
+            _ => "ok".to_string(),
+        });
+    }
+    rows[50][3] = "oops".to_string();
+    let data = dir.write("quoted.csv", &join(&rows));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("{data}:53:4 (r): `oops` is not a number")),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn too_few_samples_names_the_file_and_json_names_the_model() {
+    let dir = Scratch::new("few");
+    let text = estimation_csv(400, 1.0, 5);
+    let short: String = text.lines().take(13).map(|l| format!("{l}\n")).collect();
+    let data = dir.write("short.csv", &short);
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    assert_eq!(code(&o), 2, "{}", stdout(&o));
+    let v = json(&o);
+    assert_eq!(v["model"], "Ship", "{v}");
+    let e = &v["errors"][0];
+    assert_eq!(e["code"], "too-few-samples", "{v}");
+    let message = e["message"].as_str().unwrap_or_default();
+    assert!(
+        message.contains(&format!("`short` in {data}: 12 samples")),
+        "{message}"
+    );
+}
+
+#[test]
+fn a_gross_outlier_is_named_by_row_not_taken_for_a_rank_verdict() {
+    let dir = Scratch::new("outlier");
+    let text = estimation_csv(2000, 1.0, 5);
+    for v in ["1e6", "-3e9", "1e300"] {
+        let mut rows = rows_of(&text);
+        rows[700][1] = v.to_string();
+        let data = dir.write("spike.csv", &join(&rows));
+        for method in ["ls", "iv3"] {
+            let o = leeway(&["estimate", SHIP, "--data", &data, "--method", method]);
+            assert_eq!(code(&o), 2, "{}", stderr(&o));
+            assert!(
+                stderr(&o).contains(&format!("{data}:701:2 (u): `u` = ")),
+                "{}",
+                stderr(&o)
+            );
+            assert!(stderr(&o).contains("gross outlier"), "{}", stderr(&o));
+        }
+    }
+    // A whole column so large that squares overflow: a located data error
+    // from the first pass, not "not excited".
+    let huge = scale_columns(&text, &["u"], 1e200);
+    let data = dir.write("huge.csv", &huge);
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("non-finite-data"), "{}", stderr(&o));
+    assert!(stderr(&o).contains(&format!("{data}:")), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("not excited"), "{}", stderr(&o));
+}
+
+#[test]
+fn the_same_data_in_other_units_give_the_same_verdict() {
+    let dir = Scratch::new("units-scale");
+    let text = estimation_csv(3000, 1.0, 5);
+    let velocities = ["u", "v", "wind_n", "wind_e"];
+    for method in ["ls", "iv3"] {
+        let reference = {
+            let data = dir.write("x1.csv", &text);
+            let o = leeway(&[
+                "estimate", SHIP, "--data", &data, "--method", method, "--json",
+            ]);
+            assert_eq!(code(&o), 0, "{}", stderr(&o));
+            json(&o)
+        };
+        let statuses = |v: &Value| -> Vec<String> {
+            v["parameters"]
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .map(|p| format!("{} {}", p["name"], p["status"]))
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        for f in [1e-8, 1e-4, 1e4, 1e8] {
+            let data = dir.write("scaled.csv", &scale_columns(&text, &velocities, f));
+            let o = leeway(&[
+                "estimate", SHIP, "--data", &data, "--method", method, "--json",
+            ]);
+            assert_eq!(code(&o), 0, "{method} × {f}: {}", stdout(&o));
+            let v = json(&o);
+            assert_eq!(statuses(&v), statuses(&reference), "{method} × {f}");
+            // Linear terms do not change with the velocity unit (for IV the
+            // instruments' nominal simulation is not rescaled, so only the
+            // verdict must match).
+            let tol = if method == "ls" { 1e-6 } else { 1e-2 };
+            for p in ["X_u", "Y_v", "N_r"] {
+                let (a, b) = (
+                    v["estimates"][p].as_f64().unwrap_or(f64::NAN),
+                    reference["estimates"][p].as_f64().unwrap_or(f64::NAN),
+                );
+                assert!(
+                    (a - b).abs() <= tol * b.abs().max(1e-3),
+                    "{method} × {f}: {p} {a} vs {b}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn every_numeric_option_is_bounded_with_an_error_naming_it() {
+    let dir = Scratch::new("bounds");
+    let data = dir.write("d.csv", &estimation_csv(200, 1.0, 5));
+    let params = dir.write("p.json", &true_params());
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["reproduce", "--n", "10,1000000000000"], "--n"),
+        (vec!["reproduce", "--n", "1000001"], "--n"),
+        (vec!["reproduce", "--runs", "10001"], "--runs"),
+        (
+            vec!["reproduce", "--runs", "200", "--n", "1000000"],
+            "--runs",
+        ),
+        (vec!["reproduce", "--threads", "100000"], "--threads"),
+        (vec!["reproduce", "--threads", "0"], "--threads"),
+        (
+            vec![
+                "estimate",
+                SHIP,
+                "--data",
+                &data,
+                "--max-refinements",
+                "101",
+            ],
+            "--max-refinements",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--lags", "1001"],
+            "--lags",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--lags", "0"],
+            "--lags",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--step", "1e7"],
+            "--step",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--step", "1e-9"],
+            "--step",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--time-tolerance", "0.7"],
+            "--time-tolerance",
+        ),
+        (
+            vec!["estimate", SHIP, "--data", &data, "--resample", "1e300"],
+            "--resample",
+        ),
+        (
+            vec![
+                "validate", SHIP, "--params", &params, "--data", &data, "--step", "inf",
+            ],
+            "--step",
+        ),
+        (
+            vec![
+                "simulate", SHIP, "--params", &params, "--input", &data, "--x0", "u=1e13",
+            ],
+            "--x0",
+        ),
+        (
+            vec![
+                "simulate",
+                SHIP,
+                "--params",
+                &params,
+                "--input",
+                &data,
+                "--disturbance",
+                "north=1e300",
+            ],
+            "--disturbance",
+        ),
+    ];
+    for (args, option) in cases {
+        let started = std::time::Instant::now();
+        let o = leeway(&args);
+        no_panic(&o);
+        assert_eq!(code(&o), 2, "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(option), "{args:?}: {}", stderr(&o));
+        assert!(
+            started.elapsed().as_secs() < 10,
+            "{args:?} took {:?}",
+            started.elapsed()
+        );
+    }
+    // A resampling step at odds with the model's step is refused before any work.
+    let o = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &data,
+        "--step",
+        "1",
+        "--resample",
+        "1e-6",
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+}

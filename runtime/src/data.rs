@@ -7,7 +7,11 @@
 //! ever visit samples in order, so their memory does not grow with N.
 //!
 //! CSV loading validates everything and names the place of every problem
-//! (`file:row:column`); nothing is silently dropped or reordered.
+//! (`file:row:column`, the physical line an editor shows, also after
+//! comment lines, blank lines and quoted cells holding line breaks); nothing
+//! is silently dropped or reordered. A file is either loaded into memory
+//! ([`load_csv`]) or, after the same validating pass, visited by re-reading
+//! it ([`open_csv`], [`CsvSource`]) so that memory stays flat in N.
 
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
@@ -42,6 +46,11 @@ pub trait Source: Sync {
     fn step(&self) -> f64;
     /// Calls `f` on every sample in order.
     fn visit(&self, f: &mut dyn FnMut(&Row));
+    /// Where sample `k` (from 0) comes from, for messages: `file:line` for a
+    /// file, the experiment and sample otherwise.
+    fn locate(&self, k: usize) -> String {
+        format!("experiment `{}`, sample {}", self.name(), k + 1)
+    }
 }
 
 /// An experiment held in memory, column by column.
@@ -274,6 +283,8 @@ pub struct FileNotes {
     pub file: String,
     /// Lines skipped because their first non-blank character is `#`.
     pub comment_lines: usize,
+    /// Lines skipped because they hold only whitespace.
+    pub blank_lines: usize,
     /// Per experiment of the file, in order.
     pub experiments: Vec<TimeNotes>,
 }
@@ -314,14 +325,14 @@ pub fn load_csv_noted(
     options: &LoadOptions,
 ) -> Result<LoadedFile, DataError> {
     let file = path.display().to_string();
-    let text = std::fs::read(path).map_err(|e| {
+    let handle = std::fs::File::open(path).map_err(|e| {
         DataError::new(
             &file,
             format!("cannot read the file: {e}"),
             "check the path passed to --data",
         )
     })?;
-    parse_csv_noted(&file, &text, ir, options)
+    read_noted(&file, std::io::BufReader::new(handle), ir, options)
 }
 
 /// Parses CSV text (see [`load_csv`]); `file` names it in errors.
@@ -334,59 +345,429 @@ pub fn parse_csv(
     parse_csv_noted(file, text, ir, options).map(|f| f.experiments)
 }
 
-/// Splits off comment lines (first non-blank character `#`, anywhere in the
-/// file, also before the header): the remaining text, and for each of its
-/// lines the physical line number in the file, so that every error still
-/// names the line an editor shows.
-fn strip_comments(text: &[u8]) -> (Vec<u8>, Vec<usize>, usize) {
-    let mut kept = Vec::with_capacity(text.len());
-    let mut lines = Vec::new();
-    let mut comments = 0;
-    for (i, line) in text.split_inclusive(|b| *b == b'\n').enumerate() {
-        let first = line.iter().find(|b| !b.is_ascii_whitespace());
-        if first == Some(&b'#') {
-            comments += 1;
-            continue;
-        }
-        kept.extend_from_slice(line);
-        lines.push(i + 1);
-    }
-    (kept, lines, comments)
+/// A reader that drops comment lines (first non-blank character `#`) and
+/// blank lines (only whitespace) outside quoted cells, counts them, and
+/// remembers where it dropped them, so that the csv reader's line and byte
+/// positions map back to the file's physical lines and bytes. Its memory is
+/// the current line plus one entry per run of dropped lines, never the file.
+struct Filter<R> {
+    inner: R,
+    line: Vec<u8>,
+    pos: usize,
+    in_quotes: bool,
+    /// Physical lines and bytes consumed, from where reading started.
+    physical: u64,
+    byte: u64,
+    /// Lines and bytes served to the csv reader.
+    kept: u64,
+    kept_bytes: u64,
+    /// `(first kept line after a drop, physical − kept)`, increasing.
+    line_jumps: Vec<(u64, u64)>,
+    /// `(kept byte of a line after a drop, physical − kept)`, increasing.
+    byte_jumps: Vec<(u64, u64)>,
+    comments: usize,
+    blanks: usize,
+    error: Option<std::io::Error>,
 }
 
-/// [`parse_csv`], also returning what was noted on the way ([`FileNotes`]).
-pub fn parse_csv_noted(
+impl<R: std::io::BufRead> Filter<R> {
+    fn new(inner: R) -> Filter<R> {
+        Filter {
+            inner,
+            line: Vec::new(),
+            pos: 0,
+            in_quotes: false,
+            physical: 0,
+            byte: 0,
+            kept: 0,
+            kept_bytes: 0,
+            line_jumps: Vec::new(),
+            byte_jumps: Vec::new(),
+            comments: 0,
+            blanks: 0,
+            error: None,
+        }
+    }
+    /// The physical line (from 1) of a kept line (from 1).
+    fn physical_line(&self, kept: u64) -> u64 {
+        let i = self.line_jumps.partition_point(|(k, _)| *k <= kept);
+        kept + if i == 0 { 0 } else { self.line_jumps[i - 1].1 }
+    }
+    /// The physical byte offset of a kept byte offset at the start of a line.
+    fn physical_byte(&self, kept: u64) -> u64 {
+        let i = self.byte_jumps.partition_point(|(k, _)| *k <= kept);
+        kept + if i == 0 { 0 } else { self.byte_jumps[i - 1].1 }
+    }
+    /// Reads the next kept line into `self.line`; false at the end.
+    fn next_line(&mut self) -> std::io::Result<bool> {
+        let mut dropped = false;
+        loop {
+            self.line.clear();
+            self.pos = 0;
+            let n = self.inner.read_until(b'\n', &mut self.line)?;
+            if n == 0 {
+                return Ok(false);
+            }
+            self.physical += 1;
+            let start = self.byte;
+            self.byte += n as u64;
+            if !self.in_quotes {
+                match self.line.iter().find(|b| !b.is_ascii_whitespace()) {
+                    None => {
+                        self.blanks += 1;
+                        dropped = true;
+                        continue;
+                    }
+                    Some(b'#') => {
+                        self.comments += 1;
+                        dropped = true;
+                        continue;
+                    }
+                    Some(_) => {}
+                }
+            }
+            self.kept += 1;
+            if dropped {
+                self.line_jumps.push((self.kept, self.physical - self.kept));
+                self.byte_jumps
+                    .push((self.kept_bytes, start - self.kept_bytes));
+            }
+            self.kept_bytes += n as u64;
+            let quotes = self.line.iter().filter(|b| **b == b'"').count();
+            if quotes % 2 == 1 {
+                self.in_quotes = !self.in_quotes;
+            }
+            // CRLF outside quotes becomes " \n" (same length, so byte offsets
+            // hold; the space is trimmed): the csv reader then ends records
+            // at `\n` only and its positions count lines as an editor does.
+            let len = self.line.len();
+            if !self.in_quotes && self.line.ends_with(b"\r\n") {
+                self.line[len - 2] = b' ';
+            }
+            return Ok(true);
+        }
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Filter<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos >= self.line.len() {
+            match self.next_line() {
+                Ok(true) => {}
+                Ok(false) => return Ok(0),
+                Err(e) => {
+                    // Kept for the message: csv would only say "I/O error".
+                    let kind = e.kind();
+                    self.error = Some(e);
+                    return Err(std::io::Error::from(kind));
+                }
+            }
+        }
+        let n = buf.len().min(self.line.len() - self.pos);
+        buf[..n].copy_from_slice(&self.line[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// Where each model signal is read from in a file's records.
+#[derive(Clone, Debug)]
+struct Layout {
+    /// `(role, column index, column name, unit factor)`.
+    cols: Vec<(Role, usize, String, f64)>,
+    time_col: Option<usize>,
+    time_factor: f64,
+    exp_col: Option<usize>,
+}
+
+/// The number of rotation columns read from data (a measured `R`), else 0.
+fn measured_rotation(ir: &Ir) -> usize {
+    if matches!(ir.rotation, Rotation::Measured { .. }) {
+        ir.rotation_vars.len()
+    } else {
+        0
+    }
+}
+
+/// One sample's values, reused from row to row.
+struct RowBuf {
+    states: Vec<f64>,
+    inputs: Vec<f64>,
+    rotation: Vec<f64>,
+    dist: Vec<f64>,
+    heading: f64,
+}
+
+impl RowBuf {
+    fn new(ir: &Ir) -> RowBuf {
+        RowBuf {
+            states: vec![0.0; ir.states.len()],
+            inputs: vec![0.0; ir.inputs.len()],
+            rotation: vec![0.0; measured_rotation(ir)],
+            dist: vec![0.0; ir.components.len()],
+            heading: 0.0,
+        }
+    }
+    fn row(&self) -> Row<'_> {
+        Row {
+            states: &self.states,
+            inputs: &self.inputs,
+            heading: self.heading,
+            rotation: &self.rotation,
+            disturbances: &self.dist,
+        }
+    }
+}
+
+/// One cell as a finite number, or the located reason it is not.
+fn cell(
     file: &str,
-    text: &[u8],
+    line: u64,
+    record: &csv::ByteRecord,
+    i: usize,
+    name: &str,
+) -> Result<f64, DataError> {
+    let bytes = record.get(i).unwrap_or(b"");
+    let raw = String::from_utf8_lossy(bytes);
+    let loc = || format!("{file}:{line}:{} ({name})", i + 1);
+    match std::str::from_utf8(bytes).ok().map(str::parse::<f64>) {
+        Some(Ok(v)) if v.is_finite() => Ok(v),
+        Some(Ok(_)) => Err(DataError::new(
+            loc(),
+            format!("`{raw}` is not a finite number"),
+            "NaN and infinite values are not accepted; remove or repair the sample, leeway does not interpolate",
+        )),
+        _ if bytes.is_empty() => Err(DataError::new(
+            loc(),
+            "empty cell",
+            "every sample needs every signal; leeway does not fill gaps",
+        )),
+        _ => Err(DataError::new(
+            loc(),
+            format!("`{}` is not a number", raw.escape_debug()),
+            "use a plain decimal such as 0.25 or -1.5e-3",
+        )),
+    }
+}
+
+/// Reads one record's signals into `buf` (declared units converted to the
+/// model's base units, once, here); returns its time stamp when asked
+/// (visits after the validating pass do not need it).
+fn parse_row(
+    file: &str,
+    line: u64,
+    record: &csv::ByteRecord,
+    layout: &Layout,
+    buf: &mut RowBuf,
+    with_time: bool,
+) -> Result<Option<f64>, DataError> {
+    for (role, i, name, factor) in &layout.cols {
+        let v = cell(file, line, record, *i, name)? * factor;
+        match role {
+            Role::State(s) => buf.states[*s] = v,
+            Role::Input(s) => buf.inputs[*s] = v,
+            Role::Heading => buf.heading = v,
+            Role::Rotation(s) => buf.rotation[*s] = v,
+            Role::Disturbance(s) => buf.dist[*s] = v,
+        }
+    }
+    match layout.time_col {
+        Some(i) if with_time => Ok(Some(
+            cell(file, line, record, i, "time")? * layout.time_factor,
+        )),
+        _ => Ok(None),
+    }
+}
+
+fn csv_builder() -> csv::ReaderBuilder {
+    let mut b = csv::ReaderBuilder::new();
+    b.flexible(false)
+        .trim(csv::Trim::All)
+        .terminator(csv::Terminator::Any(b'\n'));
+    b
+}
+
+/// The most extreme samples of each signal column kept for the outlier check.
+const EXTREMES: usize = 17;
+
+/// How far outside the range of the bulk of a column a sample must lie to be
+/// a gross outlier, in multiples of that range (see [`Extremes`]).
+pub const OUTLIER_FACTOR: f64 = 1e4;
+
+/// The [`EXTREMES`] largest and smallest values of one column, with their
+/// physical lines: enough to find isolated gross outliers in one pass and
+/// flat memory.
+///
+/// The rule: with `K = min(16, (n − 1)/4)`, the bulk of the column is the
+/// range `[lo, hi]` of its values without the `K` smallest and `K` largest;
+/// a value farther than [`OUTLIER_FACTOR`] × `(hi − lo)` outside it is a gross
+/// outlier. A real zigzag (the rudder switching between ±35°, held for many
+/// samples each time) has its extremes inside the bulk, and any physical
+/// excursion held for more than `K` samples is part of the bulk; a column
+/// constant apart from at most `K` samples (`hi = lo`) has no spread to
+/// compare with and is never flagged. The rule is scale-free: units do not
+/// change it.
+#[derive(Clone, Debug, Default)]
+struct Extremes {
+    /// Largest first.
+    high: Vec<(f64, u64)>,
+    /// Smallest first.
+    low: Vec<(f64, u64)>,
+}
+
+impl Extremes {
+    fn push(&mut self, v: f64, line: u64) {
+        if self.high.len() < EXTREMES || v > self.high[EXTREMES - 1].0 {
+            let i = self.high.partition_point(|(x, _)| *x >= v);
+            self.high.insert(i, (v, line));
+            self.high.truncate(EXTREMES);
+        }
+        if self.low.len() < EXTREMES || v < self.low[EXTREMES - 1].0 {
+            let i = self.low.partition_point(|(x, _)| *x <= v);
+            self.low.insert(i, (v, line));
+            self.low.truncate(EXTREMES);
+        }
+    }
+    /// The gross outliers among `n` samples: `(value, line, bulk lo, bulk hi)`.
+    fn outliers(&self, n: usize) -> Vec<(f64, u64, f64, f64)> {
+        let k = ((n.saturating_sub(1)) / 4).min(EXTREMES - 1);
+        if k == 0 || self.high.len() <= k || self.low.len() <= k {
+            return Vec::new();
+        }
+        let (lo, hi) = (self.low[k].0, self.high[k].0);
+        let w = hi - lo;
+        if w <= 0.0 || !w.is_finite() {
+            return Vec::new();
+        }
+        let far = OUTLIER_FACTOR * w;
+        let mut out: Vec<(f64, u64, f64, f64)> = self.high[..k]
+            .iter()
+            .filter(|(x, _)| *x - hi > far)
+            .chain(self.low[..k].iter().filter(|(x, _)| lo - *x > far))
+            .map(|(x, l)| (*x, *l, lo, hi))
+            .collect();
+        out.sort_by_key(|o| o.1);
+        out
+    }
+}
+
+/// What one pass found about one experiment's time stamps: enough to check
+/// them against the mean step without holding them.
+#[derive(Clone, Debug, Default)]
+struct TimeScan {
+    first: Option<f64>,
+    last: f64,
+    /// First non-increasing step: `(step, line)`.
+    backwards: Option<(f64, u64)>,
+    /// Smallest and largest step, first occurrence: `(step, line)`.
+    min: Option<(f64, u64)>,
+    max: Option<(f64, u64)>,
+}
+
+impl TimeScan {
+    fn push(&mut self, t: f64, line: u64) {
+        if self.first.is_some() {
+            let dt = t - self.last;
+            if dt <= 0.0 && self.backwards.is_none() {
+                self.backwards = Some((dt, line));
+            }
+            if self.min.is_none_or(|(m, _)| dt < m) {
+                self.min = Some((dt, line));
+            }
+            if self.max.is_none_or(|(m, _)| dt > m) {
+                self.max = Some((dt, line));
+            }
+        } else {
+            self.first = Some(t);
+        }
+        self.last = t;
+    }
+}
+
+/// One experiment of a file as the validating pass found it: what visiting
+/// it again needs, and what was noted.
+#[derive(Clone, Debug)]
+pub struct Block {
+    /// The experiment's name.
+    pub name: String,
+    /// Physical byte offset of its first row.
+    pub start: u64,
+    /// Physical line of its first row.
+    pub first_line: u64,
+    /// Rows (samples).
+    pub rows: usize,
+    /// Sample time.
+    pub h: f64,
+    times: TimeScan,
+    extremes: Vec<Extremes>,
+}
+
+/// A validated file: its experiments' blocks and the notes.
+#[derive(Clone, Debug)]
+struct Scanned {
+    header_line: u64,
+    layout: Layout,
+    blocks: Vec<Block>,
+    notes: FileNotes,
+}
+
+/// The validating pass over one file: every check (cells, header, columns,
+/// units, experiments contiguous, time stamps, gross outliers), in one read
+/// with reused buffers; `sink(block, row, time)` sees every sample.
+fn scan<R: std::io::BufRead>(
+    file: &str,
+    input: R,
     ir: &Ir,
     options: &LoadOptions,
-) -> Result<LoadedFile, DataError> {
-    let (text, physical, comment_lines) = strip_comments(text);
-    // csv counts lines of the text without comments, from 1; map them back.
-    let line_of = |kept_line: u64| -> usize {
-        usize::try_from(kept_line)
-            .ok()
-            .and_then(|l| physical.get(l.checked_sub(1)?).copied())
-            .unwrap_or_else(|| physical.last().map_or(1, |l| l + 1))
-    };
-    let header_line = line_of(1);
-    let mut reader = csv::ReaderBuilder::new()
+    sink: &mut dyn FnMut(usize, &Row, Option<f64>),
+) -> Result<Scanned, DataError> {
+    let mut reader = csv_builder()
         .has_headers(true)
-        .flexible(false)
-        .trim(csv::Trim::All)
-        .from_reader(text.as_slice());
-    let headers: Vec<String> = reader
-        .headers()
-        .map_err(|e| {
-            DataError::new(
-                format!("{file}:{header_line}"),
+        .from_reader(Filter::new(input));
+    let io_error = |r: &csv::Reader<Filter<R>>, e: &csv::Error| -> Option<DataError> {
+        if let csv::ErrorKind::Io(io) = e.kind() {
+            let why = r
+                .get_ref()
+                .error
+                .as_ref()
+                .map_or(io.to_string(), ToString::to_string);
+            return Some(DataError::new(
+                file,
+                format!("cannot read the file: {why}"),
+                "check the path passed to --data",
+            ));
+        }
+        None
+    };
+    let headers: Vec<String> = match reader.byte_headers() {
+        Ok(h) => h
+            .iter()
+            .map(|c| String::from_utf8_lossy(c).into_owned())
+            .collect(),
+        Err(e) => {
+            if let Some(d) = io_error(&reader, &e) {
+                return Err(d);
+            }
+            let line = reader.get_ref().physical_line(1);
+            return Err(DataError::new(
+                format!("{file}:{line}"),
                 format!("cannot read the header row: {e}"),
                 "the first row names the columns",
-            )
-        })?
-        .iter()
-        .map(str::to_string)
-        .collect();
+            ));
+        }
+    };
+    let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
+        reader.get_ref().physical + 1
+    } else {
+        reader.get_ref().physical_line(1)
+    };
+    if reader.get_ref().kept == 0 {
+        return Err(DataError::new(
+            format!("{file}:{header_line}"),
+            "the file has no header row (it is empty, or only comments and blank lines)",
+            "the first row names the columns",
+        ));
+    }
     let find = |name: &str| headers.iter().position(|h| h == name);
     for (i, h) in headers.iter().enumerate() {
         if let Some(j) = headers[..i].iter().position(|g| g == h) {
@@ -423,156 +804,230 @@ pub fn parse_csv_noted(
             }
         }
     }
-    let time_col = find(&column_name(ir, "time"));
-    let time_factor = unit_factor(ir, "time");
-    let exp_col = find(&column_name(ir, "experiment"));
+    let layout = Layout {
+        cols,
+        time_col: find(&column_name(ir, "time")),
+        time_factor: unit_factor(ir, "time"),
+        exp_col: find(&column_name(ir, "experiment")),
+    };
     let base_name = Path::new(file)
         .file_stem()
         .map_or(file.to_string(), |s| s.to_string_lossy().to_string());
-    // Each experiment with its time stamps and the physical line of every row.
-    let mut experiments: Vec<(Experiment, Vec<f64>, Vec<usize>)> = Vec::new();
-    let mut finished: Vec<String> = Vec::new();
-    let n_comp = ir.components.len();
-    let mut states = vec![0.0; ir.states.len()];
-    let mut inputs = vec![0.0; ir.inputs.len()];
-    let mut rotation = vec![0.0; ir.rotation_vars.len()];
-    let mut dist = vec![0.0; n_comp];
-    let mut heading = 0.0;
-    let mut next_line = header_line + 1;
-    for record in reader.records() {
-        let record = record.map_err(|e| {
-            let at = e.position().map_or(next_line, |p| line_of(p.line()));
-            DataError::new(
-                format!("{file}:{at}"),
-                format!("malformed row: {e}"),
-                "every row needs as many cells as the header",
-            )
-        })?;
-        let line = record.position().map_or(next_line, |p| line_of(p.line()));
-        next_line = line + 1;
-        let cell = |i: usize, name: &str| -> Result<f64, DataError> {
-            let raw = record.get(i).unwrap_or("");
-            let loc = format!("{file}:{line}:{} ({name})", i + 1);
-            match raw.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                Ok(_) => Err(DataError::new(
-                    loc,
-                    format!("`{raw}` is not a finite number"),
-                    "NaN and infinite values are not accepted; remove or repair the sample, leeway does not interpolate",
-                )),
-                Err(_) if raw.is_empty() => Err(DataError::new(
-                    loc,
-                    "empty cell",
-                    "every sample needs every signal; leeway does not fill gaps",
-                )),
-                Err(_) => Err(DataError::new(
-                    loc,
-                    format!("`{raw}` is not a number"),
-                    "use a plain decimal such as 0.25 or -1.5e-3",
-                )),
-            }
-        };
-        for (role, i, name, factor) in &cols {
-            // Declared units are converted here, once, to the model's base units.
-            let v = cell(*i, name)? * factor;
-            match role {
-                Role::State(s) => states[*s] = v,
-                Role::Input(s) => inputs[*s] = v,
-                Role::Heading => heading = v,
-                Role::Rotation(s) => rotation[*s] = v,
-                Role::Disturbance(s) => dist[*s] = v,
+    let mut blocks: Vec<Block> = Vec::new();
+    let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
+    let mut current: Option<Vec<u8>> = None;
+    let mut buf = RowBuf::new(ir);
+    let mut record = csv::ByteRecord::new();
+    let n_cols = layout.cols.len();
+    loop {
+        match reader.read_byte_record(&mut record) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                if let Some(d) = io_error(&reader, &e) {
+                    return Err(d);
+                }
+                let at = e.position().map_or(reader.get_ref().physical, |p| {
+                    reader.get_ref().physical_line(p.line())
+                });
+                let what = match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
+                    _ => format!("malformed row: {e}"),
+                };
+                return Err(DataError::new(
+                    format!("{file}:{at}"),
+                    what,
+                    "every row needs as many cells as the header",
+                ));
             }
         }
-        let exp_name = match exp_col {
-            Some(i) => record.get(i).unwrap_or("").to_string(),
-            None => base_name.clone(),
+        let pos = record
+            .position()
+            .cloned()
+            .unwrap_or_else(csv::Position::new);
+        let line = reader.get_ref().physical_line(pos.line());
+        let t = parse_row(file, line, &record, &layout, &mut buf, true)?;
+        let exp_name: &[u8] = match layout.exp_col {
+            Some(i) => record.get(i).unwrap_or(b""),
+            None => base_name.as_bytes(),
         };
-        let t = match time_col {
-            Some(i) => Some(cell(i, "time")? * time_factor),
-            None => None,
-        };
-        let start_new = experiments
-            .last()
-            .is_none_or(|(e, _, _)| e.name != exp_name);
-        if start_new {
-            if finished.contains(&exp_name)
-                || experiments.iter().any(|(e, _, _)| e.name == exp_name)
-            {
+        if current.as_deref() != Some(exp_name) {
+            let name = String::from_utf8_lossy(exp_name).into_owned();
+            if finished.contains(exp_name) {
                 return Err(DataError::new(
                     format!(
                         "{file}:{line}:{} (experiment)",
-                        exp_col.map_or(0, |i| i + 1)
+                        layout.exp_col.map_or(0, |i| i + 1)
                     ),
-                    format!("experiment `{exp_name}` resumes after another experiment started"),
+                    format!("experiment `{name}` resumes after another experiment started"),
                     "keep the rows of one experiment together, in time order",
                 ));
             }
-            if let Some((e, _, _)) = experiments.last() {
-                finished.push(e.name.clone());
+            if let Some(c) = current.take() {
+                finished.insert(c);
             }
-            experiments.push((Experiment::new(ir, &exp_name, 0.0), Vec::new(), Vec::new()));
+            current = Some(exp_name.to_vec());
+            blocks.push(Block {
+                name,
+                start: reader.get_ref().physical_byte(pos.byte()),
+                first_line: line,
+                rows: 0,
+                h: 0.0,
+                times: TimeScan::default(),
+                extremes: vec![Extremes::default(); n_cols + 1],
+            });
         }
-        if let Some((e, times, lines)) = experiments.last_mut() {
-            e.push(
-                ir,
-                &Row {
-                    states: &states,
-                    inputs: &inputs,
-                    heading,
-                    rotation: &rotation,
-                    disturbances: &dist,
-                },
-            );
-            if let Some(t) = t {
-                times.push(t);
-            }
-            lines.push(line);
+        let b = blocks.len() - 1;
+        let block = &mut blocks[b];
+        block.rows += 1;
+        if let Some(t) = t {
+            block.times.push(t, line);
         }
+        for (j, (role, ..)) in layout.cols.iter().enumerate() {
+            let v = match role {
+                Role::State(s) => buf.states[*s],
+                Role::Input(s) => buf.inputs[*s],
+                Role::Heading => buf.heading,
+                Role::Rotation(s) => buf.rotation[*s],
+                Role::Disturbance(s) => buf.dist[*s],
+            };
+            block.extremes[j].push(v, line);
+        }
+        sink(b, &buf.row(), t);
     }
-    if experiments.is_empty() {
+    let filter = reader.get_ref();
+    let mut notes = FileNotes {
+        file: file.to_string(),
+        comment_lines: filter.comments,
+        blank_lines: filter.blanks,
+        experiments: Vec::new(),
+    };
+    if blocks.is_empty() {
         return Err(DataError::new(
             format!("{file}:{}", header_line + 1),
             "the file has a header but no samples",
             "record at least a few hundred samples per experiment",
         ));
     }
-    let mut out = Vec::new();
-    let mut notes = FileNotes {
-        file: file.to_string(),
-        comment_lines,
-        experiments: Vec::new(),
-    };
-    for (mut e, times, lines) in experiments {
-        let first_line = lines.first().copied().unwrap_or(header_line + 1);
-        let n = e.len();
+    for block in &mut blocks {
+        let n = block.rows;
         if n < MIN_SAMPLES {
             return Err(DataError::new(
-                format!("{file}:{first_line}"),
+                format!("{file}:{}", block.first_line),
                 format!(
                     "experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed",
-                    e.name
+                    block.name
                 ),
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
-        let time_column = time_col.map_or(0, |c| c + 1);
-        let (h, deviation) = sample_time(file, ir, &times, &lines, time_column, options)?;
-        e.h = h;
-        let mut time_notes = TimeNotes {
-            experiment: e.name.clone(),
+        for (j, (_, i, name, _)) in layout.cols.iter().enumerate() {
+            let found = block.extremes[j].outliers(n);
+            if let Some((v, line, lo, hi)) = found.first() {
+                let more = match found.len() - 1 {
+                    0 => String::new(),
+                    m => format!(" ({m} more in this column)"),
+                };
+                return Err(DataError::new(
+                    format!("{file}:{line}:{} ({name})", i + 1),
+                    format!(
+                        "`{name}` = {v:e} is a gross outlier: the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away{more}",
+                        block.name,
+                        if *v > *hi {
+                            (v - hi) / (hi - lo)
+                        } else {
+                            (lo - v) / (hi - lo)
+                        }
+                    ),
+                    format!(
+                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column is taken for a logging error"
+                    ),
+                ));
+            }
+        }
+        let time_column = layout.time_col.map_or(0, |c| c + 1);
+        let (h, deviation) = sample_time(file, ir, block, time_column, options)?;
+        block.h = h;
+        notes.experiments.push(TimeNotes {
+            experiment: block.name.clone(),
             rows: n,
             max_step_deviation: deviation,
             resampled: None,
-        };
+        });
+    }
+    Ok(Scanned {
+        header_line,
+        layout,
+        blocks,
+        notes,
+    })
+}
+
+/// Most samples `--resample` may make per row read: a finer grid only
+/// interpolates, and memory would follow the grid.
+pub const MAX_RESAMPLE_RATIO: f64 = 100.0;
+
+/// [`parse_csv`], also returning what was noted on the way ([`FileNotes`]).
+pub fn parse_csv_noted(
+    file: &str,
+    text: &[u8],
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    read_noted(file, text, ir, options)
+}
+
+/// Loads a file into memory through the validating pass.
+fn read_noted<R: std::io::BufRead>(
+    file: &str,
+    input: R,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    let mut held: Vec<(Experiment, Vec<f64>)> = Vec::new();
+    let scanned = scan(file, input, ir, options, &mut |b, row, t| {
+        if held.len() <= b {
+            held.push((Experiment::new(ir, "", 0.0), Vec::new()));
+        }
+        let (e, times) = &mut held[b];
+        e.push(ir, row);
+        if let Some(t) = t {
+            times.push(t);
+        }
+    })?;
+    let mut notes = scanned.notes;
+    let mut out = Vec::new();
+    for ((mut e, times), (block, time_notes)) in held
+        .into_iter()
+        .zip(scanned.blocks.iter().zip(notes.experiments.iter_mut()))
+    {
+        e.name = block.name.clone();
+        e.h = block.h;
         if let Some(step) = options.resample {
-            if times.len() != n {
+            let first_line = block.first_line;
+            if times.len() != e.len() {
                 return Err(DataError::new(
-                    format!("{file}:{header_line}"),
+                    format!("{file}:{}", scanned.header_line),
                     "--resample needs a time column, and the file has none",
                     format!(
                         "add a `{}` column of time stamps (or map one with data {{ time = \"<column>\" }}), or drop --resample",
                         column_name(ir, "time")
                     ),
+                ));
+            }
+            let span = times[times.len() - 1] - times[0];
+            let count = span / step + 1.0;
+            if count > MAX_RESAMPLE_RATIO * e.len() as f64 {
+                return Err(DataError::new(
+                    format!("{file}:{first_line}"),
+                    format!(
+                        "--resample {step} would make {count:.0} samples of experiment `{}` from its {} rows; at most {MAX_RESAMPLE_RATIO} per row",
+                        e.name,
+                        e.len()
+                    ),
+                    "choose a resampling step near the logger's own step",
                 ));
             }
             e = crate::resample::resample(ir, &e, &times, step);
@@ -589,12 +1044,189 @@ pub fn parse_csv_noted(
             }
             time_notes.resampled = Some(e.len());
         }
-        notes.experiments.push(time_notes);
         out.push(e);
     }
     Ok(LoadedFile {
         experiments: out,
         notes,
+    })
+}
+
+/// An experiment of a CSV file visited by re-reading the file: each
+/// [`Source::visit`] seeks to the experiment's first row and parses its rows
+/// again with the same code as the validating pass (so values are
+/// bit-identical to loading into memory), in flat memory whatever N.
+#[derive(Debug)]
+pub struct CsvSource {
+    path: std::path::PathBuf,
+    file: String,
+    layout: Layout,
+    block: Block,
+    n_states: usize,
+    n_inputs: usize,
+    n_rotation: usize,
+    n_comp: usize,
+    /// A problem met while re-reading (the file changed or vanished between
+    /// passes); visiting then stops short.
+    failure: std::sync::Mutex<Option<DataError>>,
+}
+
+impl CsvSource {
+    /// The experiment's block (name, first row, rows, step).
+    pub fn block(&self) -> &Block {
+        &self.block
+    }
+    /// The file as named in messages.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+    /// A problem met by a later pass, if any (the file changed between passes).
+    pub fn failure(&self) -> Option<DataError> {
+        self.failure.lock().ok().and_then(|f| f.clone())
+    }
+    fn fail(&self, e: DataError) {
+        if let Ok(mut f) = self.failure.lock()
+            && f.is_none()
+        {
+            *f = Some(e);
+        }
+    }
+    /// Re-reads the rows, `f(index, physical line, row)` on each; stops at
+    /// the first problem (recorded) or when `f` returns false.
+    fn read(&self, f: &mut dyn FnMut(usize, u64, &Row) -> bool) {
+        use std::io::{Seek, SeekFrom};
+        let changed = |why: String| {
+            DataError::new(
+                &self.file,
+                format!("the file changed while it was being read: {why}"),
+                "estimate from a file that is not being written to (copy it first)",
+            )
+        };
+        let mut handle = match std::fs::File::open(&self.path) {
+            Ok(h) => h,
+            Err(e) => return self.fail(changed(e.to_string())),
+        };
+        if let Err(e) = handle.seek(SeekFrom::Start(self.block.start)) {
+            return self.fail(changed(e.to_string()));
+        }
+        let input = std::io::BufReader::with_capacity(1 << 16, handle);
+        let mut reader = csv_builder()
+            .has_headers(false)
+            .from_reader(Filter::new(input));
+        let mut record = csv::ByteRecord::new();
+        let mut buf = RowBuf {
+            states: vec![0.0; self.n_states],
+            inputs: vec![0.0; self.n_inputs],
+            rotation: vec![0.0; self.n_rotation],
+            dist: vec![0.0; self.n_comp],
+            heading: 0.0,
+        };
+        for k in 0..self.block.rows {
+            match reader.read_byte_record(&mut record) {
+                Ok(true) => {}
+                Ok(false) => {
+                    return self.fail(changed(format!(
+                        "experiment `{}` ended after {k} of its {} rows",
+                        self.block.name, self.block.rows
+                    )));
+                }
+                Err(e) => return self.fail(changed(e.to_string())),
+            }
+            let line = self.block.first_line - 1
+                + reader
+                    .get_ref()
+                    .physical_line(record.position().map_or(1, csv::Position::line));
+            if let Err(e) = parse_row(&self.file, line, &record, &self.layout, &mut buf, false) {
+                return self.fail(changed(e.to_string()));
+            }
+            if !f(k, line, &buf.row()) {
+                return;
+            }
+        }
+    }
+}
+
+impl Source for CsvSource {
+    fn name(&self) -> &str {
+        &self.block.name
+    }
+    fn len(&self) -> usize {
+        self.block.rows
+    }
+    fn step(&self) -> f64 {
+        self.block.h
+    }
+    fn visit(&self, f: &mut dyn FnMut(&Row)) {
+        self.read(&mut |_, _, row| {
+            f(row);
+            true
+        });
+    }
+    fn locate(&self, k: usize) -> String {
+        let mut at = None;
+        self.read(&mut |i, line, _| {
+            if i == k {
+                at = Some(line);
+            }
+            i < k
+        });
+        match at {
+            Some(line) => format!("{}:{line}", self.file),
+            None => format!(
+                "{}: experiment `{}`, sample {}",
+                self.file,
+                self.block.name,
+                k + 1
+            ),
+        }
+    }
+}
+
+/// A validated file visited in passes: one [`CsvSource`] per experiment.
+#[derive(Debug)]
+pub struct StreamedFile {
+    /// The experiments, in file order.
+    pub sources: Vec<CsvSource>,
+    /// Comment and blank lines, time-stamp jitter.
+    pub notes: FileNotes,
+}
+
+/// Opens a CSV file for streaming: one validating pass (every check of
+/// [`load_csv`]), then each experiment is re-read on every visit. Memory is
+/// flat in the number of rows. `--resample` is not streamed: use
+/// [`load_csv_noted`] for it.
+pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
+    let file = path.display().to_string();
+    let handle = std::fs::File::open(path).map_err(|e| {
+        DataError::new(
+            &file,
+            format!("cannot read the file: {e}"),
+            "check the path passed to --data",
+        )
+    })?;
+    let input = std::io::BufReader::with_capacity(1 << 16, handle);
+    let scanned = scan(&file, input, ir, options, &mut |_, _, _| {})?;
+    let sources = scanned
+        .blocks
+        .into_iter()
+        .map(|block| CsvSource {
+            path: path.to_path_buf(),
+            file: file.clone(),
+            layout: scanned.layout.clone(),
+            block: Block {
+                extremes: Vec::new(),
+                ..block
+            },
+            n_states: ir.states.len(),
+            n_inputs: ir.inputs.len(),
+            n_rotation: measured_rotation(ir),
+            n_comp: ir.components.len(),
+            failure: std::sync::Mutex::new(None),
+        })
+        .collect();
+    Ok(StreamedFile {
+        sources,
+        notes: scanned.notes,
     })
 }
 
@@ -609,18 +1241,19 @@ fn unit_factor(ir: &Ir, signal: &str) -> f64 {
 /// The sample time of one experiment and the largest relative deviation of
 /// its steps from it (`None` without time stamps). The nominal step is the
 /// mean step; every step must lie within `options.time_tolerance` of it, in
-/// relative terms. `lines` are the rows' physical line numbers.
+/// relative terms. The worst step is the smallest or the largest, which the
+/// validating pass kept with their lines.
 fn sample_time(
     file: &str,
     ir: &Ir,
-    times: &[f64],
-    lines: &[usize],
+    block: &Block,
     time_column: usize,
     options: &LoadOptions,
 ) -> Result<(f64, Option<f64>), DataError> {
     let declared = ir.step.or(options.step);
-    let first_line = lines.first().copied().unwrap_or(0);
-    if times.len() < 2 {
+    let first_line = block.first_line;
+    let t = &block.times;
+    let (Some(first), Some(min), Some(max)) = (t.first, t.min, t.max) else {
         let h = declared.ok_or_else(|| {
             DataError::new(
                 file,
@@ -629,44 +1262,35 @@ fn sample_time(
             )
         })?;
         return Ok((h, None));
-    }
+    };
     // The nominal step is the mean step, the best estimate of a uniform h
     // under jitter. A gap shifts the mean of a short record, so that good
     // steps may fall outside the tolerance too: the error names the worst
     // step, which is the gap.
-    let mean = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
+    let mean = (t.last - first) / (block.rows - 1) as f64;
     let tol = options.time_tolerance;
-    let at = |k: usize| {
-        let line = lines.get(k + 1).copied().unwrap_or(first_line);
-        format!("{file}:{line}:{time_column} (time)")
-    };
+    let at = |line: u64| format!("{file}:{line}:{time_column} (time)");
     let hint = "leeway needs uniformly sampled data: a larger jitter may be allowed with --time-tolerance, \
                 --resample H interpolates onto a uniform grid, or split the log into experiments at the gaps";
-    if let Some((k, dt)) = times
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .enumerate()
-        .find(|(_, dt)| *dt <= 0.0)
-    {
+    if let Some((dt, line)) = t.backwards {
         return Err(DataError::new(
-            at(k),
+            at(line),
             format!("time does not increase: step {dt} s here"),
             hint,
         ));
     }
-    let (worst_k, worst) = times
-        .windows(2)
-        .map(|w| ((w[1] - w[0]) - mean).abs() / mean)
-        .enumerate()
-        .fold(
-            (0, 0.0f64),
-            |best, (k, d)| if d > best.1 { (k, d) } else { best },
-        );
+    let dev = |dt: f64| (dt - mean).abs() / mean;
+    // The first of the two on a tie, as a scan in file order would find it.
+    let (dmin, dmax) = (dev(min.0), dev(max.0));
+    let ((dt, line), worst) = if dmax > dmin || (dmax == dmin && max.1 < min.1) {
+        (max, dmax)
+    } else {
+        (min, dmin)
+    };
     // Resampling interpolates over any spacing; only the order matters then.
     if options.resample.is_none() && worst > tol {
-        let dt = times[worst_k + 1] - times[worst_k];
         return Err(DataError::new(
-            at(worst_k),
+            at(line),
             format!(
                 "inconsistent sample time: step {dt} s here, {:.1} % off the nominal (mean) step {mean} s; the tolerance is {:.1} %",
                 100.0 * worst,
@@ -698,37 +1322,41 @@ fn sample_time(
 /// Unit check of a heading that integrates a yaw rate: the least-squares gain
 /// of `Δψ/h` on `r` (≈ 1 when consistent, ≈ 57.3 when ψ is in degrees and r
 /// in rad/s). `None` without a planar heading or with too little yaw motion.
-pub fn heading_gain(ir: &Ir, e: &Experiment) -> Option<f64> {
+pub fn heading_gain(ir: &Ir, e: &dyn Source) -> Option<f64> {
     let Rotation::Planar { integrates, .. } = &ir.rotation else {
         return None;
     };
-    let r = &e.states[*integrates];
+    let h = e.step();
     // A log may wrap its heading at ±π (radians) or ±180 (degrees), or not at
     // all. Fit the gain of Δψ/h on r under each hypothesis (removing whole
     // periods from every step) and keep the one that explains Δψ/h best: a
     // threshold on the step size would mistake large steps in degrees for
-    // wraps in radians.
-    let fit = |period: Option<f64>| -> Option<(f64, f64)> {
-        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-        for k in 1..e.heading.len().min(r.len()) {
-            let mut d = e.heading[k] - e.heading[k - 1];
-            if let Some(p) = period {
-                d -= p * (d / p).round();
+    // wraps in radians. One visit accumulates all three.
+    let periods = [None, Some(2.0 * std::f64::consts::PI), Some(360.0)];
+    let mut sums = [(0.0, 0.0, 0.0); 3];
+    let mut prev: Option<(f64, f64)> = None;
+    e.visit(&mut |row| {
+        let r = row.states.get(*integrates).copied().unwrap_or(0.0);
+        if let Some((psi1, r1)) = prev {
+            for (period, (sxy, sxx, syy)) in periods.iter().zip(sums.iter_mut()) {
+                let mut d = row.heading - psi1;
+                if let Some(p) = period {
+                    d -= p * (d / p).round();
+                }
+                let y = d / h;
+                *sxy += r1 * y;
+                *sxx += r1 * r1;
+                *syy += y * y;
             }
-            let y = d / e.h;
-            let x = r[k - 1];
-            sxy += x * y;
-            sxx += x * x;
-            syy += y * y;
         }
-        (sxx > 1e-12).then(|| {
+        prev = Some((row.heading, r));
+    });
+    sums.into_iter()
+        .filter(|(_, sxx, _)| *sxx > 1e-12)
+        .map(|(sxy, sxx, syy)| {
             let gain = sxy / sxx;
             (gain, syy - gain * sxy)
         })
-    };
-    [None, Some(2.0 * std::f64::consts::PI), Some(360.0)]
-        .into_iter()
-        .filter_map(fit)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(gain, _)| gain)
 }
@@ -812,5 +1440,237 @@ mod tests {
         // Rows 0..6 sit on lines 2..8; the row after the gap is on line 9.
         assert_eq!(err.location, "d.csv:9:1 (time)");
         assert!(err.hint.contains("--time-tolerance") && err.hint.contains("--resample"));
+    }
+
+    fn error_of(text: &str) -> DataError {
+        parse_csv(
+            "b.csv",
+            text.as_bytes(),
+            &model("step 1.0"),
+            &LoadOptions::default(),
+        )
+        .err()
+        .unwrap_or_else(|| panic!("an error expected in:\n{text}"))
+    }
+
+    #[test]
+    fn blank_lines_are_counted_and_rows_keep_their_physical_line() {
+        let ir = model("step 1.0");
+        // Blank lines (empty, spaces, CRLF) before the header and between rows.
+        let mut text = String::from("\n  \ntime,u,r,delta\n");
+        text.push_str(&rows(0, 5));
+        text.push_str("\n \t \r\n");
+        text.push_str(&rows(5, 5));
+        let loaded = parse_csv_noted("b.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(loaded.notes.blank_lines, 4);
+        assert_eq!(loaded.experiments[0].len(), 10);
+        // Line 1, 2 blank, 3 header, 4..8 rows, 9 and 10 blank, 11.. rows.
+        text.push_str("10.0,1,x,35\n");
+        assert_eq!(error_of(&text).location, "b.csv:16:3 (r)");
+    }
+
+    #[test]
+    fn a_quoted_cell_holding_line_breaks_keeps_later_rows_on_their_line() {
+        let mut text = String::from("time,u,r,delta,note\n");
+        for k in 0..12 {
+            let note = if k == 3 {
+                "\"two\n# not a comment\n\nlines\""
+            } else {
+                "ok"
+            };
+            text.push_str(&format!("{k}.0,1,0.5,35,{note}\n"));
+        }
+        assert!(
+            parse_csv(
+                "q.csv",
+                text.as_bytes(),
+                &model("step 1.0"),
+                &LoadOptions::default()
+            )
+            .is_ok()
+        );
+        text.push_str("12.0,1,0.5,bad,ok\n");
+        // 1 header, rows 0..2 on 2..4, row 3 on 5..8, rows 4..11 on 9..16.
+        assert_eq!(error_of(&text).location, "b.csv:17:4 (delta)");
+    }
+
+    #[test]
+    fn crlf_line_ends_read_like_lf() {
+        let ir = model("step 1.0");
+        let text = format!("time,u,r,delta\n{}", rows(0, 12)).replace('\n', "\r\n");
+        let a = parse_csv("c.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let b = parse_csv(
+            "c.csv",
+            text.replace("\r\n", "\n").as_bytes(),
+            &ir,
+            &LoadOptions::default(),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(a, b);
+        // Rows keep their lines under CRLF (csv alone puts a record after a
+        // CRLF on the line before).
+        let bad = text.replacen("\r\n0.0,1,", "\r\n,1,", 1);
+        assert_eq!(error_of(&bad).location, "b.csv:2:1 (time)");
+        let bad = text.replace("5.0,1,0.5,35", "5.0,1,0.5,x");
+        assert_eq!(error_of(&bad).location, "b.csv:7:4 (delta)");
+    }
+
+    #[test]
+    fn a_gross_outlier_is_located_by_row_and_a_zigzag_is_not_one() {
+        // A zigzag: rudder ±35, switching every 7 samples; u varies a little.
+        let zigzag = |spike: Option<(usize, f64)>| {
+            let mut text = String::from("time,u,r,delta\n");
+            for k in 0..200 {
+                let delta = if (k / 7) % 2 == 0 { 35.0 } else { -35.0 };
+                let mut u = 5.0 + 0.01 * (k % 13) as f64;
+                if let Some((at, v)) = spike
+                    && at == k
+                {
+                    u = v;
+                }
+                text.push_str(&format!("{k}.0,{u:e},{},{delta}\n", 0.01 * (k % 5) as f64));
+            }
+            text
+        };
+        let ir = model("step 1.0");
+        assert!(
+            parse_csv(
+                "z.csv",
+                zigzag(None).as_bytes(),
+                &ir,
+                &LoadOptions::default()
+            )
+            .is_ok()
+        );
+        for v in [1e6, -1e9, 1e300] {
+            let err = parse_csv(
+                "z.csv",
+                zigzag(Some((57, v))).as_bytes(),
+                &ir,
+                &LoadOptions::default(),
+            )
+            .err()
+            .unwrap_or_else(|| panic!("u = {v} is an outlier"));
+            assert_eq!(err.location, "z.csv:59:2 (u)", "{err}");
+            assert!(err.message.contains("gross outlier"), "{err}");
+        }
+        // Scale-free: the same data in other units give the same verdicts.
+        let scaled = |text: &str, f: f64| -> String {
+            text.lines()
+                .enumerate()
+                .map(|(i, l)| {
+                    if i == 0 {
+                        return format!("{l}\n");
+                    }
+                    let c: Vec<f64> = l.split(',').map(|x| x.parse().unwrap_or(0.0)).collect();
+                    format!("{},{:e},{:e},{}\n", c[0], c[1] * f, c[2] * f, c[3])
+                })
+                .collect()
+        };
+        for f in [1e-8, 1e-4, 1e4, 1e8] {
+            assert!(
+                parse_csv(
+                    "z.csv",
+                    scaled(&zigzag(None), f).as_bytes(),
+                    &ir,
+                    &LoadOptions::default()
+                )
+                .is_ok()
+            );
+            let err = parse_csv(
+                "z.csv",
+                scaled(&zigzag(Some((57, 1e6))), f).as_bytes(),
+                &ir,
+                &LoadOptions::default(),
+            )
+            .err()
+            .unwrap_or_else(|| panic!("the outlier at × {f}"));
+            assert_eq!(err.location, "z.csv:59:2 (u)");
+        }
+    }
+
+    #[test]
+    fn streaming_visits_give_the_values_of_loading_bit_for_bit() {
+        let ir = model("step 1.0");
+        let mut text = String::from("# head\ntime,u,r,delta,experiment\n");
+        for k in 0..40 {
+            let e = if k < 25 { "a" } else { "b" };
+            text.push_str(&format!(
+                "{k}.0,{},{},{},{e}\n",
+                1.0 / (k + 1) as f64,
+                0.1 * k as f64,
+                (k as f64).sin()
+            ));
+            if k % 9 == 0 {
+                text.push_str("\n# pause\n");
+            }
+        }
+        let path = std::env::temp_dir().join(format!("leeway-stream-{}.csv", std::process::id()));
+        std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let held = load_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        let streamed =
+            open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(held.len(), 2);
+        assert_eq!(streamed.sources.len(), 2);
+        for (h, s) in held.iter().zip(&streamed.sources) {
+            assert_eq!((h.name(), h.len(), h.step()), (s.name(), s.len(), s.step()));
+            let mut a: Vec<u64> = Vec::new();
+            let mut b: Vec<u64> = Vec::new();
+            h.visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+            // Twice: every visit re-reads.
+            for _ in 0..2 {
+                b.clear();
+                s.visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+                assert_eq!(a, b);
+            }
+            assert!(s.failure().is_none());
+        }
+        // Sample 3 of `b` (row k = 28) sits on line 36: 2 before the header,
+        // 28 rows, and 2 dropped lines after rows 0, 9, 18 and 27.
+        assert_eq!(
+            streamed.sources[1].locate(3),
+            format!("{}:{}", path.display(), 2 + 29 + 2 * 4)
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+
+    #[test]
+    fn resampling_far_finer_than_the_log_is_refused_before_it_allocates() {
+        let ir = model("");
+        let text = format!("time,u,r,delta\n{}", rows(0, 12));
+        let options = LoadOptions {
+            resample: Some(1e-3),
+            ..LoadOptions::default()
+        };
+        let err = parse_csv("r.csv", text.as_bytes(), &ir, &options)
+            .err()
+            .unwrap_or_else(|| panic!("11001 samples from 12 rows is refused"));
+        assert_eq!(err.location, "r.csv:2");
+        assert!(err.message.contains("at most 100 per row"), "{err}");
+    }
+
+    #[test]
+    fn a_file_that_changes_between_passes_is_reported_not_misread() {
+        let ir = model("step 1.0");
+        let path = std::env::temp_dir().join(format!("leeway-changed-{}.csv", std::process::id()));
+        let text = format!("time,u,r,delta\n{}", rows(0, 20));
+        std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let streamed =
+            open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(&path, format!("time,u,r,delta\n{}", rows(0, 5)))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut n = 0;
+        streamed.sources[0].visit(&mut |_| n += 1);
+        assert_eq!(n, 5);
+        let failure = streamed.sources[0]
+            .failure()
+            .unwrap_or_else(|| panic!("a failure"));
+        assert!(
+            failure.message.contains("changed while it was being read"),
+            "{failure}"
+        );
+        let _ = std::fs::remove_file(&path);
     }
 }

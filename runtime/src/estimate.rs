@@ -405,6 +405,10 @@ struct EquationWalker<'a> {
 struct Diverged;
 
 /// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
+/// Largest magnitude of a measured regressor or target: squares stay below
+/// 1e290, so sums of squares over 10¹⁸ samples stay finite.
+pub const REGRESSOR_LIMIT: f64 = 1e145;
+
 type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
 
 /// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
@@ -1222,6 +1226,65 @@ impl<'a> Estimator<'a> {
         }
     }
 
+    /// One pass over the measured regressors and targets: a value that is
+    /// not finite, or so large that its square or a sum of squares leaves
+    /// f64's range ([`REGRESSOR_LIMIT`]), is a data error located at the
+    /// sample that produced it (`file:line` for a file), never a rank verdict.
+    fn check_finite(&self, experiments: &[&dyn Source]) -> Result<(), EstimateError> {
+        let walker = self.walker_with(None);
+        let n = self.n_cols;
+        let predictors = self.ir.predictors.get(self.kind);
+        for (e, info) in experiments.iter().zip(&self.infos) {
+            // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
+            let mut k = 1usize;
+            let mut bad: Option<(usize, String)> = None;
+            let _ = walker.walk(*e, info, &[], &[], None, &mut |_, phi, t| {
+                k += 1;
+                if bad.is_some() {
+                    return;
+                }
+                let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
+                for (o, _) in t.iter().enumerate() {
+                    for (c, col) in predictors.iter().enumerate().take(n) {
+                        let v = phi[o * n + c];
+                        if wrong(v) && v != 0.0 {
+                            bad = Some((
+                                k - 1,
+                                format!(
+                                    "the regressor {} of `{}` evaluates to {v:e}",
+                                    col.name, self.ir.states[o]
+                                ),
+                            ));
+                            return;
+                        }
+                    }
+                    if wrong(t[o]) {
+                        bad = Some((
+                            k,
+                            format!(
+                                "the difference quotient of `{}` evaluates to {:e}",
+                                self.ir.states[o], t[o]
+                            ),
+                        ));
+                        return;
+                    }
+                }
+            });
+            if let Some((sample, what)) = bad {
+                return Err(err(
+                    "non-finite-data",
+                    format!(
+                        "{}: {what} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
+                        e.locate(sample),
+                        e.name()
+                    ),
+                    "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// One accumulation pass: `[experiment][output]` moment sums over the block's columns.
     fn accumulate(
         &self,
@@ -1764,6 +1827,7 @@ impl<'a> Estimator<'a> {
         } else {
             theta_sim.clone()
         };
+        self.check_finite(experiments)?;
         let moments = match self.accumulate(experiments, &first, &mu, None) {
             Ok((m, _, _)) => m,
             Err(Diverged) => {

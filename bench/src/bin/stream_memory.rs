@@ -3,6 +3,10 @@
 //! experiment, and reports time and peak resident memory.
 //!
 //! `cargo run --release -p leeway-bench --bin stream-memory -- 10000000`
+//!
+//! `stream-memory write N FILE.csv` writes the same N samples as a CSV log
+//! instead (row by row, in flat memory), for measuring `leeway estimate` on
+//! a file: `/usr/bin/time -v leeway estimate examples/models/ship.som --data FILE.csv`.
 
 use leeway::runtime::Source;
 use leeway::runtime::estimate::{Method, Options, estimate};
@@ -18,9 +22,52 @@ fn peak_rss_kib() -> Option<u64> {
     line.split_whitespace().nth(1)?.parse().ok()
 }
 
+/// Writes the stream as CSV, one row per sample, never holding it.
+fn write(stream: &Stream, path: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    let ir = leeway::runtime::Model::ir(&Ship);
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let measured: Vec<usize> = (0..ir.components.len())
+        .filter(|c| ir.disturbances[ir.components[*c].disturbance].measured)
+        .collect();
+    let mut header = vec!["time".to_string()];
+    header.extend(ir.states.iter().cloned());
+    header.push("psi".to_string());
+    header.extend(ir.inputs.iter().cloned());
+    header.extend(measured.iter().map(|c| ir.components[*c].name.clone()));
+    writeln!(out, "{}", header.join(","))?;
+    let mut k = 0usize;
+    let mut failed = None;
+    let mut line = String::new();
+    stream.visit(&mut |row| {
+        use std::fmt::Write as _;
+        line.clear();
+        let _ = write!(line, "{:?}", k as f64 * stream.step());
+        for v in row.states.iter().chain([&row.heading]).chain(row.inputs) {
+            let _ = write!(line, ",{v:?}");
+        }
+        for c in &measured {
+            let _ = write!(line, ",{:?}", row.disturbances[*c]);
+        }
+        line.push('\n');
+        if failed.is_none()
+            && let Err(e) = out.write_all(line.as_bytes())
+        {
+            failed = Some(e);
+        }
+        k += 1;
+    });
+    match failed {
+        Some(e) => Err(e),
+        None => out.flush(),
+    }
+}
+
 fn main() {
-    let n: usize = std::env::args()
-        .nth(1)
+    let args: Vec<String> = std::env::args().collect();
+    let writing = args.get(1).is_some_and(|a| a == "write");
+    let n: usize = args
+        .get(if writing { 2 } else { 1 })
         .and_then(|s| s.parse().ok())
         .unwrap_or(10_000_000);
     let design = InputDesign::default();
@@ -34,6 +81,14 @@ fn main() {
         seed: 7,
         input: Box::new(move || Box::new(Pulses::new(&InputDesign::default(), 11))),
     };
+    if writing {
+        let path = args.get(3).map_or("stream.csv", String::as_str);
+        if let Err(e) = write(&stream, path) {
+            eprintln!("cannot write {path}: {e}");
+            std::process::exit(2);
+        }
+        return;
+    }
     let before = peak_rss_kib();
     let start = std::time::Instant::now();
     let result = estimate(

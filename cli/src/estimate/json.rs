@@ -13,7 +13,8 @@ use serde::Serialize;
 /// The whole document.
 #[derive(Debug, Serialize)]
 pub struct Report {
-    /// `model Name`, or null when the model did not compile.
+    /// `model Name`, or null when the model did not compile (set whenever it
+    /// compiled, also on a data or estimate error).
     model: Option<String>,
     /// The model file as given.
     file: String,
@@ -138,11 +139,12 @@ pub fn method_name(m: MethodArg) -> &'static str {
 /// The document for a result or a failure.
 pub fn report(
     args: &EstimateArgs,
+    model: Option<String>,
     result: &Result<Outcome, Failure>,
     warnings: Vec<String>,
 ) -> Report {
     let mut r = Report {
-        model: None,
+        model,
         file: args.model.display().to_string(),
         data: args.data.iter().map(|p| p.display().to_string()).collect(),
         method: method_name(args.method),
