@@ -404,11 +404,11 @@ struct EquationWalker<'a> {
 #[derive(Debug)]
 struct Diverged;
 
-/// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
 /// Largest magnitude of a measured regressor or target: squares stay below
 /// 1e290, so sums of squares over 10¹⁸ samples stay finite.
 pub const REGRESSOR_LIMIT: f64 = 1e145;
 
+/// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
 type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
 
 /// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
