@@ -215,6 +215,24 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             };
             diags.push(d);
         }
+    } else if let Some(cut) = &r.search_cut {
+        let mut d = Diagnostic::warning(
+            "search-cut",
+            format!(
+                "θ is identifiable from {} experiment{} with sign pattern{} {}; whether fewer suffice is undecided",
+                r.required_patterns.len(),
+                if r.required_patterns.len() == 1 { "" } else { "s" },
+                if r.required_patterns.len() == 1 { "" } else { "s" },
+                identify::patterns_text(ir, &r.required_patterns, ir::PredictorKind::Measured)
+            ),
+        )
+        .with_note(cut.clone());
+        if let Some(first) = r.unidentifiable.first() {
+            d.labels = labels_for(&first.parameters);
+        }
+        diags.push(d.with_help(
+            "the verdict is exact: these experiments identify θ; name the experiments you plan with --pattern to check them exactly",
+        ));
     } else if r.required_patterns.len() > 1 {
         let mut d = Diagnostic::note(
             "required-experiments",
