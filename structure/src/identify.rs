@@ -1059,7 +1059,6 @@ impl<'a> Analysis<'a> {
     }
     /// Are the θ columns of `group` free of every null vector?
     fn group_identifiable(&self, patterns: Patterns, group: &[usize]) -> bool {
-        let red = self.reduce(patterns);
         let theta: BTreeSet<usize> = self
             .names
             .columns
@@ -1068,9 +1067,14 @@ impl<'a> Analysis<'a> {
             .filter(|(_, c)| matches!(c.kind, ColumnKind::Theta { parameter } if group.contains(&parameter)))
             .map(|(i, _)| i)
             .collect();
-        red.null_space()
-            .iter()
-            .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
+        if self.empty_cols.iter().any(|c| theta.contains(c)) {
+            return false;
+        }
+        // Only the blocks holding the group's columns matter.
+        let involved: Vec<usize> = (0..self.blocks.len())
+            .filter(|b| self.blocks[*b].iter().any(|c| theta.contains(c)))
+            .collect();
+        self.blocks_ok(patterns, &involved, &|c| theta.contains(&c))
     }
     /// In these blocks, are the columns `need` selects free of every null vector?
     fn blocks_ok(
@@ -1241,7 +1245,30 @@ impl<'a> Analysis<'a> {
                 exhausted_below,
             })
         };
-        if u == 1 {
+        // Each pattern gives one row per family (output, monomial without
+        // its signs), so the θ columns living in one family alone, which must
+        // be independent, need at least as many patterns.
+        let mut per_family: BTreeMap<(usize, Vec<(StructVar, u32)>), usize> = BTreeMap::new();
+        for &b in blocks {
+            for &c in self.blocks[b].iter().filter(|c| need(**c)) {
+                let mut families = self.structural.cols[c].iter().map(|(o, _, vars)| {
+                    let rest: Vec<(StructVar, u32)> = vars
+                        .iter()
+                        .filter(|(v, _)| !matches!(v, StructVar::Sign(_)))
+                        .copied()
+                        .collect();
+                    (*o, rest)
+                });
+                if let Some(first) = families.next()
+                    && !first.1.is_empty()
+                    && families.all(|f| f == first)
+                {
+                    *per_family.entry(first).or_default() += 1;
+                }
+            }
+        }
+        let lower = per_family.values().copied().max().unwrap_or(1).max(1);
+        if lower >= u {
             return done(upper, None);
         }
         // Candidates by index: bit k of the index is the sign of args[k].
@@ -1260,7 +1287,7 @@ impl<'a> Analysis<'a> {
         // rank, so one experiment may be taken all-plus.
         let fix_first = self.homogeneous_over(blocks, args);
         let mut spent = 0usize;
-        for size in 1..=u {
+        for size in lower..=u {
             // The sets of this size to try; when more than the budget left,
             // the size cannot be exhausted (the found set is minimal anyway
             // once every smaller size was).
@@ -1269,7 +1296,8 @@ impl<'a> Analysis<'a> {
             } else {
                 binomial(n_cand, size)
             };
-            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent {
+            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent
+            {
                 return done(upper, (size < u).then_some(size));
             }
             if size > n_cand {
