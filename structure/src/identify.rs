@@ -1191,10 +1191,17 @@ impl<'a> Analysis<'a> {
                     .iter()
                     .map(|i| self.names.ir.sign_args[*i].name.clone())
                     .collect();
+                let top = c.patterns.len() - 1;
+                let sizes = if below == top {
+                    format!(
+                        "sets of {below} pattern{}",
+                        if below == 1 { "" } else { "s" }
+                    )
+                } else {
+                    format!("sets of {below} to {top} patterns")
+                };
                 untried.push(format!(
-                    "sets of {} to {} patterns of the {} interacting sign arguments {}",
-                    below,
-                    c.patterns.len() - 1,
+                    "{sizes} of the {} interacting sign arguments {}",
                     comp_args.len(),
                     names.join(", ")
                 ));
@@ -1296,8 +1303,7 @@ impl<'a> Analysis<'a> {
             } else {
                 binomial(n_cand, size)
             };
-            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent
-            {
+            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent {
                 return done(upper, (size < u).then_some(size));
             }
             if size > n_cand {
@@ -1883,18 +1889,20 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
     } else {
         a.any_single_pattern_given(found.as_ref())
     };
+    let mut single_note = None;
     let any_single_pattern = match single {
         Some(b) => b,
         None => {
             let why = "whether one experiment of any sign pattern identifies θ was not checked: an output block holds too many interacting sign arguments to try each pattern";
-            search_cut = Some(match search_cut {
-                Some(cut) => format!("{cut}; {why}"),
-                None => why.to_string(),
-            });
+            // Not part of the verdict: said with the cut search, or as a note.
+            match &mut search_cut {
+                Some(cut) => *cut = format!("{cut}; {why}"),
+                None => single_note = Some(why.to_string()),
+            }
             false
         }
     };
-    let (notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
+    let (mut notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
     let separations = v_check
         .combinations
         .iter()
@@ -1928,7 +1936,10 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
         } else {
             Vec::new()
         },
-        notes,
+        notes: {
+            notes.extend(single_note);
+            notes
+        },
         search_cut,
     }
 }
