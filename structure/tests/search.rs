@@ -236,7 +236,7 @@ fn random_model(states: usize, terms: &[(usize, u8, usize, usize, usize)]) -> St
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
 
     /// For random small models (≤ 4 sign arguments), the structured search's
     /// verdict and set size equal the exhaustive search's, and its set
