@@ -361,7 +361,10 @@ fn nine_independent_moduli_exit_0_with_two_experiments() {
     std::fs::create_dir_all(&dir).expect("temp dir");
     let path = dir.join("nine.som");
     let mut src = String::from("model Nine {\n    step 0.1\n    state ");
-    src += &(0..9).map(|i| format!("x{i}")).collect::<Vec<_>>().join(", ");
+    src += &(0..9)
+        .map(|i| format!("x{i}"))
+        .collect::<Vec<_>>()
+        .join(", ");
     src += "\n    input t\n";
     for i in 0..9 {
         src += &format!("    der x{i} = A{i}*x{i} + D{i}*|x{i}| + B{i}*t\n");
@@ -382,8 +385,20 @@ fn nine_independent_moduli_exit_0_with_two_experiments() {
     assert!(v["search_cut"].is_null());
     let required = v["required_sign_patterns"].as_array().expect("array");
     assert_eq!(required.len(), 2);
-    assert!(required[0].as_object().expect("map").values().all(|s| s == "+"));
-    assert!(required[1].as_object().expect("map").values().all(|s| s == "-"));
+    assert!(
+        required[0]
+            .as_object()
+            .expect("map")
+            .values()
+            .all(|s| s == "+")
+    );
+    assert!(
+        required[1]
+            .as_object()
+            .expect("map")
+            .values()
+            .all(|s| s == "-")
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -1013,6 +1013,9 @@ fn nonzero_point(polys: Vec<BTreeMap<Vec<usize>, Q>>, args: &[usize], n: usize) 
     p
 }
 
+/// A row family: an output and a monomial without its sign variables.
+type FamilyKey = (usize, Vec<(StructVar, u32)>);
+
 /// A multilinear polynomial in sign variables: odd sign set → coefficient.
 type Poly = BTreeMap<Vec<usize>, Q>;
 
@@ -1255,7 +1258,7 @@ impl<'a> Analysis<'a> {
         // Each pattern gives one row per family (output, monomial without
         // its signs), so the θ columns living in one family alone, which must
         // be independent, need at least as many patterns.
-        let mut per_family: BTreeMap<(usize, Vec<(StructVar, u32)>), usize> = BTreeMap::new();
+        let mut per_family: BTreeMap<FamilyKey, usize> = BTreeMap::new();
         for &b in blocks {
             for &c in self.blocks[b].iter().filter(|c| need(**c)) {
                 let mut families = self.structural.cols[c].iter().map(|(o, _, vars)| {
@@ -1337,8 +1340,7 @@ impl<'a> Analysis<'a> {
     /// as many other deficient families' polynomials nonzero as possible)
     /// raises that family's rank. At most one pattern per character.
     fn completion(&self, args: &[usize], blocks: &[usize]) -> Vec<SignPattern> {
-        let mut by_family: BTreeMap<(usize, Vec<(StructVar, u32)>), BTreeSet<Vec<usize>>> =
-            BTreeMap::new();
+        let mut by_family: BTreeMap<FamilyKey, BTreeSet<Vec<usize>>> = BTreeMap::new();
         for &b in blocks {
             for &c in &self.blocks[b] {
                 for (o, _, vars) in &self.structural.cols[c] {
