@@ -832,6 +832,10 @@ pub struct Analysis<'a> {
     blocks: Vec<Vec<usize>>,
     /// Columns without any structural entry.
     empty_cols: Vec<usize>,
+    /// The block of each column (`None` for an empty column).
+    block_of: Vec<Option<usize>>,
+    /// Columns of each parameter (θ first, then its nuisance columns).
+    param_cols: BTreeMap<usize, Vec<usize>>,
 }
 
 /// A set of sign patterns found by [`Analysis::smallest`].
@@ -1043,6 +1047,25 @@ impl<'a> Analysis<'a> {
             n_signs: ir.sign_args.len(),
             relevant: relevant_signs(ir, kind),
             kind,
+            block_of: {
+                let mut of = vec![None; columns.len()];
+                for (b, cols) in blocks_of.0.iter().enumerate() {
+                    for &c in cols {
+                        of[c] = Some(b);
+                    }
+                }
+                of
+            },
+            param_cols: {
+                let mut m: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+                for (c, col) in columns.iter().enumerate() {
+                    m.entry(col.kind.parameter()).or_default().push(c);
+                }
+                for v in m.values_mut() {
+                    v.sort_by_key(|c| columns[*c].kind.is_nuisance());
+                }
+                m
+            },
             blocks: blocks_of.0,
             empty_cols: blocks_of.1,
         }
@@ -1062,22 +1085,27 @@ impl<'a> Analysis<'a> {
     }
     /// Are the θ columns of `group` free of every null vector?
     fn group_identifiable(&self, patterns: Patterns, group: &[usize]) -> bool {
-        let theta: BTreeSet<usize> = self
-            .names
-            .columns
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| matches!(c.kind, ColumnKind::Theta { parameter } if group.contains(&parameter)))
-            .map(|(i, _)| i)
-            .collect();
-        if self.empty_cols.iter().any(|c| theta.contains(c)) {
+        let theta = self.group_theta(group);
+        if theta.iter().any(|c| self.block_of[*c].is_none()) {
             return false;
         }
         // Only the blocks holding the group's columns matter.
-        let involved: Vec<usize> = (0..self.blocks.len())
-            .filter(|b| self.blocks[*b].iter().any(|c| theta.contains(c)))
-            .collect();
+        let involved = self.blocks_holding(theta.iter().copied());
         self.blocks_ok(patterns, &involved, &|c| theta.contains(&c))
+    }
+    /// The blocks holding these columns, sorted.
+    fn blocks_holding(&self, cols: impl Iterator<Item = usize>) -> Vec<usize> {
+        let set: BTreeSet<usize> = cols.filter_map(|c| self.block_of[c]).collect();
+        set.into_iter().collect()
+    }
+    /// The θ columns of a group of parameters.
+    fn group_theta(&self, group: &[usize]) -> BTreeSet<usize> {
+        group
+            .iter()
+            .flat_map(|p| self.param_cols.get(p).into_iter().flatten())
+            .copied()
+            .filter(|c| !self.names.columns[*c].kind.is_nuisance())
+            .collect()
     }
     /// In these blocks, are the columns `need` selects free of every null vector?
     fn blocks_ok(
@@ -1137,13 +1165,12 @@ impl<'a> Analysis<'a> {
     /// sets, padded by repeating a pattern, combine into one set of that
     /// size. Only a component whose own patterns are too many to enumerate
     /// within [`SEARCH_BUDGET`] leaves minimality undecided (never the verdict).
-    pub fn smallest(&self, args: &[usize], need: &dyn Fn(usize) -> bool) -> Option<Found> {
-        let involved: Vec<usize> = (0..self.blocks.len())
-            .filter(|b| self.blocks[*b].iter().any(|c| need(*c)))
-            .collect();
-        if self.empty_cols.iter().any(|c| need(*c)) {
+    pub fn smallest(&self, args: &[usize], needed: &BTreeSet<usize>) -> Option<Found> {
+        let need = &|c: usize| needed.contains(&c);
+        if needed.iter().any(|c| self.block_of[*c].is_none()) {
             return None;
         }
+        let involved = self.blocks_holding(needed.iter().copied());
         if !self.blocks_ok(Patterns::Symbolic(args), &involved, need) {
             return None;
         }
@@ -1401,7 +1428,9 @@ impl<'a> Analysis<'a> {
     /// +1), else over every sign argument (pointwise moduli may change sign
     /// within an experiment or between experiments).
     pub fn required(&self) -> Option<Found> {
-        let theta = |c: usize| !self.names.columns[c].kind.is_nuisance();
+        let theta: BTreeSet<usize> = (0..self.names.columns.len())
+            .filter(|c| !self.names.columns[*c].kind.is_nuisance())
+            .collect();
         self.smallest(&self.relevant, &theta).or_else(|| {
             let all: Vec<usize> = (0..self.n_signs).collect();
             (all.len() > self.relevant.len())
@@ -1463,8 +1492,10 @@ impl<'a> Analysis<'a> {
     pub fn separation(&self, combination: &Combination) -> Separation {
         let group = &combination.parameters;
         let cols = self.names.columns;
-        let member_cols: Vec<usize> = (0..cols.len())
-            .filter(|c| group.contains(&cols[*c].kind.parameter()))
+        let member_cols: Vec<usize> = group
+            .iter()
+            .flat_map(|p| self.param_cols.get(p).into_iter().flatten())
+            .copied()
             .collect();
         let args: Vec<usize> = member_cols
             .iter()
@@ -1504,10 +1535,12 @@ impl<'a> Analysis<'a> {
         let theta_signs: Vec<Option<BTreeSet<usize>>> = group
             .iter()
             .filter_map(|p| {
-                cols.iter()
-                    .position(|c| c.kind == ColumnKind::Theta { parameter: *p })
+                self.param_cols
+                    .get(p)
+                    .and_then(|cs| cs.first())
+                    .filter(|c| cols[**c].kind == ColumnKind::Theta { parameter: *p })
             })
-            .map(|c| self.structural.homogeneous_signs(c))
+            .map(|c| self.structural.homogeneous_signs(*c))
             .collect();
         if !self.group_identifiable(Patterns::All, group) {
             let texts: Vec<String> = group.iter().map(|p| self.names.term_text(*p)).collect();
@@ -1533,14 +1566,11 @@ impl<'a> Analysis<'a> {
                 message: format!("no experiment separates {list}: {why}"),
             };
         }
-        let group_theta: BTreeSet<usize> = (0..cols.len())
-            .filter(|c| matches!(cols[*c].kind, ColumnKind::Theta { parameter } if group.contains(&parameter)))
-            .collect();
-        let need = |c: usize| group_theta.contains(&c);
+        let group_theta = self.group_theta(group);
         let every: Vec<usize> = (0..self.n_signs).collect();
         let searched = self
-            .smallest(&args, &need)
-            .or_else(|| self.smallest(&every, &need));
+            .smallest(&args, &group_theta)
+            .or_else(|| self.smallest(&every, &group_theta));
         let cut = searched.as_ref().and_then(|f| f.untried.clone());
         let found = searched.map(|f| f.patterns);
         let message = match (&found, theta_signs.as_slice()) {
@@ -1754,11 +1784,16 @@ pub struct Options {
 
 /// θ indices of constant terms (`X_0`): parameters all of whose terms have no factor.
 pub fn constant_parameters(ir: &Ir) -> Vec<usize> {
+    // One pass over the terms: (has a term, every term is constant).
+    let mut seen = vec![(false, true); ir.parameters.len()];
+    for t in &ir.terms {
+        if let Some(s) = seen.get_mut(t.parameter) {
+            s.0 = true;
+            s.1 &= t.factors.is_empty();
+        }
+    }
     (0..ir.parameters.len())
-        .filter(|p| {
-            let mut terms = ir.terms.iter().filter(|t| t.parameter == *p).peekable();
-            terms.peek().is_some() && terms.all(|t| t.factors.is_empty())
-        })
+        .filter(|p| seen[*p] == (true, true))
         .collect()
 }
 

@@ -176,10 +176,15 @@ fn unused_declarations(
 
 fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagnostic>) {
     let r = &ir.report;
+    // The first term of each parameter, once (a model may have 10⁴ groups).
+    let mut first_term: std::collections::BTreeMap<usize, &ir::Term> = Default::default();
+    for t in ir.terms.iter().rev() {
+        first_term.insert(t.parameter, t);
+    }
     let labels_for = |params: &[usize]| -> Vec<Label> {
         params
             .iter()
-            .filter_map(|p| ir.terms.iter().find(|t| t.parameter == *p))
+            .filter_map(|p| first_term.get(p).copied())
             .enumerate()
             .map(|(i, t)| Label {
                 span: t.span,
@@ -189,6 +194,7 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             .collect()
     };
     if !r.identifiable {
+        let constants = identify::constant_parameters(ir);
         for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
             let mut d = if options.aggregate {
                 Diagnostic::warning(
@@ -203,7 +209,6 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             };
             d.labels = labels_for(&c.parameters);
             d = d.with_note(s.message.clone());
-            let constants = identify::constant_parameters(ir);
             d = if options.aggregate {
                 d.with_help("the absorbed parameters are held at their nominal values; the kept ones estimate the combinations above")
             } else if c.parameters.iter().all(|p| constants.contains(p)) {
