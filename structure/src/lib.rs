@@ -125,11 +125,19 @@ fn unused_declarations(
     diags: &mut Vec<Diagnostic>,
 ) {
     use ir::Signal;
+    // One pass over the terms (a model may have 10⁴ inputs and terms).
+    let mut used_inputs = std::collections::BTreeSet::new();
+    let mut used_relatives = std::collections::BTreeSet::new();
+    for f in terms.iter().flat_map(|t| t.factors.iter()) {
+        if let Signal::Input(i) = f.arg.signal {
+            used_inputs.insert(i);
+        }
+        if let Some(ri) = f.arg.relative {
+            used_relatives.insert(ri);
+        }
+    }
     for (i, input) in r.inputs.iter().enumerate() {
-        if !terms
-            .iter()
-            .any(|t| t.factors.iter().any(|f| f.arg.signal == Signal::Input(i)))
-        {
+        if !used_inputs.contains(&i) {
             diags.push(
                 Diagnostic::warning(
                     "unused-declaration",
@@ -141,10 +149,7 @@ fn unused_declarations(
         }
     }
     for (ri, (name, _)) in r.relatives.iter().enumerate() {
-        if !terms
-            .iter()
-            .any(|t| t.factors.iter().any(|f| f.arg.relative == Some(ri)))
-        {
+        if !used_relatives.contains(&ri) {
             diags.push(
                 Diagnostic::warning(
                     "unused-declaration",
