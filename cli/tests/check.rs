@@ -352,3 +352,78 @@ fn json_of_the_rov() {
     );
     insta::assert_snapshot!(stdout(&o));
 }
+
+/// Nine independent moduli (issue "Hardened against every input", item 3):
+/// identifiable from all + then all − (exit 0), not "not identifiable".
+#[test]
+fn nine_independent_moduli_exit_0_with_two_experiments() {
+    let dir = std::env::temp_dir().join(format!("leeway-nine-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("nine.som");
+    let mut src = String::from("model Nine {\n    step 0.1\n    state ");
+    src += &(0..9)
+        .map(|i| format!("x{i}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    src += "\n    input t\n";
+    for i in 0..9 {
+        src += &format!("    der x{i} = A{i}*x{i} + D{i}*|x{i}| + B{i}*t\n");
+    }
+    src += "}\n";
+    std::fs::write(&path, src).expect("write model");
+    let file = path.to_string_lossy().into_owned();
+    let o = leeway(&["check", &file]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("identifiable from 2 experiments"),
+        "{}",
+        stdout(&o)
+    );
+    let v = json(&leeway(&["check", "--json", &file]));
+    assert_eq!(v["verdict"], "identifiable");
+    assert!(v["search_cut"].is_null());
+    let required = v["required_sign_patterns"].as_array().expect("array");
+    assert_eq!(required.len(), 2);
+    assert!(
+        required[0]
+            .as_object()
+            .expect("map")
+            .values()
+            .all(|s| s == "+")
+    );
+    assert!(
+        required[1]
+            .as_object()
+            .expect("map")
+            .values()
+            .all(|s| s == "-")
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A search cut by its budget: verdict `undecided`, exit 0 (θ is proven
+/// identifiable from the experiments named), never exit 1.
+#[test]
+fn a_cut_search_is_undecided_and_exits_0() {
+    let o = leeway(&["check", "--json", "examples/models/broken/search-cut.som"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stdout(&o));
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(v["identifiable"], true);
+    assert_eq!(v["verdict"], "undecided");
+    assert!(
+        v["search_cut"]
+            .as_str()
+            .is_some_and(|s| s.contains("13 interacting sign arguments")),
+        "{}",
+        v["search_cut"]
+    );
+    assert_eq!(v["warnings"][0]["code"], "search-cut");
+    let o = leeway(&["check", "examples/models/ship_iv2.som", "--json"]);
+    assert_eq!(code(&o), 1);
+    assert_eq!(json(&o)["verdict"], "not-identifiable");
+    let o = leeway(&["check", "examples/models/ship.som", "--json"]);
+    assert_eq!(json(&o)["verdict"], "identifiable");
+}

@@ -197,6 +197,9 @@ fn is_constant_column(monomials: &[StructMonomial]) -> bool {
 pub enum Patterns<'a> {
     /// Every pattern at once (signs symbolic).
     All,
+    /// Every pattern of the listed sign arguments (sorted), the others +1:
+    /// those signs symbolic, exactly as [`Patterns::All`] over them.
+    Symbolic(&'a [usize]),
     /// These experiments.
     Set(&'a [SignPattern]),
     /// Experiments as recorded: each with its sign pattern and, when its
@@ -263,6 +266,59 @@ pub fn preference_order(
 
 type RowKey = (usize, usize, Vec<(StructVar, u32)>);
 
+/// The columns connected through shared outputs (each block in `order`),
+/// and the columns without any structural entry. Blocks are independent:
+/// the stacked matrix is block diagonal over them, whatever the patterns.
+pub fn blocks(s: &Structural, order: &[usize]) -> (Vec<Vec<usize>>, Vec<usize>) {
+    let n_out = s
+        .cols
+        .iter()
+        .flat_map(|c| c.iter().map(|(o, _, _)| *o + 1))
+        .max()
+        .unwrap_or(0);
+    let mut parent: Vec<usize> = (0..n_out).collect();
+    fn find(p: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while p[r] != r {
+            r = p[r];
+        }
+        let mut y = x;
+        while p[y] != r {
+            let next = p[y];
+            p[y] = r;
+            y = next;
+        }
+        r
+    }
+    for col in &s.cols {
+        if let Some((first, _, _)) = col.first() {
+            for (o, _, _) in &col[1..] {
+                let (a, b) = (find(&mut parent, *first), find(&mut parent, *o));
+                if a != b {
+                    parent[b] = a;
+                }
+            }
+        }
+    }
+    let mut index: Vec<Option<usize>> = vec![None; n_out];
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    let mut empty_cols = Vec::new();
+    for &c in order {
+        match s.cols[c].first() {
+            Some((o, _, _)) => {
+                let root = find(&mut parent, *o);
+                let b = *index[root].get_or_insert_with(|| {
+                    out.push(Vec::new());
+                    out.len() - 1
+                });
+                out[b].push(c);
+            }
+            None => empty_cols.push(c),
+        }
+    }
+    (out, empty_cols)
+}
+
 /// Exact reduction of the columns for the given patterns, in `order`, with
 /// the constants the centring annihilates removed.
 pub fn reduce(
@@ -272,99 +328,11 @@ pub fn reduce(
     centring: Centring,
 ) -> Reduction {
     let n = s.len();
-    // Blocks: columns connected through shared outputs.
-    let mut parent: BTreeMap<usize, usize> = BTreeMap::new();
-    fn find(p: &mut BTreeMap<usize, usize>, x: usize) -> usize {
-        let mut r = x;
-        while let Some(&q) = p.get(&r) {
-            if q == r {
-                break;
-            }
-            r = q;
-        }
-        p.insert(x, r);
-        r
-    }
-    for col in &s.cols {
-        let outs: BTreeSet<usize> = col.iter().map(|(o, _, _)| *o).collect();
-        let mut it = outs.into_iter();
-        if let Some(first) = it.next() {
-            parent.entry(first).or_insert(first);
-            for o in it {
-                parent.entry(o).or_insert(o);
-                let (a, b) = (find(&mut parent, first), find(&mut parent, o));
-                if a != b {
-                    parent.insert(b, a);
-                }
-            }
-        }
-    }
-    let mut blocks: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    let mut empty_cols = Vec::new();
-    for &c in order {
-        match s.cols[c].first() {
-            Some((o, _, _)) => {
-                let root = find(&mut parent, *o);
-                blocks.entry(root).or_default().push(c);
-            }
-            None => empty_cols.push(c),
-        }
-    }
+    let (blocks, empty_cols) = blocks(s, order);
     let mut pivot = vec![false; n];
     let mut combination = vec![Vec::new(); n];
-    for cols in blocks.values() {
-        let mut rows: BTreeMap<RowKey, Vec<Q>> = BTreeMap::new();
-        let width = cols.len();
-        for (j, &c) in cols.iter().enumerate() {
-            for (o, q, vars) in &s.cols[c] {
-                match patterns {
-                    Patterns::All => {
-                        // Signs stay symbolic: only a monomial without any
-                        // variable is the same constant in every experiment.
-                        let constant = vars.iter().all(|(v, _)| matches!(v, StructVar::Sign(_)));
-                        let kept = match centring {
-                            Centring::Experiment => !constant,
-                            Centring::Pooled => !vars.is_empty() || s.intercepts.contains(o),
-                            Centring::None => true,
-                        };
-                        if kept {
-                            let key = (0, *o, vars.clone());
-                            rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j] += q;
-                        }
-                    }
-                    Patterns::Set(set) => {
-                        for (pi, pat) in set.iter().enumerate() {
-                            let ctx = RowContext {
-                                pattern: pat,
-                                frozen: None,
-                                varying: &[],
-                                keep_constants: centring != Centring::Experiment,
-                            };
-                            add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
-                        }
-                    }
-                    Patterns::Experiments(list) => {
-                        for (pi, e) in list.iter().enumerate() {
-                            let ctx = RowContext {
-                                pattern: &e.pattern,
-                                frozen: e.frozen_rotation.as_deref(),
-                                varying: &e.varying,
-                                keep_constants: centring != Centring::Experiment,
-                            };
-                            add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
-                        }
-                    }
-                }
-            }
-        }
-        if centring == Centring::Pooled && !matches!(patterns, Patterns::All) {
-            pool_constants(&mut rows, &s.intercepts);
-        }
-        let matrix: Vec<Vec<Q>> = rows
-            .into_values()
-            .filter(|r| r.iter().any(|q| !q.is_zero()))
-            .collect();
-        let e: Echelon = echelon(&matrix, width);
+    for cols in &blocks {
+        let e = reduce_block(s, patterns, cols, centring);
         for (j, &c) in cols.iter().enumerate() {
             pivot[c] = e.pivot[j];
             combination[c] = e.combination[j]
@@ -381,6 +349,80 @@ pub fn reduce(
         pivot,
         combination,
     }
+}
+
+/// The echelon form of one block's columns (`cols`, in preference order)
+/// over the rows the patterns give.
+pub fn reduce_block(
+    s: &Structural,
+    patterns: Patterns,
+    cols: &[usize],
+    centring: Centring,
+) -> Echelon {
+    let mut rows: BTreeMap<RowKey, Vec<Q>> = BTreeMap::new();
+    let width = cols.len();
+    for (j, &c) in cols.iter().enumerate() {
+        for (o, q, vars) in &s.cols[c] {
+            match patterns {
+                Patterns::All | Patterns::Symbolic(_) => {
+                    // Signs stay symbolic (those not listed are +1): only a
+                    // monomial without any other variable is the same
+                    // constant in every experiment.
+                    let vars: Vec<(StructVar, u32)> = match patterns {
+                        Patterns::Symbolic(args) => vars
+                            .iter()
+                            .filter(|(v, _)| match v {
+                                StructVar::Sign(i) => args.binary_search(i).is_ok(),
+                                _ => true,
+                            })
+                            .copied()
+                            .collect(),
+                        _ => vars.clone(),
+                    };
+                    let constant = vars.iter().all(|(v, _)| matches!(v, StructVar::Sign(_)));
+                    let kept = match centring {
+                        Centring::Experiment => !constant,
+                        Centring::Pooled => !vars.is_empty() || s.intercepts.contains(o),
+                        Centring::None => true,
+                    };
+                    if kept {
+                        let key = (0, *o, vars);
+                        rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j] += q;
+                    }
+                }
+                Patterns::Set(set) => {
+                    for (pi, pat) in set.iter().enumerate() {
+                        let ctx = RowContext {
+                            pattern: pat,
+                            frozen: None,
+                            varying: &[],
+                            keep_constants: centring != Centring::Experiment,
+                        };
+                        add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
+                    }
+                }
+                Patterns::Experiments(list) => {
+                    for (pi, e) in list.iter().enumerate() {
+                        let ctx = RowContext {
+                            pattern: &e.pattern,
+                            frozen: e.frozen_rotation.as_deref(),
+                            varying: &e.varying,
+                            keep_constants: centring != Centring::Experiment,
+                        };
+                        add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
+                    }
+                }
+            }
+        }
+    }
+    if centring == Centring::Pooled && !matches!(patterns, Patterns::All | Patterns::Symbolic(_)) {
+        pool_constants(&mut rows, &s.intercepts);
+    }
+    let matrix: Vec<Vec<Q>> = rows
+        .into_values()
+        .filter(|r| r.iter().any(|q| !q.is_zero()))
+        .collect();
+    echelon(&matrix, width)
 }
 
 /// Pooled centring removes, per output, the constant common to every
@@ -786,7 +828,200 @@ pub struct Analysis<'a> {
     pub relevant: Vec<usize>,
     /// The predictor.
     pub kind: PredictorKind,
+    /// Columns connected through shared outputs ([`blocks`]).
+    blocks: Vec<Vec<usize>>,
+    /// Columns without any structural entry.
+    empty_cols: Vec<usize>,
+    /// The block of each column (`None` for an empty column).
+    block_of: Vec<Option<usize>>,
+    /// Columns of each parameter (θ first, then its nuisance columns).
+    param_cols: BTreeMap<usize, Vec<usize>>,
 }
+
+/// A set of sign patterns found by [`Analysis::smallest`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Found {
+    /// The patterns (all-plus first where that is no loss).
+    pub patterns: Vec<SignPattern>,
+    /// `None` when no smaller set exists (proven); otherwise what the
+    /// search did not try before its budget ran out (the set still works).
+    pub untried: Option<String>,
+}
+
+/// One component's set: its patterns, and when the budget cut the search,
+/// the size from which sets were not all tried.
+struct ComponentSet {
+    patterns: Vec<SignPattern>,
+    exhausted_below: Option<usize>,
+}
+
+/// The sign arguments among `args` (sorted) that occur with an odd power.
+fn odd_signs(vars: &[(StructVar, u32)], args: &[usize]) -> Vec<usize> {
+    let mut out: Vec<usize> = vars
+        .iter()
+        .filter_map(|(v, e)| match v {
+            StructVar::Sign(i) if e % 2 == 1 && args.binary_search(i).is_ok() => Some(*i),
+            _ => None,
+        })
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// One family of rows for [`Analysis::completion`]: its sign characters and
+/// the reduced row echelon form of its evaluation matrix so far.
+struct Family {
+    chars: Vec<Vec<usize>>,
+    basis: Vec<(usize, Vec<Q>)>,
+}
+
+impl Family {
+    /// Adds the row of pattern `p`.
+    fn add(&mut self, p: &SignPattern) {
+        if self.basis.len() == self.chars.len() {
+            return;
+        }
+        let mut row: Vec<Q> = self
+            .chars
+            .iter()
+            .map(|ch| {
+                if ch.iter().filter(|i| p[**i] < 0).count() % 2 == 1 {
+                    -Q::one()
+                } else {
+                    Q::one()
+                }
+            })
+            .collect();
+        for (pc, b) in &self.basis {
+            if !row[*pc].is_zero() {
+                let f = row[*pc].clone();
+                for (x, r) in row.iter_mut().zip(b) {
+                    if !r.is_zero() {
+                        *x -= &f * r;
+                    }
+                }
+            }
+        }
+        let Some(pc) = row.iter().position(|q| !q.is_zero()) else {
+            return;
+        };
+        let inv = row[pc].clone();
+        for x in row.iter_mut() {
+            *x /= &inv;
+        }
+        for (_, b) in self.basis.iter_mut() {
+            if !b[pc].is_zero() {
+                let f = b[pc].clone();
+                for (x, r) in b.iter_mut().zip(&row) {
+                    if !r.is_zero() {
+                        *x -= &f * r;
+                    }
+                }
+            }
+        }
+        self.basis.push((pc, row));
+    }
+    /// `Σ c_S χ_S` for a null vector `c` of the evaluation matrix, if it is
+    /// rank deficient: a free column `j`, minus its pivot rows' entries.
+    fn null_poly(&self) -> Option<BTreeMap<Vec<usize>, Q>> {
+        let pivots: BTreeSet<usize> = self.basis.iter().map(|(pc, _)| *pc).collect();
+        let j = (0..self.chars.len()).find(|j| !pivots.contains(j))?;
+        let mut poly = BTreeMap::new();
+        poly.insert(self.chars[j].clone(), Q::one());
+        for (pc, row) in &self.basis {
+            if !row[j].is_zero() {
+                poly.insert(self.chars[*pc].clone(), -row[j].clone());
+            }
+        }
+        Some(poly)
+    }
+}
+
+/// A point of {±1}ⁿ (over `args`, the rest +1) where the first of these
+/// nonzero multilinear polynomials `Σ c_S χ_S` does not vanish, and as many
+/// of the others as the choices allow: variable by variable, write each
+/// `g + s·h`; if `h ≠ 0` one of `g + h`, `g − h` is nonzero (they differ by
+/// `2h`), so a polynomial forbids at most one sign; the first one alive is
+/// obeyed, the others by majority. The first stays nonzero to the end, a
+/// nonzero constant.
+fn nonzero_point(polys: Vec<BTreeMap<Vec<usize>, Q>>, args: &[usize], n: usize) -> SignPattern {
+    let mut p = vec![1i8; n];
+    let mut alive = polys;
+    for &i in args {
+        // For each polynomial: (g + h, g − h), or None when s_i is absent.
+        let split: Vec<Option<(Poly, Poly)>> = alive
+            .iter()
+            .map(|poly| {
+                if !poly.keys().any(|set| set.binary_search(&i).is_ok()) {
+                    return None;
+                }
+                let mut plus: Poly = BTreeMap::new();
+                let mut minus: Poly = BTreeMap::new();
+                for (set, c) in poly {
+                    match set.binary_search(&i) {
+                        Ok(k) => {
+                            let mut rest = set.clone();
+                            rest.remove(k);
+                            *plus.entry(rest.clone()).or_insert_with(Q::zero) += c;
+                            *minus.entry(rest).or_insert_with(Q::zero) -= c;
+                        }
+                        Err(_) => {
+                            *plus.entry(set.clone()).or_insert_with(Q::zero) += c;
+                            *minus.entry(set.clone()).or_insert_with(Q::zero) += c;
+                        }
+                    }
+                }
+                plus.retain(|_, c| !c.is_zero());
+                minus.retain(|_, c| !c.is_zero());
+                Some((plus, minus))
+            })
+            .collect();
+        let first_forbids_plus = matches!(&split[0], Some((plus, _)) if plus.is_empty());
+        let first_forbids_minus = matches!(&split[0], Some((_, minus)) if minus.is_empty());
+        let sign = if first_forbids_plus {
+            -1
+        } else if first_forbids_minus {
+            1
+        } else {
+            let kills = |minus_side: bool| {
+                split
+                    .iter()
+                    .filter(|s| match s {
+                        Some((plus, minus)) => {
+                            if minus_side {
+                                minus.is_empty()
+                            } else {
+                                plus.is_empty()
+                            }
+                        }
+                        None => false,
+                    })
+                    .count()
+            };
+            if kills(true) < kills(false) { -1 } else { 1 }
+        };
+        p[i] = sign;
+        alive = alive
+            .into_iter()
+            .zip(split)
+            .filter_map(|(poly, s)| match s {
+                None => Some(poly),
+                Some((plus, minus)) => {
+                    let next = if sign > 0 { plus } else { minus };
+                    (!next.is_empty()).then_some(next)
+                }
+            })
+            .collect();
+    }
+    p
+}
+
+/// A row family: an output and a monomial without its sign variables.
+type FamilyKey = (usize, Vec<(StructVar, u32)>);
+
+/// A multilinear polynomial in sign variables: odd sign set → coefficient.
+type Poly = BTreeMap<Vec<usize>, Q>;
 
 impl<'a> Analysis<'a> {
     /// Prepares the analysis of one predictor of a model, with the model's
@@ -798,17 +1033,41 @@ impl<'a> Analysis<'a> {
     pub fn with_centring(ir: &'a Ir, kind: PredictorKind, centring: Centring) -> Analysis<'a> {
         let columns = ir.predictors.get(kind);
         let measured = |p: usize| kind == PredictorKind::Measured && ir.parameters[p].measured;
+        let structural = Structural::new(columns);
+        let order = preference_order(columns, &measured);
+        let blocks_of = blocks(&structural, &order);
         Analysis {
             names: Names {
                 ir,
                 columns,
                 centring,
             },
-            structural: Structural::new(columns),
-            order: preference_order(columns, &measured),
+            structural,
+            order,
             n_signs: ir.sign_args.len(),
             relevant: relevant_signs(ir, kind),
             kind,
+            block_of: {
+                let mut of = vec![None; columns.len()];
+                for (b, cols) in blocks_of.0.iter().enumerate() {
+                    for &c in cols {
+                        of[c] = Some(b);
+                    }
+                }
+                of
+            },
+            param_cols: {
+                let mut m: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+                for (c, col) in columns.iter().enumerate() {
+                    m.entry(col.kind.parameter()).or_default().push(c);
+                }
+                for v in m.values_mut() {
+                    v.sort_by_key(|c| columns[*c].kind.is_nuisance());
+                }
+                m
+            },
+            blocks: blocks_of.0,
+            empty_cols: blocks_of.1,
         }
     }
     /// Reduction for a pattern set.
@@ -826,62 +1085,330 @@ impl<'a> Analysis<'a> {
     }
     /// Are the θ columns of `group` free of every null vector?
     fn group_identifiable(&self, patterns: Patterns, group: &[usize]) -> bool {
-        let red = self.reduce(patterns);
-        let theta: BTreeSet<usize> = self
-            .names
-            .columns
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| matches!(c.kind, ColumnKind::Theta { parameter } if group.contains(&parameter)))
-            .map(|(i, _)| i)
-            .collect();
-        red.null_space()
-            .iter()
-            .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
+        let theta = self.group_theta(group);
+        if theta.iter().any(|c| self.block_of[*c].is_none()) {
+            return false;
+        }
+        // Only the blocks holding the group's columns matter.
+        let involved = self.blocks_holding(theta.iter().copied());
+        self.blocks_ok(patterns, &involved, &|c| theta.contains(&c))
     }
-    /// True when flipping any set of signs only negates whole columns.
-    fn homogeneous(&self) -> bool {
-        (0..self.structural.len()).all(|c| self.structural.homogeneous_signs(c).is_some())
+    /// The blocks holding these columns, sorted.
+    fn blocks_holding(&self, cols: impl Iterator<Item = usize>) -> Vec<usize> {
+        let set: BTreeSet<usize> = cols.filter_map(|c| self.block_of[c]).collect();
+        set.into_iter().collect()
     }
-    /// The smallest set of sign patterns, over the given arguments (others +1),
-    /// for which `ok` holds; `None` if none within the budget.
-    fn search(
+    /// The θ columns of a group of parameters.
+    fn group_theta(&self, group: &[usize]) -> BTreeSet<usize> {
+        group
+            .iter()
+            .flat_map(|p| self.param_cols.get(p).into_iter().flatten())
+            .copied()
+            .filter(|c| !self.names.columns[*c].kind.is_nuisance())
+            .collect()
+    }
+    /// In these blocks, are the columns `need` selects free of every null vector?
+    fn blocks_ok(
         &self,
-        args: &[usize],
-        ok: &dyn Fn(&[SignPattern]) -> bool,
-    ) -> Option<Vec<SignPattern>> {
-        let m = args.len().min(MAX_ENUMERATED_SIGNS);
-        let candidates = self.expand_patterns(&args[..m]);
-        let mut spent = 0usize;
-        for single in &candidates {
-            spent += 1;
-            if ok(std::slice::from_ref(single)) {
-                return Some(vec![single.clone()]);
+        patterns: Patterns,
+        blocks: &[usize],
+        need: &dyn Fn(usize) -> bool,
+    ) -> bool {
+        blocks.iter().all(|&b| {
+            let cols = &self.blocks[b];
+            let e = reduce_block(&self.structural, patterns, cols, self.names.centring);
+            (0..cols.len()).all(|j| {
+                e.pivot[j]
+                    || (!need(cols[j]) && e.combination[j].iter().all(|(k, _)| !need(cols[*k])))
+            })
+        })
+    }
+    /// The sign arguments among `args` (sorted) a block's columns involve.
+    fn block_signs(&self, b: usize, args: &[usize]) -> Vec<usize> {
+        let set: BTreeSet<usize> = self.blocks[b]
+            .iter()
+            .flat_map(|c| self.structural.signs_of(*c))
+            .filter(|i| args.binary_search(i).is_ok())
+            .collect();
+        set.into_iter().collect()
+    }
+    /// True when, over the sign arguments `args`, every monomial of each
+    /// column of these blocks carries the same odd sign set: flipping signs
+    /// then only negates whole columns, which changes no rank.
+    fn homogeneous_over(&self, blocks: &[usize], args: &[usize]) -> bool {
+        blocks.iter().all(|&b| {
+            self.blocks[b].iter().all(|&c| {
+                let mut sets = self.structural.cols[c]
+                    .iter()
+                    .map(|(_, _, vars)| odd_signs(vars, args));
+                let first = sets.next().unwrap_or_default();
+                sets.all(|s| s == first)
+            })
+        })
+    }
+    /// The smallest set of sign patterns over `args` (sorted; the other
+    /// signs +1) for which the columns `need` selects are free of every null
+    /// vector; `None` when no set of patterns over `args` achieves it.
+    ///
+    /// Exact for any number of arguments, by two facts. (1) With the signs
+    /// symbolic the Walsh characters of distinct sign sets are linearly
+    /// independent functions on {±1}ⁿ, so some set of patterns achieves it
+    /// iff [`Patterns::Symbolic`] does, and a set does iff its evaluation
+    /// matrix over the characters the columns hold has the rank the symbolic
+    /// rows need; one pattern per character suffices, found deterministically
+    /// ([`Analysis::completion`]). (2) The stacked matrix is block diagonal
+    /// over output blocks and a block sees only its own signs, so the sign
+    /// arguments fall into components (arguments shared by a block) whose
+    /// pattern sets can be chosen independently; a set of k patterns works
+    /// iff its projection on every component works, so the smallest size is
+    /// the largest of the components' smallest sizes, and the components'
+    /// sets, padded by repeating a pattern, combine into one set of that
+    /// size. Only a component whose own patterns are too many to enumerate
+    /// within [`SEARCH_BUDGET`] leaves minimality undecided (never the verdict).
+    pub fn smallest(&self, args: &[usize], needed: &BTreeSet<usize>) -> Option<Found> {
+        let need = &|c: usize| needed.contains(&c);
+        if needed.iter().any(|c| self.block_of[*c].is_none()) {
+            return None;
+        }
+        let involved = self.blocks_holding(needed.iter().copied());
+        if !self.blocks_ok(Patterns::Symbolic(args), &involved, need) {
+            return None;
+        }
+        // Components: blocks that share a sign argument.
+        let mut parent: Vec<usize> = (0..args.len()).collect();
+        fn find(p: &mut [usize], x: usize) -> usize {
+            let mut r = x;
+            while p[r] != r {
+                r = p[r];
+            }
+            p[x] = r;
+            r
+        }
+        let sigs: Vec<(usize, Vec<usize>)> = involved
+            .iter()
+            .map(|b| {
+                let sig: Vec<usize> = self
+                    .block_signs(*b, args)
+                    .iter()
+                    .filter_map(|i| args.binary_search(i).ok())
+                    .collect();
+                (*b, sig)
+            })
+            .filter(|(_, sig)| !sig.is_empty())
+            .collect();
+        for (_, sig) in &sigs {
+            for w in sig.windows(2) {
+                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+                if a != b {
+                    parent[b] = a;
+                }
             }
         }
-        // Under sign flips columns only change sign when homogeneous, so one
-        // experiment may be taken all-plus without loss of generality.
-        let fix_first = self.homogeneous();
-        for size in 2..=4usize.min(candidates.len()) {
+        let mut components: BTreeMap<usize, (BTreeSet<usize>, Vec<usize>)> = BTreeMap::new();
+        for (b, sig) in &sigs {
+            let root = find(&mut parent, sig[0]);
+            let entry = components.entry(root).or_default();
+            entry.0.extend(sig.iter().map(|k| args[*k]));
+            entry.1.push(*b);
+        }
+        let mut sets: Vec<(Vec<usize>, Vec<SignPattern>)> = Vec::new();
+        let mut untried: Vec<String> = Vec::new();
+        for (comp_args, comp_blocks) in components.into_values() {
+            let comp_args: Vec<usize> = comp_args.into_iter().collect();
+            let c = self.component_search(&comp_args, &comp_blocks, need)?;
+            if let Some(below) = c.exhausted_below {
+                let names: Vec<String> = comp_args
+                    .iter()
+                    .map(|i| self.names.ir.sign_args[*i].name.clone())
+                    .collect();
+                let top = c.patterns.len() - 1;
+                let sizes = if below == top {
+                    format!(
+                        "sets of {below} pattern{}",
+                        if below == 1 { "" } else { "s" }
+                    )
+                } else {
+                    format!("sets of {below} to {top} patterns")
+                };
+                untried.push(format!(
+                    "{sizes} of the {} interacting sign arguments {}",
+                    comp_args.len(),
+                    names.join(", ")
+                ));
+            }
+            sets.push((comp_args, c.patterns));
+        }
+        let k = sets.iter().map(|(_, s)| s.len()).max().unwrap_or(1);
+        let patterns: Vec<SignPattern> = (0..k)
+            .map(|j| {
+                let mut p = vec![1i8; self.n_signs];
+                for (comp_args, set) in &sets {
+                    let w = &set[j.min(set.len() - 1)];
+                    for &a in comp_args {
+                        p[a] = w[a];
+                    }
+                }
+                p
+            })
+            .collect();
+        debug_assert!(self.blocks_ok(Patterns::Set(&patterns), &involved, need));
+        Some(Found {
+            patterns,
+            untried: (!untried.is_empty()).then(|| {
+                format!(
+                    "the search for a smaller set was cut at its budget of {SEARCH_BUDGET} rank evaluations per component before trying {}",
+                    untried.join("; ")
+                )
+            }),
+        })
+    }
+    /// The smallest set of patterns over one component's arguments (see
+    /// [`Analysis::smallest`]).
+    fn component_search(
+        &self,
+        args: &[usize],
+        blocks: &[usize],
+        need: &dyn Fn(usize) -> bool,
+    ) -> Option<ComponentSet> {
+        let ok = |set: &[SignPattern]| self.blocks_ok(Patterns::Set(set), blocks, need);
+        let upper = self.completion(args, blocks);
+        if !ok(&upper) {
+            return None;
+        }
+        let u = upper.len();
+        let done = |patterns: Vec<SignPattern>, exhausted_below: Option<usize>| {
+            Some(ComponentSet {
+                patterns,
+                exhausted_below,
+            })
+        };
+        // Each pattern gives one row per family (output, monomial without
+        // its signs), so the θ columns living in one family alone, which must
+        // be independent, need at least as many patterns.
+        let mut per_family: BTreeMap<FamilyKey, usize> = BTreeMap::new();
+        for &b in blocks {
+            for &c in self.blocks[b].iter().filter(|c| need(**c)) {
+                let mut families = self.structural.cols[c].iter().map(|(o, _, vars)| {
+                    let rest: Vec<(StructVar, u32)> = vars
+                        .iter()
+                        .filter(|(v, _)| !matches!(v, StructVar::Sign(_)))
+                        .copied()
+                        .collect();
+                    (*o, rest)
+                });
+                if let Some(first) = families.next()
+                    && !first.1.is_empty()
+                    && families.all(|f| f == first)
+                {
+                    *per_family.entry(first).or_default() += 1;
+                }
+            }
+        }
+        let lower = per_family.values().copied().max().unwrap_or(1).max(1);
+        if lower >= u {
+            return done(upper, None);
+        }
+        // Candidates by index: bit k of the index is the sign of args[k].
+        let bits = args.len().min(60);
+        let n_cand = 1usize << bits;
+        let candidate = |index: usize| -> SignPattern {
+            let mut p = vec![1i8; self.n_signs];
+            for (k, a) in args.iter().enumerate().take(bits) {
+                if index >> k & 1 == 1 {
+                    p[*a] = -1;
+                }
+            }
+            p
+        };
+        // With homogeneous columns a common flip of every pattern changes no
+        // rank, so one experiment may be taken all-plus.
+        let fix_first = self.homogeneous_over(blocks, args);
+        let mut spent = 0usize;
+        for size in lower..=u {
+            // The sets of this size to try; when more than the budget left,
+            // the size cannot be exhausted (the found set is minimal anyway
+            // once every smaller size was).
+            let count = if fix_first {
+                binomial(n_cand - 1, size - 1)
+            } else {
+                binomial(n_cand, size)
+            };
+            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent {
+                return done(upper, (size < u).then_some(size));
+            }
+            if size > n_cand {
+                break;
+            }
             let mut idx: Vec<usize> = (0..size).collect();
             loop {
                 if fix_first && idx[0] != 0 {
                     break;
                 }
                 spent += 1;
-                if spent > SEARCH_BUDGET {
-                    return None;
-                }
-                let set: Vec<SignPattern> = idx.iter().map(|i| candidates[*i].clone()).collect();
+                let set: Vec<SignPattern> = idx.iter().map(|i| candidate(*i)).collect();
                 if ok(&set) {
-                    return Some(set);
+                    return done(set, None);
                 }
-                if !next_combination(&mut idx, candidates.len()) {
+                if !next_combination(&mut idx, n_cand) {
                     break;
                 }
             }
         }
-        None
+        done(upper, None)
+    }
+    /// A set of patterns over `args` that identifies whatever the symbolic
+    /// signs identify in these blocks, all-plus first. Rows of one family
+    /// (output, monomial without its signs) are `Σ_S χ_S(p)·b_S` over the
+    /// sign characters `S` the family holds, so a set whose evaluation
+    /// matrix `[χ_S(p)]` has full column rank in every family has the
+    /// symbolic null space. While a family is rank deficient, a null vector
+    /// `c` of its matrix gives the nonzero multilinear polynomial `Σ c_S χ_S`;
+    /// a point where it does not vanish (found variable by variable, keeping
+    /// as many other deficient families' polynomials nonzero as possible)
+    /// raises that family's rank. At most one pattern per character.
+    fn completion(&self, args: &[usize], blocks: &[usize]) -> Vec<SignPattern> {
+        let mut by_family: BTreeMap<FamilyKey, BTreeSet<Vec<usize>>> = BTreeMap::new();
+        for &b in blocks {
+            for &c in &self.blocks[b] {
+                for (o, _, vars) in &self.structural.cols[c] {
+                    let rest: Vec<(StructVar, u32)> = vars
+                        .iter()
+                        .filter(|(v, _)| !matches!(v, StructVar::Sign(_)))
+                        .copied()
+                        .collect();
+                    let entry = by_family.entry((*o, rest.clone())).or_default();
+                    entry.insert(odd_signs(vars, args));
+                    if rest.is_empty() {
+                        entry.insert(Vec::new());
+                    }
+                }
+            }
+        }
+        let mut families: Vec<Family> = by_family
+            .into_values()
+            .filter(|chars| chars.len() > 1)
+            .map(|chars| Family {
+                chars: chars.into_iter().collect(),
+                basis: Vec::new(),
+            })
+            .collect();
+        let mut set = vec![vec![1i8; self.n_signs]];
+        for f in &mut families {
+            f.add(&set[0]);
+        }
+        loop {
+            let polys: Vec<BTreeMap<Vec<usize>, Q>> =
+                families.iter().filter_map(Family::null_poly).collect();
+            if polys.is_empty() {
+                break;
+            }
+            let p = nonzero_point(polys, args, self.n_signs);
+            for f in &mut families {
+                f.add(&p);
+            }
+            set.push(p);
+        }
+        set
     }
     /// Every pattern over `args`, the other signs +1, all-plus first.
     pub fn expand_patterns(&self, args: &[usize]) -> Vec<SignPattern> {
@@ -896,38 +1423,79 @@ impl<'a> Analysis<'a> {
             })
             .collect()
     }
-    /// The smallest set of sign patterns identifying θ (if θ is identifiable from any).
-    pub fn required_patterns(&self) -> Option<Vec<SignPattern>> {
-        if !self.identifiable(Patterns::All) {
-            return None;
-        }
-        self.search(&self.relevant, &|set| self.identifiable(Patterns::Set(set)))
-            .or_else(|| {
-                // Pointwise moduli of measured media may change sign too (within an
-                // experiment or between experiments): search over them as well.
-                let all: Vec<usize> = (0..self.n_signs).collect();
-                (all.len() > self.relevant.len())
-                    .then(|| self.search(&all, &|set| self.identifiable(Patterns::Set(set))))
-                    .flatten()
-            })
+    /// The smallest set of sign patterns identifying θ, if any identifies it:
+    /// first over the signs the predictor fixes per experiment (pointwise ones
+    /// +1), else over every sign argument (pointwise moduli may change sign
+    /// within an experiment or between experiments).
+    pub fn required(&self) -> Option<Found> {
+        let theta: BTreeSet<usize> = (0..self.names.columns.len())
+            .filter(|c| !self.names.columns[*c].kind.is_nuisance())
+            .collect();
+        self.smallest(&self.relevant, &theta).or_else(|| {
+            let all: Vec<usize> = (0..self.n_signs).collect();
+            (all.len() > self.relevant.len())
+                .then(|| self.smallest(&all, &theta))
+                .flatten()
+        })
     }
-    /// Whether one experiment of any sign pattern identifies θ.
+    /// The smallest set of sign patterns identifying θ (if θ is identifiable
+    /// from any; see [`Analysis::required`] for whether it is proven smallest).
+    pub fn required_patterns(&self) -> Option<Vec<SignPattern>> {
+        self.required().map(|f| f.patterns)
+    }
+    /// Whether one experiment of any sign pattern (over the signs the
+    /// predictor fixes) identifies θ; `None` when a block holds too many
+    /// interacting sign arguments to check every pattern within the budget.
     pub fn any_single_pattern(&self) -> Option<bool> {
-        if self.relevant.len() > MAX_ENUMERATED_SIGNS {
-            return None;
+        self.any_single_pattern_given(self.required().as_ref())
+    }
+    /// [`Analysis::any_single_pattern`] with the required set known.
+    pub fn any_single_pattern_given(&self, required: Option<&Found>) -> Option<bool> {
+        match required {
+            None => return Some(false),
+            Some(f) if f.untried.is_none() && f.patterns.len() > 1 => return Some(false),
+            _ => {}
         }
-        Some(
-            self.expand_patterns(&self.relevant)
-                .iter()
-                .all(|p| self.identifiable(Patterns::Set(std::slice::from_ref(p)))),
-        )
+        self.any_single_blocks()
+    }
+    /// [`Analysis::any_single_pattern`] block by block: each block sees only
+    /// its own signs, so every pattern of those is tried (one when the block
+    /// is homogeneous).
+    pub fn any_single_blocks(&self) -> Option<bool> {
+        let theta = |c: usize| !self.names.columns[c].kind.is_nuisance();
+        if self.empty_cols.iter().any(|c| theta(*c)) {
+            return Some(false);
+        }
+        // Blocks are independent and each sees only its own signs.
+        for b in 0..self.blocks.len() {
+            if !self.blocks[b].iter().any(|c| theta(*c)) {
+                continue;
+            }
+            let sig = self.block_signs(b, &self.relevant);
+            let candidates = if self.homogeneous_over(&[b], &sig) {
+                vec![vec![1i8; self.n_signs]]
+            } else if sig.len() < usize::BITS as usize - 1 && (1usize << sig.len()) <= SEARCH_BUDGET
+            {
+                self.expand_patterns(&sig)
+            } else {
+                return None;
+            };
+            for p in &candidates {
+                if !self.blocks_ok(Patterns::Set(std::slice::from_ref(p)), &[b], &theta) {
+                    return Some(false);
+                }
+            }
+        }
+        Some(true)
     }
     /// What separates an unidentifiable group.
     pub fn separation(&self, combination: &Combination) -> Separation {
         let group = &combination.parameters;
         let cols = self.names.columns;
-        let member_cols: Vec<usize> = (0..cols.len())
-            .filter(|c| group.contains(&cols[*c].kind.parameter()))
+        let member_cols: Vec<usize> = group
+            .iter()
+            .flat_map(|p| self.param_cols.get(p).into_iter().flatten())
+            .copied()
             .collect();
         let args: Vec<usize> = member_cols
             .iter()
@@ -967,10 +1535,12 @@ impl<'a> Analysis<'a> {
         let theta_signs: Vec<Option<BTreeSet<usize>>> = group
             .iter()
             .filter_map(|p| {
-                cols.iter()
-                    .position(|c| c.kind == ColumnKind::Theta { parameter: *p })
+                self.param_cols
+                    .get(p)
+                    .and_then(|cs| cs.first())
+                    .filter(|c| cols[**c].kind == ColumnKind::Theta { parameter: *p })
             })
-            .map(|c| self.structural.homogeneous_signs(c))
+            .map(|c| self.structural.homogeneous_signs(*c))
             .collect();
         if !self.group_identifiable(Patterns::All, group) {
             let texts: Vec<String> = group.iter().map(|p| self.names.term_text(*p)).collect();
@@ -996,9 +1566,13 @@ impl<'a> Analysis<'a> {
                 message: format!("no experiment separates {list}: {why}"),
             };
         }
-        let found = self.search(&args, &|set| {
-            self.group_identifiable(Patterns::Set(set), group)
-        });
+        let group_theta = self.group_theta(group);
+        let every: Vec<usize> = (0..self.n_signs).collect();
+        let searched = self
+            .smallest(&args, &group_theta)
+            .or_else(|| self.smallest(&every, &group_theta));
+        let cut = searched.as_ref().and_then(|f| f.untried.clone());
+        let found = searched.map(|f| f.patterns);
         let message = match (&found, theta_signs.as_slice()) {
             (Some(_), [Some(a), Some(b)]) => {
                 let diff: Vec<usize> = a.symmetric_difference(b).copied().collect();
@@ -1024,9 +1598,11 @@ impl<'a> Analysis<'a> {
                 "{list} are separated by the sign patterns {}",
                 patterns_text(self.names.ir, set, self.kind)
             ),
-            (None, _) => {
-                format!("{list}: no set of up to four sign patterns separates them (search budget)")
-            }
+            (None, _) => format!("{list}: no set of sign patterns separates them"),
+        };
+        let message = match cut {
+            Some(cut) => format!("{message} (not proven the fewest: {cut})"),
+            None => message,
         };
         Separation {
             parameters: group.clone(),
@@ -1034,6 +1610,22 @@ impl<'a> Analysis<'a> {
             message,
         }
     }
+}
+
+/// `C(n, k)`, saturating at `usize::MAX`.
+fn binomial(n: usize, k: usize) -> usize {
+    if k > n {
+        return 0;
+    }
+    let k = k.min(n - k);
+    let mut out: u128 = 1;
+    for i in 0..k {
+        out = out * (n - i) as u128 / (i + 1) as u128;
+        if out > usize::MAX as u128 {
+            return usize::MAX;
+        }
+    }
+    out as usize
 }
 
 /// Advances `idx` (strictly increasing, below `n`) to the next combination.
@@ -1192,11 +1784,16 @@ pub struct Options {
 
 /// θ indices of constant terms (`X_0`): parameters all of whose terms have no factor.
 pub fn constant_parameters(ir: &Ir) -> Vec<usize> {
+    // One pass over the terms: (has a term, every term is constant).
+    let mut seen = vec![(false, true); ir.parameters.len()];
+    for t in &ir.terms {
+        if let Some(s) = seen.get_mut(t.parameter) {
+            s.0 = true;
+            s.1 &= t.factors.is_empty();
+        }
+    }
     (0..ir.parameters.len())
-        .filter(|p| {
-            let mut terms = ir.terms.iter().filter(|t| t.parameter == *p).peekable();
-            terms.peek().is_some() && terms.all(|t| t.factors.is_empty())
-        })
+        .filter(|p| seen[*p] == (true, true))
         .collect()
 }
 
@@ -1295,6 +1892,12 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
     let check_set = options.patterns.clone().unwrap_or_else(|| baseline.clone());
     let red_check = a.reduce(Patterns::Set(&check_set));
     let v_check = verdict(&a.names, &red_check);
+    let mut search_cut = None;
+    let found = if options.patterns.is_some() {
+        None
+    } else {
+        a.required()
+    };
     let required = if options.patterns.is_some() {
         if v_check.identifiable {
             check_set.clone()
@@ -1302,7 +1905,13 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
             Vec::new()
         }
     } else {
-        a.required_patterns().unwrap_or_default()
+        match &found {
+            Some(f) => {
+                search_cut.clone_from(&f.untried);
+                f.patterns.clone()
+            }
+            None => Vec::new(),
+        }
     };
     let identifiable = !required.is_empty();
     let reduction_set = if options.patterns.is_some() || !identifiable {
@@ -1312,7 +1921,25 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
     };
     let red = a.reduce(Patterns::Set(&reduction_set));
     let v = verdict(&a.names, &red);
-    let (notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
+    let single = if options.patterns.is_some() {
+        a.any_single_blocks()
+    } else {
+        a.any_single_pattern_given(found.as_ref())
+    };
+    let mut single_note = None;
+    let any_single_pattern = match single {
+        Some(b) => b,
+        None => {
+            let why = "whether one experiment of any sign pattern identifies θ was not checked: an output block holds too many interacting sign arguments to try each pattern";
+            // Not part of the verdict: said with the cut search, or as a note.
+            match &mut search_cut {
+                Some(cut) => *cut = format!("{cut}; {why}"),
+                None => single_note = Some(why.to_string()),
+            }
+            false
+        }
+    };
+    let (mut notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
     let separations = v_check
         .combinations
         .iter()
@@ -1335,7 +1962,7 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
         centring: Some(centring),
         centring_reason: centring.reason(ir, PredictorKind::Measured),
         identifiable,
-        any_single_pattern: a.any_single_pattern().unwrap_or(v_check.identifiable),
+        any_single_pattern,
         required_patterns: required,
         patterns: reduction_set,
         unidentifiable: v_check.combinations,
@@ -1346,6 +1973,10 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
         } else {
             Vec::new()
         },
-        notes,
+        notes: {
+            notes.extend(single_note);
+            notes
+        },
+        search_cut,
     }
 }

@@ -487,6 +487,25 @@ pub struct Report {
     /// Why that centring is valid for this model.
     #[serde(default)]
     pub centring_reason: String,
+    /// `None` when the search for the smallest set of experiments was exact;
+    /// otherwise what its budget left untried. θ is then still proven
+    /// identifiable from `required_patterns` (the verdict is exact), but a
+    /// smaller set may exist, and `any_single_pattern` may be unproven.
+    #[serde(default)]
+    pub search_cut: Option<String>,
+}
+
+impl Report {
+    /// `identifiable`, `not-identifiable` or `undecided` (θ identifiable from
+    /// `required_patterns`, but whether fewer experiments suffice was cut by
+    /// the search budget).
+    pub fn verdict(&self) -> &'static str {
+        match (self.identifiable, &self.search_cut) {
+            (false, _) => "not-identifiable",
+            (true, None) => "identifiable",
+            (true, Some(_)) => "undecided",
+        }
+    }
 }
 
 /// A set of parameters that enter only through combinations.

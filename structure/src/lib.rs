@@ -125,11 +125,19 @@ fn unused_declarations(
     diags: &mut Vec<Diagnostic>,
 ) {
     use ir::Signal;
+    // One pass over the terms (a model may have 10⁴ inputs and terms).
+    let mut used_inputs = std::collections::BTreeSet::new();
+    let mut used_relatives = std::collections::BTreeSet::new();
+    for f in terms.iter().flat_map(|t| t.factors.iter()) {
+        if let Signal::Input(i) = f.arg.signal {
+            used_inputs.insert(i);
+        }
+        if let Some(ri) = f.arg.relative {
+            used_relatives.insert(ri);
+        }
+    }
     for (i, input) in r.inputs.iter().enumerate() {
-        if !terms
-            .iter()
-            .any(|t| t.factors.iter().any(|f| f.arg.signal == Signal::Input(i)))
-        {
+        if !used_inputs.contains(&i) {
             diags.push(
                 Diagnostic::warning(
                     "unused-declaration",
@@ -141,10 +149,7 @@ fn unused_declarations(
         }
     }
     for (ri, (name, _)) in r.relatives.iter().enumerate() {
-        if !terms
-            .iter()
-            .any(|t| t.factors.iter().any(|f| f.arg.relative == Some(ri)))
-        {
+        if !used_relatives.contains(&ri) {
             diags.push(
                 Diagnostic::warning(
                     "unused-declaration",
@@ -176,10 +181,15 @@ fn unused_declarations(
 
 fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagnostic>) {
     let r = &ir.report;
+    // The first term of each parameter, once (a model may have 10⁴ groups).
+    let mut first_term: std::collections::BTreeMap<usize, &ir::Term> = Default::default();
+    for t in ir.terms.iter().rev() {
+        first_term.insert(t.parameter, t);
+    }
     let labels_for = |params: &[usize]| -> Vec<Label> {
         params
             .iter()
-            .filter_map(|p| ir.terms.iter().find(|t| t.parameter == *p))
+            .filter_map(|p| first_term.get(p).copied())
             .enumerate()
             .map(|(i, t)| Label {
                 span: t.span,
@@ -189,6 +199,7 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             .collect()
     };
     if !r.identifiable {
+        let constants = identify::constant_parameters(ir);
         for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
             let mut d = if options.aggregate {
                 Diagnostic::warning(
@@ -203,7 +214,6 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             };
             d.labels = labels_for(&c.parameters);
             d = d.with_note(s.message.clone());
-            let constants = identify::constant_parameters(ir);
             d = if options.aggregate {
                 d.with_help("the absorbed parameters are held at their nominal values; the kept ones estimate the combinations above")
             } else if c.parameters.iter().all(|p| constants.contains(p)) {
@@ -215,6 +225,24 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             };
             diags.push(d);
         }
+    } else if let Some(cut) = &r.search_cut {
+        let mut d = Diagnostic::warning(
+            "search-cut",
+            format!(
+                "θ is identifiable from {} experiment{} with sign pattern{} {}; whether fewer suffice is undecided",
+                r.required_patterns.len(),
+                if r.required_patterns.len() == 1 { "" } else { "s" },
+                if r.required_patterns.len() == 1 { "" } else { "s" },
+                identify::patterns_text(ir, &r.required_patterns, ir::PredictorKind::Measured)
+            ),
+        )
+        .with_note(cut.clone());
+        if let Some(first) = r.unidentifiable.first() {
+            d.labels = labels_for(&first.parameters);
+        }
+        diags.push(d.with_help(
+            "the verdict is exact: these experiments identify θ; name the experiments you plan with --pattern to check them exactly",
+        ));
     } else if r.required_patterns.len() > 1 {
         let mut d = Diagnostic::note(
             "required-experiments",

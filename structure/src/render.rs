@@ -320,8 +320,17 @@ pub fn render(ir: &Ir) -> String {
             r.required_patterns.len(),
             patterns_text(ir, &r.required_patterns, PredictorKind::Measured)
         );
+    }
+    if let Some(cut) = r.search_cut.as_ref().filter(|_| r.identifiable) {
+        let _ = writeln!(
+            o,
+            "  verdict undecided: whether fewer experiments suffice ({cut})"
+        );
+    }
+    if r.identifiable {
+        // Said above.
     } else if Analysis::new(ir, PredictorKind::Measured).identifiable(Patterns::All) {
-        // Every sign pattern together identifies θ: more experiments would do.
+        // Every sign pattern together identifies θ, but not the analysed ones.
         let _ = writeln!(
             o,
             "  NOT identifiable from the analysed experiments {}; more experiments would identify it",

@@ -22,6 +22,12 @@ pub struct Report {
     parameters: Vec<String>,
     /// θ identifiable from the required (or the given) sign patterns.
     identifiable: bool,
+    /// `identifiable` (exit 0), `not-identifiable` (exit 1), `undecided` (θ
+    /// identifiable from `required_sign_patterns`, exit 0, but the search for
+    /// a smaller set was cut by its budget); null when the model has errors.
+    verdict: Option<&'static str>,
+    /// With `undecided`: what the search did not try; null otherwise.
+    search_cut: Option<String>,
     /// θ identifiable from one experiment whatever its sign pattern.
     any_single_pattern: bool,
     /// `--aggregate` was given.
@@ -189,16 +195,27 @@ pub fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
     }
 }
 
-fn pattern(ir: &Ir, p: &SignPattern) -> BTreeMap<String, String> {
-    relevant_signs(ir, PredictorKind::Measured)
-        .into_iter()
-        .map(|i| {
-            let sign = if p.get(i).copied().unwrap_or(1) < 0 {
-                "-"
-            } else {
-                "+"
-            };
-            (ir.sign_args[i].name.clone(), sign.to_string())
+/// A set of experiments as `{argument: sign}` maps: the signs the predictor
+/// fixes, plus any pointwise sign some pattern of the set makes negative (as
+/// the text report shows them).
+fn patterns(ir: &Ir, set: &[SignPattern]) -> Vec<BTreeMap<String, String>> {
+    let relevant = relevant_signs(ir, PredictorKind::Measured);
+    let shown: Vec<usize> = (0..ir.sign_args.len())
+        .filter(|i| relevant.contains(i) || set.iter().any(|p| p.get(*i).copied().unwrap_or(1) < 0))
+        .collect();
+    set.iter()
+        .map(|p| {
+            shown
+                .iter()
+                .map(|&i| {
+                    let sign = if p.get(i).copied().unwrap_or(1) < 0 {
+                        "-"
+                    } else {
+                        "+"
+                    };
+                    (ir.sign_args[i].name.clone(), sign.to_string())
+                })
+                .collect()
         })
         .collect()
 }
@@ -274,6 +291,8 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
         outputs: ir.states.clone(),
         parameters: ir.parameters.iter().map(|p| p.name.clone()).collect(),
         identifiable: r.identifiable,
+        verdict: (!c.has_errors() || c.only_unidentifiable()).then(|| r.verdict()),
+        search_cut: r.search_cut.clone(),
         any_single_pattern: r.any_single_pattern,
         aggregate,
         regressors,
@@ -308,8 +327,8 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
                 fixed_per_experiment: !s.measured,
             })
             .collect(),
-        required_sign_patterns: r.required_patterns.iter().map(|p| pattern(ir, p)).collect(),
-        analysed_sign_patterns: r.patterns.iter().map(|p| pattern(ir, p)).collect(),
+        required_sign_patterns: patterns(ir, &r.required_patterns),
+        analysed_sign_patterns: patterns(ir, &r.patterns),
         unidentifiable: r
             .unidentifiable
             .iter()
@@ -324,10 +343,7 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
             .iter()
             .map(|s| Separation {
                 parameters: names(ir, &s.parameters),
-                sign_patterns: s
-                    .patterns
-                    .as_ref()
-                    .map(|set| set.iter().map(|p| pattern(ir, p)).collect()),
+                sign_patterns: s.patterns.as_ref().map(|set| patterns(ir, set)),
                 message: s.message.clone(),
             })
             .collect(),
@@ -375,6 +391,8 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
         outputs: Vec::new(),
         parameters: Vec::new(),
         identifiable: false,
+        verdict: None,
+        search_cut: None,
         any_single_pattern: false,
         aggregate,
         regressors: Vec::new(),
