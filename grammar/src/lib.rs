@@ -10,4 +10,4 @@ mod parse;
 
 pub use ast::*;
 pub use diagnostic::{Diagnostic, Label, RenderStyle, Severity, line_col, render, render_short};
-pub use parse::{MAX_NESTING, MAX_SOURCE_BYTES, parse};
+pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};
