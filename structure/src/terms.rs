@@ -2,7 +2,7 @@
 //! `coefficient · θ_p · (a | |a| | a·b | a·|b|)`, rejecting everything outside
 //! the second-order modulus class with a located error.
 
-use crate::exact::{Q, fmt_q, parse_decimal};
+use crate::exact::{Q, coefficient_fits, decimal, fmt_q};
 use crate::ir::{Arg, Factor, Signal};
 use crate::resolve::{Resolved, Symbol, names};
 use leeway_grammar::{BinOp, Diagnostic, Expr, Ident, Path, Span};
@@ -137,21 +137,14 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
 
 fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
     match e {
-        Expr::Number(n) => match parse_decimal(&n.text) {
-            Some(q) => Some(vec![Product {
+        Expr::Number(n) => match decimal(&n.text) {
+            Ok(q) => Some(vec![Product {
                 coeff: q,
                 atoms: Vec::new(),
                 span: n.span,
             }]),
-            None => {
-                ctx.diags.push(
-                    Diagnostic::error(
-                        "invalid-number",
-                        format!("`{}` is not a number leeway can represent", n.text),
-                    )
-                    .with_primary(n.span, "here")
-                    .with_help("write a decimal such as 0.5 or 1e-3"),
-                );
+            Err(why) => {
+                ctx.diags.push(crate::resolve::invalid_number(why, n.span));
                 None
             }
         },
@@ -215,7 +208,7 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                             });
                         }
                     }
-                    Some(v)
+                    coefficients_fit(v, *span, ctx)
                 }
                 BinOp::Div => {
                     if r.iter().any(|p| !p.atoms.is_empty()) {
@@ -238,19 +231,33 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                         );
                         return None;
                     }
-                    Some(
-                        l.into_iter()
-                            .map(|mut p| {
-                                p.coeff /= d.clone();
-                                p.span = p.span.join(rhs.span());
-                                p
-                            })
-                            .collect(),
-                    )
+                    let v = l
+                        .into_iter()
+                        .map(|mut p| {
+                            p.coeff /= d.clone();
+                            p.span = p.span.join(rhs.span());
+                            p
+                        })
+                        .collect();
+                    coefficients_fit(v, *span, ctx)
                 }
             }
         }
     }
+}
+
+/// The products, or one `invalid-number` error at `span` when a coefficient
+/// left the range of an `f64` or the size the exact arithmetic allows.
+fn coefficients_fit(v: Vec<Product>, span: Span, ctx: &mut Ctx) -> Option<Vec<Product>> {
+    if v.iter().all(|p| coefficient_fits(&p.coeff)) {
+        return Some(v);
+    }
+    ctx.diags.push(
+        Diagnostic::error("invalid-number", "the numbers of this product multiply out beyond the range of an f64 (about 1e±307) or beyond 4096 bits of exact precision")
+            .with_primary(span, "here")
+            .with_help("multiply the numbers out and write the coefficient once, e.g. 2.5e-3*X*u"),
+    );
+    None
 }
 
 fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
