@@ -173,81 +173,110 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
             Some(v)
         }
         Expr::Paren(inner, _) => sum_of_products(inner, ctx),
-        Expr::Binary { op, lhs, rhs, span } => {
-            let l = sum_of_products(lhs, ctx);
-            let r = sum_of_products(rhs, ctx);
-            let (l, r) = (l?, r?);
-            match op {
-                BinOp::Add => Some([l, r].concat()),
-                BinOp::Sub => {
-                    let mut v = l;
-                    v.extend(r.into_iter().map(|mut p| {
-                        p.coeff = -p.coeff;
-                        p
-                    }));
-                    Some(v)
-                }
-                BinOp::Mul => {
-                    if l.len().saturating_mul(r.len()) > MAX_PRODUCTS {
-                        ctx.diags.push(
-                            Diagnostic::error("expression-too-large", format!("this product expands to more than {MAX_PRODUCTS} terms"))
-                                .with_primary(*span, "too many terms")
-                                .with_help("write the terms out; a second-order model has a handful per equation"),
-                        );
-                        return None;
-                    }
-                    let mut v = Vec::with_capacity(l.len() * r.len());
-                    for a in &l {
-                        for b in &r {
-                            let mut atoms = a.atoms.clone();
-                            atoms.extend(b.atoms.iter().cloned());
-                            v.push(Product {
-                                coeff: &a.coeff * &b.coeff,
-                                atoms,
-                                span: a.span.join(b.span),
-                            });
-                        }
-                    }
-                    coefficients_fit(v, *span, ctx)
-                }
-                BinOp::Div => {
-                    if r.iter().any(|p| !p.atoms.is_empty()) {
-                        ctx.diags.push(
-                            Diagnostic::error("division-by-signal", "only division by a number is allowed")
-                                .with_primary(rhs.span(), "not a number")
-                                .with_help("a regressor divided by a signal or parameter is outside the second-order modulus class; fold known constants into a number"),
-                        );
-                        return None;
-                    }
-                    let d: Q = r
-                        .iter()
-                        .map(|p| p.coeff.clone())
-                        .fold(Q::zero(), |a, b| a + b);
-                    if d.is_zero() {
-                        ctx.diags.push(
-                            Diagnostic::error("division-by-zero", "division by zero")
-                                .with_primary(rhs.span(), "equals 0")
-                                .with_help("check the coefficient"),
-                        );
-                        return None;
-                    }
-                    let v = l
-                        .into_iter()
-                        .map(|mut p| {
-                            p.coeff /= d.clone();
-                            p.span = p.span.join(rhs.span());
-                            p
-                        })
-                        .collect();
-                    coefficients_fit(v, *span, ctx)
-                }
+        Expr::Binary { .. } => {
+            // A chain `a op b op c …` is a left-deep tree as long as the
+            // expression: walk its left spine iteratively, recursing only into
+            // right operands (bounded by the nesting and sign limits).
+            let mut spine = Vec::new();
+            let mut leftmost = e;
+            while let Expr::Binary { op, lhs, rhs, span } = leftmost {
+                spine.push((*op, rhs.as_ref(), *span));
+                leftmost = lhs;
             }
+            let mut acc = sum_of_products(leftmost, ctx);
+            for (op, rhs, span) in spine.into_iter().rev() {
+                let r = sum_of_products(rhs, ctx);
+                acc = match (acc, r) {
+                    (Some(l), Some(r)) => combine(op, l, r, rhs, span, ctx),
+                    _ => None,
+                };
+            }
+            acc
         }
     }
 }
 
-/// The products, or one `invalid-number` error at `span` when a coefficient
-/// left the range of an `f64` or the size the exact arithmetic allows.
+/// `l op r` for the products of both operands.
+fn combine(
+    op: BinOp,
+    l: Vec<Product>,
+    r: Vec<Product>,
+    rhs: &Expr,
+    span: Span,
+    ctx: &mut Ctx,
+) -> Option<Vec<Product>> {
+    match op {
+        BinOp::Add => Some([l, r].concat()),
+        BinOp::Sub => {
+            let mut v = l;
+            v.extend(r.into_iter().map(|mut p| {
+                p.coeff = -p.coeff;
+                p
+            }));
+            Some(v)
+        }
+        BinOp::Mul => {
+            if l.len().saturating_mul(r.len()) > MAX_PRODUCTS {
+                ctx.diags.push(
+                    Diagnostic::error(
+                        "expression-too-large",
+                        format!("this product expands to more than {MAX_PRODUCTS} terms"),
+                    )
+                    .with_primary(span, "too many terms")
+                    .with_help(
+                        "write the terms out; a second-order model has a handful per equation",
+                    ),
+                );
+                return None;
+            }
+            let mut v = Vec::with_capacity(l.len() * r.len());
+            for a in &l {
+                for b in &r {
+                    let mut atoms = a.atoms.clone();
+                    atoms.extend(b.atoms.iter().cloned());
+                    v.push(Product {
+                        coeff: &a.coeff * &b.coeff,
+                        atoms,
+                        span: a.span.join(b.span),
+                    });
+                }
+            }
+            coefficients_fit(v, span, ctx)
+        }
+        BinOp::Div => {
+            if r.iter().any(|p| !p.atoms.is_empty()) {
+                ctx.diags.push(
+                    Diagnostic::error("division-by-signal", "only division by a number is allowed")
+                        .with_primary(rhs.span(), "not a number")
+                        .with_help("a regressor divided by a signal or parameter is outside the second-order modulus class; fold known constants into a number"),
+                );
+                return None;
+            }
+            let d: Q = r
+                .iter()
+                .map(|p| p.coeff.clone())
+                .fold(Q::zero(), |a, b| a + b);
+            if d.is_zero() {
+                ctx.diags.push(
+                    Diagnostic::error("division-by-zero", "division by zero")
+                        .with_primary(rhs.span(), "equals 0")
+                        .with_help("check the coefficient"),
+                );
+                return None;
+            }
+            let v = l
+                .into_iter()
+                .map(|mut p| {
+                    p.coeff /= d.clone();
+                    p.span = p.span.join(rhs.span());
+                    p
+                })
+                .collect();
+            coefficients_fit(v, span, ctx)
+        }
+    }
+}
+
 fn coefficients_fit(v: Vec<Product>, span: Span, ctx: &mut Ctx) -> Option<Vec<Product>> {
     if v.iter().all(|p| coefficient_fits(&p.coeff)) {
         return Some(v);
