@@ -237,8 +237,9 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
     let columns = &ir.predictors.measured;
     let mut regressors = Vec::new();
     let mut nuisance_regressors = Vec::new();
-    for (out, state) in ir.states.iter().enumerate() {
-        for col in columns.iter().filter(|col| col.outputs().contains(&out)) {
+    let by_output = leeway_structure::ir::columns_by_output(columns, ir.states.len());
+    for ((out, state), mine) in ir.states.iter().enumerate().zip(by_output) {
+        for col in mine {
             let expression = column_text(ir, col, out);
             match col.kind {
                 ColumnKind::Theta { parameter } => {
