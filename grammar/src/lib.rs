@@ -7,6 +7,7 @@
 pub mod ast;
 pub mod diagnostic;
 mod parse;
+pub mod source;
 
 pub use ast::*;
 pub use diagnostic::{

@@ -29,13 +29,7 @@ pub const MAX_SIGNS: usize = 8;
 /// parse returns exactly one diagnostic.
 pub fn parse(source: &str) -> (Option<Model>, Vec<Diagnostic>) {
     if source.len() > MAX_SOURCE_BYTES {
-        let d = Diagnostic::error(
-            "file-too-large",
-            format!("the model file is {} bytes; at most {} are accepted", source.len(), MAX_SOURCE_BYTES),
-        )
-        .with_primary(Span::new(0, 0), "")
-        .with_help("a model file holds one craft's equations; split generated text or remove embedded data");
-        return (None, vec![d]);
+        return (None, vec![crate::source::too_large(source.len() as u64)]);
     }
     if let Some(d) = nesting_guard(source).or_else(|| size_guard(source)) {
         return (None, vec![d]);

@@ -46,6 +46,8 @@ pub struct Report {
     errors: Vec<JsonDiagnostic>,
     warnings: Vec<JsonDiagnostic>,
     notes: Vec<JsonDiagnostic>,
+    /// Diagnostics left out: at most the first 50 of each severity are listed.
+    omitted: usize,
 }
 
 #[derive(Debug, Serialize)]
@@ -212,10 +214,18 @@ fn names(ir: &Ir, params: &[usize]) -> Vec<String> {
 
 /// The document for a compiled (or rejected) model.
 pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
+    let mut report = full_report(file, source, c, aggregate);
+    let listed = report.errors.len() + report.warnings.len() + report.notes.len();
+    report.omitted = c.diagnostics.len().saturating_sub(listed);
+    report
+}
+
+fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
     let by = |s: Severity| -> Vec<JsonDiagnostic> {
         c.diagnostics
             .iter()
             .filter(|d| d.severity == s)
+            .take(grammar::MAX_RENDERED)
             .map(|d| diagnostic(file, source, d))
             .collect()
     };
@@ -344,6 +354,7 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
         errors,
         warnings,
         notes,
+        omitted: 0,
     }
 }
 
@@ -389,5 +400,6 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
         errors: Vec::new(),
         warnings: Vec::new(),
         notes: Vec::new(),
+        omitted: 0,
     }
 }
