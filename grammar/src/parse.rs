@@ -314,6 +314,9 @@ fn found_token(source: &str, pos: usize) -> (String, usize) {
         (format!("`{}`", &rest[..len]), pos + len)
     } else if first == '\n' || first == '\r' {
         ("end of line".to_string(), pos + 1)
+    } else if first.is_control() {
+        // Never echo a raw control character (NUL, escape…) to a terminal.
+        (format!("`\\u{{{:x}}}`", u32::from(first)), pos + first.len_utf8())
     } else {
         (format!("`{first}`"), pos + first.len_utf8())
     }
@@ -966,6 +969,7 @@ mod tests {
         assert_eq!(found_token("abc_1.u rest", 0), ("`abc_1.u`".to_string(), 7));
         assert_eq!(found_token("x", 1), ("end of file".to_string(), 1));
         assert_eq!(found_token("\nx", 0), ("end of line".to_string(), 1));
+        assert_eq!(found_token("\u{0}x", 0), ("`\\u{0}`".to_string(), 1));
         let src = "model M { state é }";
         let d = error(src);
         assert_eq!(at(src, &d), "é");

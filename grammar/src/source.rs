@@ -79,8 +79,13 @@ mod tests {
             text,
             "error[not-utf8]: the model file is not UTF-8 text: byte 0xe9 cannot start or continue a character\n  ┌─ m.som:2:19\n  │\n2 │     state u // caf\u{fffd}\n  │                   ^ not UTF-8\n  │\n  = help: save the file as UTF-8 (names and numbers are ASCII; comments may hold any UTF-8 text)\n\n"
         );
-        assert_eq!(decode(b"model M {}".to_vec()).ok().as_deref(), Some("model M {}"));
-        let big = decode(vec![b' '; MAX_SOURCE_BYTES + 1]).err().map(|r| r.diagnostic.code);
+        assert_eq!(
+            decode(b"model M {}".to_vec()).ok().as_deref(),
+            Some("model M {}")
+        );
+        let big = decode(vec![b' '; MAX_SOURCE_BYTES + 1])
+            .err()
+            .map(|r| r.diagnostic.code);
         assert_eq!(big.as_deref(), Some("file-too-large"));
     }
 }
