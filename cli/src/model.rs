@@ -36,16 +36,16 @@ pub fn read_text(path: &Path, what: &str) -> Result<String, Problem> {
 /// [`grammar::MAX_SOURCE_BYTES`] is never read whole: at most one byte more is
 /// read), then the bytes are decoded, a non-UTF-8 file refused with the
 /// line and column of its first invalid byte. `Err` is an IO failure.
-pub fn read_model(path: &Path) -> std::io::Result<Result<String, Refused>> {
+pub fn read_model(path: &Path) -> std::io::Result<Result<String, Box<Refused>>> {
     use std::io::Read;
     let file = std::fs::File::open(path)?;
     let size = file.metadata()?.len();
     let limit = grammar::MAX_SOURCE_BYTES as u64;
     if size > limit {
-        return Ok(Err(Refused {
+        return Ok(Err(Box::new(Refused {
             text: String::new(),
             diagnostic: grammar::source::too_large(size),
-        }));
+        })));
     }
     let mut bytes = Vec::new();
     file.take(limit + 1).read_to_end(&mut bytes)?;

@@ -375,12 +375,18 @@ fn check_path(path: &Path, json: bool) -> Output {
 #[test]
 fn a_non_utf8_model_is_one_located_error() {
     // Issue 10: no line:col and no hint.
-    let path = scratch("latin1.som", b"model M {\n    state u // caf\xe9\n    der u = X*u\n}\n");
+    let path = scratch(
+        "latin1.som",
+        b"model M {\n    state u // caf\xe9\n    der u = X*u\n}\n",
+    );
     let o = check_path(&path, false);
     no_panic(&o);
     assert_eq!(code(&o), 2);
     let err = stderr(&o);
-    assert!(err.contains("error[not-utf8]: the model file is not UTF-8 text: byte 0xe9"), "{err}");
+    assert!(
+        err.contains("error[not-utf8]: the model file is not UTF-8 text: byte 0xe9"),
+        "{err}"
+    );
     assert!(err.contains("latin1.som:2:19"), "{err}");
     assert!(err.contains("help: save the file as UTF-8"), "{err}");
     assert_eq!(err.matches("error[").count(), 1, "{err}");
@@ -398,7 +404,10 @@ fn control_bytes_are_escaped_with_a_caret() {
     assert_eq!(code(&o), 2);
     let err = stderr(&o);
     assert!(!err.contains('\0'), "{err:?}");
-    assert!(err.contains("error[syntax]: expected a declaration, found `\\u{0}`"), "{err}");
+    assert!(
+        err.contains("error[syntax]: expected a declaration, found `\\u{0}`"),
+        "{err}"
+    );
     assert!(err.contains("nul.som:2:12"), "{err}");
     assert!(err.contains("2 │     state u\\u{0}"), "{err}");
     assert!(err.contains("  │            ^"), "{err}");
@@ -432,15 +441,29 @@ fn floods_are_capped() {
     let err = stderr(&o);
     assert!(err.len() < 64 * 1024, "{} bytes", err.len());
     assert_eq!(err.matches("error[duplicate-declaration]").count(), 50);
-    assert!(err.contains("… and 3949 errors more, not shown (the first 50 are above)"), "{}", &err[err.len() - 300..]);
-    assert!(err.ends_with("was not checked: 3999 errors\n"), "{}", &err[err.len() - 300..]);
+    assert!(
+        err.contains("… and 3949 errors more, not shown (the first 50 are above)"),
+        "{}",
+        &err[err.len() - 300..]
+    );
+    assert!(
+        err.ends_with("was not checked: 3999 errors\n"),
+        "{}",
+        &err[err.len() - 300..]
+    );
     let v = json(&check_path(&scratch("dup.som", src.as_bytes()), true));
     assert_eq!(v["errors"].as_array().map(Vec::len), Some(50));
     assert_eq!(v["omitted"], 3949);
     // `X*(u+v)` with 12 factors (117 bytes) gave 4,097 errors and 1.5 MB.
-    let src = format!("model M {{ state u, v\n der u = X*{}\n der v = Y*v }}\n", ["(u+v)"; 12].join("*"));
+    let src = format!(
+        "model M {{ state u, v\n der u = X*{}\n der v = Y*v }}\n",
+        ["(u+v)"; 12].join("*")
+    );
     let o = check_path(&scratch("f12.som", src.as_bytes()), false);
     let err = stderr(&o);
     assert_eq!(err.matches("error[").count(), 1, "{err}");
-    assert!(err.contains("note: 4095 more terms of this expression have the same problem"), "{err}");
+    assert!(
+        err.contains("note: 4095 more terms of this expression have the same problem"),
+        "{err}"
+    );
 }

@@ -271,17 +271,17 @@ pub fn include_model(input: TokenStream, invocation: &Invocation) -> TokenStream
 /// `MAX_SOURCE_BYTES + 1` bytes are read, then decoded as UTF-8.
 fn read_model(
     path: &std::path::Path,
-) -> std::io::Result<Result<String, leeway_structure::grammar::source::Refused>> {
+) -> std::io::Result<Result<String, Box<leeway_structure::grammar::source::Refused>>> {
     use leeway_structure::grammar::{self, source};
     use std::io::Read;
     let file = std::fs::File::open(path)?;
     let size = file.metadata()?.len();
     let limit = grammar::MAX_SOURCE_BYTES as u64;
     if size > limit {
-        return Ok(Err(source::Refused {
+        return Ok(Err(Box::new(source::Refused {
             text: String::new(),
             diagnostic: source::too_large(size),
-        }));
+        })));
     }
     let mut bytes = Vec::new();
     file.take(limit + 1).read_to_end(&mut bytes)?;

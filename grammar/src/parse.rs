@@ -316,7 +316,10 @@ fn found_token(source: &str, pos: usize) -> (String, usize) {
         ("end of line".to_string(), pos + 1)
     } else if first.is_control() {
         // Never echo a raw control character (NUL, escape…) to a terminal.
-        (format!("`\\u{{{:x}}}`", u32::from(first)), pos + first.len_utf8())
+        (
+            format!("`\\u{{{:x}}}`", u32::from(first)),
+            pos + first.len_utf8(),
+        )
     } else {
         (format!("`{first}`"), pos + first.len_utf8())
     }

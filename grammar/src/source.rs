@@ -30,7 +30,7 @@ pub fn too_large(size: u64) -> Diagnostic {
 /// The text of a model file read as bytes (at most [`MAX_SOURCE_BYTES`] are
 /// accepted), or why not: too large, or not UTF-8 — located at the first
 /// invalid byte.
-pub fn decode(bytes: Vec<u8>) -> Result<String, Refused> {
+pub fn decode(bytes: Vec<u8>) -> Result<String, Box<Refused>> {
     if bytes.len() > MAX_SOURCE_BYTES {
         let diagnostic = Diagnostic::error(
             "file-too-large",
@@ -38,10 +38,10 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, Refused> {
         )
         .with_primary(Span::new(0, 0), "")
         .with_help("a model file holds one craft's equations; pass the model, not a data file, and split generated text");
-        return Err(Refused {
+        return Err(Box::new(Refused {
             text: String::new(),
             diagnostic,
-        });
+        }));
     }
     match String::from_utf8(bytes) {
         Ok(text) => Ok(text),
@@ -58,7 +58,7 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, Refused> {
             )
             .with_primary(Span::new(at, at + width), "not UTF-8")
             .with_help("save the file as UTF-8 (names and numbers are ASCII; comments may hold any UTF-8 text)");
-            Err(Refused { text, diagnostic })
+            Err(Box::new(Refused { text, diagnostic }))
         }
     }
 }

@@ -267,8 +267,8 @@ fn check_small_stack(source: String, aggregate: bool) -> Result<(), TestCaseErro
 /// One operand or operator piece of a long expression.
 fn piece() -> impl Strategy<Value = &'static str> {
     prop::sample::select(vec![
-        "*1", "*u", "+X*u", "-Y*v", "/2", "*(u+v)", "*|u|", "*-", "*- -", "+(", ")", "*|(", "|)", "*1e-300", "*9e307",
-        "*0.5", "+1", "*X", "*((u))",
+        "*1", "*u", "+X*u", "-Y*v", "/2", "*(u+v)", "*|u|", "*-", "*- -", "+(", ")", "*|(", "|)",
+        "*1e-300", "*9e307", "*0.5", "+1", "*X", "*((u))",
     ])
 }
 
@@ -306,8 +306,14 @@ fn wide_model() -> impl Strategy<Value = String> {
 
 /// Number literals: long mantissas, huge and tiny exponents, in equations and `nominal`.
 fn literal() -> impl Strategy<Value = String> {
-    ("[0-9]{0,60}", any::<bool>(), "[0-9]{0,60}", prop::option::of(any::<i64>()), any::<bool>()).prop_map(
-        |(int, dot, frac, exp, nominal)| {
+    (
+        "[0-9]{0,60}",
+        any::<bool>(),
+        "[0-9]{0,60}",
+        prop::option::of(any::<i64>()),
+        any::<bool>(),
+    )
+        .prop_map(|(int, dot, frac, exp, nominal)| {
             let mut lit = int;
             if dot || lit.is_empty() {
                 lit.push('.');
@@ -317,15 +323,17 @@ fn literal() -> impl Strategy<Value = String> {
                 }
             }
             if let Some(e) = exp {
-                lit.push_str(&format!("e{}", e % 1000 * if e % 7 == 0 { 1 << 40 } else { 1 }));
+                lit.push_str(&format!(
+                    "e{}",
+                    e % 1000 * if e % 7 == 0 { 1 << 40 } else { 1 }
+                ));
             }
             if nominal {
                 format!("model M {{ state u der u = X*u nominal {{ X = -{lit} }} }}")
             } else {
                 format!("model M {{ state u der u = {lit}*X*u*{lit} }}")
             }
-        },
-    )
+        })
 }
 
 proptest! {
