@@ -58,6 +58,7 @@ struct Ctx<'a> {
 /// Lowers every equation. Returns the parameters (first-use order) and terms.
 pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>, Vec<TermDecl>) {
     let mut params: Vec<ParamDecl> = Vec::new();
+    let mut param_index: BTreeMap<String, usize> = BTreeMap::new();
     let mut terms: Vec<TermDecl> = Vec::new();
     let mut ctx = Ctx { r, diags };
     for eq in r.equations.iter().flatten() {
@@ -71,9 +72,10 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
             let Some((pname, factors)) = classify(&p, &mut ctx) else {
                 continue;
             };
-            let pi = match params.iter().position(|q| q.name == pname.name) {
-                Some(i) => i,
+            let pi = match param_index.get(&pname.name) {
+                Some(i) => *i,
                 None => {
+                    param_index.insert(pname.name.clone(), params.len());
                     params.push(ParamDecl {
                         name: pname.name.clone(),
                         span: pname.span,
@@ -638,11 +640,45 @@ fn common_terms(
     };
     let medium =
         |t: &TermDecl| -> Option<usize> { t.factors.iter().find_map(|f| arg_medium(r, &f.arg)) };
-    for (i, a) in terms.iter().enumerate() {
-        for b in terms.iter().skip(i + 1) {
-            if a.output != b.output || a.parameter == b.parameter || shape(a) != shape(b) {
-                continue;
+    // Terms of one output and one shape, in order: grouping them first keeps
+    // this linear in the number of terms (comparing all pairs was quadratic).
+    let mut groups: BTreeMap<(usize, Shape), Vec<usize>> = BTreeMap::new();
+    for (i, t) in terms.iter().enumerate() {
+        groups.entry((t.output, shape(t))).or_default().push(i);
+    }
+    // Each later term is paired with one earlier term of the group: the first
+    // (input-only terms), or the first of another medium (state terms).
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for group in groups.values() {
+        let mut first_of: BTreeMap<Option<usize>, usize> = BTreeMap::new();
+        for &j in group {
+            let b = &terms[j];
+            let input_only = b
+                .factors
+                .iter()
+                .all(|f| matches!(f.arg.signal, Signal::Input(_)));
+            let earlier = if input_only {
+                group
+                    .iter()
+                    .copied()
+                    .find(|&i| i < j && terms[i].parameter != b.parameter)
+            } else {
+                first_of
+                    .iter()
+                    .filter(|(m, i)| **m != medium(b) && terms[**i].parameter != b.parameter)
+                    .map(|(_, i)| *i)
+                    .min()
+            };
+            if let Some(i) = earlier {
+                pairs.push((i, j));
             }
+            first_of.entry(medium(b)).or_insert(j);
+        }
+    }
+    pairs.sort_unstable();
+    for (i, j) in pairs {
+        let (a, b) = (&terms[i], &terms[j]);
+        {
             let (pa, pb) = (&params[a.parameter].name, &params[b.parameter].name);
             let input_only = a
                 .factors
