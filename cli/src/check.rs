@@ -47,22 +47,23 @@ impl CheckArgs {
 /// Runs `leeway check`.
 pub fn run(args: &CheckArgs) -> Status {
     let file = args.model.display().to_string();
-    let source = match std::fs::read_to_string(&args.model) {
-        Ok(s) => s,
+    let (source, compilation) = match crate::model::read_model(&args.model) {
+        Ok(Ok(source)) => match analyse(args, &source) {
+            Ok(c) => (source, c),
+            Err(message) => return fail(args, &file, "invalid-pattern", message),
+        },
+        // Too large or not UTF-8: one located error, reported like the compiler's.
+        Ok(Err(refused)) => (
+            refused.text,
+            Compilation {
+                ir: None,
+                diagnostics: vec![refused.diagnostic],
+            },
+        ),
         Err(e) => {
-            let message = match e.kind() {
-                std::io::ErrorKind::NotFound => format!("cannot read `{file}`: no such file"),
-                std::io::ErrorKind::InvalidData => {
-                    format!("cannot read `{file}`: it is not UTF-8 text")
-                }
-                _ => format!("cannot read `{file}`: {e}"),
-            };
+            let message = format!("cannot read `{file}`: {}", crate::model::io_reason(&e));
             return fail(args, &file, "io", message);
         }
-    };
-    let compilation = match analyse(args, &source) {
-        Ok(c) => c,
-        Err(message) => return fail(args, &file, "invalid-pattern", message),
     };
     let status = status_of(&compilation);
     if args.json {

@@ -6,6 +6,7 @@ use leeway_runtime::data::{
     CsvSource, FileNotes, LoadOptions, heading_gain, load_csv_noted, open_csv,
 };
 use leeway_runtime::{Experiment, Source};
+use leeway_structure::grammar::source::Refused;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
 use leeway_structure::{Options, compile};
@@ -38,12 +39,58 @@ pub fn read_text(path: &Path, what: &str) -> Result<String, Problem> {
     })
 }
 
+/// Reads a model file: its size is checked before reading (a file over
+/// [`grammar::MAX_SOURCE_BYTES`] is never read whole: at most one byte more is
+/// read), then the bytes are decoded, a non-UTF-8 file refused with the
+/// line and column of its first invalid byte. `Err` is an IO failure.
+pub fn read_model(path: &Path) -> std::io::Result<Result<String, Box<Refused>>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path)?;
+    let size = file.metadata()?.len();
+    let limit = grammar::MAX_SOURCE_BYTES as u64;
+    if size > limit {
+        return Ok(Err(Box::new(Refused {
+            text: String::new(),
+            diagnostic: grammar::source::too_large(size),
+        })));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    Ok(grammar::source::decode(bytes))
+}
+
+/// Why a model file cannot be read, as the CLI says it.
+pub fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".to_string(),
+        std::io::ErrorKind::IsADirectory => "it is a directory".to_string(),
+        _ => e.to_string(),
+    }
+}
+
 /// Reads and compiles a model. A model that does not compile is a failure
 /// with its rendered diagnostics; one whose θ is not identifiable from any
 /// experiment still compiles (the estimator then says why, with the data).
 pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
     let file = path.display().to_string();
-    let source = read_text(path, "the model")?;
+    let source = match read_model(path) {
+        Ok(Ok(source)) => source,
+        Ok(Err(refused)) => {
+            return Err(Failure::Model {
+                file,
+                source: refused.text,
+                diagnostics: vec![refused.diagnostic],
+            });
+        }
+        Err(e) => {
+            return Err(Problem::error(
+                "io",
+                format!("cannot read the model `{file}`: {}", io_reason(&e)),
+            )
+            .at(&file)
+            .into());
+        }
+    };
     let compilation = compile(
         &source,
         &Options {

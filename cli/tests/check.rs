@@ -235,6 +235,7 @@ fn assert_contract(v: &Value) {
         assert!(k["name"].is_string() && k["estimates"].is_string(), "{k}");
     }
     assert!(v["required_sign_patterns"].is_array());
+    assert!(v["omitted"].is_u64(), "omitted: {v}");
     for key in ["notes", "errors"] {
         for d in v[key].as_array().unwrap_or_else(|| panic!("{key}")) {
             for f in ["code", "message", "severity"] {
@@ -426,4 +427,118 @@ fn a_cut_search_is_undecided_and_exits_0() {
     assert_eq!(json(&o)["verdict"], "not-identifiable");
     let o = leeway(&["check", "examples/models/ship.som", "--json"]);
     assert_eq!(json(&o)["verdict"], "identifiable");
+}
+
+/// A scratch file under the target directory, unique to this test.
+fn scratch(name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("check-limits");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).expect("write scratch file");
+    path
+}
+
+fn check_path(path: &Path, json: bool) -> Output {
+    let p = path.to_str().expect("utf-8 path");
+    if json {
+        leeway(&["check", "--json", p])
+    } else {
+        leeway(&["check", p])
+    }
+}
+
+#[test]
+fn a_non_utf8_model_is_one_located_error() {
+    // Issue 10: no line:col and no hint.
+    let path = scratch(
+        "latin1.som",
+        b"model M {\n    state u // caf\xe9\n    der u = X*u\n}\n",
+    );
+    let o = check_path(&path, false);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(
+        err.contains("error[not-utf8]: the model file is not UTF-8 text: byte 0xe9"),
+        "{err}"
+    );
+    assert!(err.contains("latin1.som:2:19"), "{err}");
+    assert!(err.contains("help: save the file as UTF-8"), "{err}");
+    assert_eq!(err.matches("error[").count(), 1, "{err}");
+    let v = json(&check_path(&path, true));
+    assert_eq!(v["errors"][0]["code"], "not-utf8");
+    assert_eq!(v["errors"][0]["line"], 2);
+    assert_eq!(v["errors"][0]["column"], 19);
+}
+
+#[test]
+fn control_bytes_are_escaped_with_a_caret() {
+    let path = scratch("nul.som", b"model M {\n    state u\0\n    der u = X*u\n}\n");
+    let o = check_path(&path, false);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(!err.contains('\0'), "{err:?}");
+    assert!(
+        err.contains("error[syntax]: expected a declaration, found `\\u{0}`"),
+        "{err}"
+    );
+    assert!(err.contains("nul.som:2:12"), "{err}");
+    assert!(err.contains("2 │     state u\\u{0}"), "{err}");
+    assert!(err.contains("  │            ^"), "{err}");
+}
+
+#[test]
+fn an_oversized_model_is_refused_before_it_is_read() {
+    // Issue 10: a 6.7 GB file took 6.6 GB of memory. A sparse 8 GiB file is
+    // refused from its metadata (reading it would take seconds and gigabytes).
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("check-limits");
+    std::fs::create_dir_all(&dir).expect("scratch dir");
+    let path = dir.join("huge.som");
+    let f = std::fs::File::create(&path).expect("create");
+    f.set_len(8 << 30).expect("sparse file");
+    let start = std::time::Instant::now();
+    let o = check_path(&path, false);
+    assert!(start.elapsed() < std::time::Duration::from_secs(5));
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(err.contains("error[file-too-large]: the model file is 8589934592 bytes; at most 1048576 are accepted"), "{err}");
+}
+
+#[test]
+fn floods_are_capped() {
+    // Issue 10: `state u` 4,000 times on one line gave 257 MB of stderr.
+    let src = format!("model M {{ {}\n der u = X*u }}\n", "state u ".repeat(4000));
+    let o = check_path(&scratch("dup.som", src.as_bytes()), false);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(err.len() < 64 * 1024, "{} bytes", err.len());
+    assert_eq!(err.matches("error[duplicate-declaration]").count(), 50);
+    assert!(
+        err.contains("… and 3949 errors more, not shown (the first 50 are above)"),
+        "{}",
+        &err[err.len() - 300..]
+    );
+    assert!(
+        err.ends_with("was not checked: 3999 errors\n"),
+        "{}",
+        &err[err.len() - 300..]
+    );
+    let v = json(&check_path(&scratch("dup.som", src.as_bytes()), true));
+    assert_eq!(v["errors"].as_array().map(Vec::len), Some(50));
+    assert_eq!(v["omitted"], 3949);
+    // `X*(u+v)` with 12 factors (117 bytes) gave 4,097 errors and 1.5 MB.
+    let src = format!(
+        "model M {{ state u, v\n der u = X*{}\n der v = Y*v }}\n",
+        ["(u+v)"; 12].join("*")
+    );
+    let o = check_path(&scratch("f12.som", src.as_bytes()), false);
+    let err = stderr(&o);
+    assert_eq!(err.matches("error[").count(), 1, "{err}");
+    assert!(
+        err.contains("note: 4095 more terms of this expression have the same problem"),
+        "{err}"
+    );
 }

@@ -223,12 +223,18 @@ pub fn include_model(input: TokenStream, invocation: &Invocation) -> TokenStream
         Ok(p) => p,
         Err(e) => return compile_error(&e, span),
     };
-    let text = match std::fs::read_to_string(&path) {
-        Ok(t) => t,
+    let text = match read_model(&path) {
+        Ok(Ok(t)) => t,
+        // Too large (checked before reading) or not UTF-8 (located): one rendered error.
+        Ok(Err(refused)) => {
+            return compile_error(
+                &error_message(&refused.diagnostic, &written, &refused.text),
+                span,
+            );
+        }
         Err(e) => {
             let why = match e.kind() {
                 std::io::ErrorKind::NotFound => "not found".to_string(),
-                std::io::ErrorKind::InvalidData => "not valid UTF-8".to_string(),
                 _ => e.to_string(),
             };
             return compile_error(
@@ -259,6 +265,27 @@ pub fn include_model(input: TokenStream, invocation: &Invocation) -> TokenStream
         &input.options(),
         span,
     )
+}
+
+/// Reads a model file, its size checked before reading: at most
+/// `MAX_SOURCE_BYTES + 1` bytes are read, then decoded as UTF-8.
+fn read_model(
+    path: &std::path::Path,
+) -> std::io::Result<Result<String, Box<leeway_structure::grammar::source::Refused>>> {
+    use leeway_structure::grammar::{self, source};
+    use std::io::Read;
+    let file = std::fs::File::open(path)?;
+    let size = file.metadata()?.len();
+    let limit = grammar::MAX_SOURCE_BYTES as u64;
+    if size > limit {
+        return Ok(Err(Box::new(source::Refused {
+            text: String::new(),
+            diagnostic: source::too_large(size),
+        })));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    Ok(source::decode(bytes))
 }
 
 /// `inline_model!(r#"model A { … }"#)`: the model written in a string

@@ -7,7 +7,11 @@
 pub mod ast;
 pub mod diagnostic;
 mod parse;
+pub mod source;
 
 pub use ast::*;
-pub use diagnostic::{Diagnostic, Label, RenderStyle, Severity, line_col, render, render_short};
-pub use parse::{MAX_NESTING, MAX_SOURCE_BYTES, parse};
+pub use diagnostic::{
+    Diagnostic, Label, MAX_LINE_COLUMNS, MAX_RENDERED, RenderStyle, Severity, line_col, render,
+    render_short,
+};
+pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};

@@ -16,19 +16,22 @@ pub const MAX_NESTING: usize = 64;
 /// Largest model file accepted, in bytes.
 pub const MAX_SOURCE_BYTES: usize = 1 << 20;
 
+/// Most operands (names and numbers) in one expression, a chain of operands
+/// joined by `+ - * /` (through parentheses and moduli). Checked before
+/// parsing: every later pass may then recurse over an expression, whose tree
+/// is at most this deep (plus [`MAX_NESTING`] and [`MAX_SIGNS`] levels).
+pub const MAX_OPERANDS: usize = 1000;
+
+/// Most unary signs in a row (`- -u` is two). Checked before parsing.
+pub const MAX_SIGNS: usize = 8;
+
 /// Parses a `.som` source. pest stops at the first syntax error, so a failed
 /// parse returns exactly one diagnostic.
 pub fn parse(source: &str) -> (Option<Model>, Vec<Diagnostic>) {
     if source.len() > MAX_SOURCE_BYTES {
-        let d = Diagnostic::error(
-            "file-too-large",
-            format!("the model file is {} bytes; at most {} are accepted", source.len(), MAX_SOURCE_BYTES),
-        )
-        .with_primary(Span::new(0, 0), "")
-        .with_help("a model file holds one craft's equations; split generated text or remove embedded data");
-        return (None, vec![d]);
+        return (None, vec![crate::source::too_large(source.len() as u64)]);
     }
-    if let Some(d) = nesting_guard(source) {
+    if let Some(d) = nesting_guard(source).or_else(|| size_guard(source)) {
         return (None, vec![d]);
     }
     match SomParser::parse(Rule::file, source) {
@@ -54,6 +57,120 @@ fn nesting_guard(source: &str) -> Option<Diagnostic> {
             .with_primary(Span::new(deepest, deepest + 1), "too deep here")
             .with_help("second-order modulus terms never need deep nesting; write the term as a product such as X*u*|v|"),
     )
+}
+
+/// Rejects an expression of more than [`MAX_OPERANDS`] operands or a run of
+/// more than [`MAX_SIGNS`] unary signs, before pest (or any recursion over
+/// the tree) sees it. Skips comments and strings like [`scan_delimiters`].
+/// An operand directly after an operand (no operator between) starts a new
+/// expression, as do `=`, `,`, `;`, braces and brackets.
+fn size_guard(source: &str) -> Option<Diagnostic> {
+    let bytes = source.as_bytes();
+    let word = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'.';
+    let mut operands = 0usize;
+    let mut chain_start = 0usize;
+    // After an operand (name, number, `)` or closing `|`): an operator may follow.
+    let mut after_operand = false;
+    let mut modulus_depth = 0usize;
+    let mut signs = 0usize;
+    let mut signs_start = 0usize;
+    let mut i = 0;
+    while i < bytes.len() {
+        let b = bytes[i];
+        let next = bytes.get(i + 1).copied();
+        match b {
+            b'/' if next == Some(b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if next == Some(b'*') => {
+                i += 2;
+                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                i += 2;
+                continue;
+            }
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                operands = 0;
+                after_operand = false;
+            }
+            _ if word(b) => {
+                let start = i;
+                let number = b.is_ascii_digit() || b == b'.';
+                while i < bytes.len() && word(bytes[i]) {
+                    // `1e-3`: the exponent's sign belongs to the number.
+                    if number
+                        && matches!(bytes[i], b'e' | b'E')
+                        && matches!(bytes.get(i + 1), Some(b'+' | b'-'))
+                    {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+                if after_operand {
+                    operands = 0;
+                }
+                if operands == 0 {
+                    chain_start = start;
+                }
+                operands += 1;
+                if operands > MAX_OPERANDS {
+                    return Some(
+                        Diagnostic::error("expression-too-large", format!("this expression has more than {MAX_OPERANDS} operands"))
+                            .with_primary(Span::new(chain_start, i), "too many operands")
+                            .with_help("write the terms out; a second-order model has a handful per equation, and a number may be written once (e.g. 2.5e-3)"),
+                    );
+                }
+                after_operand = true;
+                signs = 0;
+                continue;
+            }
+            b'(' => after_operand = false,
+            b')' => after_operand = true,
+            b'|' if after_operand && modulus_depth > 0 => modulus_depth -= 1,
+            b'|' => {
+                modulus_depth += 1;
+                after_operand = false;
+            }
+            b'+' | b'-' if !after_operand => {
+                if signs == 0 {
+                    signs_start = i;
+                }
+                signs += 1;
+                if signs > MAX_SIGNS {
+                    return Some(
+                        Diagnostic::error(
+                            "expression-too-large",
+                            format!("more than {MAX_SIGNS} signs in a row"),
+                        )
+                        .with_primary(Span::new(signs_start, i + 1), "too many signs")
+                        .with_help("write one sign: `- -u` is `u`, `- - -u` is `-u`"),
+                    );
+                }
+            }
+            b'+' | b'-' | b'*' | b'/' => {
+                after_operand = false;
+                signs = 0;
+            }
+            b' ' | b'\t' | b'\r' | b'\n' => {}
+            _ => {
+                // `=`, `,`, `;`, braces, brackets, `:` and anything else end an expression.
+                operands = 0;
+                after_operand = false;
+                modulus_depth = 0;
+                signs = 0;
+            }
+        }
+        i += 1;
+    }
+    None
 }
 
 /// Scans `source[from..to]` for the delimiters of expressions, skipping
@@ -197,6 +314,12 @@ fn found_token(source: &str, pos: usize) -> (String, usize) {
         (format!("`{}`", &rest[..len]), pos + len)
     } else if first == '\n' || first == '\r' {
         ("end of line".to_string(), pos + 1)
+    } else if first.is_control() {
+        // Never echo a raw control character (NUL, escape…) to a terminal.
+        (
+            format!("`\\u{{{:x}}}`", u32::from(first)),
+            pos + first.len_utf8(),
+        )
     } else {
         (format!("`{first}`"), pos + first.len_utf8())
     }
@@ -780,6 +903,61 @@ mod tests {
         assert!(parse(&quiet).1.is_empty(), "{:?}", parse(&quiet).1);
     }
 
+    /// Runs `f` on a thread with a small stack, so that recursion proportional
+    /// to the input aborts the test instead of passing on a large main stack.
+    fn on_small_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
+        let handle = std::thread::Builder::new()
+            .stack_size(256 * 1024)
+            .spawn(f)
+            .unwrap_or_else(|e| panic!("cannot spawn: {e}"));
+        handle
+            .join()
+            .unwrap_or_else(|_| panic!("the parser panicked"))
+    }
+
+    #[test]
+    fn long_chains_and_sign_runs_are_rejected_before_parsing() {
+        // Issue 10 reproducers: 7,200 `*1`, `+1`, `/1` after `X*u`, and 7,200 unary `-`.
+        for op in ["*1", "+1", "/1", "+X*u"] {
+            let src = format!("model M {{ state u der u = X*u{} }}", op.repeat(7200));
+            let (model, d) = on_small_stack(move || {
+                let (m, d) = parse(&src);
+                (m.is_some(), d)
+            });
+            assert!(!model);
+            assert_eq!(d.len(), 1, "{op}");
+            assert_eq!(d[0].code, "expression-too-large");
+            assert_eq!(d[0].message, "this expression has more than 1000 operands");
+        }
+        let src = format!("model M {{ state u der u = X*{}u }}", "-".repeat(7200));
+        let d = error(&src);
+        assert_eq!(d.code, "expression-too-large");
+        assert_eq!(d.message, "more than 8 signs in a row");
+        assert_eq!(at(&src, &d), "-".repeat(9));
+        // At the limits, the model parses (on a small stack: the tree is bounded).
+        let ok = format!(
+            "model M {{ state u der u = X*u{} + {}u }}",
+            "*1".repeat(MAX_OPERANDS - 3),
+            "- ".repeat(MAX_SIGNS)
+        );
+        let diags = on_small_stack(move || parse(&ok).1);
+        assert!(diags.is_empty(), "{diags:?}");
+        // Exponent signs are part of the number; declarations start new expressions.
+        let many = format!(
+            "model M {{ state u {} nominal {{ {} }} }}",
+            "der u = 1e-3*X*u ".repeat(1200),
+            (0..1200)
+                .map(|i| format!("P{i} = -1e-3,"))
+                .collect::<String>()
+        );
+        assert!(
+            parse(&many)
+                .1
+                .iter()
+                .all(|d| d.code != "expression-too-large")
+        );
+    }
+
     #[test]
     fn oversized_input_is_rejected_up_front() {
         let big = " ".repeat(MAX_SOURCE_BYTES + 1);
@@ -794,6 +972,7 @@ mod tests {
         assert_eq!(found_token("abc_1.u rest", 0), ("`abc_1.u`".to_string(), 7));
         assert_eq!(found_token("x", 1), ("end of file".to_string(), 1));
         assert_eq!(found_token("\nx", 0), ("end of line".to_string(), 1));
+        assert_eq!(found_token("\u{0}x", 0), ("`\\u{0}`".to_string(), 1));
         let src = "model M { state é }";
         let d = error(src);
         assert_eq!(at(src, &d), "é");

@@ -13,47 +13,137 @@ use num_traits::{One, Signed, ToPrimitive, Zero};
 /// The exact rational type used throughout the structure compiler.
 pub type Q = BigRational;
 
-/// Parses a decimal literal (`-0.015`, `1e-3`, `.5`) into an exact rational.
+/// Most significant digits in a number literal (from its first to its last
+/// non-zero digit): far beyond an `f64`'s 17, and small enough that no literal
+/// makes the exact arithmetic slow.
+pub const MAX_SIGNIFICANT_DIGITS: usize = 40;
+
+/// Largest decimal exponent of a literal's leading digit: every non-zero
+/// literal lies in `1e-307 ≤ |x| < 1e308`, so it is a normal `f64`.
+pub const MAX_DECIMAL_EXPONENT: i64 = 307;
+
+/// Largest size, in bits, of the numerator plus denominator of an exact
+/// coefficient built from literals (`2.5e-3*X*u/7`): 4096 bits holds any
+/// product of a few literals; more would only slow the exact arithmetic.
+pub const MAX_COEFFICIENT_BITS: u64 = 4096;
+
+/// Parses a decimal literal (`-0.015`, `1e-3`, `.5`) into an exact rational,
+/// or `None`; see [`decimal`] for the reason.
 pub fn parse_decimal(text: &str) -> Option<Q> {
+    decimal(text).ok()
+}
+
+/// A literal as the user wrote it, cut to a readable length for a message.
+pub fn shown(text: &str) -> String {
+    let chars: Vec<char> = text.chars().take(33).collect();
+    if chars.len() <= 32 {
+        return text.to_string();
+    }
+    let head: String = chars[..24].iter().collect();
+    format!("{head}… ({} characters)", text.chars().count())
+}
+
+/// Parses a decimal literal into an exact rational, or says in one sentence
+/// why it is refused: not a decimal, more than [`MAX_SIGNIFICANT_DIGITS`]
+/// significant digits, or a magnitude outside `1e-307 ≤ |x| < 1e308`. The
+/// limits are checked on the text, before any big-integer arithmetic, with
+/// checked integer operations.
+pub fn decimal(text: &str) -> Result<Q, String> {
+    let not_a_number = || format!("`{}` is not a number", shown(text));
     let t = text.trim();
     let (neg, t) = match t.strip_prefix('-') {
         Some(r) => (true, r),
         None => (false, t.strip_prefix('+').unwrap_or(t)),
     };
-    let (mantissa, exp) = match t.find(['e', 'E']) {
-        Some(i) => (&t[..i], t[i + 1..].parse::<i64>().ok()?),
-        None => (t, 0),
+    let (mantissa, exp_text) = match t.find(['e', 'E']) {
+        Some(i) => (&t[..i], Some(&t[i + 1..])),
+        None => (t, None),
     };
     let (int, frac) = match mantissa.find('.') {
         Some(i) => (&mantissa[..i], &mantissa[i + 1..]),
         None => (mantissa, ""),
     };
     if int.is_empty() && frac.is_empty() {
-        return None;
+        return Err(not_a_number());
     }
-    if !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit()) {
-        return None;
+    if !int.bytes().chain(frac.bytes()).all(|c| c.is_ascii_digit()) {
+        return Err(not_a_number());
     }
-    let digits = format!("{int}{frac}");
-    let mut num: BigInt = if digits.is_empty() {
-        BigInt::zero()
-    } else {
-        digits.parse().ok()?
+    let out_of_range = || {
+        format!(
+            "`{}` is out of range: a non-zero number must lie between 1e-{MAX_DECIMAL_EXPONENT} and 1e{} in magnitude",
+            shown(text),
+            MAX_DECIMAL_EXPONENT + 1
+        )
     };
+    // The exponent, bounded on its text: 7 digits already exceed any range.
+    let exp: i64 = match exp_text {
+        None => 0,
+        Some(e) => {
+            let (e_neg, digits) = match e.strip_prefix('-') {
+                Some(r) => (true, r),
+                None => (false, e.strip_prefix('+').unwrap_or(e)),
+            };
+            if digits.is_empty() || !digits.bytes().all(|c| c.is_ascii_digit()) {
+                return Err(not_a_number());
+            }
+            let digits = digits.trim_start_matches('0');
+            if digits.len() > 6 {
+                // Zero times any power of ten is still zero.
+                if int.bytes().chain(frac.bytes()).all(|c| c == b'0') {
+                    return Ok(Q::zero());
+                }
+                return Err(out_of_range());
+            }
+            let v: i64 = digits.parse().unwrap_or(0);
+            if e_neg { -v } else { v }
+        }
+    };
+    let all = || int.bytes().chain(frac.bytes());
+    let Some(lead) = all().position(|c| c != b'0') else {
+        return Ok(Q::zero());
+    };
+    let last = int.len() + frac.len() - 1 - all().rev().position(|c| c != b'0').unwrap_or(0);
+    let significant = last + 1 - lead;
+    if significant > MAX_SIGNIFICANT_DIGITS {
+        return Err(format!(
+            "`{}` has {significant} significant digits; at most {MAX_SIGNIFICANT_DIGITS} are accepted",
+            shown(text)
+        ));
+    }
+    // The power of ten of the leading digit: lengths are below 2^21, the exponent below 10^6.
+    let leading = (int.len() as i64) - 1 - (lead as i64) + exp;
+    if !(-MAX_DECIMAL_EXPONENT..=MAX_DECIMAL_EXPONENT).contains(&leading) {
+        return Err(out_of_range());
+    }
+    let digits: String = all().skip(lead).take(significant).map(char::from).collect();
+    let mut num: BigInt = digits.parse().map_err(|_| not_a_number())?;
     if neg {
         num = -num;
     }
-    let scale = exp - frac.len() as i64;
-    if scale.abs() > 400 {
-        return None;
-    }
-    let ten = BigInt::from(10);
-    let p = num_traits::pow(ten, scale.unsigned_abs() as usize);
-    Some(if scale >= 0 {
+    // The value is digits × 10^scale, |scale| ≤ 307 + 40.
+    let scale = leading - (significant as i64 - 1);
+    let p = num_traits::pow(BigInt::from(10), scale.unsigned_abs() as usize);
+    Ok(if scale >= 0 {
         Q::from_integer(num * p)
     } else {
         Q::new(num, p)
     })
+}
+
+/// Whether an exact coefficient is small enough for the exact arithmetic
+/// ([`MAX_COEFFICIENT_BITS`]) and, when non-zero, within the range of a
+/// normal `f64` (about `2^-1020 … 2^1023`).
+pub fn coefficient_fits(q: &Q) -> bool {
+    if Zero::is_zero(q) {
+        return true;
+    }
+    let (n, d) = (q.numer().bits(), q.denom().bits());
+    if n.saturating_add(d) > MAX_COEFFICIENT_BITS {
+        return false;
+    }
+    let log2 = n as i64 - d as i64;
+    (-1020..=1023).contains(&log2)
 }
 
 /// The nearest `f64` to an exact rational (ties to even), so generated code
@@ -322,6 +412,54 @@ mod tests {
         assert_eq!(parse_decimal("1."), Some(q(1, 1)));
         assert_eq!(parse_decimal("."), None);
         assert_eq!(parse_decimal("1e99999"), None);
+        assert_eq!(parse_decimal("0e99999999999999999999"), Some(q(0, 1)));
+        assert_eq!(
+            parse_decimal("1.50000000000000000000000000000000000000000000000"),
+            Some(q(3, 2))
+        );
+        assert_eq!(
+            parse_decimal("0.000000000000000000000000000000000000000000000000001"),
+            Some(Q::new(1.into(), num_traits::pow(BigInt::from(10), 51)))
+        );
+    }
+
+    #[test]
+    fn literal_limits_are_checked_on_the_text() {
+        // Issue 10: `1e-9223372036854775808` wrapped `scale.abs()` and hung.
+        for text in [
+            "1e-9223372036854775808",
+            "1e9223372036854775807",
+            "1e399",
+            "1e-399",
+            "-1e308",
+            "1e-308",
+            "123e306",
+        ] {
+            let e = decimal(text).err().unwrap_or_default();
+            assert!(e.contains("is out of range"), "{text}: {e}");
+        }
+        assert_eq!(decimal("9.99e307").map(|q| to_f64(&q)), Ok(9.99e307));
+        assert_eq!(decimal("1e-307").map(|q| to_f64(&q)), Ok(1e-307));
+        assert_eq!(decimal("100e-309").map(|q| to_f64(&q)), Ok(1e-307));
+        // 100k digits: refused at once (no quadratic gcd), the message stays short.
+        let long = "7".repeat(100_000);
+        let start = std::time::Instant::now();
+        let e = decimal(&long).err().unwrap_or_default();
+        assert!(start.elapsed().as_millis() < 500);
+        assert_eq!(
+            e,
+            format!(
+                "`{}… (100000 characters)` has 100000 significant digits; at most 40 are accepted",
+                "7".repeat(24)
+            )
+        );
+        assert!(decimal(&"1".repeat(40)).is_ok());
+        assert!(decimal(&format!("0.{}1", "0".repeat(100_000))).is_err());
+        assert!(coefficient_fits(&q(1, 3)));
+        assert!(!coefficient_fits(&Q::from_integer(num_traits::pow(
+            BigInt::from(10),
+            309
+        ))));
     }
 
     #[test]

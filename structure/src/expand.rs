@@ -366,22 +366,30 @@ pub fn expand(
     }
     let augmented = finish(aug, params, r, &BTreeMap::new());
     let measured = finish(meas, params, r, &pointwise);
-    let basic: Vec<Column> = (0..params.len())
-        .map(|p| {
+    // Terms and θ columns by parameter, in one pass each (not one per parameter).
+    let mut by_param: Vec<Vec<Entry>> = vec![Vec::new(); params.len()];
+    for (ti, t) in terms.iter().enumerate() {
+        if let Some(v) = by_param.get_mut(t.parameter) {
+            v.push(Entry::Term {
+                output: t.output,
+                term: ti,
+                pointwise: Pointwise::Undisturbed,
+            });
+        }
+    }
+    let mut theta_column: BTreeMap<usize, &Column> = BTreeMap::new();
+    for c in &augmented {
+        if let ColumnKind::Theta { parameter } = c.kind {
+            theta_column.entry(parameter).or_insert(c);
+        }
+    }
+    let basic: Vec<Column> = by_param
+        .into_iter()
+        .enumerate()
+        .map(|(p, entries)| {
             let kind = ColumnKind::Theta { parameter: p };
-            let entries = terms
-                .iter()
-                .enumerate()
-                .filter(|(_, t)| t.parameter == p)
-                .map(|(ti, t)| Entry::Term {
-                    output: t.output,
-                    term: ti,
-                    pointwise: Pointwise::Undisturbed,
-                })
-                .collect();
-            let structural = augmented
-                .iter()
-                .find(|c| c.kind == kind)
+            let structural = theta_column
+                .get(&p)
                 .map(|c| c.structural.clone())
                 .unwrap_or_default();
             Column {

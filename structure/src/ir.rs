@@ -351,6 +351,24 @@ pub struct Column {
     pub structural: Vec<StructuralEntry>,
 }
 
+/// The columns with entries in each of `n_outputs` outputs, in their order:
+/// one pass over the columns (filtering them once per output is quadratic in
+/// the size of the model).
+pub fn columns_by_output<'a>(
+    columns: impl IntoIterator<Item = &'a Column>,
+    n_outputs: usize,
+) -> Vec<Vec<&'a Column>> {
+    let mut by: Vec<Vec<&'a Column>> = vec![Vec::new(); n_outputs];
+    for c in columns {
+        for out in c.outputs() {
+            if let Some(v) = by.get_mut(out) {
+                v.push(c);
+            }
+        }
+    }
+    by
+}
+
 impl Column {
     /// The outputs this column has entries in.
     pub fn outputs(&self) -> Vec<usize> {

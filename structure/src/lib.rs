@@ -59,6 +59,7 @@ pub fn compile(source: &str, options: &Options) -> Compilation {
     };
     let resolved = resolve::resolve(&model, &mut diagnostics);
     let (params, terms) = terms::lower_terms(&resolved, &mut diagnostics);
+    merge_repeats(&mut diagnostics);
     if diagnostics.iter().any(Diagnostic::is_error) {
         return Compilation {
             ir: None,
@@ -262,4 +263,41 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
         }
         diags.push(d);
     }
+}
+
+/// Keeps one diagnostic per code and place (the start of its primary span):
+/// the products of one multiplied-out term start where it does, and 4,096 of
+/// them must not report the same problem 4,096 times. The kept one counts the others in a note.
+fn merge_repeats(diagnostics: &mut Vec<Diagnostic>) {
+    let mut seen: std::collections::BTreeMap<(String, Option<usize>), (usize, usize)> =
+        std::collections::BTreeMap::new();
+    let mut keep = vec![true; diagnostics.len()];
+    for (i, d) in diagnostics.iter().enumerate() {
+        let key = (d.code.clone(), d.primary_span().map(|s| s.start));
+        if d.labels.is_empty() {
+            continue;
+        }
+        match seen.get_mut(&key) {
+            Some((_, n)) => {
+                *n += 1;
+                keep[i] = false;
+            }
+            None => {
+                seen.insert(key, (i, 0));
+            }
+        }
+    }
+    for (first, n) in seen.into_values() {
+        if n > 0 {
+            let more = if n == 1 { "term" } else { "terms" };
+            diagnostics[first].notes.push(format!(
+                "{n} more {more} of this expression have the same problem"
+            ));
+        }
+    }
+    let mut i = 0;
+    diagnostics.retain(|_| {
+        i += 1;
+        keep[i - 1]
+    });
 }

@@ -220,11 +220,11 @@ pub fn render(ir: &Ir) -> String {
 
     let cols = &ir.predictors.measured;
     let _ = writeln!(o, "\nΦ: θ regressors ({} parameters)", ir.parameters.len());
-    for (out, state) in ir.states.iter().enumerate() {
-        let theta: Vec<&Column> = cols
-            .iter()
-            .filter(|c| !c.kind.is_nuisance() && c.outputs().contains(&out))
-            .collect();
+    let by_output = crate::ir::columns_by_output(
+        cols.iter().filter(|c| !c.kind.is_nuisance()),
+        ir.states.len(),
+    );
+    for ((out, state), theta) in ir.states.iter().enumerate().zip(by_output) {
         let kind = if ir.equations[out].kind == EquationKind::Der {
             "der"
         } else {
@@ -270,8 +270,8 @@ pub fn render(ir: &Ir) -> String {
             unmeasured.join(", ")
         }
     );
-    for (out, state) in ir.states.iter().enumerate() {
-        let mine: Vec<&&Column> = nuis.iter().filter(|c| c.outputs().contains(&out)).collect();
+    let by_output = crate::ir::columns_by_output(nuis.iter().copied(), ir.states.len());
+    for ((out, state), mine) in ir.states.iter().enumerate().zip(by_output) {
         if mine.is_empty() {
             continue;
         }

@@ -1,7 +1,7 @@
 //! Pass 1, resolve: declarations → symbol tables, with every naming error
 //! (duplicates, unknown names, missing rotation, bad shapes) collected.
 
-use crate::exact::{Q, parse_decimal};
+use crate::exact::{Q, decimal};
 use leeway_grammar::{
     Diagnostic, EquationKind, Expr, Frame, Ident, Item, Measurement, Model, Span,
 };
@@ -271,12 +271,16 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                     continue;
                 }
                 step_span = Some(*span);
-                match parse_decimal(&value.text) {
-                    Some(q) if q > Q::zero() => r.step = Some((q, value.span)),
-                    _ => diags.push(
+                match decimal(&value.text) {
+                    Ok(q) if q > Q::zero() => r.step = Some((q, value.span)),
+                    Err(why) => diags.push(invalid_number(why, value.span)),
+                    Ok(_) => diags.push(
                         Diagnostic::error(
                             "invalid-step",
-                            format!("the sample time must be positive, found `{}`", value.text),
+                            format!(
+                                "the sample time must be positive, found `{}`",
+                                crate::exact::shown(&value.text)
+                            ),
                         )
                         .with_primary(value.span, "not a positive number")
                         .with_help("write the sample time in seconds, e.g. `step 0.1`"),
@@ -591,13 +595,9 @@ pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
                         diags.push(duplicate(id, first, "a nominal value"));
                         continue;
                     }
-                    match parse_decimal(&num.text) {
-                        Some(q) => r.nominal.push((id.clone(), q, id.span)),
-                        None => diags.push(
-                            Diagnostic::error("invalid-number", format!("`{}` is not a number leeway can represent", num.text))
-                                .with_primary(num.span, "here")
-                                .with_help("write a decimal such as -0.15 or 1.5e-4"),
-                        ),
+                    match decimal(&num.text) {
+                        Ok(q) => r.nominal.push((id.clone(), q, id.span)),
+                        Err(why) => diags.push(invalid_number(why, num.span)),
                     }
                 }
             }
@@ -684,4 +684,16 @@ pub fn names(ids: &[Ident]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     }
+}
+
+/// A literal refused by [`decimal`], with the limits in the help.
+pub(crate) fn invalid_number(why: String, span: Span) -> Diagnostic {
+    Diagnostic::error("invalid-number", why)
+        .with_primary(span, "here")
+        .with_help(format!(
+            "write a decimal of at most {} significant digits between 1e-{} and 1e{} in magnitude, such as -0.15 or 1.5e-4",
+            crate::exact::MAX_SIGNIFICANT_DIGITS,
+            crate::exact::MAX_DECIMAL_EXPONENT,
+            crate::exact::MAX_DECIMAL_EXPONENT + 1
+        ))
 }

@@ -2,7 +2,7 @@
 //! `coefficient · θ_p · (a | |a| | a·b | a·|b|)`, rejecting everything outside
 //! the second-order modulus class with a located error.
 
-use crate::exact::{Q, fmt_q, parse_decimal};
+use crate::exact::{Q, coefficient_fits, decimal, fmt_q};
 use crate::ir::{Arg, Factor, Signal};
 use crate::resolve::{Resolved, Symbol, names};
 use leeway_grammar::{BinOp, Diagnostic, Expr, Ident, Path, Span};
@@ -58,6 +58,7 @@ struct Ctx<'a> {
 /// Lowers every equation. Returns the parameters (first-use order) and terms.
 pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>, Vec<TermDecl>) {
     let mut params: Vec<ParamDecl> = Vec::new();
+    let mut param_index: BTreeMap<String, usize> = BTreeMap::new();
     let mut terms: Vec<TermDecl> = Vec::new();
     let mut ctx = Ctx { r, diags };
     for eq in r.equations.iter().flatten() {
@@ -71,9 +72,10 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
             let Some((pname, factors)) = classify(&p, &mut ctx) else {
                 continue;
             };
-            let pi = match params.iter().position(|q| q.name == pname.name) {
-                Some(i) => i,
+            let pi = match param_index.get(&pname.name) {
+                Some(i) => *i,
                 None => {
+                    param_index.insert(pname.name.clone(), params.len());
                     params.push(ParamDecl {
                         name: pname.name.clone(),
                         span: pname.span,
@@ -137,21 +139,14 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
 
 fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
     match e {
-        Expr::Number(n) => match parse_decimal(&n.text) {
-            Some(q) => Some(vec![Product {
+        Expr::Number(n) => match decimal(&n.text) {
+            Ok(q) => Some(vec![Product {
                 coeff: q,
                 atoms: Vec::new(),
                 span: n.span,
             }]),
-            None => {
-                ctx.diags.push(
-                    Diagnostic::error(
-                        "invalid-number",
-                        format!("`{}` is not a number leeway can represent", n.text),
-                    )
-                    .with_primary(n.span, "here")
-                    .with_help("write a decimal such as 0.5 or 1e-3"),
-                );
+            Err(why) => {
+                ctx.diags.push(crate::resolve::invalid_number(why, n.span));
                 None
             }
         },
@@ -180,77 +175,120 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
             Some(v)
         }
         Expr::Paren(inner, _) => sum_of_products(inner, ctx),
-        Expr::Binary { op, lhs, rhs, span } => {
-            let l = sum_of_products(lhs, ctx);
-            let r = sum_of_products(rhs, ctx);
-            let (l, r) = (l?, r?);
-            match op {
-                BinOp::Add => Some([l, r].concat()),
-                BinOp::Sub => {
-                    let mut v = l;
-                    v.extend(r.into_iter().map(|mut p| {
-                        p.coeff = -p.coeff;
-                        p
-                    }));
-                    Some(v)
-                }
-                BinOp::Mul => {
-                    if l.len().saturating_mul(r.len()) > MAX_PRODUCTS {
-                        ctx.diags.push(
-                            Diagnostic::error("expression-too-large", format!("this product expands to more than {MAX_PRODUCTS} terms"))
-                                .with_primary(*span, "too many terms")
-                                .with_help("write the terms out; a second-order model has a handful per equation"),
-                        );
-                        return None;
-                    }
-                    let mut v = Vec::with_capacity(l.len() * r.len());
-                    for a in &l {
-                        for b in &r {
-                            let mut atoms = a.atoms.clone();
-                            atoms.extend(b.atoms.iter().cloned());
-                            v.push(Product {
-                                coeff: &a.coeff * &b.coeff,
-                                atoms,
-                                span: a.span.join(b.span),
-                            });
-                        }
-                    }
-                    Some(v)
-                }
-                BinOp::Div => {
-                    if r.iter().any(|p| !p.atoms.is_empty()) {
-                        ctx.diags.push(
-                            Diagnostic::error("division-by-signal", "only division by a number is allowed")
-                                .with_primary(rhs.span(), "not a number")
-                                .with_help("a regressor divided by a signal or parameter is outside the second-order modulus class; fold known constants into a number"),
-                        );
-                        return None;
-                    }
-                    let d: Q = r
-                        .iter()
-                        .map(|p| p.coeff.clone())
-                        .fold(Q::zero(), |a, b| a + b);
-                    if d.is_zero() {
-                        ctx.diags.push(
-                            Diagnostic::error("division-by-zero", "division by zero")
-                                .with_primary(rhs.span(), "equals 0")
-                                .with_help("check the coefficient"),
-                        );
-                        return None;
-                    }
-                    Some(
-                        l.into_iter()
-                            .map(|mut p| {
-                                p.coeff /= d.clone();
-                                p.span = p.span.join(rhs.span());
-                                p
-                            })
-                            .collect(),
-                    )
-                }
+        Expr::Binary { .. } => {
+            // A chain `a op b op c …` is a left-deep tree as long as the
+            // expression: walk its left spine iteratively, recursing only into
+            // right operands (bounded by the nesting and sign limits).
+            let mut spine = Vec::new();
+            let mut leftmost = e;
+            while let Expr::Binary { op, lhs, rhs, span } = leftmost {
+                spine.push((*op, rhs.as_ref(), *span));
+                leftmost = lhs;
             }
+            let mut acc = sum_of_products(leftmost, ctx);
+            for (op, rhs, span) in spine.into_iter().rev() {
+                let r = sum_of_products(rhs, ctx);
+                acc = match (acc, r) {
+                    (Some(l), Some(r)) => combine(op, l, r, rhs, span, ctx),
+                    _ => None,
+                };
+            }
+            acc
         }
     }
+}
+
+/// `l op r` for the products of both operands.
+fn combine(
+    op: BinOp,
+    l: Vec<Product>,
+    r: Vec<Product>,
+    rhs: &Expr,
+    span: Span,
+    ctx: &mut Ctx,
+) -> Option<Vec<Product>> {
+    match op {
+        BinOp::Add => Some([l, r].concat()),
+        BinOp::Sub => {
+            let mut v = l;
+            v.extend(r.into_iter().map(|mut p| {
+                p.coeff = -p.coeff;
+                p
+            }));
+            Some(v)
+        }
+        BinOp::Mul => {
+            if l.len().saturating_mul(r.len()) > MAX_PRODUCTS {
+                ctx.diags.push(
+                    Diagnostic::error(
+                        "expression-too-large",
+                        format!("this product expands to more than {MAX_PRODUCTS} terms"),
+                    )
+                    .with_primary(span, "too many terms")
+                    .with_help(
+                        "write the terms out; a second-order model has a handful per equation",
+                    ),
+                );
+                return None;
+            }
+            let mut v = Vec::with_capacity(l.len() * r.len());
+            for a in &l {
+                for b in &r {
+                    let mut atoms = a.atoms.clone();
+                    atoms.extend(b.atoms.iter().cloned());
+                    v.push(Product {
+                        coeff: &a.coeff * &b.coeff,
+                        atoms,
+                        span: a.span.join(b.span),
+                    });
+                }
+            }
+            coefficients_fit(v, span, ctx)
+        }
+        BinOp::Div => {
+            if r.iter().any(|p| !p.atoms.is_empty()) {
+                ctx.diags.push(
+                    Diagnostic::error("division-by-signal", "only division by a number is allowed")
+                        .with_primary(rhs.span(), "not a number")
+                        .with_help("a regressor divided by a signal or parameter is outside the second-order modulus class; fold known constants into a number"),
+                );
+                return None;
+            }
+            let d: Q = r
+                .iter()
+                .map(|p| p.coeff.clone())
+                .fold(Q::zero(), |a, b| a + b);
+            if d.is_zero() {
+                ctx.diags.push(
+                    Diagnostic::error("division-by-zero", "division by zero")
+                        .with_primary(rhs.span(), "equals 0")
+                        .with_help("check the coefficient"),
+                );
+                return None;
+            }
+            let v = l
+                .into_iter()
+                .map(|mut p| {
+                    p.coeff /= d.clone();
+                    p.span = p.span.join(rhs.span());
+                    p
+                })
+                .collect();
+            coefficients_fit(v, span, ctx)
+        }
+    }
+}
+
+fn coefficients_fit(v: Vec<Product>, span: Span, ctx: &mut Ctx) -> Option<Vec<Product>> {
+    if v.iter().all(|p| coefficient_fits(&p.coeff)) {
+        return Some(v);
+    }
+    ctx.diags.push(
+        Diagnostic::error("invalid-number", "the numbers of this product multiply out beyond the range of an f64 (about 1e±307) or beyond 4096 bits of exact precision")
+            .with_primary(span, "here")
+            .with_help("multiply the numbers out and write the coefficient once, e.g. 2.5e-3*X*u"),
+    );
+    None
 }
 
 fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
@@ -602,11 +640,45 @@ fn common_terms(
     };
     let medium =
         |t: &TermDecl| -> Option<usize> { t.factors.iter().find_map(|f| arg_medium(r, &f.arg)) };
-    for (i, a) in terms.iter().enumerate() {
-        for b in terms.iter().skip(i + 1) {
-            if a.output != b.output || a.parameter == b.parameter || shape(a) != shape(b) {
-                continue;
+    // Terms of one output and one shape, in order: grouping them first keeps
+    // this linear in the number of terms (comparing all pairs was quadratic).
+    let mut groups: BTreeMap<(usize, Shape), Vec<usize>> = BTreeMap::new();
+    for (i, t) in terms.iter().enumerate() {
+        groups.entry((t.output, shape(t))).or_default().push(i);
+    }
+    // Each later term is paired with one earlier term of the group: the first
+    // (input-only terms), or the first of another medium (state terms).
+    let mut pairs: Vec<(usize, usize)> = Vec::new();
+    for group in groups.values() {
+        let mut first_of: BTreeMap<Option<usize>, usize> = BTreeMap::new();
+        for &j in group {
+            let b = &terms[j];
+            let input_only = b
+                .factors
+                .iter()
+                .all(|f| matches!(f.arg.signal, Signal::Input(_)));
+            let earlier = if input_only {
+                group
+                    .iter()
+                    .copied()
+                    .find(|&i| i < j && terms[i].parameter != b.parameter)
+            } else {
+                first_of
+                    .iter()
+                    .filter(|(m, i)| **m != medium(b) && terms[**i].parameter != b.parameter)
+                    .map(|(_, i)| *i)
+                    .min()
+            };
+            if let Some(i) = earlier {
+                pairs.push((i, j));
             }
+            first_of.entry(medium(b)).or_insert(j);
+        }
+    }
+    pairs.sort_unstable();
+    for (i, j) in pairs {
+        let (a, b) = (&terms[i], &terms[j]);
+        {
             let (pa, pb) = (&params[a.parameter].name, &params[b.parameter].name);
             let input_only = a
                 .factors

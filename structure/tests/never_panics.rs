@@ -241,7 +241,99 @@ fn check(source: &str, aggregate: bool) -> Result<(), TestCaseError> {
     }
     let text = render(&c.diagnostics, "model.som", source, RenderStyle::Plain);
     prop_assert_eq!(text.is_empty(), c.diagnostics.is_empty());
+    // No flood: at most 50 diagnostics, each line cut to a window.
+    prop_assert!(text.len() < 256 * 1024, "{} bytes rendered", text.len());
     Ok(())
+}
+
+/// [`check`] on a thread with a 256 KiB stack and a time bound: recursion
+/// proportional to the input aborts, a hang fails.
+fn check_small_stack(source: String, aggregate: bool) -> Result<(), TestCaseError> {
+    let handle = std::thread::Builder::new()
+        .stack_size(256 * 1024)
+        .spawn(move || {
+            let start = std::time::Instant::now();
+            let r = check(&source, aggregate);
+            (r, start.elapsed())
+        })
+        .map_err(|e| TestCaseError::fail(format!("spawn: {e}")))?;
+    let (r, took) = handle
+        .join()
+        .map_err(|_| TestCaseError::fail("the compiler panicked"))?;
+    prop_assert!(took < std::time::Duration::from_secs(5), "took {took:?}");
+    r
+}
+
+/// One operand or operator piece of a long expression.
+fn piece() -> impl Strategy<Value = &'static str> {
+    prop::sample::select(vec![
+        "*1", "*u", "+X*u", "-Y*v", "/2", "*(u+v)", "*|u|", "*-", "*- -", "+(", ")", "*|(", "|)",
+        "*1e-300", "*9e307", "*0.5", "+1", "*X", "*((u))",
+    ])
+}
+
+/// Long expressions around the operand limit, with signs, parentheses and moduli.
+fn long_expression() -> impl Strategy<Value = String> {
+    (prop::collection::vec(piece(), 0..200), 1usize..8).prop_map(|(pieces, repeat)| {
+        let body: String = pieces.concat().repeat(repeat);
+        format!("model M {{\n state u, v\n der u = X*u{body}\n der v = Y*v\n}}\n")
+    })
+}
+
+/// Wide models: many states, each with a few terms, some with a medium.
+fn wide_model() -> impl Strategy<Value = String> {
+    (1usize..400, any::<bool>(), 0usize..4).prop_map(|(n, medium, shape)| {
+        let mut s = String::from("model W {\n state ");
+        s.push_str(&(0..n).map(|i| format!("x{i}")).collect::<Vec<_>>().join(", "));
+        s.push_str("\n input t\n");
+        if medium && n >= 2 {
+            s.push_str(" heading psi integrates x1\n disturbance c unmeasured earth(north, east)\n w = relative(c)\n");
+        }
+        for i in 0..n {
+            let term = match (shape + i) % 4 {
+                0 => format!("A{i}*x{i}"),
+                1 => format!("A{i}*x{i} + B{i}*x{i}*|x{i}|"),
+                2 => format!("A{i}*x{i} + K{i}*t"),
+                _ => format!("A{i}*x{i} + 1.5e-3*C{i}*x{i}*x0"),
+            };
+            let term = if medium && i < 2 && n >= 2 { format!("{term} + D{i}*w.x{i}") } else { term };
+            s.push_str(&format!(" der x{i} = {term}\n"));
+        }
+        s.push_str("}\n");
+        s
+    })
+}
+
+/// Number literals: long mantissas, huge and tiny exponents, in equations and `nominal`.
+fn literal() -> impl Strategy<Value = String> {
+    (
+        "[0-9]{0,60}",
+        any::<bool>(),
+        "[0-9]{0,60}",
+        prop::option::of(any::<i64>()),
+        any::<bool>(),
+    )
+        .prop_map(|(int, dot, frac, exp, nominal)| {
+            let mut lit = int;
+            if dot || lit.is_empty() {
+                lit.push('.');
+                lit.push_str(&frac);
+                if lit == "." {
+                    lit.push('5');
+                }
+            }
+            if let Some(e) = exp {
+                lit.push_str(&format!(
+                    "e{}",
+                    e % 1000 * if e % 7 == 0 { 1 << 40 } else { 1 }
+                ));
+            }
+            if nominal {
+                format!("model M {{ state u der u = X*u nominal {{ X = -{lit} }} }}")
+            } else {
+                format!("model M {{ state u der u = {lit}*X*u*{lit} }}")
+            }
+        })
 }
 
 proptest! {
@@ -275,6 +367,21 @@ proptest! {
             apply(&mut text, m);
         }
         check(&text, aggregate)?;
+    }
+
+    #[test]
+    fn long_expressions(source in long_expression()) {
+        check_small_stack(source, false)?;
+    }
+
+    #[test]
+    fn wide_models(source in wide_model()) {
+        check_small_stack(source, false)?;
+    }
+
+    #[test]
+    fn literals(source in literal()) {
+        check_small_stack(source, false)?;
     }
 
     #[test]

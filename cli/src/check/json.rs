@@ -52,6 +52,8 @@ pub struct Report {
     errors: Vec<JsonDiagnostic>,
     warnings: Vec<JsonDiagnostic>,
     notes: Vec<JsonDiagnostic>,
+    /// Diagnostics left out: at most the first 50 of each severity are listed.
+    omitted: usize,
 }
 
 #[derive(Debug, Serialize)]
@@ -229,10 +231,18 @@ fn names(ir: &Ir, params: &[usize]) -> Vec<String> {
 
 /// The document for a compiled (or rejected) model.
 pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
+    let mut report = full_report(file, source, c, aggregate);
+    let listed = report.errors.len() + report.warnings.len() + report.notes.len();
+    report.omitted = c.diagnostics.len().saturating_sub(listed);
+    report
+}
+
+fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
     let by = |s: Severity| -> Vec<JsonDiagnostic> {
         c.diagnostics
             .iter()
             .filter(|d| d.severity == s)
+            .take(grammar::MAX_RENDERED)
             .map(|d| diagnostic(file, source, d))
             .collect()
     };
@@ -254,8 +264,9 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
     let columns = &ir.predictors.measured;
     let mut regressors = Vec::new();
     let mut nuisance_regressors = Vec::new();
-    for (out, state) in ir.states.iter().enumerate() {
-        for col in columns.iter().filter(|col| col.outputs().contains(&out)) {
+    let by_output = leeway_structure::ir::columns_by_output(columns, ir.states.len());
+    for ((out, state), mine) in ir.states.iter().enumerate().zip(by_output) {
+        for col in mine {
             let expression = column_text(ir, col, out);
             match col.kind {
                 ColumnKind::Theta { parameter } => {
@@ -359,6 +370,7 @@ pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Rep
         errors,
         warnings,
         notes,
+        omitted: 0,
     }
 }
 
@@ -406,5 +418,6 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
         errors: Vec::new(),
         warnings: Vec::new(),
         notes: Vec::new(),
+        omitted: 0,
     }
 }
