@@ -1226,72 +1226,69 @@ impl<'a> Estimator<'a> {
         }
     }
 
-    /// One pass over the measured regressors and targets: a value that is
-    /// not finite, or so large that its square or a sum of squares leaves
-    /// f64's range ([`REGRESSOR_LIMIT`]), is a data error located at the
-    /// sample that produced it (`file:line` for a file), never a rank verdict.
-    fn check_finite(&self, experiments: &[&dyn Source]) -> Result<(), EstimateError> {
-        let walker = self.walker_with(None);
+    /// A measured regressor or target that is not finite, or so large that
+    /// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
+    /// in equation `k` (regressors at `k − 1`): `(sample, what)`.
+    fn non_finite(&self, k: usize, phi: &[f64], t: &[f64]) -> Option<(usize, String)> {
+        // The common case in one branch-free sweep (NaN fails `<=` too).
+        let fine = |v: &f64| v.abs() <= REGRESSOR_LIMIT;
+        if phi.iter().all(fine) && t.iter().all(fine) {
+            return None;
+        }
         let n = self.n_cols;
         let predictors = self.ir.predictors.get(self.kind);
-        for (e, info) in experiments.iter().zip(&self.infos) {
-            // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
-            let mut k = 1usize;
-            let mut bad: Option<(usize, String)> = None;
-            let _ = walker.walk(*e, info, &[], &[], None, &mut |_, phi, t| {
-                k += 1;
-                if bad.is_some() {
-                    return;
+        let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
+        for (o, target) in t.iter().enumerate() {
+            for (c, col) in predictors.iter().enumerate().take(n) {
+                let v = phi[o * n + c];
+                if wrong(v) && v != 0.0 {
+                    return Some((
+                        k - 1,
+                        format!(
+                            "the regressor {} of `{}` evaluates to {v:e}",
+                            col.name, self.ir.states[o]
+                        ),
+                    ));
                 }
-                let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
-                for (o, _) in t.iter().enumerate() {
-                    for (c, col) in predictors.iter().enumerate().take(n) {
-                        let v = phi[o * n + c];
-                        if wrong(v) && v != 0.0 {
-                            bad = Some((
-                                k - 1,
-                                format!(
-                                    "the regressor {} of `{}` evaluates to {v:e}",
-                                    col.name, self.ir.states[o]
-                                ),
-                            ));
-                            return;
-                        }
-                    }
-                    if wrong(t[o]) {
-                        bad = Some((
-                            k,
-                            format!(
-                                "the difference quotient of `{}` evaluates to {:e}",
-                                self.ir.states[o], t[o]
-                            ),
-                        ));
-                        return;
-                    }
-                }
-            });
-            if let Some((sample, what)) = bad {
-                return Err(err(
-                    "non-finite-data",
+            }
+            if wrong(*target) {
+                return Some((
+                    k,
                     format!(
-                        "{}: {what} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
-                        e.locate(sample),
-                        e.name()
+                        "the difference quotient of `{}` evaluates to {target:e}",
+                        self.ir.states[o]
                     ),
-                    "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
                 ));
             }
         }
-        Ok(())
+        None
+    }
+
+    /// The located data error for a non-finite value found by the first pass:
+    /// never a rank verdict.
+    fn non_finite_error(&self, e: &dyn Source, sample: usize, what: &str) -> EstimateError {
+        err(
+            "non-finite-data",
+            format!(
+                "{}: {what} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
+                e.locate(sample),
+                e.name()
+            ),
+            "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
+        )
     }
 
     /// One accumulation pass: `[experiment][output]` moment sums over the block's columns.
+    /// With `finite`, the first pass also looks for non-finite measured
+    /// values (no extra pass over the data): the first one found is stored
+    /// as `(experiment, sample, what)`.
     fn accumulate(
         &self,
         experiments: &[&dyn Source],
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
+        finite: Option<&std::cell::RefCell<Option<(usize, usize, String)>>>,
     ) -> Result<(Vec<Vec<CrossMoments>>, f64, f64), Diverged> {
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
         let walker = if theta_sim.is_empty() {
@@ -1303,7 +1300,9 @@ impl<'a> Estimator<'a> {
         let mut all = Vec::with_capacity(experiments.len());
         let mut change = 0.0f64;
         let mut fit = 0.0f64;
-        for (e, info) in experiments.iter().zip(&self.infos) {
+        for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
+            // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
+            let mut k = 1usize;
             let mut acc: Vec<CrossMoments> = (0..self.ir.states.len())
                 .map(|o| {
                     let m = self.blocks[self.block_of_output[o]].cols.len();
@@ -1317,6 +1316,13 @@ impl<'a> Estimator<'a> {
                 .collect();
             let mut pb: Vec<Vec<f64>> = zb.clone();
             let c = walker.walk(*e, info, theta_sim, mu, reference, &mut |z, phi, t| {
+                k += 1;
+                if let Some(cell) = finite
+                    && cell.borrow().is_none()
+                    && let Some((sample, what)) = self.non_finite(k, phi, t)
+                {
+                    *cell.borrow_mut() = Some((i, sample, what));
+                }
                 for (o, a) in acc.iter_mut().enumerate() {
                     let b = self.block_of_output[o];
                     let cols = &self.blocks[b].cols;
@@ -1827,10 +1833,30 @@ impl<'a> Estimator<'a> {
         } else {
             theta_sim.clone()
         };
-        self.check_finite(experiments)?;
-        let moments = match self.accumulate(experiments, &first, &mu, None) {
+        let bad = std::cell::RefCell::new(None);
+        let first_pass = self.accumulate(experiments, &first, &mu, None, Some(&bad));
+        if let Some((i, sample, what)) = bad.into_inner() {
+            return Err(self.non_finite_error(experiments[i], sample, &what));
+        }
+        let moments = match first_pass {
             Ok((m, _, _)) => m,
             Err(Diverged) => {
+                // The simulation stopped the pass early: a bad value further
+                // on is still a data error, not a divergence.
+                let walker = self.walker_with(None);
+                for (e, info) in experiments.iter().zip(&self.infos) {
+                    let mut k = 1usize;
+                    let mut found = None;
+                    let _ = walker.walk(*e, info, &[], &[], None, &mut |_, phi, t| {
+                        k += 1;
+                        if found.is_none() {
+                            found = self.non_finite(k, phi, t);
+                        }
+                    });
+                    if let Some((sample, what)) = found {
+                        return Err(self.non_finite_error(*e, sample, &what));
+                    }
+                }
                 return Err(err(
                     "nominal-diverges",
                     "the simulation of the nominal model diverges on the input of these experiments",
@@ -1870,9 +1896,13 @@ impl<'a> Estimator<'a> {
                     .zip(&new_mu)
                     .map(|(a, b)| a + step * (b - a))
                     .collect();
-                if let Ok(r) =
-                    self.accumulate(experiments, &trial, &trial_mu, Some((&theta_sim, &mu)))
-                {
+                if let Ok(r) = self.accumulate(
+                    experiments,
+                    &trial,
+                    &trial_mu,
+                    Some((&theta_sim, &mu)),
+                    None,
+                ) {
                     accepted = Some((trial, trial_mu, r));
                     break;
                 }
