@@ -408,6 +408,9 @@ struct Diverged;
 /// 1e290, so sums of squares over 10¹⁸ samples stay finite.
 pub const REGRESSOR_LIMIT: f64 = 1e145;
 
+/// The first non-finite measured value found: `(experiment, sample, what)`.
+type FirstBadValue = std::cell::RefCell<Option<(usize, usize, String)>>;
+
 /// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
 type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
 
@@ -1288,7 +1291,7 @@ impl<'a> Estimator<'a> {
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
-        finite: Option<&std::cell::RefCell<Option<(usize, usize, String)>>>,
+        finite: Option<&FirstBadValue>,
     ) -> Result<(Vec<Vec<CrossMoments>>, f64, f64), Diverged> {
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
         let walker = if theta_sim.is_empty() {
