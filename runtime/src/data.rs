@@ -591,7 +591,7 @@ fn csv_builder() -> csv::ReaderBuilder {
 const EXTREMES: usize = 17;
 
 /// How far outside the range of the bulk of a column a sample must lie to be
-/// a gross outlier, in multiples of that range (see [`Extremes`]).
+/// a gross outlier, in multiples of that range (see `Extremes`).
 pub const OUTLIER_FACTOR: f64 = 1e4;
 
 /// The [`EXTREMES`] largest and smallest values of one column, with their

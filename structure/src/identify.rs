@@ -1156,7 +1156,7 @@ impl<'a> Analysis<'a> {
     /// iff [`Patterns::Symbolic`] does, and a set does iff its evaluation
     /// matrix over the characters the columns hold has the rank the symbolic
     /// rows need; one pattern per character suffices, found deterministically
-    /// ([`Analysis::completion`]). (2) The stacked matrix is block diagonal
+    /// (`Analysis::completion`). (2) The stacked matrix is block diagonal
     /// over output blocks and a block sees only its own signs, so the sign
     /// arguments fall into components (arguments shared by a block) whose
     /// pattern sets can be chosen independently; a set of k patterns works
