@@ -85,6 +85,12 @@ fn edit() -> impl Strategy<Value = Edit> {
     ]
 }
 
+fn set(row: &mut [String], column: usize, text: &str) {
+    if let Some(cell) = row.get_mut(column) {
+        *cell = text.to_string();
+    }
+}
+
 /// The file text: the edited rows, extra lines, line ends.
 fn layout(edits: &[Edit], crlf: bool) -> String {
     let mut rows = base_rows(80);
@@ -94,9 +100,10 @@ fn layout(edits: &[Edit], crlf: bool) -> String {
         match e {
             Edit::Blank(r, s) => before.push((*r, (*s).to_string())),
             Edit::Comment(r, s) => before.push((*r, (*s).to_string())),
-            Edit::Quoted(r, s) => rows[r + 1][10] = (*s).to_string(),
-            Edit::Empty(r, c) => rows[r + 1][*c] = String::new(),
-            Edit::Text(r, c, s) => rows[r + 1][*c] = (*s).to_string(),
+            // A cell a `MissingCell` edit removed stays removed.
+            Edit::Quoted(r, s) => set(&mut rows[r + 1], 10, s),
+            Edit::Empty(r, c) => set(&mut rows[r + 1], *c, ""),
+            Edit::Text(r, c, s) => set(&mut rows[r + 1], *c, s),
             Edit::ExtraCell(r) => rows[r + 1].push("9".to_string()),
             Edit::MissingCell(r) => {
                 rows[r + 1].pop();

@@ -299,8 +299,13 @@ pub struct StudyOutcomes {
 /// in the list), so a study of one case draws the same experiments as that
 /// case of a study of both.
 pub fn run_seed(seed: u64, case: &Case, run: usize) -> u64 {
-    // FNV-1a of the name, then SplitMix64 of the three numbers.
-    let key = case.name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| {
+    keyed_seed(seed, &case.name, run)
+}
+
+/// The seed of run `run` of a set named `name`: FNV-1a of the name, then
+/// SplitMix64 of the three numbers (shared by every seeded campaign).
+pub fn keyed_seed(seed: u64, name: &str, run: usize) -> u64 {
+    let key = name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
     });
     let mut z = seed

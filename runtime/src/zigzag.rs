@@ -474,18 +474,10 @@ pub fn simulate_zigzag(tanker: &Tanker, z: &Zigzag) -> Trace {
     trace
 }
 
-/// The seed of run `run` of set `set` (FNV-1a of the name, SplitMix64 of
-/// the numbers, as `study::run_seed`).
+/// The seed of run `run` of set `set`, derived as the study's
+/// ([`crate::study::keyed_seed`]).
 pub fn run_seed(seed: u64, set: &str, run: usize) -> u64 {
-    let key = set.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
-    });
-    let mut z = seed
-        ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ (run as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    crate::study::keyed_seed(seed, set, run)
 }
 
 /// Zigzag angles `(δ_z, ψ_z)` in degrees of the training runs.
