@@ -3,107 +3,11 @@
 //! `data { }`, the aggregate rows of the `estimate` table, and `validate` with
 //! several parameter files (the binary on synthetic ship data).
 
-use leeway_runtime::{Experiment, Interpreter, study, write_csv};
+use leeway_runtime::{Interpreter, study};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
-/// A scratch directory, removed when dropped.
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("leeway-cli-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
-        Scratch(dir)
-    }
-    fn path(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-    fn write(&self, file: &str, text: &str) -> String {
-        let p = self.path(file);
-        std::fs::write(&p, text).unwrap_or_else(|e| panic!("{e}"));
-        p.display().to_string()
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-const SHIP: &str = "examples/models/ship.som";
-
-/// Runs `leeway ARGS` from the workspace root.
-fn leeway(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_leeway"))
-        .args(args)
-        .current_dir(root())
-        .env_remove("NO_COLOR")
-        .output()
-        .expect("run leeway")
-}
-
-fn code(o: &Output) -> i32 {
-    o.status.code().expect("exit code")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(o: &Output) -> Value {
-    serde_json::from_slice(&o.stdout)
-        .unwrap_or_else(|e| panic!("stdout is not JSON ({e}): {}\n{}", stdout(o), stderr(o)))
-}
-
-fn no_panic(o: &Output) {
-    assert!(!stderr(o).contains("panicked"), "{}", stderr(o));
-}
-
-fn ship() -> Interpreter {
-    let src = std::fs::read_to_string(root().join(SHIP)).unwrap_or_default();
-    let c = leeway_runtime::structure::compile(&src, &Default::default());
-    Interpreter::new(c.ir.unwrap_or_else(|| panic!("{:?}", c.diagnostics)))
-}
-
-fn csv_text(model: &Interpreter, experiments: &[&Experiment]) -> String {
-    let mut buf = Vec::new();
-    write_csv(leeway_runtime::Model::ir(model), experiments, 0.0, &mut buf)
-        .unwrap_or_else(|e| panic!("{e}"));
-    String::from_utf8(buf).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// One estimation experiment of the study as CSV text.
-fn estimation_csv(n: usize, wind: f64, seed: u64) -> String {
-    let model = ship();
-    let (e, _) =
-        study::estimation_experiment(&model, &study::InputDesign::default(), wind, n, seed);
-    csv_text(&model, &[&e])
-}
-
-/// θ0 of the paper as a plain parameter file.
-fn true_params() -> String {
-    let model = ship();
-    let ir = leeway_runtime::Model::ir(&model);
-    let entries: Vec<String> = ir
-        .parameters
-        .iter()
-        .zip(study::THETA0)
-        .map(|(p, v)| format!("  \"{}\": {v:?}", p.name))
-        .collect();
-    format!("{{\n{}\n}}\n", entries.join(",\n"))
-}
+mod common;
+use common::*;
 
 fn rows_of(text: &str) -> Vec<Vec<String>> {
     text.lines()
