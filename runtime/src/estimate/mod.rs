@@ -1,0 +1,209 @@
+//! The estimators of the paper: `ls`, `iv1`, `iv2`, `iv3`.
+//!
+//! Each experiment is visited in order; per pass the regressors `Φ(k−1)`
+//! (from data), the instruments `Z(k−1)` and the target (`(y(k) − y(k−1))/h`
+//! for `der`, `y(k)` for `next`) feed shifted moment sums per output, so
+//! memory is `O(n_ϑ²)` whatever N. Columns split into blocks of outputs that
+//! share no parameter (usually one block per output), each solved on its own.
+//!
+//! Instruments (paper §V-B, SPEC §5): the nominal model is simulated with the
+//! known input; its noise-free regressors are the instruments, centred per
+//! experiment (default), pooled, or not. Rotation entries come from a heading
+//! anchored to the previous measurement, `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`
+//! (with a measured `R`: the measurement one sample earlier); measured
+//! disturbances enter as their experiment mean. The estimate is refined by
+//! re-simulating with it (Young's refined IV) until it settles. Equations
+//! start at k = 2 so no instrument uses a same-sample measurement.
+
+use crate::data::Source;
+use crate::model::{Model, Signals, planar_rotation};
+use crate::moments::{CrossMoments, LongRun};
+use crate::signs::{ExperimentSigns, detect, plain_sign_args, set_pointwise_signs};
+use leeway_structure::exact::Q;
+use leeway_structure::grammar::EquationKind;
+pub use leeway_structure::identify::Centring;
+use leeway_structure::identify::{
+    Analysis, ExperimentStructure, Patterns, constant_parameters, linear_text, patterns_text,
+    verdict,
+};
+use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, Rotation};
+use nalgebra::{DMatrix, DVector};
+
+use std::collections::BTreeMap;
+
+mod accumulate;
+mod covariance;
+mod disturbances;
+mod options;
+mod outcome;
+mod plan;
+mod record;
+mod refine;
+mod report;
+mod solve;
+mod walk;
+
+pub use options::*;
+pub use outcome::*;
+use record::*;
+use solve::*;
+pub use walk::REGRESSOR_LIMIT;
+use walk::*;
+
+#[derive(Clone, Debug)]
+struct Block {
+    outputs: Vec<usize>,
+    /// Structurally kept predictor columns of the block, in column order.
+    cols: Vec<usize>,
+}
+
+/// The estimator for one model, method and set of experiments.
+struct Estimator<'a> {
+    model: &'a dyn Model,
+    ir: &'a Ir,
+    options: &'a Options,
+    kind: PredictorKind,
+    /// The centring used (the option, or the model's default).
+    centring: Centring,
+    /// Constant θ columns (`X_0`): under pooled centring their instrument,
+    /// the constant, is not centred.
+    constant_cols: Vec<bool>,
+    n_cols: usize,
+    blocks: Vec<Block>,
+    block_of_output: Vec<usize>,
+    /// Structurally dropped θ held at nominal (aggregation).
+    held: Vec<(usize, f64)>,
+    /// Preference rank of each column (lower = kept first).
+    preference: Vec<usize>,
+    nominal: Vec<f64>,
+    infos: Vec<ExperimentInfo>,
+    /// What each kept column estimates, as (column, coefficient) in predictor columns.
+    meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    warnings: Vec<String>,
+    unexcited: Vec<String>,
+    aggregates: Vec<String>,
+    terms: Vec<crate::interp::TermPlan>,
+}
+
+/// Estimates θ (and nuisance parameters) of `model` from the experiments.
+pub fn estimate(
+    model: &dyn Model,
+    experiments: &[&dyn Source],
+    options: &Options,
+) -> Result<Estimate, EstimateError> {
+    let ir = model.ir();
+    if experiments.is_empty() {
+        return Err(err(
+            "no-data",
+            "no experiment given",
+            "pass at least one --data file",
+        ));
+    }
+    let nominal = match &options.nominal {
+        Some(v) if v.len() == ir.parameters.len() => v.clone(),
+        Some(v) => {
+            return Err(err(
+                "invalid-nominal",
+                format!(
+                    "the nominal model has {} values, the model {} parameters",
+                    v.len(),
+                    ir.parameters.len()
+                ),
+                "give one value per parameter",
+            ));
+        }
+        None => ir.parameters.iter().map(|p| p.nominal).collect(),
+    };
+    let kind = options.method.predictor();
+    let mut warnings = Vec::new();
+    let mut notes = Vec::new();
+    // Sign patterns, measured means, bounds and heading spread, in one visit each.
+    let mut sign_patterns = Vec::new();
+    let mut infos = Vec::new();
+    for e in experiments {
+        if e.len() < crate::data::MIN_SAMPLES {
+            return Err(err(
+                "too-few-samples",
+                format!(
+                    "experiment `{}` has {} samples; at least {} are needed",
+                    e.name(),
+                    e.len(),
+                    crate::data::MIN_SAMPLES
+                ),
+                "record a longer experiment",
+            ));
+        }
+        let s = detect(ir, kind, *e);
+        for a in &s.arguments {
+            if a.minority_fraction > 0.0 {
+                let msg = format!(
+                    "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
+                    s.experiment,
+                    a.argument,
+                    if a.sign > 0 { "+" } else { "-" },
+                    100.0 * (1.0 - a.minority_fraction),
+                    100.0 * a.minority_fraction
+                );
+                if options.strict {
+                    return Err(err(
+                        "sign-violation",
+                        msg,
+                        "run experiments with a static offset large enough that the argument keeps its sign, or drop --strict to estimate anyway",
+                    ));
+                }
+                warnings.push(msg);
+            }
+        }
+        let crossing: Vec<String> = s
+            .pointwise
+            .iter()
+            .zip(&s.crossings)
+            .filter(|(a, _)| {
+                a.minority_fraction > 0.0
+                    && ir
+                        .sign_args
+                        .iter()
+                        .any(|x| x.pointwise && x.name == a.argument)
+            })
+            .map(|(a, n)| {
+                format!(
+                    "{} ({n} sign change{}, {:.1}% of the samples of the minority sign)",
+                    a.argument,
+                    if *n == 1 { "" } else { "s" },
+                    100.0 * a.minority_fraction
+                )
+            })
+            .collect();
+        if !crossing.is_empty() {
+            notes.push(format!(
+                "experiment `{}`: {} cross zero; their moduli are evaluated pointwise, as the simulation does (within the noise of zero, measurement noise biases |x| slightly upwards)",
+                s.experiment,
+                crossing.join(", ")
+            ));
+        }
+        infos.push(experiment_info(ir, *e, &s, options));
+        sign_patterns.push(s);
+    }
+    for (e, info) in experiments.iter().zip(&infos) {
+        if info.frozen.is_some() {
+            warnings.push(format!(
+                "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
+                e.name(),
+                info.spread.max(0.0)
+            ));
+        }
+    }
+    let mut est = Estimator::new(
+        model,
+        options,
+        kind,
+        nominal,
+        infos,
+        &sign_patterns,
+        warnings,
+    )?;
+    est.check_length(experiments)?;
+    let mut estimate = est.run(experiments, sign_patterns)?;
+    estimate.notes = notes;
+    Ok(estimate)
+}

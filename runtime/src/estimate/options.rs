@@ -1,0 +1,161 @@
+//! What the caller chooses: the method, its instruments, centring and combination.
+
+use super::Centring;
+use leeway_structure::ir::PredictorKind;
+use serde::Serialize;
+
+/// Which estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Least squares on IV3's predictor, with an intercept per output and experiment.
+    Ls,
+    /// IV on the basic predictor `Φ(y, u)`.
+    Iv1,
+    /// IV on the augmented predictor, every medium unmeasured.
+    Iv2,
+    /// IV on the augmented predictor plus `Φ2(y + y_aux)` for measured media.
+    Iv3,
+}
+
+impl Method {
+    /// The predictor the method uses.
+    pub fn predictor(self) -> PredictorKind {
+        match self {
+            Method::Iv1 => PredictorKind::Basic,
+            Method::Iv2 => PredictorKind::Augmented,
+            Method::Ls | Method::Iv3 => PredictorKind::Measured,
+        }
+    }
+    /// `ls`, `iv1`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ls => "ls",
+            Method::Iv1 => "iv1",
+            Method::Iv2 => "iv2",
+            Method::Iv3 => "iv3",
+        }
+    }
+    /// All four, in the paper's order.
+    pub const ALL: [Method; 4] = [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3];
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Method, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "ls" => Ok(Method::Ls),
+            "iv1" => Ok(Method::Iv1),
+            "iv2" => Ok(Method::Iv2),
+            "iv3" => Ok(Method::Iv3),
+            other => Err(format!("unknown method `{other}`: use ls, iv1, iv2 or iv3")),
+        }
+    }
+}
+
+/// Where instruments come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Instruments {
+    /// Simulated nominal model, refined (default).
+    Simulated,
+    /// Regressors of the measurement one sample earlier.
+    Delayed,
+}
+
+/// Where the refined IV's first instrument simulation gets its θ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Initial {
+    /// The nominal model (`nominal { }` or `--nominal`).
+    Nominal,
+    /// An estimate with delayed-measurement instruments (measured disturbances
+    /// at their experiment mean): consistent, and close enough to the craft
+    /// that the first simulation gives strong instruments.
+    Delayed,
+}
+
+/// How the experiments' moment equations are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    /// `(Σᵢ Hᵢ) ϑ = Σᵢ gᵢ`: the pooled IV estimator (default). With model
+    /// error every run's equations have their own solution; summing weighs
+    /// runs by their length and keeps one consistent system.
+    Summed,
+    /// `[H₁/n₁; …; H_E/n_E] ϑ = [g₁/n₁; …]` solved by least squares: the
+    /// paper's eq. (IV_problem) as written.
+    Stacked,
+}
+
+impl Combine {
+    /// `summed`, `stacked`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Combine::Summed => "summed",
+            Combine::Stacked => "stacked",
+        }
+    }
+}
+
+/// Estimation options.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The estimator.
+    pub method: Method,
+    /// Instrument kind.
+    pub instruments: Instruments,
+    /// The θ the first instrument simulation uses (simulated instruments).
+    pub initial: Initial,
+    /// Instrument centring (`None`: the model's default,
+    /// [`Centring::for_model`]: per experiment when the model has a
+    /// disturbance the predictor does not take from data, none otherwise).
+    pub centring: Option<Centring>,
+    /// How the experiments' moment equations are combined.
+    pub combine: Combine,
+    /// θ of the nominal model (default: the model's `nominal { }`).
+    pub nominal: Option<Vec<f64>>,
+    /// Most re-simulations of the refined IV.
+    pub max_refinements: usize,
+    /// The refinement has settled when a new instrument simulation moves less
+    /// than this fraction of the simulated states' variation (RMS).
+    pub tolerance: f64,
+    /// Estimate identifiable combinations when θ is not identifiable.
+    pub aggregate: bool,
+    /// A7 violations (wrong signs) are errors instead of warnings.
+    pub strict: bool,
+    /// Lags of the long-run covariance (≥ 1: the Euler residual is MA(1)).
+    pub lags: usize,
+    /// Relative residual below which a column is numerically dependent.
+    pub rank_tolerance: f64,
+    /// Heading spread (circular std, rad) below which `R` counts as constant.
+    pub heading_spread: f64,
+    /// Compute standard errors and disturbance moments (one more pass).
+    pub covariance: bool,
+    /// Stop a refinement whose simulation tracks the data markedly worse than
+    /// an earlier iterate, and report the best iterate (small-sample runaway
+    /// guard). `false` gives the plain refined IV of the paper.
+    pub runaway_guard: bool,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            method: Method::Iv3,
+            instruments: Instruments::Simulated,
+            initial: Initial::Delayed,
+            centring: None,
+            combine: Combine::Summed,
+            nominal: None,
+            max_refinements: 8,
+            tolerance: 1e-3,
+            aggregate: false,
+            strict: false,
+            lags: 1,
+            rank_tolerance: 1e-9,
+            heading_spread: 0.05,
+            covariance: true,
+            runaway_guard: true,
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! What an estimate returns: θ, the nuisance columns, disturbance moments, diagnostics, errors.
+
+use super::ExperimentSigns;
+use super::Method;
+use serde::Serialize;
+
+/// One column's estimate (θ or nuisance).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ColumnEstimate {
+    /// Column name.
+    pub name: String,
+    /// `theta`, `rho` or `lambda`.
+    pub kind: &'static str,
+    /// The estimate (held value for held columns, `None` when dropped).
+    pub value: Option<f64>,
+    /// Standard error (estimated columns only).
+    pub std_error: Option<f64>,
+    /// `estimated`, `held at nominal`, `held at 0`, `dropped`.
+    pub status: String,
+    /// What the value estimates, in moments and parameter names.
+    pub estimates: String,
+}
+
+/// The mean of an unmeasured disturbance component (paper Corollary 1).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DisturbanceMoment {
+    /// The disturbance.
+    pub disturbance: String,
+    /// The component.
+    pub component: String,
+    /// Estimated mean.
+    pub mean: f64,
+    /// Its standard error (delta method).
+    pub std_error: Option<f64>,
+}
+
+/// How the estimate was computed and how well the data support it.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Diagnostics {
+    /// `basic`, `augmented`, `measured`.
+    pub predictor: String,
+    /// Experiments.
+    pub experiments: usize,
+    /// Equations used (samples − 2 per experiment).
+    pub equations: usize,
+    /// Columns of the predictor (unreduced).
+    pub columns: usize,
+    /// Columns estimated after structural and numeric reduction.
+    pub estimated: usize,
+    /// Numerical rank of the stacked moment matrix over the structurally kept columns.
+    pub rank: usize,
+    /// Condition number of the column-equilibrated stacked matrix (largest block).
+    pub condition_number: f64,
+    /// Refinements (re-simulations with an estimate).
+    pub refinements: usize,
+    /// The refined estimate settled within the tolerance.
+    pub converged: bool,
+    /// Instruments used.
+    pub instruments: String,
+    /// Centring used, and why it is valid.
+    pub centring: String,
+    /// `summed` or `stacked`: how the experiments' equations were combined.
+    pub combine: String,
+    /// Lags of the long-run covariance.
+    pub lags: usize,
+    /// Combinations the data did not excite, in the model's names.
+    pub unexcited: Vec<String>,
+    /// What kept parameters estimate when others were held.
+    pub aggregates: Vec<String>,
+}
+
+/// The result of an estimation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Estimate {
+    /// The method.
+    pub method: Method,
+    /// θ names.
+    pub parameters: Vec<String>,
+    /// θ (held parameters at their nominal values).
+    pub theta: Vec<f64>,
+    /// Standard errors of θ (`None` for held parameters).
+    pub std_errors: Vec<Option<f64>>,
+    /// Every column of the predictor.
+    pub columns: Vec<ColumnEstimate>,
+    /// Means of the unmeasured disturbances.
+    pub disturbances: Vec<DisturbanceMoment>,
+    /// Sign pattern per experiment.
+    pub sign_patterns: Vec<ExperimentSigns>,
+    /// Diagnostics.
+    pub diagnostics: Diagnostics,
+    /// Warnings.
+    pub warnings: Vec<String>,
+    /// Notes: facts about the data worth knowing that need no action (e.g.
+    /// where a pointwise modulus of a noisy state crosses zero).
+    pub notes: Vec<String>,
+}
+
+impl Estimate {
+    /// θ by name.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.parameters
+            .iter()
+            .position(|p| p == name)
+            .map(|i| self.theta[i])
+    }
+}
+
+/// Why an estimate could not be computed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{message}")]
+pub struct EstimateError {
+    /// Stable kebab-case code (`unidentifiable`, `rank-deficient`, `sign-violation`, ...).
+    pub code: &'static str,
+    /// What is wrong.
+    pub message: String,
+    /// How to fix it.
+    pub hint: String,
+}
+
+pub(super) fn err(
+    code: &'static str,
+    message: impl Into<String>,
+    hint: impl Into<String>,
+) -> EstimateError {
+    EstimateError {
+        code,
+        message: message.into(),
+        hint: hint.into(),
+    }
+}

@@ -1,0 +1,220 @@
+//! What is estimated before any data pass: the structural analysis for the experiments' sign patterns, held columns, blocks of outputs, the meaning of each kept column.
+
+use super::*;
+
+/// Fewest equations per column of the largest block (a bare minimum for the
+/// moment matrices to have full rank with some margin).
+pub(super) const MIN_EQUATIONS_PER_COLUMN: usize = 3;
+
+impl<'a> Estimator<'a> {
+    pub(super) fn new(
+        model: &'a dyn Model,
+        options: &'a Options,
+        kind: PredictorKind,
+        nominal: Vec<f64>,
+        infos: Vec<ExperimentInfo>,
+        signs: &[ExperimentSigns],
+        warnings: Vec<String>,
+    ) -> Result<Estimator<'a>, EstimateError> {
+        let ir = model.ir();
+        let centring = options
+            .centring
+            .unwrap_or_else(|| Centring::for_model(ir, kind));
+        let columns = ir.predictors.get(kind);
+        let n_cols = columns.len();
+        let analysis = Analysis::with_centring(ir, kind, centring);
+        let constant_cols: Vec<bool> = (0..n_cols)
+            .map(|c| !columns[c].kind.is_nuisance() && analysis.structural.is_constant(c))
+            .collect();
+        let exps: Vec<ExperimentStructure> = signs
+            .iter()
+            .zip(&infos)
+            .map(|(s, info)| ExperimentStructure {
+                varying: s
+                    .pointwise
+                    .iter()
+                    .filter(|a| a.minority_fraction > 0.0)
+                    .filter_map(|a| ir.sign_args.iter().position(|x| x.name == a.argument))
+                    .collect(),
+                pattern: s.pattern.clone(),
+                frozen_rotation: info.frozen.as_ref().map(|v| {
+                    v.iter()
+                        .map(|x| Q::from_float(*x).unwrap_or_default())
+                        .collect()
+                }),
+            })
+            .collect();
+        let red = analysis.reduce(Patterns::Experiments(&exps));
+        let v = verdict(&analysis.names, &red);
+        let mut held = Vec::new();
+        let mut aggregates = Vec::new();
+        if !v.identifiable {
+            let distinct: Vec<Vec<i8>> = {
+                let mut p: Vec<Vec<i8>> = signs.iter().map(|s| s.pattern.clone()).collect();
+                p.sort();
+                p.dedup();
+                p
+            };
+            let combos: Vec<String> = v.combinations.iter().map(|c| c.message.clone()).collect();
+            let remark2 = infos.iter().any(|i| i.frozen.is_some());
+            let constants = constant_parameters(ir);
+            let only_constants = v
+                .combinations
+                .iter()
+                .all(|c| c.parameters.iter().all(|p| constants.contains(p)));
+            if !options.aggregate {
+                let required = analysis.required_patterns();
+                let hint = match (&required, remark2) {
+                    _ if only_constants && centring != Centring::None => format!(
+                        "a constant term is estimable with uncentred instruments (--centring none: {}), or with --centring pooled; or remove the term",
+                        Centring::None.reason(ir, kind)
+                    ),
+                    (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
+                    (Some(r), false) if !r.is_empty() => format!(
+                        "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",
+                        patterns_text(ir, r, kind)
+                    ),
+                    _ => "no set of experiments identifies θ with this predictor; estimate the identifiable combinations with --aggregate".to_string(),
+                };
+                return Err(err(
+                    "unidentifiable",
+                    format!(
+                        "θ is not identifiable from these experiments (sign patterns {}): {}",
+                        patterns_text(ir, &distinct, kind),
+                        combos.join("; ")
+                    ),
+                    hint,
+                ));
+            }
+            for a in &v.aggregates {
+                aggregates.push(format!(
+                    "{} estimates {} (absorbed parameters held at their nominal values)",
+                    ir.parameters[a.parameter].name, a.estimates
+                ));
+            }
+            for (c, col) in columns.iter().enumerate() {
+                if let ColumnKind::Theta { parameter } = col.kind
+                    && !red.pivot[c]
+                {
+                    held.push((c, nominal[parameter]));
+                }
+            }
+        }
+        // What each kept column estimates: itself plus the structurally dropped
+        // columns expressed through it.
+        let mut meaning: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
+        for c in 0..n_cols {
+            if red.pivot[c] {
+                meaning.entry(c).or_default().push((c, 1.0));
+            }
+        }
+        for d in 0..n_cols {
+            if !red.pivot[d] {
+                for (k, q) in &red.combination[d] {
+                    meaning
+                        .entry(*k)
+                        .or_default()
+                        .push((d, leeway_structure::exact::to_f64(q)));
+                }
+            }
+        }
+        // Blocks: outputs connected through shared columns.
+        let n_out = ir.states.len();
+        let mut parent: Vec<usize> = (0..n_out).collect();
+        fn find(p: &mut [usize], x: usize) -> usize {
+            let mut r = x;
+            while p[r] != r {
+                r = p[r];
+            }
+            p[x] = r;
+            r
+        }
+        for col in columns {
+            let outs = col.outputs();
+            for w in outs.windows(2) {
+                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+                parent[b] = a;
+            }
+        }
+        let mut blocks: Vec<Block> = Vec::new();
+        let mut block_of_output = vec![0; n_out];
+        for (o, slot) in block_of_output.iter_mut().enumerate() {
+            let root = find(&mut parent, o);
+            let b = match blocks
+                .iter()
+                .position(|b| find(&mut parent, b.outputs[0]) == root)
+            {
+                Some(b) => b,
+                None => {
+                    blocks.push(Block {
+                        outputs: Vec::new(),
+                        cols: Vec::new(),
+                    });
+                    blocks.len() - 1
+                }
+            };
+            blocks[b].outputs.push(o);
+            *slot = b;
+        }
+        for (c, col) in columns.iter().enumerate() {
+            if red.pivot[c]
+                && let Some(o) = col.outputs().first()
+            {
+                blocks[block_of_output[*o]].cols.push(c);
+            }
+        }
+        let mut preference = vec![0; n_cols];
+        for (rank, c) in analysis.order.iter().enumerate() {
+            preference[*c] = rank;
+        }
+        Ok(Estimator {
+            model,
+            ir,
+            options,
+            kind,
+            centring,
+            constant_cols,
+            n_cols,
+            blocks,
+            block_of_output,
+            held,
+            preference,
+            nominal,
+            infos,
+            meaning,
+            warnings,
+            unexcited: Vec::new(),
+            aggregates,
+            terms: crate::interp::term_plans(ir),
+        })
+    }
+
+    pub(super) fn combine(&self) -> Combine {
+        self.options.combine
+    }
+
+    /// Refuses records too short for the number of columns estimated together.
+    pub(super) fn check_length(&self, experiments: &[&dyn Source]) -> Result<(), EstimateError> {
+        let equations: usize = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
+        if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
+            let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
+            if equations < needed {
+                let outputs: Vec<&str> = block
+                    .outputs
+                    .iter()
+                    .map(|o| self.ir.states[*o].as_str())
+                    .collect();
+                return Err(err(
+                    "too-few-samples",
+                    format!(
+                        "{equations} equations for {} columns estimated together (outputs {}): at least {needed} are needed",
+                        block.cols.len(),
+                        outputs.join(", ")
+                    ),
+                    "record longer experiments (hundreds of samples per parameter give useful standard errors)",
+                ));
+            }
+        }
+        Ok(())
+    }
+}

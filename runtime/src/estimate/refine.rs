@@ -1,0 +1,226 @@
+//! The refinement policy: bootstrap, re-simulation with the estimate, damping, convergence, the iterate reported.
+
+use super::*;
+
+/// Fit points by which a refinement's simulation may fall below the best
+/// earlier iterate before the refinement counts as running away.
+pub(super) const RUNAWAY_FIT_DROP: f64 = 5.0;
+
+/// One iterate of the refined IV.
+#[derive(Clone, Debug)]
+pub(super) struct Iterate {
+    pub(super) theta: Vec<f64>,
+    pub(super) sol: Vec<BlockSolution>,
+    /// The θ (empty: delayed bootstrap) whose simulation gave the instruments.
+    pub(super) theta_sim: Vec<f64>,
+    pub(super) mu: Vec<f64>,
+    pub(super) moments: Vec<Vec<CrossMoments>>,
+    /// Fit of this iterate's own simulation to the data, once simulated.
+    pub(super) fit: Option<f64>,
+}
+
+impl Estimator<'_> {
+    pub(super) fn run(
+        &mut self,
+        experiments: &[&dyn Source],
+        sign_patterns: Vec<ExperimentSigns>,
+    ) -> Result<Estimate, EstimateError> {
+        let n_comp = self.ir.components.len();
+        let mut theta_sim = self.nominal.clone();
+        let mut mu = vec![0.0; n_comp];
+        let refine =
+            self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
+        let mut refinements = 0usize;
+        let mut converged = !refine;
+        let mut stopped = false;
+        let bootstrap = refine && self.options.initial == Initial::Delayed;
+        let first: Vec<f64> = if bootstrap {
+            Vec::new()
+        } else {
+            theta_sim.clone()
+        };
+        let bad = std::cell::RefCell::new(None);
+        let first_pass = self.accumulate(experiments, &first, &mu, None, Some(&bad));
+        if let Some((i, sample, what)) = bad.into_inner() {
+            return Err(self.non_finite_error(experiments[i], sample, &what));
+        }
+        let moments = match first_pass {
+            Ok((m, _, _)) => m,
+            Err(Diverged) => {
+                // The simulation stopped the pass early: a bad value further
+                // on is still a data error, not a divergence.
+                let walker = self.walker_with(None);
+                for (e, info) in experiments.iter().zip(&self.infos) {
+                    let mut k = 1usize;
+                    let mut found = None;
+                    let _ = walker.walk(*e, info, &[], &[], None, &mut |_, phi, t| {
+                        k += 1;
+                        if found.is_none() {
+                            found = self.non_finite(k, phi, t);
+                        }
+                    });
+                    if let Some((sample, what)) = found {
+                        return Err(self.non_finite_error(*e, sample, &what));
+                    }
+                }
+                return Err(err(
+                    "nominal-diverges",
+                    "the simulation of the nominal model diverges on the input of these experiments",
+                    "give nominal values closer to the craft (nominal { } in the model, or --nominal FILE)",
+                ));
+            }
+        };
+        let sol = self.solve(&moments, !refine)?;
+        // The current iterate: its estimate, the simulation that produced its
+        // instruments, and (once simulated itself) how well it tracks the data.
+        let mut cur = Iterate {
+            theta: self.theta_of(&sol),
+            sol,
+            theta_sim: first,
+            mu: mu.clone(),
+            moments,
+            fit: None,
+        };
+        let mut best: Option<Iterate> = None;
+        while refine && refinements < self.options.max_refinements {
+            // Re-simulate with the estimate (and the disturbance means it implies),
+            // damping towards the previous simulation if it diverges. The new
+            // simulation is compared with the previous one in the same pass:
+            // once the instruments stop moving, so does the estimate.
+            let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
+            let new_mu = self.mean_vector(&values, &cur.theta);
+            let mut step = 1.0;
+            let mut accepted = None;
+            for _ in 0..6 {
+                let trial: Vec<f64> = theta_sim
+                    .iter()
+                    .zip(&cur.theta)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                let trial_mu: Vec<f64> = mu
+                    .iter()
+                    .zip(&new_mu)
+                    .map(|(a, b)| a + step * (b - a))
+                    .collect();
+                if let Ok(r) = self.accumulate(
+                    experiments,
+                    &trial,
+                    &trial_mu,
+                    Some((&theta_sim, &mu)),
+                    None,
+                ) {
+                    accepted = Some((trial, trial_mu, r));
+                    break;
+                }
+                step *= 0.5;
+            }
+            let Some((trial, trial_mu, (m, change, fit))) = accepted else {
+                self.warnings.push(format!(
+                    "refinement stopped after {refinements}: the simulation with the refined estimate diverges even when damped; the iterate whose simulation fits the data best is reported"
+                ));
+                stopped = true;
+                break;
+            };
+            if step < 1.0 {
+                self.warnings.push(format!(
+                    "refinement {} damped by {step} (the simulation with the full step diverged)",
+                    refinements + 1
+                ));
+            } else {
+                cur.fit = Some(fit);
+                if best
+                    .as_ref()
+                    .is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) < fit)
+                {
+                    best = Some(cur.clone());
+                }
+            }
+            theta_sim = trial.clone();
+            mu = trial_mu.clone();
+            refinements += 1;
+            let sol = self.solve(&m, false)?;
+            let next = Iterate {
+                theta: self.theta_of(&sol),
+                sol,
+                theta_sim: trial,
+                mu: trial_mu,
+                moments: m,
+                fit: None,
+            };
+            if std::env::var("LEEWAY_DEBUG").is_ok() {
+                eprintln!("refinement {refinements}: change {change:.3e} simulation fit {fit:.1}");
+            }
+            if change < self.options.tolerance {
+                converged = true;
+                cur = next;
+                break;
+            }
+            // A refinement whose simulation tracks the data markedly worse than
+            // an earlier iterate is running away (small samples): stop there.
+            if let (true, Some(b), Some(f)) = (self.options.runaway_guard, &best, cur.fit)
+                && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
+            {
+                self.warnings.push(format!(
+                    "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported",
+                    b.fit.unwrap_or(f) - f
+                ));
+                cur = next;
+                stopped = true;
+                break;
+            }
+            cur = next;
+        }
+        if refine && !converged {
+            // Report the iterate whose own simulation tracks the data best.
+            if let (true, Some(b)) = (self.options.runaway_guard, best)
+                && cur.fit.is_none_or(|f| f < b.fit.unwrap_or(f))
+            {
+                cur = b;
+            }
+            if !stopped {
+                self.warnings.push(format!(
+                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
+                    refinements, self.options.tolerance
+                ));
+            }
+        }
+        let theta_sim = cur.theta_sim.clone();
+        let mu = cur.mu.clone();
+        let moments = cur.moments;
+        // Record the numeric findings of the reported solve.
+        let sol = if refine {
+            self.solve(&moments, true)?
+        } else {
+            cur.sol
+        };
+        let theta = self.theta_of(&sol);
+        let columns = self.ir.predictors.get(self.kind);
+        if !sol
+            .iter()
+            .flat_map(|s| &s.kept)
+            .any(|c| !columns[*c].kind.is_nuisance())
+        {
+            return Err(err(
+                "rank-deficient",
+                "no physical parameter could be estimated from these data: every θ column is unexcited or held",
+                "record experiments that excite the craft (varying inputs, turning), or check the data columns",
+            ));
+        }
+        let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
+        let cov = if self.options.covariance {
+            self.covariance(experiments, &moments, &sol, &theta_sim, &mu)
+        } else {
+            None
+        };
+        self.finish(
+            sign_patterns,
+            &sol,
+            values,
+            theta,
+            cov,
+            refinements,
+            converged,
+            experiments,
+        )
+    }
+}

@@ -1,0 +1,455 @@
+//! Solving the moment equations per block: residue test, equilibration, column selection, the pseudo-inverse map used by the covariance.
+
+use super::*;
+
+/// A moment column below this many machine epsilons per equation of its
+/// Cauchy–Schwarz scale is rounding residue, not information.
+pub(super) const RESIDUE_EPSILONS: f64 = 64.0;
+
+/// Condition number of the equilibrated moment matrix above which an
+/// estimate is reported as ill-conditioned, naming the columns involved.
+pub(super) const CONDITION_WARNING: f64 = 1e8;
+
+/// The per-block outcome of a solve.
+#[derive(Clone, Debug)]
+pub(super) struct BlockSolution {
+    /// Columns (predictor indices) estimated.
+    pub(super) kept: Vec<usize>,
+    /// Numerically dropped columns with their held value.
+    pub(super) held: Vec<(usize, f64)>,
+    /// Estimates of `kept`.
+    pub(super) values: Vec<f64>,
+    /// `ϑ_K = Σ_i B_i · (Σ_k ζ_k of experiment i)` over the block's instrument rows.
+    pub(super) b: Vec<DMatrix<f64>>,
+    /// Instrument rows (predictor columns) of ζ.
+    pub(super) rows: Vec<usize>,
+    pub(super) condition: f64,
+    /// Columns that dominate the weakest direction when ill-conditioned.
+    pub(super) weak: Vec<usize>,
+}
+
+impl Estimator<'_> {
+    /// Solves every block; collects numeric rank findings.
+    pub(super) fn solve(
+        &mut self,
+        moments: &[Vec<CrossMoments>],
+        record: bool,
+    ) -> Result<Vec<BlockSolution>, EstimateError> {
+        let mut out = Vec::with_capacity(self.blocks.len());
+        let mut errors = Vec::new();
+        for b in 0..self.blocks.len() {
+            let cols = self.blocks[b].cols.clone();
+            let m = cols.len();
+            let e_count = moments.len();
+            // The summed system (Σ H_i) ϑ = Σ g_i (IV by default, and LS's
+            // normal equations), or the stacked one [H_i/n_i] ϑ = [g_i/n_i].
+            let summed = self.options.method == Method::Ls || self.combine() == Combine::Summed;
+            let (mut mat, rhs, scale_rows, bound): (
+                DMatrix<f64>,
+                DVector<f64>,
+                Vec<f64>,
+                Vec<f64>,
+            ) = if summed {
+                let mut a = DMatrix::zeros(m, m);
+                let mut g = DVector::zeros(m);
+                let mut bound = vec![0.0; m];
+                for i in 0..e_count {
+                    let (h, gi, bi) = self.equations(moments, i, b);
+                    a += h;
+                    g += gi;
+                    for (s, v) in bound.iter_mut().zip(bi) {
+                        *s += v;
+                    }
+                }
+                if self.options.method == Method::Ls {
+                    (a, g, vec![1.0; e_count], bound)
+                } else {
+                    // Divided by the total count, the summed system of one
+                    // experiment is the stacked one bit for bit.
+                    let total: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
+                    let n = total.max(1) as f64;
+                    for v in &mut bound {
+                        *v /= n;
+                    }
+                    (a / n, g / n, vec![1.0 / n; e_count], bound)
+                }
+            } else {
+                let mut a = DMatrix::zeros(m * e_count, m);
+                let mut g = DVector::zeros(m * e_count);
+                let mut scales = Vec::new();
+                let mut bound = vec![0.0; m];
+                for i in 0..e_count {
+                    let (h, gi, bi) = self.equations(moments, i, b);
+                    let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
+                    a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
+                    g.rows_mut(i * m, m).copy_from(&(gi / n));
+                    scales.push(1.0 / n);
+                    for (s, v) in bound.iter_mut().zip(bi) {
+                        *s += v / n;
+                    }
+                }
+                (a, g, scales, bound)
+            };
+            // Scale-aware residue test over the whole system: a column whose
+            // moments are at the rounding level of its own scale carries no
+            // information, whatever the units (equilibration would otherwise
+            // blow the residue up into a column).
+            let equations: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
+            let residue = RESIDUE_EPSILONS * f64::EPSILON * (equations.max(1) as f64);
+            for (j, bj) in bound.iter().enumerate() {
+                if mat.column(j).norm() <= residue * bj {
+                    mat.column_mut(j).fill(0.0);
+                }
+            }
+            // Rows equilibrated too (each instrument's equation to unit norm):
+            // an instrument in large units must not drown the others, so the
+            // rank decision and the conditioning do not depend on the units.
+            // One scale per instrument, the same in every experiment's rows
+            // (stacked), so the experiments keep their relative weights.
+            let instrument_norm: Vec<f64> = (0..m)
+                .map(|r| {
+                    (0..mat.nrows() / m)
+                        .map(|i| mat.row(i * m + r).norm_squared())
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            let row_scale: Vec<f64> = (0..mat.nrows())
+                .map(|r| {
+                    let norm = instrument_norm[r % m];
+                    if norm > 0.0 && norm.is_finite() {
+                        1.0 / norm
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            let mut scaled = mat.clone();
+            for (r, d) in row_scale.iter().enumerate() {
+                scaled.row_mut(r).scale_mut(*d);
+            }
+            let mut order: Vec<usize> = (0..m).collect();
+            order.sort_by_key(|j| self.preference[cols[*j]]);
+            let sel = select_columns(&scaled, &order, self.options.rank_tolerance);
+            // The square summed system is solved equilibrated (its solution
+            // does not depend on row scaling); the stacked one as the paper
+            // writes it, by unweighted least squares over the rows.
+            let (mat, rhs, row_scale) = if summed {
+                let mut rhs = rhs;
+                for (r, d) in row_scale.iter().enumerate() {
+                    rhs[r] *= d;
+                }
+                (scaled.clone(), rhs, row_scale)
+            } else {
+                (mat, rhs, vec![1.0; row_scale.len()])
+            };
+            let mut held = Vec::new();
+            for (j, combo) in &sel.dropped {
+                let c = cols[*j];
+                let col = &self.ir.predictors.get(self.kind)[c];
+                let text = if combo.is_empty() {
+                    format!(
+                        "{} is not excited by these data (its moments vanish)",
+                        col.name
+                    )
+                } else {
+                    let mut items: Vec<(String, Q)> = vec![];
+                    for (k, a) in combo {
+                        items.push((
+                            self.ir.predictors.get(self.kind)[cols[*k]].name.clone(),
+                            Q::from_float(round_sig(*a)).unwrap_or_default(),
+                        ));
+                    }
+                    format!(
+                        "{} is not separately excited: its column equals {}",
+                        col.name,
+                        linear_text_f(&items)
+                    )
+                };
+                match col.kind {
+                    ColumnKind::Theta { parameter } => {
+                        let p = &self.ir.parameters[parameter];
+                        let value = self.nominal[parameter];
+                        if p.measured && self.kind == PredictorKind::Measured {
+                            if record {
+                                self.warnings.push(format!(
+                                    "{text}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
+                                    p.name,
+                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
+                                    p.name,
+                                    value
+                                ));
+                                self.unexcited.push(text.clone());
+                                for (k, a) in combo {
+                                    let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
+                                    let held = if value == 0.0 {
+                                        p.name.clone()
+                                    } else {
+                                        format!("({} - {value})", p.name)
+                                    };
+                                    let coef = round_sig(*a);
+                                    self.aggregates.push(format!(
+                                        "{kept} estimates {kept} {} {}*{held}",
+                                        if coef < 0.0 { "-" } else { "+" },
+                                        coef.abs()
+                                    ));
+                                }
+                            }
+                            held.push((c, value));
+                        } else if self.options.aggregate {
+                            if record {
+                                self.warnings.push(format!(
+                                    "{text}; held at its nominal value {value} (--aggregate)"
+                                ));
+                                self.unexcited.push(text.clone());
+                            }
+                            held.push((c, value));
+                        } else {
+                            errors.push(text);
+                        }
+                    }
+                    _ => {
+                        if record {
+                            self.unexcited.push(format!("{text} (nuisance; held at 0)"));
+                        }
+                        held.push((c, 0.0));
+                    }
+                }
+            }
+            let kept: Vec<usize> = sel.kept.iter().map(|j| cols[*j]).collect();
+            // Right-hand side without the held columns' contribution.
+            let mut g = rhs.clone();
+            for (c, v) in &held {
+                if let Some(j) = cols.iter().position(|x| x == c) {
+                    g -= mat.column(j) * *v;
+                }
+            }
+            let kj: Vec<usize> = sel.kept.clone();
+            let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
+            let (values, mut pinv, condition) = solve_equilibrated(&mk, &g);
+            // The map from the unscaled moment sums to ϑ includes the row scaling.
+            for (c, d) in row_scale.iter().enumerate() {
+                pinv.column_mut(c).scale_mut(*d);
+            }
+            // Conditioning judged on the equilibrated system, whatever the units.
+            let condition = if summed {
+                condition
+            } else {
+                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
+                solve_equilibrated(&ks, &DVector::zeros(scaled.nrows())).2
+            };
+            let weak = if condition > CONDITION_WARNING {
+                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
+                weakest_direction(&ks)
+                    .into_iter()
+                    .map(|k| kept[k])
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            // B_i: ϑ_K = pinv · g, with g's experiment-i rows = (Σ_k ζ_k)·scale_i.
+            let b_list = if self.options.method == Method::Ls {
+                // ϑ = A⁻¹ Σ ζ restricted to the kept rows.
+                let rows_idx = kj.clone();
+                let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
+                vec![sub; e_count]
+            } else if summed {
+                (0..e_count).map(|i| &pinv * scale_rows[i]).collect()
+            } else {
+                (0..e_count)
+                    .map(|i| pinv.columns(i * m, m) * scale_rows[i])
+                    .collect()
+            };
+            let rows = if self.options.method == Method::Ls {
+                kept.clone()
+            } else {
+                cols.clone()
+            };
+            out.push(BlockSolution {
+                kept,
+                held,
+                values: values.iter().copied().collect(),
+                b: b_list,
+                rows,
+                condition,
+                weak,
+            });
+        }
+        if !errors.is_empty() {
+            let remark2 = self
+                .infos
+                .iter()
+                .any(|i| i.spread < 4.0 * self.options.heading_spread);
+            return Err(err(
+                "rank-deficient",
+                format!(
+                    "the data did not excite every parameter: {}",
+                    errors.join("; ")
+                ),
+                if remark2 {
+                    "the heading barely varied, which leaves the disturbance terms collinear with the others (paper Remark 2): turn the craft during the experiment; or estimate the identifiable combinations with --aggregate".to_string()
+                } else {
+                    "excite the named terms (richer input, experiments with other sign patterns), or estimate the identifiable combinations with --aggregate".to_string()
+                },
+            ));
+        }
+        Ok(out)
+    }
+
+    /// θ from block solutions (held parameters at nominal).
+    pub(super) fn theta_of(&self, sol: &[BlockSolution]) -> Vec<f64> {
+        let mut theta = self.nominal.clone();
+        let cols = self.ir.predictors.get(self.kind);
+        for (c, v) in self.all_values(sol) {
+            if let ColumnKind::Theta { parameter } = cols[c].kind {
+                theta[parameter] = v;
+            }
+        }
+        theta
+    }
+
+    pub(super) fn all_values(&self, sol: &[BlockSolution]) -> Vec<(usize, f64)> {
+        let mut v: Vec<(usize, f64)> = self.held.clone();
+        for s in sol {
+            v.extend(s.kept.iter().copied().zip(s.values.iter().copied()));
+            v.extend(s.held.iter().copied());
+        }
+        v.sort_by_key(|(c, _)| *c);
+        v
+    }
+}
+
+/// Significant digits for messages.
+pub(super) fn round_sig(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    format!("{v:.2e}").parse().unwrap_or(v)
+}
+
+pub(super) fn linear_text_f(items: &[(String, Q)]) -> String {
+    let mut out = String::new();
+    for (i, (name, q)) in items.iter().enumerate() {
+        let v = leeway_structure::exact::to_f64(q);
+        if i == 0 {
+            out.push_str(&format!("{v}*{name}"));
+        } else {
+            out.push_str(&format!(
+                " {} {}*{name}",
+                if v < 0.0 { "-" } else { "+" },
+                v.abs()
+            ));
+        }
+    }
+    out
+}
+
+/// Greedy column selection in preference order on the column-equilibrated
+/// matrix (modified Gram–Schmidt, reorthogonalised): a column is kept when
+/// its residual against the kept ones exceeds `tol` relative to its norm.
+pub(crate) struct Selection {
+    pub(crate) kept: Vec<usize>,
+    /// Dropped column with its combination of kept columns (original units).
+    pub(crate) dropped: Vec<(usize, Vec<(usize, f64)>)>,
+}
+
+pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Selection {
+    let rows = m.nrows();
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut kept = Vec::new();
+    let mut dropped_idx = Vec::new();
+    for &j in order {
+        let col = m.column(j).into_owned();
+        let norm = col.norm();
+        if norm == 0.0 || !norm.is_finite() {
+            dropped_idx.push(j);
+            continue;
+        }
+        let mut v = col / norm;
+        for _ in 0..2 {
+            for q in &basis {
+                let d = q.dot(&v);
+                v.axpy(-d, q, 1.0);
+            }
+        }
+        let r = v.norm();
+        if r > tol.max(1e-300) && basis.len() < rows {
+            basis.push(v / r);
+            kept.push(j);
+        } else {
+            dropped_idx.push(j);
+        }
+    }
+    kept.sort_unstable();
+    let mk = DMatrix::from_fn(rows, kept.len(), |r, k| m[(r, kept[k])]);
+    let dropped = dropped_idx
+        .into_iter()
+        .map(|j| {
+            if kept.is_empty() || m.column(j).norm() == 0.0 {
+                return (j, Vec::new());
+            }
+            let (alpha, _, _) = solve_equilibrated(&mk, &m.column(j).into_owned());
+            let scale = m.column(j).norm();
+            let combo = kept
+                .iter()
+                .zip(alpha.iter())
+                .filter(|(k, a)| (**a * m.column(**k).norm()).abs() > 1e-3 * scale)
+                .map(|(k, a)| (*k, *a))
+                .collect();
+            (j, combo)
+        })
+        .collect();
+    Selection { kept, dropped }
+}
+
+/// The columns (indices into `m`) that dominate the right singular vector
+/// of the smallest singular value of the column-equilibrated `m`.
+pub(super) fn weakest_direction(m: &DMatrix<f64>) -> Vec<usize> {
+    let cols = m.ncols();
+    if cols == 0 || m.nrows() == 0 {
+        return Vec::new();
+    }
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let svd = scaled.svd(false, true);
+    let Some(vt) = svd.v_t else {
+        return Vec::new();
+    };
+    let (weakest, _) = svd.singular_values.argmin();
+    let v = vt.row(weakest);
+    let top = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    (0..cols).filter(|j| v[*j].abs() >= 0.3 * top).collect()
+}
+
+/// Least-squares solution of `M x = g` with column equilibration; returns
+/// `x`, the pseudo-inverse mapping `g ↦ x`, and the condition number.
+pub(crate) fn solve_equilibrated(
+    m: &DMatrix<f64>,
+    g: &DVector<f64>,
+) -> (DVector<f64>, DMatrix<f64>, f64) {
+    let cols = m.ncols();
+    if cols == 0 || m.nrows() == 0 {
+        return (DVector::zeros(0), DMatrix::zeros(0, m.nrows()), 1.0);
+    }
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let svd = scaled.svd(true, true);
+    let smax = svd.singular_values.max();
+    let smin = svd.singular_values.min();
+    let condition = if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    };
+    let pinv = svd
+        .pseudo_inverse(0.0)
+        .unwrap_or_else(|_| DMatrix::zeros(cols, m.nrows()));
+    let pinv = DMatrix::from_fn(cols, m.nrows(), |r, c| pinv[(r, c)] / d[r]);
+    let x = &pinv * g;
+    (x, pinv, condition)
+}

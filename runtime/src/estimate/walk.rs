@@ -1,0 +1,421 @@
+//! The data pass: every equation of an experiment with its regressors, instruments (simulated, delayed or none) and target, and the instrument simulation stepped along.
+
+use super::*;
+
+/// Visits every equation of an experiment: `f(z, φ, t)` with dense buffers
+/// (`n_out × n_cols`) of instruments and regressors and the targets.
+pub(super) struct EquationWalker<'a> {
+    pub(super) model: &'a dyn Model,
+    pub(super) ir: &'a Ir,
+    pub(super) terms: &'a [crate::interp::TermPlan],
+    pub(super) kind: PredictorKind,
+    pub(super) instruments: Option<Instruments>,
+    /// Delayed instruments take measured disturbances at their experiment
+    /// mean (bootstrap of the refined IV) instead of one sample earlier.
+    pub(super) delayed_mean: bool,
+    pub(super) n_cols: usize,
+}
+
+#[derive(Debug)]
+pub(super) struct Diverged;
+
+/// Largest magnitude of a measured regressor or target: squares stay below
+/// 1e290, so sums of squares over 10¹⁸ samples stay finite.
+pub const REGRESSOR_LIMIT: f64 = 1e145;
+
+/// The first non-finite measured value found: `(experiment, sample, what)`.
+pub(super) type FirstBadValue = std::cell::RefCell<Option<(usize, usize, String)>>;
+
+/// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
+pub(super) type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
+
+/// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
+/// estimates in terms of disturbance means and θ.
+pub(super) type MomentEquation = (usize, Vec<(usize, usize, f64)>);
+
+/// How far an instrument simulation moved from a reference one, per output:
+/// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
+#[derive(Clone, Debug, Default)]
+pub(super) struct SimChange {
+    pub(super) diff2: Vec<f64>,
+    pub(super) sum: Vec<f64>,
+    pub(super) sum2: Vec<f64>,
+    pub(super) n: usize,
+    /// `Σ (y − x_sim)²`, `Σ y`, `Σ y²` per output: how well the instrument
+    /// simulation tracks the measured states (its strength as an instrument).
+    pub(super) err2: Vec<f64>,
+    pub(super) y_sum: Vec<f64>,
+    pub(super) y_sum2: Vec<f64>,
+    pub(super) y_n: usize,
+}
+
+impl SimChange {
+    /// Mean over outputs of the fit `100·(1 − ‖y − x_sim‖/‖y − ȳ‖)`.
+    pub(super) fn fit(&self) -> f64 {
+        let n = self.y_n.max(1) as f64;
+        let fits: Vec<f64> = (0..self.err2.len())
+            .map(|o| {
+                let var = (self.y_sum2[o] - self.y_sum[o] * self.y_sum[o] / n).max(0.0);
+                if var > 0.0 {
+                    100.0 * (1.0 - (self.err2[o] / var).sqrt())
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        fits.iter().sum::<f64>() / fits.len().max(1) as f64
+    }
+
+    pub(super) fn relative(&self) -> f64 {
+        let n = self.n.max(1) as f64;
+        (0..self.diff2.len())
+            .map(|o| {
+                let mean = self.sum[o] / n;
+                let var = (self.sum2[o] / n - mean * mean).max(0.0) * n;
+                if var > 0.0 {
+                    (self.diff2[o] / var).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+impl EquationWalker<'_> {
+    pub(super) fn walk(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        theta_sim: &[f64],
+        mu: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+        f: &mut EquationSink,
+    ) -> Result<SimChange, Diverged> {
+        let ir = self.ir;
+        let n_out = ir.states.len();
+        let n_in = ir.inputs.len();
+        // Measured rotation columns travel with the data; a planar heading does not.
+        let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) {
+            ir.rotation_vars.len()
+        } else {
+            0
+        };
+        let n_comp = ir.components.len();
+        let planar = match &ir.rotation {
+            Rotation::Planar { integrates, .. } => Some(*integrates),
+            _ => None,
+        };
+        let h = e.step();
+        let len = n_out * self.n_cols;
+        let mut phi = vec![0.0; len];
+        let mut z = vec![0.0; len];
+        let mut t = vec![0.0; n_out];
+        let (mut y1, mut u1, mut rot1, mut d1, mut psi1) = (
+            vec![0.0; n_out],
+            vec![0.0; n_in],
+            vec![0.0; n_rot],
+            vec![0.0; n_comp],
+            0.0,
+        );
+        let (mut y2, mut rot2, mut d2, mut psi2) =
+            (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
+        let mut x_sim = vec![0.0; n_out];
+        let mut x_next = vec![0.0; n_out];
+        let mut fbuf = vec![0.0; n_out];
+        let mut psi_z = 0.0;
+        let mut sim_dist = vec![0.0; n_comp];
+        let measured: Vec<bool> = ir
+            .components
+            .iter()
+            .map(|c| ir.disturbances[c.disturbance].measured)
+            .collect();
+        let mut k = 0usize;
+        let mut diverged = false;
+        // The reference simulation (previous instruments), stepped in lockstep.
+        let mut x_ref = vec![0.0; n_out];
+        let mut x_ref_next = vec![0.0; n_out];
+        let mut psi_ref = 0.0;
+        let mut ref_dist = vec![0.0; n_comp];
+        let mut change = SimChange {
+            diff2: vec![0.0; n_out],
+            sum: vec![0.0; n_out],
+            sum2: vec![0.0; n_out],
+            n: 0,
+            err2: vec![0.0; n_out],
+            y_sum: vec![0.0; n_out],
+            y_sum2: vec![0.0; n_out],
+            y_n: 0,
+        };
+        // Rotations of the measured headings one and two samples back, and
+        // buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
+        let (mut rh1, mut rh2) = ([1.0, 0.0], [1.0, 0.0]);
+        let mut fix_acc = vec![0.0; n_out];
+        let mut fix_set = vec![false; n_out];
+        // Signs of the pointwise moduli, sample by sample where they change.
+        let mut signs = info.signs.clone();
+        e.visit(&mut |row| {
+            if diverged {
+                return;
+            }
+            if k == 0 {
+                x_sim.copy_from_slice(row.states);
+                x_ref.copy_from_slice(row.states);
+                psi_z = row.heading;
+                psi_ref = row.heading;
+            } else {
+                // The anchored heading's rotation serves the instruments and the simulation.
+                let rz = planar_rotation(psi_z);
+                if k >= 2 {
+                    let sig = Signals {
+                        states: &y1,
+                        inputs: &u1,
+                        rotation: if planar.is_some() { &rh1 } else { &rot1 },
+                        disturbances: &d1,
+                    };
+                    set_pointwise_signs(&mut signs, &info.varying, &y1);
+                    self.model.regressors(self.kind, &sig, &signs, &mut phi);
+                    match self.instruments {
+                        None => z.copy_from_slice(&phi),
+                        Some(Instruments::Simulated) => {
+                            let sig = Signals {
+                                states: &x_sim,
+                                inputs: &u1,
+                                rotation: if planar.is_some() { &rz } else { &rot2 },
+                                disturbances: &info.measured_mean,
+                            };
+                            set_pointwise_signs(&mut signs, &info.varying, &x_sim);
+                            self.model.regressors(self.kind, &sig, &signs, &mut z);
+                            for fixed in &info.fixed_sign_columns {
+                                fix_set.fill(false);
+                                for (term, o, signs) in &fixed.terms {
+                                    let plan = &self.terms[*term];
+                                    let mut t = plan.coefficient;
+                                    for ((arg, modulus), s) in plan.factors.iter().zip(signs) {
+                                        let v = arg.eval(&sig, true);
+                                        t *= if *modulus { s * v } else { v };
+                                    }
+                                    fix_acc[*o] = if fix_set[*o] { fix_acc[*o] + t } else { t };
+                                    fix_set[*o] = true;
+                                }
+                                for o in 0..n_out {
+                                    if fix_set[o] {
+                                        z[o * self.n_cols + fixed.column] = fix_acc[o];
+                                    }
+                                }
+                            }
+                        }
+                        Some(Instruments::Delayed) => {
+                            let dist: &[f64] = if self.delayed_mean {
+                                &info.measured_mean
+                            } else {
+                                &d2
+                            };
+                            let sig = Signals {
+                                states: &y2,
+                                inputs: &u1,
+                                rotation: if planar.is_some() { &rh2 } else { &rot2 },
+                                disturbances: dist,
+                            };
+                            set_pointwise_signs(&mut signs, &info.varying, &y2);
+                            self.model.regressors(self.kind, &sig, &signs, &mut z);
+                        }
+                    }
+                    for (o, eq) in ir.equations.iter().enumerate() {
+                        t[o] = match eq.kind {
+                            EquationKind::Der => (row.states[o] - y1[o]) / h,
+                            EquationKind::Next => row.states[o],
+                        };
+                    }
+                    f(&z, &phi, &t);
+                }
+                if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
+                    // Advance the instrument simulation from k−1 to k.
+
+                    simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
+                    let sig = Signals {
+                        states: &x_sim,
+                        inputs: &u1,
+                        rotation: if planar.is_some() { &rz } else { &rot1 },
+                        disturbances: &sim_dist,
+                    };
+                    self.model.step(theta_sim, h, &sig, &mut fbuf, &mut x_next);
+                    if x_next
+                        .iter()
+                        .zip(&info.bound)
+                        .any(|(x, b)| !x.is_finite() || x.abs() > *b)
+                    {
+                        diverged = true;
+                        return;
+                    }
+                    if let Some(yaw) = planar {
+                        psi_z = psi1 + h * x_sim[yaw];
+                    }
+                    x_sim.copy_from_slice(&x_next);
+                    for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
+                        change.err2[o] += (y - x) * (y - x);
+                        change.y_sum[o] += y;
+                        change.y_sum2[o] += y * y;
+                    }
+                    change.y_n += 1;
+                    if let Some((theta_ref, mu_ref)) = reference {
+                        let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
+
+                        simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
+                        let sig = Signals {
+                            states: &x_ref,
+                            inputs: &u1,
+                            rotation: rot_ref.as_slice(),
+                            disturbances: &ref_dist,
+                        };
+                        self.model
+                            .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
+                        if let Some(yaw) = planar {
+                            psi_ref = psi1 + h * x_ref[yaw];
+                        }
+                        x_ref.copy_from_slice(&x_ref_next);
+                        for o in 0..n_out {
+                            let d = x_sim[o] - x_ref[o];
+                            change.diff2[o] += d * d;
+                            change.sum[o] += x_ref[o];
+                            change.sum2[o] += x_ref[o] * x_ref[o];
+                        }
+                        change.n += 1;
+                    }
+                }
+            }
+            // Shift the history: (k−2) ← (k−1) ← k.
+            y2.copy_from_slice(&y1);
+            rot2.copy_from_slice(&rot1);
+            d2.copy_from_slice(&d1);
+            psi2 = psi1;
+            y1.copy_from_slice(row.states);
+            u1.copy_from_slice(row.inputs);
+            rot1.copy_from_slice(row.rotation);
+            d1.copy_from_slice(row.disturbances);
+            psi1 = row.heading;
+            if planar.is_some() {
+                rh2 = rh1;
+                rh1 = planar_rotation(row.heading);
+            }
+            k += 1;
+        });
+        if diverged { Err(Diverged) } else { Ok(change) }
+    }
+}
+
+/// The disturbance values a simulation step uses: measured components as
+/// recorded (one sample back), unmeasured ones at the current estimate of
+/// their means.
+pub(super) fn simulation_disturbances(
+    measured: &[bool],
+    recorded: &[f64],
+    means: &[f64],
+    out: &mut [f64],
+) {
+    for (((o, m), r), mean) in out.iter_mut().zip(measured).zip(recorded).zip(means) {
+        *o = if *m { *r } else { *mean };
+    }
+}
+
+/// Rotation variables from a heading (planar) or measured columns.
+pub(super) enum RotationValues<'a> {
+    Planar([f64; 2]),
+    Measured(&'a [f64]),
+}
+
+impl RotationValues<'_> {
+    pub(super) fn as_slice(&self) -> &[f64] {
+        match self {
+            RotationValues::Planar(a) => a,
+            RotationValues::Measured(s) => s,
+        }
+    }
+}
+
+pub(super) fn rotation_at(planar: bool, psi: f64, measured: &[f64]) -> RotationValues<'_> {
+    if planar {
+        RotationValues::Planar(planar_rotation(psi))
+    } else {
+        RotationValues::Measured(measured)
+    }
+}
+
+impl Estimator<'_> {
+    pub(super) fn walker(&self) -> EquationWalker<'_> {
+        self.walker_with(if self.options.method == Method::Ls {
+            None
+        } else {
+            Some(self.options.instruments)
+        })
+    }
+
+    pub(super) fn walker_with(&self, instruments: Option<Instruments>) -> EquationWalker<'_> {
+        EquationWalker {
+            model: self.model,
+            ir: self.ir,
+            terms: &self.terms,
+            kind: self.kind,
+            instruments,
+            delayed_mean: self.options.instruments == Instruments::Simulated,
+            n_cols: self.n_cols,
+        }
+    }
+
+    /// A measured regressor or target that is not finite, or so large that
+    /// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
+    /// in equation `k` (regressors at `k − 1`): `(sample, what)`.
+    pub(super) fn non_finite(&self, k: usize, phi: &[f64], t: &[f64]) -> Option<(usize, String)> {
+        // The common case in one branch-free sweep (NaN fails `<=` too).
+        let fine = |v: &f64| v.abs() <= REGRESSOR_LIMIT;
+        if phi.iter().all(fine) && t.iter().all(fine) {
+            return None;
+        }
+        let n = self.n_cols;
+        let predictors = self.ir.predictors.get(self.kind);
+        let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
+        for (o, target) in t.iter().enumerate() {
+            for (c, col) in predictors.iter().enumerate().take(n) {
+                let v = phi[o * n + c];
+                if wrong(v) && v != 0.0 {
+                    return Some((
+                        k - 1,
+                        format!(
+                            "the regressor {} of `{}` evaluates to {v:e}",
+                            col.name, self.ir.states[o]
+                        ),
+                    ));
+                }
+            }
+            if wrong(*target) {
+                return Some((
+                    k,
+                    format!(
+                        "the difference quotient of `{}` evaluates to {target:e}",
+                        self.ir.states[o]
+                    ),
+                ));
+            }
+        }
+        None
+    }
+
+    /// The located data error for a non-finite value found by the first pass:
+    /// never a rank verdict.
+    pub(super) fn non_finite_error(
+        &self,
+        e: &dyn Source,
+        sample: usize,
+        what: &str,
+    ) -> EstimateError {
+        err(
+            "non-finite-data",
+            format!(
+                "{}: {what} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
+                e.locate(sample),
+                e.name()
+            ),
+            "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
+        )
+    }
+}
