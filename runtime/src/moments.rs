@@ -6,7 +6,48 @@
 
 use nalgebra::{DMatrix, DVector};
 
-/// Shifted cross-moment sums of instruments `z`, regressors `φ` and target `t`.
+/// Samples buffered before they are added to the sums, so that the sums are
+/// loaded and stored once a block rather than once a sample.
+pub const BLOCK: usize = 32;
+
+/// Width of the kernel's tiles; buffers and sums are padded to a multiple.
+const TILE: usize = 4;
+
+fn padded(n: usize) -> usize {
+    n.div_ceil(TILE) * TILE
+}
+
+/// `s += aᵀ b` for row-major `a` (`rows × wa`) and `b` (`rows × wb`), `s`
+/// row-major `wa × wb`, widths multiples of [`TILE`]. Each entry sums its
+/// rows in order in a register tile and is then added once: the same
+/// operations, in the same order, on every machine (no fused multiply-add,
+/// no CPU-dependent kernel), so results stay bit-identical everywhere.
+fn add_outer_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, wa: usize, wb: usize) {
+    for i0 in (0..wa).step_by(TILE) {
+        for j0 in (0..wb).step_by(TILE) {
+            let mut acc = [[0.0f64; TILE]; TILE];
+            for (ar, br) in a.chunks_exact(wa).zip(b.chunks_exact(wb)).take(rows) {
+                let x = &ar[i0..i0 + TILE];
+                let y = &br[j0..j0 + TILE];
+                for (row, &xi) in acc.iter_mut().zip(x) {
+                    for (v, &yj) in row.iter_mut().zip(y) {
+                        *v += xi * yj;
+                    }
+                }
+            }
+            for (r, row) in acc.iter().enumerate() {
+                let out = &mut s[(i0 + r) * wb + j0..(i0 + r) * wb + j0 + TILE];
+                for (o, v) in out.iter_mut().zip(row) {
+                    *o += v;
+                }
+            }
+        }
+    }
+}
+
+/// Shifted cross-moment sums of instruments `z`, regressors `φ` and target
+/// `t`: what one experiment contributes to the moment equations, whatever
+/// its length (`O(m·p)` numbers).
 #[derive(Clone, Debug)]
 pub struct CrossMoments {
     /// Samples.
@@ -26,76 +67,163 @@ pub struct CrossMoments {
     /// moment is judged to be rounding residue.
     s_zz: Vec<f64>,
     s_pp: Vec<f64>,
-    dz: Vec<f64>,
-    dphi: Vec<f64>,
 }
 
-impl CrossMoments {
+/// Accumulates [`CrossMoments`] a block of samples at a time: each sample
+/// is written (shifted by the first one) into a row of the block buffers,
+/// `[z − z₀, 1]` and `[φ − φ₀, t − t₀, 1]`, and a full block is added by one
+/// small matrix product that yields every sum at once.
+#[derive(Clone, Debug)]
+pub struct MomentAccumulator {
+    n: usize,
+    m: usize,
+    p: usize,
+    z0: Vec<f64>,
+    phi0: Vec<f64>,
+    t0: f64,
+    /// Padded widths of the instrument and regressor rows.
+    wz: usize,
+    wf: usize,
+    /// `Σ [z − z₀, 1]ᵀ [φ − φ₀, t − t₀, 1]`, row-major `wz × wf`.
+    sums: Vec<f64>,
+    s_zz: Vec<f64>,
+    s_pp: Vec<f64>,
+    zb: Vec<f64>,
+    fb: Vec<f64>,
+    filled: usize,
+}
+
+impl MomentAccumulator {
     /// Empty sums for `m` instruments and `p` regressors.
-    pub fn new(m: usize, p: usize) -> CrossMoments {
-        CrossMoments {
+    pub fn new(m: usize, p: usize) -> MomentAccumulator {
+        let (wz, wf) = (padded(m + 1), padded(p + 2));
+        let mut zb = vec![0.0; BLOCK * wz];
+        let mut fb = vec![0.0; BLOCK * wf];
+        // The constant columns: `Σ 1·(φ − φ₀)`, `Σ 1·(t − t₀)` and `n` come out
+        // of the same product.
+        for row in zb.chunks_exact_mut(wz) {
+            row[m] = 1.0;
+        }
+        for row in fb.chunks_exact_mut(wf) {
+            row[p + 1] = 1.0;
+        }
+        MomentAccumulator {
             n: 0,
             m,
             p,
             z0: vec![0.0; m],
             phi0: vec![0.0; p],
             t0: 0.0,
-            s_zphi: vec![0.0; m * p],
-            s_zt: vec![0.0; m],
-            s_z: vec![0.0; m],
-            s_phi: vec![0.0; p],
-            s_t: 0.0,
+            wz,
+            wf,
+            sums: vec![0.0; wz * wf],
             s_zz: vec![0.0; m],
             s_pp: vec![0.0; p],
-            dz: vec![0.0; m],
-            dphi: vec![0.0; p],
+            zb,
+            fb,
+            filled: 0,
         }
     }
 
     /// Adds one sample.
     #[inline]
     pub fn push(&mut self, z: &[f64], phi: &[f64], t: f64) {
-        if self.n == 0 {
-            self.z0.copy_from_slice(&z[..self.m]);
-            self.phi0.copy_from_slice(&phi[..self.p]);
-            self.t0 = t;
-        }
-        for ((d, a), b) in self.dz.iter_mut().zip(z).zip(&self.z0) {
-            *d = a - b;
-        }
-        for ((d, a), b) in self.dphi.iter_mut().zip(phi).zip(&self.phi0) {
-            *d = a - b;
-        }
-        let dt = t - self.t0;
-        for (row, &zi) in self.s_zphi.chunks_exact_mut(self.p).zip(&self.dz) {
-            for (s, &f) in row.iter_mut().zip(&self.dphi) {
-                *s += zi * f;
-            }
-        }
-        for (((s, sz), szz), &zi) in self
-            .s_zt
-            .iter_mut()
-            .zip(self.s_z.iter_mut())
-            .zip(self.s_zz.iter_mut())
-            .zip(&self.dz)
-        {
-            *s += zi * dt;
-            *sz += zi;
-            *szz += zi * zi;
-        }
-        for ((s, spp), &f) in self
-            .s_phi
-            .iter_mut()
-            .zip(self.s_pp.iter_mut())
-            .zip(&self.dphi)
-        {
-            *s += f;
-            *spp += f * f;
-        }
-        self.s_t += dt;
-        self.n += 1;
+        self.push_with(
+            |zs, fs| {
+                zs.copy_from_slice(&z[..zs.len()]);
+                fs.copy_from_slice(&phi[..fs.len()]);
+            },
+            t,
+        );
     }
 
+    /// Adds one sample whose instruments and regressors are the entries
+    /// `cols` of the dense rows `z` and `phi`.
+    #[inline]
+    pub fn push_columns(&mut self, z: &[f64], phi: &[f64], cols: &[usize], t: f64) {
+        self.push_with(
+            |zs, fs| {
+                for ((a, b), &c) in zs.iter_mut().zip(fs.iter_mut()).zip(cols) {
+                    *a = z[c];
+                    *b = phi[c];
+                }
+            },
+            t,
+        );
+    }
+
+    /// `write(z, φ)` fills the sample's instruments and regressors in place.
+    #[inline]
+    fn push_with(&mut self, write: impl FnOnce(&mut [f64], &mut [f64]), t: f64) {
+        let (m, p) = (self.m, self.p);
+        let zr = &mut self.zb[self.filled * self.wz..self.filled * self.wz + m];
+        let fr = &mut self.fb[self.filled * self.wf..self.filled * self.wf + p];
+        write(zr, fr);
+        if self.n == 0 {
+            self.z0.copy_from_slice(zr);
+            self.phi0.copy_from_slice(fr);
+            self.t0 = t;
+        }
+        for (v, c) in zr.iter_mut().zip(&self.z0) {
+            *v -= c;
+        }
+        for (v, c) in fr.iter_mut().zip(&self.phi0) {
+            *v -= c;
+        }
+        self.fb[self.filled * self.wf + p] = t - self.t0;
+        self.n += 1;
+        self.filled += 1;
+        if self.filled == BLOCK {
+            self.flush();
+        }
+    }
+
+    fn flush(&mut self) {
+        let rows = self.filled;
+        if rows == 0 {
+            return;
+        }
+        add_outer_products(&mut self.sums, &self.zb, &self.fb, rows, self.wz, self.wf);
+        for zr in self.zb.chunks_exact(self.wz).take(rows) {
+            for (s, v) in self.s_zz.iter_mut().zip(zr) {
+                *s += v * v;
+            }
+        }
+        for fr in self.fb.chunks_exact(self.wf).take(rows) {
+            for (s, v) in self.s_pp.iter_mut().zip(fr) {
+                *s += v * v;
+            }
+        }
+        self.filled = 0;
+    }
+
+    /// The sums of every sample pushed.
+    pub fn finish(mut self) -> CrossMoments {
+        self.flush();
+        let (m, p, wf) = (self.m, self.p, self.wf);
+        let at = |i: usize, j: usize| self.sums[i * wf + j];
+        CrossMoments {
+            n: self.n,
+            m,
+            p,
+            s_zphi: (0..m)
+                .flat_map(|i| (0..p).map(move |j| (i, j)))
+                .map(|(i, j)| at(i, j))
+                .collect(),
+            s_zt: (0..m).map(|i| at(i, p)).collect(),
+            s_z: (0..m).map(|i| at(i, p + 1)).collect(),
+            s_phi: (0..p).map(|j| at(m, j)).collect(),
+            s_t: at(m, p),
+            z0: self.z0,
+            phi0: self.phi0,
+            t0: self.t0,
+            s_zz: self.s_zz,
+            s_pp: self.s_pp,
+        }
+    }
+}
+
+impl CrossMoments {
     /// Mean of the instruments.
     pub fn mean_z(&self) -> DVector<f64> {
         let n = self.n.max(1) as f64;
@@ -269,10 +397,11 @@ mod tests {
         let zs: Vec<[f64; 2]> = (0..50)
             .map(|k| [1e6 + (k as f64).sin(), 3.0 + 0.1 * k as f64])
             .collect();
-        let mut m = CrossMoments::new(2, 2);
+        let mut acc = MomentAccumulator::new(2, 2);
         for z in &zs {
-            m.push(z, z, z[0] + 2.0 * z[1]);
+            acc.push(z, z, z[0] + 2.0 * z[1]);
         }
+        let m = acc.finish();
         let (c, ct) = m.centred();
         let (c2, ct2) = m.about(&m.mean_z());
         assert!((&c - c2).abs().max() < 1e-9 && (&ct - ct2).abs().max() < 1e-9);

@@ -28,18 +28,12 @@ impl Estimator<'_> {
         for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
             // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
             let mut k = 1usize;
-            let mut acc: Vec<CrossMoments> = (0..self.ir.states.len())
+            let mut acc: Vec<MomentAccumulator> = (0..self.ir.states.len())
                 .map(|o| {
                     let m = self.blocks[self.block_of_output[o]].cols.len();
-                    CrossMoments::new(m, m)
+                    MomentAccumulator::new(m, m)
                 })
                 .collect();
-            let mut zb: Vec<Vec<f64>> = self
-                .blocks
-                .iter()
-                .map(|b| vec![0.0; b.cols.len()])
-                .collect();
-            let mut pb: Vec<Vec<f64>> = zb.clone();
             let c = walker.walk(*e, info, theta_sim, mu, reference, &mut |z, phi, t| {
                 k += 1;
                 if let Some(cell) = finite
@@ -49,23 +43,22 @@ impl Estimator<'_> {
                     *cell.borrow_mut() = Some((i, sample, what));
                 }
                 for (o, a) in acc.iter_mut().enumerate() {
-                    let b = self.block_of_output[o];
-                    let cols = &self.blocks[b].cols;
-                    let (zv, pv) = (&mut zb[b], &mut pb[b]);
-                    for (j, c) in cols.iter().enumerate() {
-                        zv[j] = z[o * n + c];
-                        pv[j] = phi[o * n + c];
-                    }
+                    let cols = &self.blocks[self.block_of_output[o]].cols;
                     let mut target = t[o];
                     for (c, v) in &self.held {
                         target -= phi[o * n + c] * v;
                     }
-                    a.push(zv, pv, target);
+                    a.push_columns(
+                        &z[o * n..(o + 1) * n],
+                        &phi[o * n..(o + 1) * n],
+                        cols,
+                        target,
+                    );
                 }
             })?;
             change = change.max(c.relative());
             fit += c.fit() / experiments.len() as f64;
-            all.push(acc);
+            all.push(acc.into_iter().map(MomentAccumulator::finish).collect());
         }
         Ok((all, change, fit))
     }

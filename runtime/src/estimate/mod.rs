@@ -16,8 +16,8 @@
 //! start at k = 2 so no instrument uses a same-sample measurement.
 
 use crate::data::Source;
-use crate::model::{Model, Signals, planar_rotation};
-use crate::moments::{CrossMoments, LongRun};
+use crate::model::{Model, Signals, planar_rotation, rotated};
+use crate::moments::{CrossMoments, LongRun, MomentAccumulator};
 use crate::signs::{ExperimentSigns, detect, plain_sign_args, set_pointwise_signs};
 use leeway_structure::exact::Q;
 use leeway_structure::grammar::EquationKind;
@@ -114,6 +114,21 @@ pub fn estimate(
         }
         None => ir.parameters.iter().map(|p| p.nominal).collect(),
     };
+    if let Some(start) = &options.start
+        && (start.theta.len() != ir.parameters.len() || start.means.len() != ir.components.len())
+    {
+        return Err(err(
+            "invalid-start",
+            format!(
+                "the warm start has {} θ values and {} disturbance means, the model {} parameters and {} disturbance components",
+                start.theta.len(),
+                start.means.len(),
+                ir.parameters.len(),
+                ir.components.len()
+            ),
+            "build the start from an estimate of the same model (Start::from_estimate)",
+        ));
+    }
     let kind = options.method.predictor();
     let mut warnings = Vec::new();
     let mut notes = Vec::new();

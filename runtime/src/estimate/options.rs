@@ -118,7 +118,9 @@ pub struct Options {
     /// Most re-simulations of the refined IV.
     pub max_refinements: usize,
     /// The refinement has settled when a new instrument simulation moves less
-    /// than this fraction of the simulated states' variation (RMS).
+    /// than this fraction of the simulated states' variation (RMS), or when
+    /// the refinement contracts (each move less than half the previous) and
+    /// the next move, predicted geometrically, would.
     pub tolerance: f64,
     /// Estimate identifiable combinations when θ is not identifiable.
     pub aggregate: bool,
@@ -136,6 +138,42 @@ pub struct Options {
     /// an earlier iterate, and report the best iterate (small-sample runaway
     /// guard). `false` gives the plain refined IV of the paper.
     pub runaway_guard: bool,
+    /// A warm start: the first instrument simulation uses this θ and these
+    /// disturbance means instead of `initial` (e.g. the estimate from a
+    /// shorter record of the same experiment).
+    pub start: Option<Start>,
+}
+
+/// The θ and disturbance-component means of a first instrument simulation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Start {
+    /// θ, one value per parameter.
+    pub theta: Vec<f64>,
+    /// Means of the disturbance components (by global index) in the
+    /// simulation; measured components are simulated as recorded.
+    pub means: Vec<f64>,
+}
+
+impl Start {
+    /// The warm start an estimate gives: its θ and the unmeasured
+    /// disturbance means it implies (0 where it implies none).
+    pub fn from_estimate(ir: &leeway_structure::ir::Ir, estimate: &super::Estimate) -> Start {
+        let means = ir
+            .components
+            .iter()
+            .map(|c| {
+                estimate
+                    .disturbances
+                    .iter()
+                    .find(|d| d.component == c.name)
+                    .map_or(0.0, |d| d.mean)
+            })
+            .collect();
+        Start {
+            theta: estimate.theta.clone(),
+            means,
+        }
+    }
 }
 
 impl Default for Options {
@@ -156,6 +194,7 @@ impl Default for Options {
             heading_spread: 0.05,
             covariance: true,
             runaway_guard: true,
+            start: None,
         }
     }
 }

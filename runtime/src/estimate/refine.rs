@@ -6,6 +6,15 @@ use super::*;
 /// earlier iterate before the refinement counts as running away.
 pub(super) const RUNAWAY_FIT_DROP: f64 = 5.0;
 
+/// Fits closer than this (fit points) are a tie, settled in favour of the
+/// earlier iterate: which iterate is reported must not depend on round-off.
+const FIT_TIE: f64 = 1e-6;
+
+/// A refinement contracts when its simulation moved less than this fraction
+/// of the previous one's move; the next move is then predicted as
+/// `change · (change / previous change)`.
+const CONTRACTION: f64 = 0.5;
+
 /// One iterate of the refined IV.
 #[derive(Clone, Debug)]
 pub(super) struct Iterate {
@@ -33,7 +42,12 @@ impl Estimator<'_> {
         let mut refinements = 0usize;
         let mut converged = !refine;
         let mut stopped = false;
-        let bootstrap = refine && self.options.initial == Initial::Delayed;
+        if let (true, Some(start)) = (refine, &self.options.start) {
+            theta_sim.clone_from(&start.theta);
+            mu.clone_from(&start.means);
+        }
+        let bootstrap =
+            refine && self.options.start.is_none() && self.options.initial == Initial::Delayed;
         let first: Vec<f64> = if bootstrap {
             Vec::new()
         } else {
@@ -82,6 +96,8 @@ impl Estimator<'_> {
             fit: None,
         };
         let mut best: Option<Iterate> = None;
+        // The previous full-step refinement's move of the simulation.
+        let mut previous_change: Option<f64> = None;
         while refine && refinements < self.options.max_refinements {
             // Re-simulate with the estimate (and the disturbance means it implies),
             // damping towards the previous simulation if it diverges. The new
@@ -130,7 +146,7 @@ impl Estimator<'_> {
                 cur.fit = Some(fit);
                 if best
                     .as_ref()
-                    .is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) < fit)
+                    .is_none_or(|b| b.fit.unwrap_or(f64::NEG_INFINITY) + FIT_TIE < fit)
                 {
                     best = Some(cur.clone());
                 }
@@ -150,11 +166,21 @@ impl Estimator<'_> {
             if std::env::var("LEEWAY_DEBUG").is_ok() {
                 eprintln!("refinement {refinements}: change {change:.3e} simulation fit {fit:.1}");
             }
-            if change < self.options.tolerance {
+            // Settled when this simulation moved less than the tolerance, or
+            // when the refinement contracts so that the next one would: its
+            // estimate would differ from this one by less than the tolerance
+            // moves the instruments, and a pass is saved.
+            let predicted = previous_change
+                .filter(|p| step == 1.0 && change < CONTRACTION * p)
+                .map(|p| change * (change / p));
+            if change < self.options.tolerance
+                || predicted.is_some_and(|p| p < self.options.tolerance)
+            {
                 converged = true;
                 cur = next;
                 break;
             }
+            previous_change = (step == 1.0).then_some(change);
             // A refinement whose simulation tracks the data markedly worse than
             // an earlier iterate is running away (small samples): stop there.
             if let (true, Some(b), Some(f)) = (self.options.runaway_guard, &best, cur.fit)
@@ -173,7 +199,7 @@ impl Estimator<'_> {
         if refine && !converged {
             // Report the iterate whose own simulation tracks the data best.
             if let (true, Some(b)) = (self.options.runaway_guard, best)
-                && cur.fit.is_none_or(|f| f < b.fit.unwrap_or(f))
+                && cur.fit.is_none_or(|f| f + FIT_TIE < b.fit.unwrap_or(f))
             {
                 cur = b;
             }

@@ -111,19 +111,19 @@ impl EquationWalker<'_> {
         let mut phi = vec![0.0; len];
         let mut z = vec![0.0; len];
         let mut t = vec![0.0; n_out];
-        let (mut y1, mut u1, mut rot1, mut d1, mut psi1) = (
+        let (mut y1, mut u1, mut rot1, mut d1) = (
             vec![0.0; n_out],
             vec![0.0; n_in],
             vec![0.0; n_rot],
             vec![0.0; n_comp],
-            0.0,
         );
-        let (mut y2, mut rot2, mut d2, mut psi2) =
-            (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp], 0.0);
+        let (mut y2, mut rot2, mut d2) = (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp]);
         let mut x_sim = vec![0.0; n_out];
         let mut x_next = vec![0.0; n_out];
         let mut fbuf = vec![0.0; n_out];
-        let mut psi_z = 0.0;
+        // The anchored heading's rotation `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`,
+        // rotated from the measured one by the small simulated step.
+        let mut rz = [1.0, 0.0];
         let mut sim_dist = vec![0.0; n_comp];
         let measured: Vec<bool> = ir
             .components
@@ -135,7 +135,7 @@ impl EquationWalker<'_> {
         // The reference simulation (previous instruments), stepped in lockstep.
         let mut x_ref = vec![0.0; n_out];
         let mut x_ref_next = vec![0.0; n_out];
-        let mut psi_ref = 0.0;
+        let mut rref = [1.0, 0.0];
         let mut ref_dist = vec![0.0; n_comp];
         let mut change = SimChange {
             diff2: vec![0.0; n_out],
@@ -161,11 +161,11 @@ impl EquationWalker<'_> {
             if k == 0 {
                 x_sim.copy_from_slice(row.states);
                 x_ref.copy_from_slice(row.states);
-                psi_z = row.heading;
-                psi_ref = row.heading;
+                if planar.is_some() {
+                    rz = planar_rotation(row.heading);
+                    rref = rz;
+                }
             } else {
-                // The anchored heading's rotation serves the instruments and the simulation.
-                let rz = planar_rotation(psi_z);
                 if k >= 2 {
                     let sig = Signals {
                         states: &y1,
@@ -249,7 +249,7 @@ impl EquationWalker<'_> {
                         return;
                     }
                     if let Some(yaw) = planar {
-                        psi_z = psi1 + h * x_sim[yaw];
+                        rz = rotated(rh1, h * x_sim[yaw]);
                     }
                     x_sim.copy_from_slice(&x_next);
                     for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
@@ -259,19 +259,17 @@ impl EquationWalker<'_> {
                     }
                     change.y_n += 1;
                     if let Some((theta_ref, mu_ref)) = reference {
-                        let rot_ref = rotation_at(planar.is_some(), psi_ref, &rot1);
-
                         simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
                         let sig = Signals {
                             states: &x_ref,
                             inputs: &u1,
-                            rotation: rot_ref.as_slice(),
+                            rotation: if planar.is_some() { &rref } else { &rot1 },
                             disturbances: &ref_dist,
                         };
                         self.model
                             .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
                         if let Some(yaw) = planar {
-                            psi_ref = psi1 + h * x_ref[yaw];
+                            rref = rotated(rh1, h * x_ref[yaw]);
                         }
                         x_ref.copy_from_slice(&x_ref_next);
                         for o in 0..n_out {
@@ -288,12 +286,10 @@ impl EquationWalker<'_> {
             y2.copy_from_slice(&y1);
             rot2.copy_from_slice(&rot1);
             d2.copy_from_slice(&d1);
-            psi2 = psi1;
             y1.copy_from_slice(row.states);
             u1.copy_from_slice(row.inputs);
             rot1.copy_from_slice(row.rotation);
             d1.copy_from_slice(row.disturbances);
-            psi1 = row.heading;
             if planar.is_some() {
                 rh2 = rh1;
                 rh1 = planar_rotation(row.heading);
@@ -315,29 +311,6 @@ pub(super) fn simulation_disturbances(
 ) {
     for (((o, m), r), mean) in out.iter_mut().zip(measured).zip(recorded).zip(means) {
         *o = if *m { *r } else { *mean };
-    }
-}
-
-/// Rotation variables from a heading (planar) or measured columns.
-pub(super) enum RotationValues<'a> {
-    Planar([f64; 2]),
-    Measured(&'a [f64]),
-}
-
-impl RotationValues<'_> {
-    pub(super) fn as_slice(&self) -> &[f64] {
-        match self {
-            RotationValues::Planar(a) => a,
-            RotationValues::Measured(s) => s,
-        }
-    }
-}
-
-pub(super) fn rotation_at(planar: bool, psi: f64, measured: &[f64]) -> RotationValues<'_> {
-    if planar {
-        RotationValues::Planar(planar_rotation(psi))
-    } else {
-        RotationValues::Measured(measured)
     }
 }
 
