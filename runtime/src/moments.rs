@@ -22,6 +22,7 @@ fn padded(n: usize) -> usize {
 /// rows in order in a register tile and is then added once: the same
 /// operations, in the same order, on every machine (no fused multiply-add,
 /// no CPU-dependent kernel), so results stay bit-identical everywhere.
+#[inline(always)]
 fn add_outer_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, wa: usize, wb: usize) {
     for i0 in (0..wa).step_by(TILE) {
         for j0 in (0..wb).step_by(TILE) {
@@ -42,6 +43,46 @@ fn add_outer_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, wa: usiz
                 }
             }
         }
+    }
+}
+
+/// `s[j] += Σ_rows a[row][j]²` for row-major `a` of width `w` (a multiple
+/// of [`TILE`]), each entry summed over the rows in order.
+#[inline(always)]
+fn add_squares(s: &mut [f64], a: &[f64], rows: usize, w: usize) {
+    for j0 in (0..w).step_by(TILE) {
+        let mut acc = [0.0f64; TILE];
+        for ar in a.chunks_exact(w).take(rows) {
+            for (v, &x) in acc.iter_mut().zip(&ar[j0..j0 + TILE]) {
+                *v += x * x;
+            }
+        }
+        for (o, v) in s[j0..j0 + TILE].iter_mut().zip(acc) {
+            *o += v;
+        }
+    }
+}
+
+/// One block's sums as a pulp kernel: inlined into a function compiled for
+/// each instruction set, of which the widest the CPU has is run.
+struct BlockKernel<'a> {
+    sums: &'a mut [f64],
+    zz: &'a mut [f64],
+    pp: &'a mut [f64],
+    zb: &'a [f64],
+    fb: &'a [f64],
+    rows: usize,
+    wz: usize,
+    wf: usize,
+}
+
+impl pulp::WithSimd for BlockKernel<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        add_outer_products(self.sums, self.zb, self.fb, self.rows, self.wz, self.wf);
+        add_squares(self.zz, self.zb, self.rows, self.wz);
+        add_squares(self.pp, self.fb, self.rows, self.wf);
     }
 }
 
@@ -117,8 +158,8 @@ impl MomentAccumulator {
             wz,
             wf,
             sums: vec![0.0; wz * wf],
-            s_zz: vec![0.0; m],
-            s_pp: vec![0.0; p],
+            s_zz: vec![0.0; wz],
+            s_pp: vec![0.0; wf],
             zb,
             fb,
             filled: 0,
@@ -138,18 +179,36 @@ impl MomentAccumulator {
     }
 
     /// Adds one sample whose instruments and regressors are the entries
-    /// `cols` of the dense rows `z` and `phi`.
+    /// `cols` of the dense rows `z` and `phi` (as many instruments as
+    /// regressors), gathered and shifted in one sweep.
     #[inline]
     pub fn push_columns(&mut self, z: &[f64], phi: &[f64], cols: &[usize], t: f64) {
-        self.push_with(
-            |zs, fs| {
-                for ((a, b), &c) in zs.iter_mut().zip(fs.iter_mut()).zip(cols) {
-                    *a = z[c];
-                    *b = phi[c];
-                }
-            },
-            t,
-        );
+        debug_assert!(self.m == cols.len() && self.p == cols.len());
+        if self.n == 0 {
+            for ((a, b), &c) in self.z0.iter_mut().zip(self.phi0.iter_mut()).zip(cols) {
+                *a = z[c];
+                *b = phi[c];
+            }
+            self.t0 = t;
+        }
+        let (m, p, r) = (self.m, self.p, self.filled);
+        let zr = &mut self.zb[r * self.wz..r * self.wz + m];
+        let fr = &mut self.fb[r * self.wf..r * self.wf + p];
+        for (((a, b), &c), (z0, p0)) in zr
+            .iter_mut()
+            .zip(fr.iter_mut())
+            .zip(cols)
+            .zip(self.z0.iter().zip(&self.phi0))
+        {
+            *a = z[c] - z0;
+            *b = phi[c] - p0;
+        }
+        self.fb[r * self.wf + p] = t - self.t0;
+        self.n += 1;
+        self.filled += 1;
+        if self.filled == BLOCK {
+            self.flush();
+        }
     }
 
     /// `write(z, φ)` fills the sample's instruments and regressors in place.
@@ -183,17 +242,19 @@ impl MomentAccumulator {
         if rows == 0 {
             return;
         }
-        add_outer_products(&mut self.sums, &self.zb, &self.fb, rows, self.wz, self.wf);
-        for zr in self.zb.chunks_exact(self.wz).take(rows) {
-            for (s, v) in self.s_zz.iter_mut().zip(zr) {
-                *s += v * v;
-            }
-        }
-        for fr in self.fb.chunks_exact(self.wf).take(rows) {
-            for (s, v) in self.s_pp.iter_mut().zip(fr) {
-                *s += v * v;
-            }
-        }
+        // Compiled for the widest SIMD this CPU has (pulp dispatches at run
+        // time); every lane does the same unfused multiply and add, so the
+        // bits do not depend on the CPU.
+        pulp::Arch::new().dispatch(BlockKernel {
+            sums: &mut self.sums,
+            zz: &mut self.s_zz,
+            pp: &mut self.s_pp,
+            zb: &self.zb,
+            fb: &self.fb,
+            rows,
+            wz: self.wz,
+            wf: self.wf,
+        });
         self.filled = 0;
     }
 
@@ -217,8 +278,8 @@ impl MomentAccumulator {
             z0: self.z0,
             phi0: self.phi0,
             t0: self.t0,
-            s_zz: self.s_zz,
-            s_pp: self.s_pp,
+            s_zz: self.s_zz[..m].to_vec(),
+            s_pp: self.s_pp[..p].to_vec(),
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::data::Source;
 use crate::interp::{ArgPlan, arg_plan};
-use crate::model::planar_rotation;
+use crate::model::HeadingRotation;
 use leeway_structure::identify::{pointwise_signs, relevant_signs};
 use leeway_structure::ir::{Ir, PredictorKind, Rotation, SignPattern};
 use serde::Serialize;
@@ -82,10 +82,11 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
     let mut last = vec![0i8; plans.len()];
     let mut n = 0usize;
     let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    let mut headings = HeadingRotation::default();
     source.visit(&mut |row| {
         let rot_buf;
         let rotation: &[f64] = if planar {
-            rot_buf = planar_rotation(row.heading);
+            rot_buf = headings.next(row.heading);
             &rot_buf
         } else {
             row.rotation

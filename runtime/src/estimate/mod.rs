@@ -16,7 +16,7 @@
 //! start at k = 2 so no instrument uses a same-sample measurement.
 
 use crate::data::Source;
-use crate::model::{Model, Signals, planar_rotation, rotated};
+use crate::model::{HeadingRotation, Model, Signals, planar_rotation, rotated};
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator};
 use crate::signs::{ExperimentSigns, detect, plain_sign_args, set_pointwise_signs};
 use leeway_structure::exact::Q;

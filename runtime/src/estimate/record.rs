@@ -41,6 +41,7 @@ pub(super) fn experiment_info(
     let n_rot = ir.rotation_vars.len();
     let mut rot_sum = vec![0.0; n_rot];
     let mut rot_sq = vec![0.0; n_rot];
+    let mut headings = HeadingRotation::default();
     e.visit(&mut |row| {
         for (a, v) in sum.iter_mut().zip(row.disturbances) {
             *a += v;
@@ -48,8 +49,9 @@ pub(super) fn experiment_info(
         for (m, v) in max_abs.iter_mut().zip(row.states) {
             *m = m.max(v.abs());
         }
-        sc += row.heading.cos();
-        ss += row.heading.sin();
+        let [c, s] = headings.next(row.heading);
+        sc += c;
+        ss += s;
         for i in 0..row.rotation.len().min(n_rot) {
             rot_sum[i] += row.rotation[i];
             rot_sq[i] += row.rotation[i] * row.rotation[i];

@@ -150,6 +150,7 @@ impl EquationWalker<'_> {
         // Rotations of the measured headings one and two samples back, and
         // buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
         let (mut rh1, mut rh2) = ([1.0, 0.0], [1.0, 0.0]);
+        let mut headings = HeadingRotation::default();
         let mut fix_acc = vec![0.0; n_out];
         let mut fix_set = vec![false; n_out];
         // Signs of the pointwise moduli, sample by sample where they change.
@@ -292,7 +293,7 @@ impl EquationWalker<'_> {
             d1.copy_from_slice(row.disturbances);
             if planar.is_some() {
                 rh2 = rh1;
-                rh1 = planar_rotation(row.heading);
+                rh1 = headings.next(row.heading);
             }
             k += 1;
         });
@@ -340,8 +341,10 @@ impl Estimator<'_> {
     /// in equation `k` (regressors at `k − 1`): `(sample, what)`.
     pub(super) fn non_finite(&self, k: usize, phi: &[f64], t: &[f64]) -> Option<(usize, String)> {
         // The common case in one branch-free sweep (NaN fails `<=` too).
-        let fine = |v: &f64| v.abs() <= REGRESSOR_LIMIT;
-        if phi.iter().all(fine) && t.iter().all(fine) {
+        // (A fold without early exit vectorises; the rare bad value is then
+        // looked for entry by entry.)
+        let fine = |ok: bool, v: &f64| ok & (v.abs() <= REGRESSOR_LIMIT);
+        if phi.iter().fold(true, fine) & t.iter().fold(true, fine) {
             return None;
         }
         let n = self.n_cols;
