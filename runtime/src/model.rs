@@ -163,7 +163,7 @@ impl HeadingRotation {
     /// The rotation of the next heading.
     pub fn next(&mut self, psi: f64) -> [f64; 2] {
         let delta = psi - self.psi;
-        if self.since >= Self::REANCHOR || !(delta.abs() <= SMALL_STEP) {
+        if self.since >= Self::REANCHOR || delta.is_nan() || delta.abs() > SMALL_STEP {
             self.rot = planar_rotation(psi);
             self.since = 0;
         } else {
