@@ -107,7 +107,13 @@ impl Estimator<'_> {
             let new_mu = self.mean_vector(&values, &cur.theta);
             let mut step = 1.0;
             let mut accepted = None;
-            for _ in 0..6 {
+            // A full step whose simulation diverges means the refinement is
+            // not contracting here; with the runaway guard it stops rather
+            // than damping: damped steps near an unstable simulation amplify
+            // round-off into a different estimate (the paper's plain refined
+            // IV damps, at most five times).
+            let tries = if self.options.runaway_guard { 1 } else { 6 };
+            for _ in 0..tries {
                 let trial: Vec<f64> = theta_sim
                     .iter()
                     .zip(&cur.theta)
@@ -132,7 +138,8 @@ impl Estimator<'_> {
             }
             let Some((trial, trial_mu, (m, change, fit))) = accepted else {
                 self.warnings.push(format!(
-                    "refinement stopped after {refinements}: the simulation with the refined estimate diverges even when damped; the iterate whose simulation fits the data best is reported"
+                    "refinement stopped after {refinements}: the simulation with the refined estimate diverges{}; the iterate whose simulation fits the data best is reported",
+                    if tries > 1 { " even when damped" } else { "" }
                 ));
                 stopped = true;
                 break;
