@@ -382,21 +382,22 @@ fn add_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, w: usize) {
 /// Long-run covariance sums of a vector series `ζ_k` truncated at `lags`
 /// (uniform weights, the right kernel for the MA(1) residual of an Euler
 /// difference): `Σ ζ_k ζ_kᵀ + Σ_{j=1..L} Σ (ζ_k ζ_{k−j}ᵀ + ζ_{k−j} ζ_kᵀ)`.
+/// With `s_k = Σ_{j=1..L} ζ_{k−j}` this is the symmetric part of
+/// `M = Σ ζ_k (ζ_k + 2 s_k)ᵀ`: one product per block instead of `L + 1`.
 /// Samples are buffered [`BLOCK`] at a time behind the last `lags` of the
-/// previous block (zeros before the first sample), and each block adds
-/// `AᵀA` and `AᵀA₋ⱼ` by the moment kernel.
+/// previous block (zeros before the first sample).
 #[derive(Clone, Debug)]
 pub struct LongRun {
     lags: usize,
     dim: usize,
     /// Padded row width.
     w: usize,
-    /// `Σ ζζᵀ`, row-major `w × w`.
-    own: Vec<f64>,
-    /// `Σ_j Σ_k ζ_k ζ_{k−j}ᵀ`, row-major `w × w`.
-    cross: Vec<f64>,
+    /// `M = Σ ζ_k (ζ_k + 2 s_k)ᵀ`, row-major `w × w`.
+    sums: Vec<f64>,
     /// `lags` rows of history, then up to [`BLOCK`] new rows.
     buf: Vec<f64>,
+    /// `ζ_k + 2 s_k` of the block's rows.
+    with_lags: Vec<f64>,
     filled: usize,
     /// Samples seen.
     pub n: usize,
@@ -411,9 +412,9 @@ impl LongRun {
             lags,
             dim: m,
             w,
-            own: vec![0.0; w * w],
-            cross: vec![0.0; w * w],
+            sums: vec![0.0; w * w],
             buf: vec![0.0; (lags + BLOCK) * w],
+            with_lags: vec![0.0; BLOCK * w],
             filled: 0,
             n: 0,
         }
@@ -434,12 +435,22 @@ impl LongRun {
         if rows == 0 {
             return;
         }
-        let current = &self.buf[lags * w..(lags + rows) * w];
-        add_products(&mut self.own, current, current, rows, w);
-        for j in 1..=lags {
-            let earlier = &self.buf[(lags - j) * w..(lags - j + rows) * w];
-            add_products(&mut self.cross, current, earlier, rows, w);
+        for r in 0..rows {
+            let out = &mut self.with_lags[r * w..(r + 1) * w];
+            out.fill(0.0);
+            for j in 1..=lags {
+                let earlier = &self.buf[(lags + r - j) * w..(lags + r - j + 1) * w];
+                for (o, e) in out.iter_mut().zip(earlier) {
+                    *o += e;
+                }
+            }
+            let current = &self.buf[(lags + r) * w..(lags + r + 1) * w];
+            for (o, c) in out.iter_mut().zip(current) {
+                *o = c + 2.0 * *o;
+            }
         }
+        let current = &self.buf[lags * w..(lags + rows) * w];
+        add_products(&mut self.sums, current, &self.with_lags, rows, w);
         // The last `lags` rows become the next block's history.
         self.buf.copy_within(rows * w..(rows + lags) * w, 0);
         self.filled = 0;
@@ -453,15 +464,8 @@ impl LongRun {
         if m == 0 {
             return DMatrix::zeros(0, 0);
         }
-        // `own` is summed in full; its upper triangle is used for both halves,
-        // so the result is exactly symmetric.
         let sym = DMatrix::from_fn(m, m, |i, j| {
-            let own = if i <= j {
-                self.own[i * w + j]
-            } else {
-                self.own[j * w + i]
-            };
-            own + self.cross[i * w + j] + self.cross[j * w + i]
+            0.5 * (self.sums[i * w + j] + self.sums[j * w + i])
         });
         let eig = sym.clone().symmetric_eigen();
         if eig.eigenvalues.iter().all(|v| *v >= 0.0) {
