@@ -2,6 +2,10 @@
 
 use super::*;
 
+/// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
+/// estimates in terms of disturbance means and θ.
+type MomentEquation = (usize, Vec<(usize, usize, f64)>);
+
 impl Estimator<'_> {
     /// Unmeasured disturbance means from ρ̂ and θ̂ (paper Corollary 1), with
     /// standard errors by the delta method when a covariance is given.

@@ -29,10 +29,6 @@ pub(super) type FirstBadValue = std::cell::RefCell<Option<(usize, usize, String)
 /// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
 pub(super) type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
 
-/// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
-/// estimates in terms of disturbance means and θ.
-pub(super) type MomentEquation = (usize, Vec<(usize, usize, f64)>);
-
 /// How far an instrument simulation moved from a reference one, per output:
 /// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
 #[derive(Clone, Debug, Default)]
