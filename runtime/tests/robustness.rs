@@ -3,8 +3,9 @@
 //! a change of summation order or of the data's last bit can cross. Every
 //! measured value is moved by one ulp and a small study is re-run; the mean
 //! fits of the estimators whose figures the paper's claims rest on (LS,
-//! IV2, IV3) must stay within a fraction of their Monte Carlo standard error,
-//! and almost every single estimate must stay where it was.
+//! IV2, IV3) must stay within half their Monte Carlo standard error, and
+//! nine estimates in ten must stay within half a fit point (the rest are
+//! runs whose refined estimate is itself chaotic in the data's last bits).
 
 use leeway_runtime::estimate::Method;
 use leeway_runtime::study::{self, Outcome, StudyConfig};
@@ -79,9 +80,16 @@ fn study(
 #[test]
 fn one_ulp_of_data_leaves_the_study_figures_within_tolerance() {
     let model = ship();
+    // LEEWAY_ROBUSTNESS_RUNS and LEEWAY_ROBUSTNESS_N run it larger
+    // (e.g. the study's 100 runs and N = 1000..5000, in release).
+    let env = |name: &str| std::env::var(name).ok();
     let config = StudyConfig {
-        runs: 10,
-        n: vec![1000, 2000],
+        runs: env("LEEWAY_ROBUSTNESS_RUNS")
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(10),
+        n: env("LEEWAY_ROBUSTNESS_N")
+            .map(|v| v.split(',').filter_map(|x| x.parse().ok()).collect())
+            .unwrap_or_else(|| vec![1000, 2000]),
         ..StudyConfig::default()
     };
     for wind in [1.0, 10.0] {
@@ -102,19 +110,30 @@ fn one_ulp_of_data_leaves_the_study_figures_within_tolerance() {
                 let (fa, fb) = (fits(&a), fits(&b));
                 let (ma, sa, _) = study::mean_std(fa.iter().copied());
                 let (mb, _, _) = study::mean_std(fb.iter().copied());
-                // A quarter of the Monte Carlo standard error of the mean.
-                let tolerance = 0.25 * sa / (config.runs as f64).sqrt();
-                assert!(
-                    (ma - mb).abs() <= tolerance,
-                    "{method:?} wind {wind} N {n}: mean fit {ma:.3} vs {mb:.3} after one ulp (tolerance {tolerance:.3})"
-                );
+                // Half the Monte Carlo standard error of the mean.
+                let tolerance = 0.5 * sa / (config.runs as f64).sqrt();
                 let moved = fa
                     .iter()
                     .zip(&fb)
                     .filter(|(x, y)| (*x - *y).abs() > 0.5)
                     .count();
+                if env("LEEWAY_ROBUSTNESS_RUNS").is_some() {
+                    eprintln!(
+                        "{method:?} wind {wind} N {n}: mean fit {ma:.3} vs {mb:.3} (tolerance {tolerance:.3}), {moved} of {} moved",
+                        config.runs
+                    );
+                    for (r, (x, y)) in fa.iter().zip(&fb).enumerate() {
+                        if (x - y).abs() > 0.5 {
+                            eprintln!("  run {r}: {x:.1} vs {y:.1}");
+                        }
+                    }
+                }
                 assert!(
-                    moved <= 1,
+                    (ma - mb).abs() <= tolerance,
+                    "{method:?} wind {wind} N {n}: mean fit {ma:.3} vs {mb:.3} after one ulp (tolerance {tolerance:.3})"
+                );
+                assert!(
+                    moved <= config.runs.div_ceil(10),
                     "{method:?} wind {wind} N {n}: {moved} of {} estimates moved by more than half a fit point after one ulp",
                     config.runs
                 );
