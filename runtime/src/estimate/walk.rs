@@ -173,7 +173,8 @@ impl EquationWalker<'_> {
                     set_pointwise_signs(&mut signs, &info.varying, &y1);
                     self.model.regressors(self.kind, &sig, &signs, &mut phi);
                     match self.instruments {
-                        None => z.copy_from_slice(&phi),
+                        // Least squares: the regressors are their own instruments.
+                        None => {}
                         Some(Instruments::Simulated) => {
                             let sig = Signals {
                                 states: &x_sim,
@@ -224,7 +225,8 @@ impl EquationWalker<'_> {
                             EquationKind::Next => row.states[o],
                         };
                     }
-                    f(&z, &phi, &t);
+                    let instruments = if self.instruments.is_some() { &z } else { &phi };
+                    f(instruments, &phi, &t);
                 }
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
