@@ -64,7 +64,7 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
                 )
                 .help(format!(
                     "initial values can be given for {}",
-                    known.join(", ")
+                    leeway_structure::grammar::join_capped(&known, ", ")
                 )));
             }
             let v = match value.trim().parse::<f64>() {
@@ -202,7 +202,7 @@ pub fn parse_input(
                     .at(format!("{file}:1"))
                     .help(format!(
                         "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
-                        headers.join(", ")
+                        leeway_structure::grammar::join_capped(&headers, ", ")
                     )));
             }
         }

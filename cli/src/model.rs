@@ -523,7 +523,10 @@ pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem
     let help = if unmeasured.is_empty() {
         format!("model `{}` has no unmeasured disturbance", ir.name)
     } else {
-        format!("the unmeasured components are {}", unmeasured.join(", "))
+        format!(
+            "the unmeasured components are {}",
+            leeway_structure::grammar::join_capped(&unmeasured, ", ")
+        )
     };
     for spec in specs {
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {

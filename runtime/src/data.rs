@@ -798,7 +798,7 @@ fn scan<R: std::io::BufRead>(
                     format!("missing column `{col}`{mapped}"),
                     format!(
                         "the header has: {}. Name the column `{col}`, or map it in the model: data {{ {signal} = \"<column>\" }}",
-                        headers.join(", ")
+                        leeway_structure::grammar::join_capped(&headers, ", ")
                     ),
                 ));
             }
