@@ -10,8 +10,9 @@
 //! (`file:row:column`, the physical line an editor shows, also after
 //! comment lines, blank lines and quoted cells holding line breaks); nothing
 //! is silently dropped or reordered. A file is either loaded into memory
-//! ([`load_csv`]) or, after the same validating pass, visited by re-reading
-//! it ([`open_csv`], [`CsvSource`]) so that memory stays flat in N.
+//! ([`load_csv`]) or, after the same validating pass, visited in passes
+//! from a binary copy of its validated samples ([`open_csv`], [`CsvSource`])
+//! so that memory stays flat in N and no pass parses the text again.
 
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
@@ -706,20 +707,23 @@ pub struct Block {
 #[derive(Clone, Debug)]
 struct Scanned {
     header_line: u64,
-    layout: Layout,
     blocks: Vec<Block>,
     notes: FileNotes,
 }
 
+/// What the validating pass hands on for each sample: its block, its
+/// physical line, its values and its time stamp.
+type Sink<'a> = dyn FnMut(usize, u64, &Row, Option<f64>) -> Result<(), DataError> + 'a;
+
 /// The validating pass over one file: every check (cells, header, columns,
 /// units, experiments contiguous, time stamps, gross outliers), in one read
-/// with reused buffers; `sink(block, row, time)` sees every sample.
+/// with reused buffers; `sink(block, line, row, time)` sees every sample.
 fn scan<R: std::io::BufRead>(
     file: &str,
     input: R,
     ir: &Ir,
     options: &LoadOptions,
-    sink: &mut dyn FnMut(usize, &Row, Option<f64>),
+    sink: &mut Sink,
 ) -> Result<Scanned, DataError> {
     let mut reader = csv_builder()
         .has_headers(true)
@@ -895,7 +899,7 @@ fn scan<R: std::io::BufRead>(
             };
             block.extremes[j].push(v, line);
         }
-        sink(b, &buf.row(), t);
+        sink(b, line, &buf.row(), t)?;
     }
     let filter = reader.get_ref();
     let mut notes = FileNotes {
@@ -959,7 +963,6 @@ fn scan<R: std::io::BufRead>(
     }
     Ok(Scanned {
         header_line,
-        layout,
         blocks,
         notes,
     })
@@ -987,7 +990,7 @@ fn read_noted<R: std::io::BufRead>(
     options: &LoadOptions,
 ) -> Result<LoadedFile, DataError> {
     let mut held: Vec<(Experiment, Vec<f64>)> = Vec::new();
-    let scanned = scan(file, input, ir, options, &mut |b, row, t| {
+    let scanned = scan(file, input, ir, options, &mut |b, _, row, t| {
         if held.len() <= b {
             held.push((Experiment::new(ir, "", 0.0), Vec::new()));
         }
@@ -996,6 +999,7 @@ fn read_noted<R: std::io::BufRead>(
         if let Some(t) = t {
             times.push(t);
         }
+        Ok(())
     })?;
     let mut notes = scanned.notes;
     let mut out = Vec::new();
@@ -1052,22 +1056,70 @@ fn read_noted<R: std::io::BufRead>(
     })
 }
 
-/// An experiment of a CSV file visited by re-reading the file: each
-/// [`Source::visit`] seeks to the experiment's first row and parses its rows
-/// again with the same code as the validating pass (so values are
-/// bit-identical to loading into memory), in flat memory whatever N.
+/// The validated samples of a file, as the validating pass parsed them:
+/// per row its physical line (`u64`) and the layout's values (`f64`, base
+/// units), little-endian, in a temporary file removed when the last
+/// [`CsvSource`] of the file is dropped. Later passes read these bytes
+/// instead of parsing the text again: the values are the validated ones, bit
+/// for bit, and a file rewritten after validation changes nothing.
+#[derive(Debug)]
+struct Spill {
+    file: tempfile::NamedTempFile,
+    /// Values per row (the layout's columns).
+    width: usize,
+}
+
+impl Spill {
+    /// Bytes per row: the line and the values.
+    fn record(&self) -> u64 {
+        8 * (1 + self.width as u64)
+    }
+}
+
+/// Writes validated rows to a [`Spill`].
+struct SpillWriter {
+    out: std::io::BufWriter<std::fs::File>,
+    bytes: Vec<u8>,
+}
+
+impl SpillWriter {
+    fn push(&mut self, line: u64, roles: &[Role], row: &Row) -> std::io::Result<()> {
+        use std::io::Write;
+        self.bytes.clear();
+        self.bytes.extend_from_slice(&line.to_le_bytes());
+        for role in roles {
+            let v = match role {
+                Role::State(s) => row.states[*s],
+                Role::Input(s) => row.inputs[*s],
+                Role::Heading => row.heading,
+                Role::Rotation(s) => row.rotation[*s],
+                Role::Disturbance(s) => row.disturbances[*s],
+            };
+            self.bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        self.out.write_all(&self.bytes)
+    }
+}
+
+/// An experiment of a CSV file visited in passes: the validating pass wrote
+/// its samples to a spill file ([`open_csv`]), and each [`Source::visit`]
+/// reads them back from there (binary, buffered; no text is parsed again),
+/// in flat memory whatever N.
 #[derive(Debug)]
 pub struct CsvSource {
-    path: std::path::PathBuf,
     file: String,
-    layout: Layout,
+    /// What each value of a spilled row is.
+    roles: Vec<Role>,
     block: Block,
+    spill: std::sync::Arc<Spill>,
+    /// The block's first row in the spill.
+    first_record: u64,
     n_states: usize,
     n_inputs: usize,
     n_rotation: usize,
     n_comp: usize,
-    /// A problem met while re-reading (the file changed or vanished between
-    /// passes); visiting then stops short.
+    /// A problem met while reading the spill file back (it vanished or the
+    /// disk failed); visiting then stops short.
     failure: std::sync::Mutex<Option<DataError>>,
 }
 
@@ -1080,7 +1132,7 @@ impl CsvSource {
     pub fn file(&self) -> &str {
         &self.file
     }
-    /// A problem met by a later pass, if any (the file changed between passes).
+    /// A problem met by a later pass, if any (the spill file could not be read).
     pub fn failure(&self) -> Option<DataError> {
         self.failure.lock().ok().and_then(|f| f.clone())
     }
@@ -1091,29 +1143,30 @@ impl CsvSource {
             *f = Some(e);
         }
     }
-    /// Re-reads the rows, `f(index, physical line, row)` on each; stops at
-    /// the first problem (recorded) or when `f` returns false.
-    fn read(&self, f: &mut dyn FnMut(usize, u64, &Row) -> bool) {
-        use std::io::{Seek, SeekFrom};
-        let changed = |why: String| {
+    /// Reads the rows from `from` on, `f(index, physical line, row)` on each;
+    /// stops at the first problem (recorded) or when `f` returns false.
+    fn read(&self, from: usize, f: &mut dyn FnMut(usize, u64, &Row) -> bool) {
+        use std::io::{Read, Seek, SeekFrom};
+        let lost = |why: String| {
             DataError::new(
                 &self.file,
-                format!("the file changed while it was being read: {why}"),
-                "estimate from a file that is not being written to (copy it first)",
+                format!(
+                    "cannot read back the validated samples of experiment `{}`: {why}",
+                    self.block.name
+                ),
+                "the temporary copy of the data (in the system's temporary directory, TMPDIR) was removed or could not be read; check that directory and run again",
             )
         };
-        let mut handle = match std::fs::File::open(&self.path) {
+        let record = self.spill.record();
+        let mut handle = match self.spill.file.reopen() {
             Ok(h) => h,
-            Err(e) => return self.fail(changed(e.to_string())),
+            Err(e) => return self.fail(lost(e.to_string())),
         };
-        if let Err(e) = handle.seek(SeekFrom::Start(self.block.start)) {
-            return self.fail(changed(e.to_string()));
+        if let Err(e) = handle.seek(SeekFrom::Start((self.first_record + from as u64) * record)) {
+            return self.fail(lost(e.to_string()));
         }
-        let input = std::io::BufReader::with_capacity(1 << 16, handle);
-        let mut reader = csv_builder()
-            .has_headers(false)
-            .from_reader(Filter::new(input));
-        let mut record = csv::ByteRecord::new();
+        let mut input = std::io::BufReader::with_capacity(1 << 16, handle);
+        let mut bytes = vec![0u8; 8 * (1 + self.spill.width)];
         let mut buf = RowBuf {
             states: vec![0.0; self.n_states],
             inputs: vec![0.0; self.n_inputs],
@@ -1121,23 +1174,25 @@ impl CsvSource {
             dist: vec![0.0; self.n_comp],
             heading: 0.0,
         };
-        for k in 0..self.block.rows {
-            match reader.read_byte_record(&mut record) {
-                Ok(true) => {}
-                Ok(false) => {
-                    return self.fail(changed(format!(
-                        "experiment `{}` ended after {k} of its {} rows",
-                        self.block.name, self.block.rows
-                    )));
-                }
-                Err(e) => return self.fail(changed(e.to_string())),
+        let word = |b: &[u8], i: usize| -> [u8; 8] {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(&b[8 * i..8 * i + 8]);
+            w
+        };
+        for k in from..self.block.rows {
+            if let Err(e) = input.read_exact(&mut bytes) {
+                return self.fail(lost(format!("row {} of {}: {e}", k + 1, self.block.rows)));
             }
-            let line = self.block.first_line - 1
-                + reader
-                    .get_ref()
-                    .physical_line(record.position().map_or(1, csv::Position::line));
-            if let Err(e) = parse_row(&self.file, line, &record, &self.layout, &mut buf, false) {
-                return self.fail(changed(e.to_string()));
+            let line = u64::from_le_bytes(word(&bytes, 0));
+            for (j, role) in self.roles.iter().enumerate() {
+                let v = f64::from_le_bytes(word(&bytes, j + 1));
+                match role {
+                    Role::State(s) => buf.states[*s] = v,
+                    Role::Input(s) => buf.inputs[*s] = v,
+                    Role::Heading => buf.heading = v,
+                    Role::Rotation(s) => buf.rotation[*s] = v,
+                    Role::Disturbance(s) => buf.dist[*s] = v,
+                }
             }
             if !f(k, line, &buf.row()) {
                 return;
@@ -1157,19 +1212,19 @@ impl Source for CsvSource {
         self.block.h
     }
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
-        self.read(&mut |_, _, row| {
+        self.read(0, &mut |_, _, row| {
             f(row);
             true
         });
     }
     fn locate(&self, k: usize) -> String {
         let mut at = None;
-        self.read(&mut |i, line, _| {
-            if i == k {
+        if k < self.block.rows {
+            self.read(k, &mut |_, line, _| {
                 at = Some(line);
-            }
-            i < k
-        });
+                false
+            });
+        }
         match at {
             Some(line) => format!("{}:{line}", self.file),
             None => format!(
@@ -1192,9 +1247,11 @@ pub struct StreamedFile {
 }
 
 /// Opens a CSV file for streaming: one validating pass (every check of
-/// [`load_csv`]), then each experiment is re-read on every visit. Memory is
-/// flat in the number of rows. `--resample` is not streamed: use
-/// [`load_csv_noted`] for it.
+/// [`load_csv`]) that also writes the parsed samples to a temporary spill
+/// file (8 bytes per value and row, in the system's temporary directory,
+/// removed when the sources are dropped); every later visit reads them from
+/// there. Memory is flat in the number of rows. `--resample` is not
+/// streamed: use [`load_csv_noted`] for it.
 pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
     let file = path.display().to_string();
     let handle = std::fs::File::open(path).map_err(|e| {
@@ -1204,24 +1261,58 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
             "check the path passed to --data",
         )
     })?;
+    let spill_error = |e: std::io::Error| {
+        DataError::new(
+            &file,
+            format!("cannot write the temporary copy of the validated samples: {e}"),
+            format!(
+                "leeway streams a file through a binary copy in the system's temporary directory ({}); free space there or point TMPDIR elsewhere",
+                std::env::temp_dir().display()
+            ),
+        )
+    };
+    let spill_file = tempfile::Builder::new()
+        .prefix("leeway-spill-")
+        .tempfile()
+        .map_err(spill_error)?;
+    let mut writer = SpillWriter {
+        out: std::io::BufWriter::with_capacity(1 << 16, spill_file.reopen().map_err(spill_error)?),
+        bytes: Vec::new(),
+    };
     let input = std::io::BufReader::with_capacity(1 << 16, handle);
-    let scanned = scan(&file, input, ir, options, &mut |_, _, _| {})?;
+    // Every signal the model reads from data, in a fixed order.
+    let roles: Vec<Role> = required_signals(ir).into_iter().map(|(_, r)| r).collect();
+    let scanned = scan(&file, input, ir, options, &mut |_, line, row, _| {
+        writer.push(line, &roles, row).map_err(spill_error)
+    })?;
+    std::io::Write::flush(&mut writer.out).map_err(spill_error)?;
+    drop(writer);
+    let spill = std::sync::Arc::new(Spill {
+        file: spill_file,
+        width: roles.len(),
+    });
+    let mut first_record = 0u64;
     let sources = scanned
         .blocks
         .into_iter()
-        .map(|block| CsvSource {
-            path: path.to_path_buf(),
-            file: file.clone(),
-            layout: scanned.layout.clone(),
-            block: Block {
-                extremes: Vec::new(),
-                ..block
-            },
-            n_states: ir.states.len(),
-            n_inputs: ir.inputs.len(),
-            n_rotation: measured_rotation(ir),
-            n_comp: ir.components.len(),
-            failure: std::sync::Mutex::new(None),
+        .map(|block| {
+            let first = first_record;
+            first_record += block.rows as u64;
+            CsvSource {
+                file: file.clone(),
+                roles: roles.clone(),
+                block: Block {
+                    extremes: Vec::new(),
+                    ..block
+                },
+                spill: spill.clone(),
+                first_record: first,
+                n_states: ir.states.len(),
+                n_inputs: ir.inputs.len(),
+                n_rotation: measured_rotation(ir),
+                n_comp: ir.components.len(),
+                failure: std::sync::Mutex::new(None),
+            }
         })
         .collect();
     Ok(StreamedFile {
@@ -1619,7 +1710,7 @@ mod tests {
             let mut a: Vec<u64> = Vec::new();
             let mut b: Vec<u64> = Vec::new();
             h.visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
-            // Twice: every visit re-reads.
+            // Twice: every visit reads the spill again.
             for _ in 0..2 {
                 b.clear();
                 s.visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
@@ -1652,25 +1743,44 @@ mod tests {
     }
 
     #[test]
-    fn a_file_that_changes_between_passes_is_reported_not_misread() {
+    fn later_passes_read_the_validated_samples_and_the_spill_is_removed() {
+        // Passes read the binary copy the validating pass wrote: a file
+        // rewritten after validation changes nothing (it used to stop the
+        // visit with "the file changed while it was being read").
         let ir = model("step 1.0");
         let path = std::env::temp_dir().join(format!("leeway-changed-{}.csv", std::process::id()));
         let text = format!("time,u,r,delta\n{}", rows(0, 20));
         std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let held = load_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         let streamed =
             open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&path, format!("time,u,r,delta\n{}", rows(0, 5)))
             .unwrap_or_else(|e| panic!("{e}"));
-        let mut n = 0;
-        streamed.sources[0].visit(&mut |_| n += 1);
-        assert_eq!(n, 5);
-        let failure = streamed.sources[0]
-            .failure()
-            .unwrap_or_else(|| panic!("a failure"));
-        assert!(
-            failure.message.contains("changed while it was being read"),
-            "{failure}"
+        let mut a: Vec<u64> = Vec::new();
+        let mut b: Vec<u64> = Vec::new();
+        held[0].visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+        streamed.sources[0]
+            .visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+        assert_eq!(a.len(), 20 * 3);
+        assert_eq!(a, b);
+        assert!(streamed.sources[0].failure().is_none());
+        assert_eq!(
+            streamed.sources[0].locate(19),
+            format!("{}:21", path.display())
         );
+        assert_eq!(
+            streamed.sources[0].locate(20),
+            format!(
+                "{}: experiment `{}`, sample 21",
+                path.display(),
+                streamed.sources[0].name()
+            )
+        );
+        // The spill file is removed with the sources.
+        let spill = streamed.sources[0].spill.file.path().to_path_buf();
+        assert!(spill.exists());
+        drop(streamed);
+        assert!(!spill.exists(), "{}", spill.display());
         let _ = std::fs::remove_file(&path);
     }
 }
