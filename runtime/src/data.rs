@@ -471,6 +471,197 @@ impl<R: std::io::BufRead> std::io::Read for Filter<R> {
     }
 }
 
+/// A CSV file read record by record through the line filter (comment and
+/// blank lines dropped and counted, CRLF folded, physical lines kept): the
+/// reader of data files (`estimate`, `validate`) and of `simulate`'s input,
+/// so every CSV file leeway reads follows the same rules and every problem
+/// is located the same way (`file:line`, `file:line:column (name)`). It holds
+/// one record, never the file.
+pub struct Records<R: std::io::BufRead> {
+    file: String,
+    what: String,
+    reader: csv::Reader<Filter<R>>,
+    record: csv::ByteRecord,
+    headers: Vec<String>,
+    header_line: u64,
+    line: u64,
+}
+
+impl Records<std::io::BufReader<std::fs::File>> {
+    /// Opens a file (`what` names the option that gave it, for the hint).
+    pub fn open(path: &Path, what: &str) -> Result<Self, DataError> {
+        let file = path.display().to_string();
+        let handle = std::fs::File::open(path).map_err(|e| {
+            DataError::new(
+                &file,
+                format!("cannot read the file: {e}"),
+                format!("check the path passed to {what}"),
+            )
+        })?;
+        Records::new(
+            &file,
+            std::io::BufReader::with_capacity(1 << 16, handle),
+            what,
+        )
+    }
+}
+
+impl<R: std::io::BufRead> Records<R> {
+    /// Reads the header row (after any comment and blank lines); the header
+    /// must name each column once. `what` names the option that gave the
+    /// file (`--data`, `--input`), for the hint of a read failure.
+    pub fn new(file: &str, input: R, what: &str) -> Result<Self, DataError> {
+        let mut reader = csv_builder()
+            .has_headers(true)
+            .from_reader(Filter::new(input));
+        let headers: Vec<String> = match reader.byte_headers() {
+            Ok(h) => h
+                .iter()
+                .map(|c| String::from_utf8_lossy(c).into_owned())
+                .collect(),
+            Err(e) => {
+                if let Some(d) = io_error(file, what, &reader, &e) {
+                    return Err(d);
+                }
+                let line = reader.get_ref().physical_line(1);
+                return Err(DataError::new(
+                    format!("{file}:{line}"),
+                    format!("cannot read the header row: {e}"),
+                    "the first row names the columns",
+                ));
+            }
+        };
+        let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
+            reader.get_ref().physical + 1
+        } else {
+            reader.get_ref().physical_line(1)
+        };
+        if reader.get_ref().kept == 0 {
+            return Err(DataError::new(
+                format!("{file}:{header_line}"),
+                "the file has no header row (it is empty, or only comments and blank lines)",
+                "the first row names the columns",
+            ));
+        }
+        for (i, h) in headers.iter().enumerate() {
+            if let Some(j) = headers[..i].iter().position(|g| g == h) {
+                return Err(DataError::new(
+                    format!("{file}:{header_line}:{}", i + 1),
+                    format!(
+                        "column `{h}` appears twice (columns {} and {})",
+                        j + 1,
+                        i + 1
+                    ),
+                    "rename one of them; leeway will not guess which is meant",
+                ));
+            }
+        }
+        Ok(Records {
+            file: file.to_string(),
+            what: what.to_string(),
+            reader,
+            record: csv::ByteRecord::new(),
+            headers,
+            header_line,
+            line: header_line,
+        })
+    }
+    /// The column names.
+    pub fn headers(&self) -> &[String] {
+        &self.headers
+    }
+    /// The header's physical line.
+    pub fn header_line(&self) -> u64 {
+        self.header_line
+    }
+    /// The file as named in messages.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+    /// The column of a header name.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.headers.iter().position(|h| h == name)
+    }
+    /// Advances to the next record: `false` at the end; a malformed row (a
+    /// cell count other than the header's, an unclosed quote) or a read
+    /// failure is a located error.
+    pub fn next_record(&mut self) -> Result<bool, DataError> {
+        let file = self.file.as_str();
+        match self.reader.read_byte_record(&mut self.record) {
+            Ok(true) => {}
+            Ok(false) => return Ok(false),
+            Err(e) => {
+                if let Some(d) = io_error(file, &self.what, &self.reader, &e) {
+                    return Err(d);
+                }
+                let at = e.position().map_or(self.reader.get_ref().physical, |p| {
+                    self.reader.get_ref().physical_line(p.line())
+                });
+                let what = match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
+                    _ => format!("malformed row: {e}"),
+                };
+                return Err(DataError::new(
+                    format!("{file}:{at}"),
+                    what,
+                    "every row needs as many cells as the header",
+                ));
+            }
+        }
+        let pos = self.record.position().map_or(1, csv::Position::line);
+        self.line = self.reader.get_ref().physical_line(pos);
+        Ok(true)
+    }
+    /// The current record's physical line.
+    pub fn line(&self) -> u64 {
+        self.line
+    }
+    /// The current record's physical byte offset.
+    fn byte(&self) -> u64 {
+        let pos = self.record.position().map_or(0, csv::Position::byte);
+        self.reader.get_ref().physical_byte(pos)
+    }
+    /// The raw bytes of cell `i` of the current record (empty if absent).
+    pub fn raw(&self, i: usize) -> &[u8] {
+        self.record.get(i).unwrap_or(b"")
+    }
+    /// Cell `i` of the current record as a finite number, or the located
+    /// reason it is not (`name` is the column's name in the message).
+    pub fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
+        cell(&self.file, self.line, &self.record, i, name)
+    }
+    /// Comment lines and blank lines dropped so far.
+    pub fn dropped(&self) -> (usize, usize) {
+        let f = self.reader.get_ref();
+        (f.comments, f.blanks)
+    }
+}
+
+/// A read failure met by the csv reader, with the filter's own message (csv
+/// would only say "I/O error").
+fn io_error<R: std::io::BufRead>(
+    file: &str,
+    what: &str,
+    r: &csv::Reader<Filter<R>>,
+    e: &csv::Error,
+) -> Option<DataError> {
+    if let csv::ErrorKind::Io(io) = e.kind() {
+        let why = r
+            .get_ref()
+            .error
+            .as_ref()
+            .map_or(io.to_string(), ToString::to_string);
+        return Some(DataError::new(
+            file,
+            format!("cannot read the file: {why}"),
+            format!("check the path passed to {what}"),
+        ));
+    }
+    None
+}
+
 /// Where each model signal is read from in a file's records.
 #[derive(Clone, Debug)]
 struct Layout {
@@ -725,67 +916,10 @@ fn scan<R: std::io::BufRead>(
     options: &LoadOptions,
     sink: &mut Sink,
 ) -> Result<Scanned, DataError> {
-    let mut reader = csv_builder()
-        .has_headers(true)
-        .from_reader(Filter::new(input));
-    let io_error = |r: &csv::Reader<Filter<R>>, e: &csv::Error| -> Option<DataError> {
-        if let csv::ErrorKind::Io(io) = e.kind() {
-            let why = r
-                .get_ref()
-                .error
-                .as_ref()
-                .map_or(io.to_string(), ToString::to_string);
-            return Some(DataError::new(
-                file,
-                format!("cannot read the file: {why}"),
-                "check the path passed to --data",
-            ));
-        }
-        None
-    };
-    let headers: Vec<String> = match reader.byte_headers() {
-        Ok(h) => h
-            .iter()
-            .map(|c| String::from_utf8_lossy(c).into_owned())
-            .collect(),
-        Err(e) => {
-            if let Some(d) = io_error(&reader, &e) {
-                return Err(d);
-            }
-            let line = reader.get_ref().physical_line(1);
-            return Err(DataError::new(
-                format!("{file}:{line}"),
-                format!("cannot read the header row: {e}"),
-                "the first row names the columns",
-            ));
-        }
-    };
-    let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
-        reader.get_ref().physical + 1
-    } else {
-        reader.get_ref().physical_line(1)
-    };
-    if reader.get_ref().kept == 0 {
-        return Err(DataError::new(
-            format!("{file}:{header_line}"),
-            "the file has no header row (it is empty, or only comments and blank lines)",
-            "the first row names the columns",
-        ));
-    }
+    let mut records = Records::new(file, input, "--data")?;
+    let header_line = records.header_line();
+    let headers = records.headers().to_vec();
     let find = |name: &str| headers.iter().position(|h| h == name);
-    for (i, h) in headers.iter().enumerate() {
-        if let Some(j) = headers[..i].iter().position(|g| g == h) {
-            return Err(DataError::new(
-                format!("{file}:{header_line}:{}", i + 1),
-                format!(
-                    "column `{h}` appears twice (columns {} and {})",
-                    j + 1,
-                    i + 1
-                ),
-                "rename one of them; leeway will not guess which is meant",
-            ));
-        }
-    }
     let mut cols: Vec<(Role, usize, String, f64)> = Vec::new();
     for (signal, role) in required_signals(ir) {
         let col = column_name(ir, &signal);
@@ -821,40 +955,12 @@ fn scan<R: std::io::BufRead>(
     let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
     let mut current: Option<Vec<u8>> = None;
     let mut buf = RowBuf::new(ir);
-    let mut record = csv::ByteRecord::new();
     let n_cols = layout.cols.len();
-    loop {
-        match reader.read_byte_record(&mut record) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => {
-                if let Some(d) = io_error(&reader, &e) {
-                    return Err(d);
-                }
-                let at = e.position().map_or(reader.get_ref().physical, |p| {
-                    reader.get_ref().physical_line(p.line())
-                });
-                let what = match e.kind() {
-                    csv::ErrorKind::UnequalLengths {
-                        expected_len, len, ..
-                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
-                    _ => format!("malformed row: {e}"),
-                };
-                return Err(DataError::new(
-                    format!("{file}:{at}"),
-                    what,
-                    "every row needs as many cells as the header",
-                ));
-            }
-        }
-        let pos = record
-            .position()
-            .cloned()
-            .unwrap_or_else(csv::Position::new);
-        let line = reader.get_ref().physical_line(pos.line());
-        let t = parse_row(file, line, &record, &layout, &mut buf, true)?;
+    while records.next_record()? {
+        let line = records.line();
+        let t = parse_row(file, line, &records.record, &layout, &mut buf, true)?;
         let exp_name: &[u8] = match layout.exp_col {
-            Some(i) => record.get(i).unwrap_or(b""),
+            Some(i) => records.raw(i),
             None => base_name.as_bytes(),
         };
         if current.as_deref() != Some(exp_name) {
@@ -875,7 +981,7 @@ fn scan<R: std::io::BufRead>(
             current = Some(exp_name.to_vec());
             blocks.push(Block {
                 name,
-                start: reader.get_ref().physical_byte(pos.byte()),
+                start: records.byte(),
                 first_line: line,
                 rows: 0,
                 h: 0.0,
@@ -901,11 +1007,11 @@ fn scan<R: std::io::BufRead>(
         }
         sink(b, line, &buf.row(), t)?;
     }
-    let filter = reader.get_ref();
+    let (comment_lines, blank_lines) = records.dropped();
     let mut notes = FileNotes {
         file: file.to_string(),
-        comment_lines: filter.comments,
-        blank_lines: filter.blanks,
+        comment_lines,
+        blank_lines,
         experiments: Vec::new(),
     };
     if blocks.is_empty() {
