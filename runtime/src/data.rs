@@ -786,6 +786,26 @@ const EXTREMES: usize = 17;
 /// a gross outlier, in multiples of that range (see `Extremes`).
 pub const OUTLIER_FACTOR: f64 = 1e4;
 
+/// The gross-outlier bound for a column that is otherwise exactly 0, for
+/// states, the heading, rotation entries and measured disturbances (base
+/// units m/s, rad, rad/s: no physical value comes near).
+pub const ZERO_OUTLIER: f64 = 1e6;
+
+/// The same for inputs (forces, angles and rates in the user's units).
+pub const ZERO_OUTLIER_INPUT: f64 = 1e12;
+
+/// A gross outlier found by [`Extremes::outliers`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Outlier {
+    value: f64,
+    line: u64,
+    /// The bulk's range (equal ends for a constant column).
+    lo: f64,
+    hi: f64,
+    /// The bound it broke, for a constant column of 0: `Some(bound)`.
+    zero_bound: Option<f64>,
+}
+
 /// The [`EXTREMES`] largest and smallest values of one column, with their
 /// physical lines: enough to find isolated gross outliers in one pass and
 /// flat memory.
@@ -795,10 +815,17 @@ pub const OUTLIER_FACTOR: f64 = 1e4;
 /// a value farther than [`OUTLIER_FACTOR`] × `(hi − lo)` outside it is a gross
 /// outlier. A real zigzag (the rudder switching between ±35°, held for many
 /// samples each time) has its extremes inside the bulk, and any physical
-/// excursion held for more than `K` samples is part of the bulk; a column
-/// constant apart from at most `K` samples (`hi = lo`) has no spread to
-/// compare with and is never flagged. The rule is scale-free: units do not
-/// change it.
+/// excursion held for more than `K` samples is part of the bulk. The rule is
+/// scale-free: units do not change it.
+///
+/// A column constant apart from at most `K` samples (`hi = lo = c`: a
+/// sensor stuck at one value) has no spread to compare with; there a value
+/// farther than [`OUTLIER_FACTOR`] × `|c|` from `c` is a gross outlier (still
+/// scale-free), and when `c = 0`, one beyond an absolute bound in base units:
+/// [`ZERO_OUTLIER`] for states, heading, rotation and measured disturbances
+/// (speeds in m/s, angles in rad, rates in rad/s), [`ZERO_OUTLIER_INPUT`]
+/// for inputs, whose units are the user's. A short pulse on a column that is
+/// otherwise zero (a thruster kick) stays accepted.
 #[derive(Clone, Debug, Default)]
 struct Extremes {
     /// Largest first.
@@ -820,25 +847,40 @@ impl Extremes {
             self.low.truncate(EXTREMES);
         }
     }
-    /// The gross outliers among `n` samples: `(value, line, bulk lo, bulk hi)`.
-    fn outliers(&self, n: usize) -> Vec<(f64, u64, f64, f64)> {
+    /// The gross outliers among `n` samples, by line (`zero_bound`: the
+    /// absolute bound of a column that is otherwise 0).
+    fn outliers(&self, n: usize, zero_bound: f64) -> Vec<Outlier> {
         let k = ((n.saturating_sub(1)) / 4).min(EXTREMES - 1);
         if k == 0 || self.high.len() <= k || self.low.len() <= k {
             return Vec::new();
         }
         let (lo, hi) = (self.low[k].0, self.high[k].0);
         let w = hi - lo;
-        if w <= 0.0 || !w.is_finite() {
+        if !w.is_finite() || w < 0.0 {
             return Vec::new();
         }
-        let far = OUTLIER_FACTOR * w;
-        let mut out: Vec<(f64, u64, f64, f64)> = self.high[..k]
+        // A spread to compare with, else the constant's own magnitude, else
+        // (a column of zeros) the absolute bound.
+        let (far, bound) = if w > 0.0 {
+            (OUTLIER_FACTOR * w, None)
+        } else if lo != 0.0 {
+            (OUTLIER_FACTOR * lo.abs(), None)
+        } else {
+            (zero_bound, Some(zero_bound))
+        };
+        let mut out: Vec<Outlier> = self.high[..k]
             .iter()
             .filter(|(x, _)| *x - hi > far)
             .chain(self.low[..k].iter().filter(|(x, _)| lo - *x > far))
-            .map(|(x, l)| (*x, *l, lo, hi))
+            .map(|(x, l)| Outlier {
+                value: *x,
+                line: *l,
+                lo,
+                hi,
+                zero_bound: bound,
+            })
             .collect();
-        out.sort_by_key(|o| o.1);
+        out.sort_by_key(|o| o.line);
         out
     }
 }
@@ -1033,26 +1075,45 @@ fn scan<R: std::io::BufRead>(
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
-        for (j, (_, i, name, _)) in layout.cols.iter().enumerate() {
-            let found = block.extremes[j].outliers(n);
-            if let Some((v, line, lo, hi)) = found.first() {
+        for (j, (role, i, name, _)) in layout.cols.iter().enumerate() {
+            let zero_bound = match role {
+                Role::Input(_) => ZERO_OUTLIER_INPUT,
+                _ => ZERO_OUTLIER,
+            };
+            let found = block.extremes[j].outliers(n, zero_bound);
+            if let Some(o) = found.first() {
                 let more = match found.len() - 1 {
                     0 => String::new(),
                     m => format!(" ({m} more in this column)"),
                 };
-                return Err(DataError::new(
-                    format!("{file}:{line}:{} ({name})", i + 1),
+                let (v, lo, hi) = (o.value, o.lo, o.hi);
+                let why = if hi > lo {
                     format!(
-                        "`{name}` = {v:e} is a gross outlier: the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away{more}",
+                        "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
                         block.name,
-                        if *v > *hi {
+                        if v > hi {
                             (v - hi) / (hi - lo)
                         } else {
                             (lo - v) / (hi - lo)
                         }
-                    ),
+                    )
+                } else if let Some(bound) = o.zero_bound {
                     format!(
-                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column is taken for a logging error"
+                        "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
+                        block.name
+                    )
+                } else {
+                    format!(
+                        "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+                        block.name,
+                        (v - lo).abs() / lo.abs()
+                    )
+                };
+                return Err(DataError::new(
+                    format!("{file}:{}:{} ({name})", o.line, i + 1),
+                    format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+                    format!(
+                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
                     ),
                 ));
             }
@@ -1786,6 +1847,64 @@ mod tests {
             .unwrap_or_else(|| panic!("the outlier at × {f}"));
             assert_eq!(err.location, "z.csv:59:2 (u)");
         }
+    }
+
+    #[test]
+    fn a_stuck_sensor_with_a_spike_is_an_outlier() {
+        // Issue 10 (the gap of the spread rule): a column constant apart from
+        // a few samples has no spread; a spike far from the constant, or far
+        // from 0 for a column of zeros, is still named by its row.
+        let log = |u: &dyn Fn(usize) -> f64, delta: &dyn Fn(usize) -> f64| {
+            let mut text = String::from("# a log\ntime,u,r,delta\n");
+            for k in 0..200 {
+                text.push_str(&format!(
+                    "{k}.0,{:e},{},{:e}\n",
+                    u(k),
+                    0.01 * (k % 5) as f64,
+                    delta(k)
+                ));
+            }
+            text
+        };
+        let ir = model("step 1.0");
+        let check =
+            |text: String| parse_csv("s.csv", text.as_bytes(), &ir, &LoadOptions::default());
+        let varying = |k: usize| 35.0 * ((k / 7) % 2) as f64;
+        for (c, spike) in [
+            (5.0, 1e300),
+            (5.0, -1e6),
+            (5e-8, 5e-3),
+            (0.0, 1e300),
+            (0.0, -2e6),
+        ] {
+            let err = check(log(&|k| if k == 57 { spike } else { c }, &varying))
+                .err()
+                .unwrap_or_else(|| panic!("{c} with {spike} at row 57"));
+            assert_eq!(err.location, "s.csv:60:2 (u)", "{err}");
+            assert!(err.message.contains("is a gross outlier"), "{err}");
+            assert!(err.message.contains("the column is constant"), "{err}");
+        }
+        // Within the bound: a stuck sensor with small deviations, a pulse.
+        for (c, spike) in [(5.0, 20.0), (5.0, -4e4), (0.0, 35.0), (0.0, 9e5)] {
+            assert!(
+                check(log(
+                    &|k| if (57..60).contains(&k) { spike } else { c },
+                    &varying
+                ))
+                .is_ok(),
+                "{c} with {spike}"
+            );
+        }
+        // Inputs are in the user's units: a thruster kick of 16 samples on a
+        // zero column is data; only beyond 1e12 is a zero column's sample a glitch.
+        let kick = |k: usize| if (100..116).contains(&k) { 2e6 } else { 0.0 };
+        assert!(check(log(&|k| 5.0 + 0.01 * (k % 3) as f64, &kick)).is_ok());
+        let glitch = |k: usize| if k == 120 { 1e13 } else { 0.0 };
+        let err = check(log(&|k| 5.0 + 0.01 * (k % 3) as f64, &glitch))
+            .err()
+            .unwrap_or_else(|| panic!("1e13 on a zero input"));
+        assert_eq!(err.location, "s.csv:123:4 (delta)", "{err}");
+        assert!(err.message.contains("exceeds 1e12 in magnitude"), "{err}");
     }
 
     #[test]
