@@ -265,7 +265,7 @@ fn mutate(rng: &mut ChaCha8Rng, text: &[u8]) -> Vec<u8> {
                 t.remove(at);
             }
             1 if !t.is_empty() => t[at] = rng.random_range(0..=255u8),
-            2 | 3 | 4 => {
+            2..=4 => {
                 let tok = TOKENS[rng.random_range(0..TOKENS.len())].as_bytes();
                 t.splice(at..at, tok.iter().copied());
             }
@@ -349,7 +349,7 @@ fn generate(rng: &mut ChaCha8Rng) -> Vec<u8> {
                 0 => "7".repeat(digits),
                 1 => format!("1e{}", rng.random_range(-10_000_000_i64..10_000_000)),
                 2 => format!("0.{}1", "0".repeat(digits)),
-                _ => format!("1e-9223372036854775808"),
+                _ => "1e-9223372036854775808".to_string(),
             };
             format!("model N {{ state u der u = {lit}*X*u nominal {{ X = {lit} }} }}").into_bytes()
         }
@@ -459,12 +459,12 @@ fn malform(rng: &mut ChaCha8Rng, base: &str) -> Vec<u8> {
                     }
                 }
                 if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(c)) {
-                    *x = format!("{:e}", 10f64.powi(rng.random_range(2..300)));
+                    *x = format!("1e{}", rng.random_range(2..300));
                 }
             }
             8 => {
                 // A column scaled (units).
-                let f = 10f64.powi(rng.random_range(-30..30));
+                let f: f64 = format!("1e{}", rng.random_range(-30..30)).parse().unwrap_or(1.0);
                 for row in rows.iter_mut().skip(1) {
                     if let Some(x) = row.get_mut(c) {
                         let v: f64 = x.parse().unwrap_or(0.0);
