@@ -1,6 +1,7 @@
 //! The input file of `leeway simulate`: a CSV file with a header row, one
-//! experiment, validated like estimation data and located the same way
-//! (`file:row:column (name)`).
+//! experiment, read by the data files' reader (`leeway_runtime::data::Records`:
+//! comment and blank lines skipped, CRLF, quoted cells) and located the same
+//! way (`file:row:column (name)`, the physical line).
 //!
 //! Required columns (after the model's `data { }` mapping): every input, the
 //! columns of a measured `R`, and every measured disturbance component, on
@@ -12,8 +13,9 @@
 //! either is an error; nothing is assumed to be zero.
 
 use crate::problem::{Failure, Problem};
+use leeway_runtime::DataError;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{LoadOptions, column_name};
+use leeway_runtime::data::{LoadOptions, Records, column_name};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -64,7 +66,7 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
                 )
                 .help(format!(
                     "initial values can be given for {}",
-                    known.join(", ")
+                    leeway_structure::grammar::join_capped(&known, ", ")
                 )));
             }
             let v = match value.trim().parse::<f64>() {
@@ -101,41 +103,20 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
     Ok(out)
 }
 
-/// Loads the input file.
+/// Loads the input file, reading it record by record (the text is never
+/// held: memory is the parsed columns).
 pub fn load_input(
     path: &Path,
     ir: &Ir,
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Failure> {
-    let file = path.display().to_string();
-    let text = std::fs::read(path).map_err(|e| {
-        Problem::error("data", format!("cannot read the file: {e}"))
-            .at(&file)
-            .help("check the path passed to --input")
-    })?;
-    parse_input(&file, &text, ir, options, x0).map_err(Failure::from)
-}
-
-fn cell(file: &str, line: usize, i: usize, name: &str, raw: &str) -> Result<f64, Problem> {
-    let at = format!("{file}:{line}:{} ({name})", i + 1);
-    match raw.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(
-            Problem::error("data", format!("`{raw}` is not a finite number"))
-                .at(at)
-                .help("NaN and infinite values are not accepted; leeway does not interpolate"),
-        ),
-        Err(_) if raw.is_empty() => Err(Problem::error("data", "empty cell")
-            .at(at)
-            .help("every sample needs every input; leeway does not fill gaps")),
-        Err(_) => Err(Problem::error("data", format!("`{raw}` is not a number"))
-            .at(at)
-            .help("use a plain decimal such as 0.25 or -1.5e-3")),
-    }
+    let records = Records::open(path, "--input").map_err(|e| Problem::data(&e))?;
+    read_input(records, ir, options, x0).map_err(Failure::from)
 }
 
 /// Parses the input file's bytes (see [`load_input`]).
+#[cfg(test)]
 pub fn parse_input(
     file: &str,
     text: &[u8],
@@ -143,35 +124,23 @@ pub fn parse_input(
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Problem> {
-    let mut reader = csv::ReaderBuilder::new()
-        .has_headers(true)
-        .flexible(false)
-        .trim(csv::Trim::All)
-        .from_reader(text);
-    let headers: Vec<String> = reader
-        .headers()
-        .map_err(|e| {
-            Problem::error("data", format!("cannot read the header row: {e}"))
-                .at(format!("{file}:1"))
-                .help("the first row names the columns")
-        })?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    for (i, h) in headers.iter().enumerate() {
-        if let Some(j) = headers[..i].iter().position(|g| g == h) {
-            return Err(Problem::error(
-                "data",
-                format!(
-                    "column `{h}` appears twice (columns {} and {})",
-                    j + 1,
-                    i + 1
-                ),
-            )
-            .at(format!("{file}:1:{}", i + 1))
-            .help("rename one of them; leeway will not guess which is meant"));
-        }
-    }
+    let records = Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
+    read_input(records, ir, options, x0)
+}
+
+/// Reads the input through the data files' reader ([`Records`]: comment and
+/// blank lines skipped and counted, every problem at its physical line).
+fn read_input<R: std::io::BufRead>(
+    mut records: Records<R>,
+    ir: &Ir,
+    options: &LoadOptions,
+    x0: &[(String, f64)],
+) -> Result<Input, Problem> {
+    let data = |e: DataError| Problem::data(&e);
+    let file = records.file().to_string();
+    let file = file.as_str();
+    let header_line = records.header_line();
+    let headers = records.headers().to_vec();
     let find = |name: &str| headers.iter().position(|h| h == name);
     let mut required: Vec<(Role, usize, String)> = Vec::new();
     let mut wanted: Vec<(Role, String)> = ir
@@ -199,10 +168,10 @@ pub fn parse_input(
             Some(i) => required.push((role, i, col)),
             None => {
                 return Err(Problem::error("data", format!("missing column `{col}`"))
-                    .at(format!("{file}:1"))
+                    .at(format!("{file}:{header_line}"))
                     .help(format!(
                         "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
-                        headers.join(", ")
+                        leeway_structure::grammar::join_capped(&headers, ", ")
                     )));
             }
         }
@@ -228,7 +197,7 @@ pub fn parse_input(
                     column_name(ir, name)
                 ),
             )
-            .at(format!("{file}:1"))
+            .at(format!("{file}:{header_line}"))
             .help(format!(
                 "add a `{}` column (only its first row is read) or pass --x0 {name}=VALUE",
                 column_name(ir, name)
@@ -236,32 +205,18 @@ pub fn parse_input(
         }
     }
     let time_col = find(&column_name(ir, "time"));
+    let time_name = column_name(ir, "time");
     let exp_col = find(&column_name(ir, "experiment"));
     let n_comp = ir.components.len();
     let mut inputs = vec![Vec::new(); ir.inputs.len()];
     let mut rotation = vec![Vec::new(); ir.rotation_vars.len()];
     let mut dist = vec![Vec::new(); n_comp];
-    let mut times = Vec::new();
+    let mut times = TimeSteps::default();
     let mut experiment: Option<String> = None;
     let mut rows = 0usize;
-    for (ri, record) in reader.records().enumerate() {
-        let line = ri + 2;
-        let record = record.map_err(|e| {
-            let at = e.position().map_or(line as u64, |p| p.line());
-            let message = match e.kind() {
-                csv::ErrorKind::UnequalLengths {
-                    expected_len, len, ..
-                } => format!("malformed row: {len} cells, the header has {expected_len}"),
-                csv::ErrorKind::Utf8 { .. } => {
-                    "malformed row: a cell is not UTF-8 text".to_string()
-                }
-                _ => format!("malformed row: {e}"),
-            };
-            Problem::error("data", message)
-                .at(format!("{file}:{at}"))
-                .help("every row needs as many cells as the header")
-        })?;
-        let raw = |i: usize| record.get(i).unwrap_or("");
+    let mut first_line = header_line + 1;
+    while records.next_record().map_err(data)? {
+        let line = records.line();
         for (role, i, name) in &required {
             // Declared units are converted to base units, as for data files.
             let signal = match role {
@@ -269,7 +224,7 @@ pub fn parse_input(
                 Role::Rotation(s) => ir.rotation_vars.get(*s),
                 Role::Disturbance(s) => ir.components.get(*s).map(|c| &c.name),
             };
-            let v = cell(file, line, *i, name, raw(*i))? * signal.map_or(1.0, |s| unit(ir, s));
+            let v = records.number(*i, name).map_err(data)? * signal.map_or(1.0, |s| unit(ir, s));
             match role {
                 Role::Input(s) => inputs[*s].push(v),
                 Role::Rotation(s) => rotation[*s].push(v),
@@ -277,18 +232,21 @@ pub fn parse_input(
             }
         }
         if rows == 0 {
+            first_line = line;
             for (name, value, col) in &mut initial {
                 if let Some(i) = *col {
-                    *value =
-                        Some(cell(file, line, i, &column_name(ir, name), raw(i))? * unit(ir, name));
+                    *value = Some(
+                        records.number(i, &column_name(ir, name)).map_err(data)? * unit(ir, name),
+                    );
                 }
             }
         }
         if let Some(i) = time_col {
-            times.push(cell(file, line, i, &column_name(ir, "time"), raw(i))? * unit(ir, "time"));
+            let t = records.number(i, &time_name).map_err(data)? * unit(ir, "time");
+            times.push(t, || format!("{file}:{line}:{} ({time_name})", i + 1))?;
         }
         if let Some(i) = exp_col {
-            let name = raw(i).to_string();
+            let name = String::from_utf8_lossy(records.raw(i)).into_owned();
             match &experiment {
                 None => experiment = Some(name),
                 Some(first) if *first != name => {
@@ -307,12 +265,12 @@ pub fn parse_input(
     if rows == 0 {
         return Err(
             Problem::error("data", "the file has a header but no samples")
-                .at(format!("{file}:2"))
+                .at(format!("{file}:{}", header_line + 1))
                 .help("one row per sample of the input"),
         );
     }
-    let time_at = time_col.map(|i| format!("{}:{} (time)", "{line}", i + 1));
-    let h = sample_time(file, ir, &times, time_at.as_deref(), options)?;
+    let first_time_at = time_col.map(|i| format!("{file}:{first_line}:{} ({time_name})", i + 1));
+    let h = sample_time(file, ir, &times, first_time_at, options)?;
     let name = experiment.unwrap_or_else(|| {
         Path::new(file)
             .file_stem()
@@ -341,8 +299,42 @@ pub fn parse_input(
     }
     Ok(Input {
         experiment: e,
-        t0: times.first().copied().unwrap_or(0.0),
+        t0: times.first.unwrap_or(0.0),
     })
+}
+
+/// The time stamps of the input, checked as they are read: each step equal
+/// to the first within 0.1 % and positive (a simulation steps uniformly),
+/// without holding them.
+#[derive(Clone, Debug, Default)]
+struct TimeSteps {
+    first: Option<f64>,
+    last: f64,
+    /// The first step.
+    h: Option<f64>,
+    count: usize,
+}
+
+impl TimeSteps {
+    fn push(&mut self, t: f64, at: impl Fn() -> String) -> Result<(), Problem> {
+        if self.first.is_some() {
+            let dt = t - self.last;
+            let h = *self.h.get_or_insert(dt);
+            if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
+                return Err(Problem::error(
+                    "data",
+                    format!("inconsistent sample time: step {dt} here, {h} at the start"),
+                )
+                .at(at())
+                .help("leeway needs uniformly sampled data; resample the input"));
+            }
+        } else {
+            self.first = Some(t);
+        }
+        self.last = t;
+        self.count += 1;
+        Ok(())
+    }
 }
 
 /// The factor from a signal's declared unit to its base unit (1 without one).
@@ -352,24 +344,18 @@ fn unit(ir: &Ir, signal: &str) -> f64 {
         .map_or(1.0, |u| leeway_structure::units::factor(u))
 }
 
-/// The sample time: from the time column (uniform, checked against the
-/// model's `step`), else the model's `step`, else `--step`.
-/// `column` is `{line}:C (time)`, a template for a row's time cell.
+/// The sample time: from the time column (uniform, checked as read, and
+/// against the model's `step`), else the model's `step`, else `--step`.
+/// `first_at` locates the first row's time cell.
 fn sample_time(
     file: &str,
     ir: &Ir,
-    times: &[f64],
-    column: Option<&str>,
+    times: &TimeSteps,
+    first_at: Option<String>,
     options: &LoadOptions,
 ) -> Result<f64, Problem> {
-    let at = |line: usize| {
-        let cell = column
-            .unwrap_or("{line}")
-            .replace("{line}", &line.to_string());
-        format!("{file}:{cell}")
-    };
     let declared = ir.step.or(options.step);
-    if times.len() < 2 {
+    let (Some(first), true) = (times.first, times.count >= 2) else {
         return declared.ok_or_else(|| {
             Problem::error(
                 "data",
@@ -378,20 +364,8 @@ fn sample_time(
             .at(file)
             .help("declare `step h` in the model, add a `time` column, or pass --step H")
         });
-    }
-    let h = times[1] - times[0];
-    for (k, w) in times.windows(2).enumerate() {
-        let dt = w[1] - w[0];
-        if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
-            return Err(Problem::error(
-                "data",
-                format!("inconsistent sample time: step {dt} here, {h} at the start"),
-            )
-            .at(at(k + 3))
-            .help("leeway needs uniformly sampled data; resample the input"));
-        }
-    }
-    let mean = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
+    };
+    let mean = (times.last - first) / (times.count - 1) as f64;
     if let Some(d) = declared
         && (mean - d).abs() > 1e-3 * d
     {
@@ -399,7 +373,7 @@ fn sample_time(
             "data",
             format!("the input is sampled every {mean} s but the model declares step {d}"),
         )
-        .at(at(2))
+        .at(first_at.unwrap_or_else(|| file.to_string()))
         .help("make `step` in the model match the data, or resample the input"));
     }
     Ok(declared.unwrap_or(mean))
@@ -505,6 +479,45 @@ mod tests {
             ),
         ] {
             assert_eq!(parse(text, &[]).err().as_deref(), Some(expect), "{text}");
+        }
+    }
+
+    #[test]
+    fn comment_and_blank_lines_are_skipped_and_rows_keep_their_physical_line() {
+        // Issue 10: simulate's loader read every line as a record; it now
+        // uses the data files' reader (the same rules as `estimate`).
+        let head = "# logged by the bridge\n\ntime,u,v,r,psi,tau1,tau2,tau3,wind_n,wind_e\r\n";
+        let ok = format!(
+            "{head}0,5,3,0.1,0.2,50,160,230,1,1\r\n# pause\n\n1,,,,,51,160,230,1,1\r\n2,,,,,52,160,230,1,1\n"
+        );
+        let i = parse(&ok, &[]).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(i.experiment.inputs[0], vec![50.0, 51.0, 52.0]);
+        assert_eq!(i.experiment.h, 1.0);
+        for (text, expect) in [
+            (
+                format!("{head}0,5,3,0.1,0.2,50,160,230,1,1\n\n# pause\n1,,,,,x,160,230,1,1\n"),
+                "in.csv:7:6 (tau1): `x` is not a number",
+            ),
+            (
+                format!(
+                    "{head}0,5,3,0.1,0.2,50,160,230,1,1\n\n1,,,,,50,160,230,1,1\n\n3,,,,,50,160,230,1,1\n"
+                ),
+                "in.csv:8:1 (time): inconsistent sample time: step 2 here, 1 at the start",
+            ),
+            (
+                format!("{head}0,5,3,0.1,0.2,50,160,230,1\n"),
+                "in.csv:4: malformed row: 9 cells, the header has 10",
+            ),
+            (
+                "# only a comment\n\n".to_string(),
+                "in.csv:3: the file has no header row (it is empty, or only comments and blank lines)",
+            ),
+            (
+                format!("{head}# no rows\n"),
+                "in.csv:4: the file has a header but no samples",
+            ),
+        ] {
+            assert_eq!(parse(&text, &[]).err().as_deref(), Some(expect), "{text}");
         }
     }
 

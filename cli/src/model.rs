@@ -209,11 +209,11 @@ pub fn load_data(
     }
 }
 
-/// Experiments for an estimate: streamed from their files (re-read on every
-/// pass, flat memory in N), or held in memory under `--resample`, which
-/// interpolates over a whole experiment.
+/// Experiments for an estimate: streamed from their files (validated once,
+/// then read on every pass from a binary copy, flat memory in N), or held in
+/// memory under `--resample`, which interpolates over a whole experiment.
 pub enum DataSet {
-    /// Re-read per pass.
+    /// Read per pass from the validated copy.
     Streamed(Vec<CsvSource>),
     /// Loaded (resampled).
     Held(Vec<Experiment>),
@@ -234,7 +234,7 @@ impl DataSet {
             DataSet::Held(v) => v.iter().map(|_| None).collect(),
         }
     }
-    /// A problem met by a later pass (a file changed while being read).
+    /// A problem met by a later pass (the validated copy could not be read).
     pub fn failure(&self) -> Option<Problem> {
         match self {
             DataSet::Streamed(v) => v
@@ -523,7 +523,10 @@ pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem
     let help = if unmeasured.is_empty() {
         format!("model `{}` has no unmeasured disturbance", ir.name)
     } else {
-        format!("the unmeasured components are {}", unmeasured.join(", "))
+        format!(
+            "the unmeasured components are {}",
+            leeway_structure::grammar::join_capped(&unmeasured, ", ")
+        )
     };
     for spec in specs {
         for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {

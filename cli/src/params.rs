@@ -76,7 +76,10 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
                     ),
                 )
                 .at(at)
-                .help(format!("the parameters are {}", names.join(", "))),
+                .help(format!(
+                    "the parameters are {}",
+                    leeway_structure::grammar::join_capped(&names, ", ")
+                )),
             );
             continue;
         };
@@ -117,7 +120,7 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
                 "invalid-params",
                 format!(
                     "missing parameter{plural} {}: every parameter of model `{}` needs a value",
-                    missing.join(", "),
+                    leeway_structure::grammar::join_capped(&missing, ", "),
                     ir.name
                 ),
             )

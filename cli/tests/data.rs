@@ -613,6 +613,50 @@ fn a_gross_outlier_is_named_by_row_not_taken_for_a_rank_verdict() {
     assert!(!stderr(&o).contains("not excited"), "{}", stderr(&o));
 }
 
+/// The gap of the spread rule: a sensor stuck at one value (the anemometer's
+/// north component) with one spike is still named by its row, by `estimate`
+/// and `validate` alike.
+#[test]
+fn a_stuck_sensor_with_a_spike_is_named_by_row() {
+    let dir = Scratch::new("stuck");
+    let text = estimation_csv(2000, 1.0, 5);
+    let mut rows = rows_of(&text);
+    let col = rows[0]
+        .iter()
+        .position(|h| h == "wind_n")
+        .unwrap_or_else(|| panic!("{:?}", rows[0]));
+    for row in rows.iter_mut().skip(1) {
+        row[col] = "10".to_string();
+    }
+    rows[700][col] = "1e300".to_string();
+    let data = dir.write("stuck.csv", &join(&rows));
+    let o = leeway(&["estimate", SHIP, "--data", &data]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    let expected = format!(
+        "{data}:701:{} (wind_n): `wind_n` = 1e300 is a gross outlier",
+        col + 1
+    );
+    assert!(stderr(&o).contains(&expected), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the column is constant"),
+        "{}",
+        stderr(&o)
+    );
+    let params = dir.write("theta.json", &true_params());
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &params,
+        "--data",
+        &data,
+        "--no-plot",
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains(&expected), "{}", stderr(&o));
+}
+
 #[test]
 fn the_same_data_in_other_units_give_the_same_verdict() {
     let dir = Scratch::new("units-scale");

@@ -117,6 +117,64 @@ impl Diagnostic {
     }
 }
 
+/// Most items a list inside a message, note or help names: the rest are
+/// counted (`… (491 more)`), so no message grows with the model. Structured
+/// output (JSON fields) keeps full lists.
+pub const MAX_LISTED: usize = 8;
+
+/// At most [`MAX_LISTED`] items joined by `sep`, then `sep… (N more)`:
+/// `x0, x1, …, x7, … (9992 more)`.
+pub fn join_capped<I>(items: I, sep: &str) -> String
+where
+    I: IntoIterator,
+    I::Item: std::fmt::Display,
+{
+    let mut out = String::new();
+    let mut rest = 0usize;
+    for (i, item) in items.into_iter().enumerate() {
+        if i < MAX_LISTED {
+            if i > 0 {
+                out.push_str(sep);
+            }
+            out.push_str(&item.to_string());
+        } else {
+            rest += 1;
+        }
+    }
+    if rest > 0 {
+        out.push_str(&format!("{sep}… ({rest} more)"));
+    }
+    out
+}
+
+/// `a`, `a and b`, `a, b and c`; beyond [`MAX_LISTED`] items
+/// `a, b, …, h and 491 more`.
+pub fn and_list<I>(items: I) -> String
+where
+    I: IntoIterator,
+    I::Item: std::fmt::Display,
+{
+    let mut shown: Vec<String> = Vec::new();
+    let mut rest = 0usize;
+    for item in items {
+        if shown.len() < MAX_LISTED + 1 {
+            shown.push(item.to_string());
+        } else {
+            rest += 1;
+        }
+    }
+    if rest > 0 {
+        // Nine kept: the ninth is counted with the rest.
+        shown.truncate(MAX_LISTED);
+        return format!("{} and {} more", shown.join(", "), rest + 1);
+    }
+    match shown.len() {
+        0 => String::new(),
+        1 => shown.remove(0),
+        n => format!("{} and {}", shown[..n - 1].join(", "), shown[n - 1]),
+    }
+}
+
 /// Plain text (tests, `compile_error!`, pipes) or ANSI colour (terminals).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RenderStyle {
@@ -151,6 +209,22 @@ fn clamp(source: &str, span: Span) -> std::ops::Range<usize> {
     start..end
 }
 
+/// Most notes [`render`] prints per diagnostic; the rest are counted.
+pub const MAX_NOTES: usize = 3 * MAX_LISTED;
+
+/// Longest message, note, help or label text [`render`] prints, in
+/// characters: a longer one (a name of 10⁵ characters quoted twice) is cut
+/// with `… (N characters)`.
+pub const MAX_TEXT_CHARS: usize = 1000;
+
+/// `text`, cut to [`MAX_TEXT_CHARS`] characters.
+fn cut_text(text: &str) -> String {
+    match text.char_indices().nth(MAX_TEXT_CHARS) {
+        None => text.to_string(),
+        Some((at, _)) => format!("{}… ({} characters)", &text[..at], text.chars().count()),
+    }
+}
+
 fn to_codespan(d: &Diagnostic, source: &str) -> cs::Diagnostic<()> {
     let severity = match d.severity {
         Severity::Error => cs::Severity::Error,
@@ -166,16 +240,27 @@ fn to_codespan(d: &Diagnostic, source: &str) -> cs::Diagnostic<()> {
             } else {
                 cs::LabelStyle::Secondary
             };
-            cs::Label::new(style, (), clamp(source, l.span)).with_message(l.message.clone())
+            cs::Label::new(style, (), clamp(source, l.span)).with_message(cut_text(&l.message))
         })
         .collect();
-    let mut notes: Vec<String> = d.notes.iter().map(|n| format!("note: {n}")).collect();
+    let mut notes: Vec<String> = d
+        .notes
+        .iter()
+        .take(MAX_NOTES)
+        .map(|n| format!("note: {}", cut_text(n)))
+        .collect();
+    if d.notes.len() > MAX_NOTES {
+        notes.push(format!(
+            "note: … and {} more notes, not shown",
+            d.notes.len() - MAX_NOTES
+        ));
+    }
     if let Some(help) = &d.help {
-        notes.push(format!("help: {help}"));
+        notes.push(format!("help: {}", cut_text(help)));
     }
     cs::Diagnostic::new(severity)
         .with_code(d.code.clone())
-        .with_message(d.message.clone())
+        .with_message(cut_text(&d.message))
         .with_labels(labels)
         .with_notes(notes)
 }
@@ -203,7 +288,16 @@ pub fn render(
     let file = SimpleFile::new(file_name, source);
     let config = term::Config::default();
     let mut out = String::new();
-    for d in diagnostics.iter().take(MAX_RENDERED) {
+    let groups = line_groups(diagnostics, source);
+    for group in groups.iter().take(MAX_RENDERED) {
+        let merged;
+        let d = match group.as_slice() {
+            [one] => &diagnostics[*one],
+            many => {
+                merged = merge(diagnostics, many);
+                &merged
+            }
+        };
         let cd = to_codespan(d, source);
         let mut buffer = match style {
             RenderStyle::Plain => term::termcolor::Buffer::no_color(),
@@ -220,21 +314,128 @@ pub fn render(
             out.push_str(&String::from_utf8_lossy(buffer.as_slice()));
         } else {
             // The renderer refused (cannot happen for clamped spans); never lose the message.
-            out.push_str(&format!("{:?}[{}]: {}\n", d.severity, d.code, d.message).to_lowercase());
+            out.push_str(
+                &format!("{:?}[{}]: {}\n", d.severity, d.code, cut_text(&d.message)).to_lowercase(),
+            );
         }
     }
-    out.push_str(&omitted_line(diagnostics));
+    let rest = groups.get(MAX_RENDERED..).unwrap_or_default();
+    out.push_str(&omitted_line(
+        rest.iter().flatten().map(|i| &diagnostics[*i]),
+    ));
     out
 }
 
+/// The diagnostics as [`render`] shows them: those of one code and severity
+/// whose primary labels lie on one source line form one group (in the order
+/// of their first member), so a line is printed once however many errors
+/// point at it (`state u` 4,000 times on one line printed the line 4,000
+/// times). Each group is a list of indices into `diagnostics`.
+fn line_groups(diagnostics: &[Diagnostic], source: &str) -> Vec<Vec<usize>> {
+    let line_starts: Vec<usize> = std::iter::once(0)
+        .chain(source.match_indices('\n').map(|(i, _)| i + 1))
+        .collect();
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut by_key: std::collections::BTreeMap<(&str, Severity, usize), usize> =
+        std::collections::BTreeMap::new();
+    for (i, d) in diagnostics.iter().enumerate() {
+        let Some(span) = d.primary_span() else {
+            groups.push(vec![i]);
+            continue;
+        };
+        let line = line_starts
+            .partition_point(|s| *s <= span.start.min(source.len()))
+            .saturating_sub(1);
+        match by_key.entry((d.code.as_str(), d.severity, line)) {
+            std::collections::btree_map::Entry::Occupied(e) => groups[*e.get()].push(i),
+            std::collections::btree_map::Entry::Vacant(e) => {
+                e.insert(groups.len());
+                groups.push(vec![i]);
+            }
+        }
+    }
+    groups
+}
+
+/// One diagnostic for a group of [`line_groups`]: the first member's
+/// message (with the count), notes and help; the primary label of at most
+/// [`MAX_LISTED`] members (each saying its own message when the messages
+/// differ) and their other labels once each; a note counting the rest.
+fn merge(diagnostics: &[Diagnostic], members: &[usize]) -> Diagnostic {
+    let first = &diagnostics[members[0]];
+    let same_message = members
+        .iter()
+        .all(|i| diagnostics[*i].message == first.message);
+    let mut d = first.clone();
+    d.message = if same_message {
+        format!("{} ({} times on this line)", first.message, members.len())
+    } else {
+        format!(
+            "{} (and {} more on this line)",
+            first.message,
+            members.len() - 1
+        )
+    };
+    d.labels = Vec::new();
+    for (k, i) in members.iter().take(MAX_LISTED).enumerate() {
+        let m = &diagnostics[*i];
+        for l in &m.labels {
+            let mut l = l.clone();
+            if l.primary && !same_message {
+                l.message = m.message.clone();
+            } else if l.primary && k > 0 {
+                // Said once, at the first caret.
+                l.message = String::new();
+            }
+            if !d
+                .labels
+                .iter()
+                .any(|x| x.span == l.span && x.primary == l.primary)
+            {
+                d.labels.push(l);
+            }
+        }
+    }
+    // Notes and helps of the marked members, each distinct one once.
+    let mut helps: Vec<&str> = Vec::new();
+    for i in members.iter().take(MAX_LISTED) {
+        let m = &diagnostics[*i];
+        for n in &m.notes {
+            if !d.notes.contains(n) {
+                d.notes.push(n.clone());
+            }
+        }
+        if let Some(h) = &m.help
+            && !helps.contains(&h.as_str())
+        {
+            helps.push(h);
+        }
+    }
+    if !helps.is_empty() {
+        d.help = Some(helps.join("; "));
+    }
+    if members.len() > MAX_LISTED {
+        d.notes.push(format!(
+            "… and {} more on this line, not marked",
+            members.len() - MAX_LISTED
+        ));
+    }
+    d
+}
+
 /// `… and N more errors (M warnings) not shown`, or nothing.
-fn omitted_line(diagnostics: &[Diagnostic]) -> String {
-    let rest = diagnostics.get(MAX_RENDERED..).unwrap_or_default();
-    if rest.is_empty() {
+fn omitted_line<'a>(rest: impl Iterator<Item = &'a Diagnostic>) -> String {
+    let (mut errors, mut others) = (0usize, 0usize);
+    for d in rest {
+        if d.is_error() {
+            errors += 1;
+        } else {
+            others += 1;
+        }
+    }
+    if errors + others == 0 {
         return String::new();
     }
-    let errors = rest.iter().filter(|d| d.is_error()).count();
-    let others = rest.len() - errors;
     let plural = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
     let what = match (errors, others) {
         (0, o) => plural(o, "warning or note"),
@@ -487,13 +688,20 @@ pub fn render_short(diagnostics: &[Diagnostic], file_name: &str, source: &str) -
                 let (l, c) = line_col(source, span.start);
                 out.push_str(&format!(
                     "{file_name}:{l}:{c}: {sev}[{}]: {}\n",
-                    d.code, d.message
+                    d.code,
+                    cut_text(&d.message)
                 ));
             }
-            None => out.push_str(&format!("{file_name}: {sev}[{}]: {}\n", d.code, d.message)),
+            None => out.push_str(&format!(
+                "{file_name}: {sev}[{}]: {}\n",
+                d.code,
+                cut_text(&d.message)
+            )),
         }
     }
-    out.push_str(&omitted_line(diagnostics));
+    out.push_str(&omitted_line(
+        diagnostics.get(MAX_RENDERED..).unwrap_or_default().iter(),
+    ));
     out
 }
 
@@ -549,9 +757,14 @@ mod tests {
     #[test]
     fn at_most_fifty_diagnostics_are_rendered() {
         // Issue 10: 4,097 errors from a 117-byte model filled 1.5 MB of stderr.
-        let src = "model M {}\n";
+        // One error per line (errors on one line are merged, see below).
+        let src = "x\n".repeat(5000);
+        let src = src.as_str();
         let mut ds: Vec<Diagnostic> = (0..4097)
-            .map(|i| Diagnostic::error("e", format!("error {i}")).with_primary(Span::new(0, 5), ""))
+            .map(|i| {
+                Diagnostic::error("e", format!("error {i}"))
+                    .with_primary(Span::new(2 * i, 2 * i + 1), "")
+            })
             .collect();
         ds.push(Diagnostic::warning("w", "a warning"));
         let text = render(&ds, "m.som", src, RenderStyle::Plain);
@@ -566,6 +779,100 @@ mod tests {
         let short = render_short(&ds, "m.som", src);
         assert_eq!(short.lines().count(), MAX_RENDERED + 1);
         assert!(render(&ds[..50], "m.som", src, RenderStyle::Plain).ends_with("\n\n"));
+    }
+
+    #[test]
+    fn a_line_is_printed_once_however_many_errors_point_at_it() {
+        // Issue 10: `state u` 4,000 times on one line gave 257 MB of stderr,
+        // then 50 copies of the line; now one diagnostic marks the first 8.
+        let src = format!("model M {{ {}}}\n", "state u ".repeat(4000));
+        let first = Span::new(16, 17);
+        let ds: Vec<Diagnostic> = (1..4000)
+            .map(|k| {
+                let at = 10 + 8 * k + 6;
+                Diagnostic::error("duplicate-declaration", "`u` is declared twice")
+                    .with_primary(Span::new(at, at + 1), "second declaration of a state")
+                    .with_secondary(first, "first declared here")
+                    .with_help("keep one")
+            })
+            .collect();
+        let text = render(&ds, "m.som", &src, RenderStyle::Plain);
+        assert!(text.len() < 3000, "{} bytes:\n{text}", text.len());
+        assert_eq!(text.matches("\n1 │").count(), 1, "{text}");
+        assert!(text.starts_with(
+            "error[duplicate-declaration]: `u` is declared twice (3999 times on this line)\n  ┌─ m.som:1:25\n"
+        ), "{text}");
+        assert_eq!(text.matches('^').count(), MAX_LISTED, "{text}");
+        assert!(
+            text.contains("= note: … and 3991 more on this line, not marked"),
+            "{text}"
+        );
+        assert!(!text.contains("not shown"), "{text}");
+        // Different messages on one line: each caret says its own.
+        let src = "model M { state u state v state u state v }\n";
+        let ds = vec![
+            Diagnostic::error("duplicate-declaration", "`u` is declared twice")
+                .with_primary(Span::new(32, 33), "again"),
+            Diagnostic::error("duplicate-declaration", "`v` is declared twice")
+                .with_primary(Span::new(40, 41), "again"),
+        ];
+        let text = render(&ds, "m.som", src, RenderStyle::Plain);
+        assert!(
+            text.starts_with(
+                "error[duplicate-declaration]: `u` is declared twice (and 1 more on this line)"
+            ),
+            "{text}"
+        );
+        assert!(text.contains("`v` is declared twice"), "{text}");
+        assert_eq!(text.matches("\n1 │").count(), 1, "{text}");
+        // Other lines and other codes stay apart.
+        let src = "a\nb\n";
+        let ds = vec![
+            Diagnostic::error("x", "one").with_primary(Span::new(0, 1), ""),
+            Diagnostic::error("x", "two").with_primary(Span::new(2, 3), ""),
+            Diagnostic::error("y", "three").with_primary(Span::new(0, 1), ""),
+        ];
+        let text = render(&ds, "m.som", src, RenderStyle::Plain);
+        assert_eq!(text.matches("error[").count(), 3, "{text}");
+    }
+
+    #[test]
+    fn long_texts_and_many_notes_are_cut() {
+        let name = "a".repeat(100_000);
+        let mut d = Diagnostic::error("e", format!("`{name}` is declared twice"))
+            .with_primary(Span::new(0, 1), name.clone());
+        for i in 0..100 {
+            d = d.with_note(format!("note {i}"));
+        }
+        let text = render(&[d], "m.som", "x\n", RenderStyle::Plain);
+        assert!(text.len() < 6000, "{}", text.len());
+        assert!(text.contains("… (100020 characters)"), "{text}");
+        assert!(text.contains("… (100000 characters)"), "{text}");
+        assert_eq!(text.matches("= note: note").count(), MAX_NOTES);
+        assert!(
+            text.contains("= note: … and 76 more notes, not shown"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn lists_are_capped() {
+        assert_eq!(join_capped(["a", "b"], ", "), "a, b");
+        assert_eq!(
+            join_capped((0..10).map(|i| format!("x{i}")), ", "),
+            "x0, x1, x2, x3, x4, x5, x6, x7, … (2 more)"
+        );
+        assert_eq!(and_list(["a"]), "a");
+        assert_eq!(and_list(["a", "b", "c"]), "a, b and c");
+        assert_eq!(
+            and_list((0..9).map(|i| i.to_string())),
+            "0, 1, 2, 3, 4, 5, 6, 7 and 8"
+        );
+        assert_eq!(
+            and_list((0..10).map(|i| i.to_string())),
+            "0, 1, 2, 3, 4, 5, 6, 7 and 2 more"
+        );
+        assert_eq!(and_list(Vec::<String>::new()), "");
     }
 
     #[test]

@@ -11,7 +11,7 @@ pub mod source;
 
 pub use ast::*;
 pub use diagnostic::{
-    Diagnostic, Label, MAX_LINE_COLUMNS, MAX_RENDERED, RenderStyle, Severity, line_col, render,
-    render_short,
+    Diagnostic, Label, MAX_LINE_COLUMNS, MAX_LISTED, MAX_RENDERED, RenderStyle, Severity, and_list,
+    join_capped, line_col, render, render_short,
 };
 pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};

@@ -10,8 +10,9 @@
 //! (`file:row:column`, the physical line an editor shows, also after
 //! comment lines, blank lines and quoted cells holding line breaks); nothing
 //! is silently dropped or reordered. A file is either loaded into memory
-//! ([`load_csv`]) or, after the same validating pass, visited by re-reading
-//! it ([`open_csv`], [`CsvSource`]) so that memory stays flat in N.
+//! ([`load_csv`]) or, after the same validating pass, visited in passes
+//! from a binary copy of its validated samples ([`open_csv`], [`CsvSource`])
+//! so that memory stays flat in N and no pass parses the text again.
 
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
@@ -470,6 +471,197 @@ impl<R: std::io::BufRead> std::io::Read for Filter<R> {
     }
 }
 
+/// A CSV file read record by record through the line filter (comment and
+/// blank lines dropped and counted, CRLF folded, physical lines kept): the
+/// reader of data files (`estimate`, `validate`) and of `simulate`'s input,
+/// so every CSV file leeway reads follows the same rules and every problem
+/// is located the same way (`file:line`, `file:line:column (name)`). It holds
+/// one record, never the file.
+pub struct Records<R: std::io::BufRead> {
+    file: String,
+    what: String,
+    reader: csv::Reader<Filter<R>>,
+    record: csv::ByteRecord,
+    headers: Vec<String>,
+    header_line: u64,
+    line: u64,
+}
+
+impl Records<std::io::BufReader<std::fs::File>> {
+    /// Opens a file (`what` names the option that gave it, for the hint).
+    pub fn open(path: &Path, what: &str) -> Result<Self, DataError> {
+        let file = path.display().to_string();
+        let handle = std::fs::File::open(path).map_err(|e| {
+            DataError::new(
+                &file,
+                format!("cannot read the file: {e}"),
+                format!("check the path passed to {what}"),
+            )
+        })?;
+        Records::new(
+            &file,
+            std::io::BufReader::with_capacity(1 << 16, handle),
+            what,
+        )
+    }
+}
+
+impl<R: std::io::BufRead> Records<R> {
+    /// Reads the header row (after any comment and blank lines); the header
+    /// must name each column once. `what` names the option that gave the
+    /// file (`--data`, `--input`), for the hint of a read failure.
+    pub fn new(file: &str, input: R, what: &str) -> Result<Self, DataError> {
+        let mut reader = csv_builder()
+            .has_headers(true)
+            .from_reader(Filter::new(input));
+        let headers: Vec<String> = match reader.byte_headers() {
+            Ok(h) => h
+                .iter()
+                .map(|c| String::from_utf8_lossy(c).into_owned())
+                .collect(),
+            Err(e) => {
+                if let Some(d) = io_error(file, what, &reader, &e) {
+                    return Err(d);
+                }
+                let line = reader.get_ref().physical_line(1);
+                return Err(DataError::new(
+                    format!("{file}:{line}"),
+                    format!("cannot read the header row: {e}"),
+                    "the first row names the columns",
+                ));
+            }
+        };
+        let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
+            reader.get_ref().physical + 1
+        } else {
+            reader.get_ref().physical_line(1)
+        };
+        if reader.get_ref().kept == 0 {
+            return Err(DataError::new(
+                format!("{file}:{header_line}"),
+                "the file has no header row (it is empty, or only comments and blank lines)",
+                "the first row names the columns",
+            ));
+        }
+        for (i, h) in headers.iter().enumerate() {
+            if let Some(j) = headers[..i].iter().position(|g| g == h) {
+                return Err(DataError::new(
+                    format!("{file}:{header_line}:{}", i + 1),
+                    format!(
+                        "column `{h}` appears twice (columns {} and {})",
+                        j + 1,
+                        i + 1
+                    ),
+                    "rename one of them; leeway will not guess which is meant",
+                ));
+            }
+        }
+        Ok(Records {
+            file: file.to_string(),
+            what: what.to_string(),
+            reader,
+            record: csv::ByteRecord::new(),
+            headers,
+            header_line,
+            line: header_line,
+        })
+    }
+    /// The column names.
+    pub fn headers(&self) -> &[String] {
+        &self.headers
+    }
+    /// The header's physical line.
+    pub fn header_line(&self) -> u64 {
+        self.header_line
+    }
+    /// The file as named in messages.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+    /// The column of a header name.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.headers.iter().position(|h| h == name)
+    }
+    /// Advances to the next record: `false` at the end; a malformed row (a
+    /// cell count other than the header's, an unclosed quote) or a read
+    /// failure is a located error.
+    pub fn next_record(&mut self) -> Result<bool, DataError> {
+        let file = self.file.as_str();
+        match self.reader.read_byte_record(&mut self.record) {
+            Ok(true) => {}
+            Ok(false) => return Ok(false),
+            Err(e) => {
+                if let Some(d) = io_error(file, &self.what, &self.reader, &e) {
+                    return Err(d);
+                }
+                let at = e.position().map_or(self.reader.get_ref().physical, |p| {
+                    self.reader.get_ref().physical_line(p.line())
+                });
+                let what = match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
+                    _ => format!("malformed row: {e}"),
+                };
+                return Err(DataError::new(
+                    format!("{file}:{at}"),
+                    what,
+                    "every row needs as many cells as the header",
+                ));
+            }
+        }
+        let pos = self.record.position().map_or(1, csv::Position::line);
+        self.line = self.reader.get_ref().physical_line(pos);
+        Ok(true)
+    }
+    /// The current record's physical line.
+    pub fn line(&self) -> u64 {
+        self.line
+    }
+    /// The current record's physical byte offset.
+    fn byte(&self) -> u64 {
+        let pos = self.record.position().map_or(0, csv::Position::byte);
+        self.reader.get_ref().physical_byte(pos)
+    }
+    /// The raw bytes of cell `i` of the current record (empty if absent).
+    pub fn raw(&self, i: usize) -> &[u8] {
+        self.record.get(i).unwrap_or(b"")
+    }
+    /// Cell `i` of the current record as a finite number, or the located
+    /// reason it is not (`name` is the column's name in the message).
+    pub fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
+        cell(&self.file, self.line, &self.record, i, name)
+    }
+    /// Comment lines and blank lines dropped so far.
+    pub fn dropped(&self) -> (usize, usize) {
+        let f = self.reader.get_ref();
+        (f.comments, f.blanks)
+    }
+}
+
+/// A read failure met by the csv reader, with the filter's own message (csv
+/// would only say "I/O error").
+fn io_error<R: std::io::BufRead>(
+    file: &str,
+    what: &str,
+    r: &csv::Reader<Filter<R>>,
+    e: &csv::Error,
+) -> Option<DataError> {
+    if let csv::ErrorKind::Io(io) = e.kind() {
+        let why = r
+            .get_ref()
+            .error
+            .as_ref()
+            .map_or(io.to_string(), ToString::to_string);
+        return Some(DataError::new(
+            file,
+            format!("cannot read the file: {why}"),
+            format!("check the path passed to {what}"),
+        ));
+    }
+    None
+}
+
 /// Where each model signal is read from in a file's records.
 #[derive(Clone, Debug)]
 struct Layout {
@@ -594,6 +786,26 @@ const EXTREMES: usize = 17;
 /// a gross outlier, in multiples of that range (see `Extremes`).
 pub const OUTLIER_FACTOR: f64 = 1e4;
 
+/// The gross-outlier bound for a column that is otherwise exactly 0, for
+/// states, the heading, rotation entries and measured disturbances (base
+/// units m/s, rad, rad/s: no physical value comes near).
+pub const ZERO_OUTLIER: f64 = 1e6;
+
+/// The same for inputs (forces, angles and rates in the user's units).
+pub const ZERO_OUTLIER_INPUT: f64 = 1e12;
+
+/// A gross outlier found by [`Extremes::outliers`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Outlier {
+    value: f64,
+    line: u64,
+    /// The bulk's range (equal ends for a constant column).
+    lo: f64,
+    hi: f64,
+    /// The bound it broke, for a constant column of 0: `Some(bound)`.
+    zero_bound: Option<f64>,
+}
+
 /// The [`EXTREMES`] largest and smallest values of one column, with their
 /// physical lines: enough to find isolated gross outliers in one pass and
 /// flat memory.
@@ -603,10 +815,17 @@ pub const OUTLIER_FACTOR: f64 = 1e4;
 /// a value farther than [`OUTLIER_FACTOR`] × `(hi − lo)` outside it is a gross
 /// outlier. A real zigzag (the rudder switching between ±35°, held for many
 /// samples each time) has its extremes inside the bulk, and any physical
-/// excursion held for more than `K` samples is part of the bulk; a column
-/// constant apart from at most `K` samples (`hi = lo`) has no spread to
-/// compare with and is never flagged. The rule is scale-free: units do not
-/// change it.
+/// excursion held for more than `K` samples is part of the bulk. The rule is
+/// scale-free: units do not change it.
+///
+/// A column constant apart from at most `K` samples (`hi = lo = c`: a
+/// sensor stuck at one value) has no spread to compare with; there a value
+/// farther than [`OUTLIER_FACTOR`] × `|c|` from `c` is a gross outlier (still
+/// scale-free), and when `c = 0`, one beyond an absolute bound in base units:
+/// [`ZERO_OUTLIER`] for states, heading, rotation and measured disturbances
+/// (speeds in m/s, angles in rad, rates in rad/s), [`ZERO_OUTLIER_INPUT`]
+/// for inputs, whose units are the user's. A short pulse on a column that is
+/// otherwise zero (a thruster kick) stays accepted.
 #[derive(Clone, Debug, Default)]
 struct Extremes {
     /// Largest first.
@@ -628,25 +847,40 @@ impl Extremes {
             self.low.truncate(EXTREMES);
         }
     }
-    /// The gross outliers among `n` samples: `(value, line, bulk lo, bulk hi)`.
-    fn outliers(&self, n: usize) -> Vec<(f64, u64, f64, f64)> {
+    /// The gross outliers among `n` samples, by line (`zero_bound`: the
+    /// absolute bound of a column that is otherwise 0).
+    fn outliers(&self, n: usize, zero_bound: f64) -> Vec<Outlier> {
         let k = ((n.saturating_sub(1)) / 4).min(EXTREMES - 1);
         if k == 0 || self.high.len() <= k || self.low.len() <= k {
             return Vec::new();
         }
         let (lo, hi) = (self.low[k].0, self.high[k].0);
         let w = hi - lo;
-        if w <= 0.0 || !w.is_finite() {
+        if !w.is_finite() || w < 0.0 {
             return Vec::new();
         }
-        let far = OUTLIER_FACTOR * w;
-        let mut out: Vec<(f64, u64, f64, f64)> = self.high[..k]
+        // A spread to compare with, else the constant's own magnitude, else
+        // (a column of zeros) the absolute bound.
+        let (far, bound) = if w > 0.0 {
+            (OUTLIER_FACTOR * w, None)
+        } else if lo != 0.0 {
+            (OUTLIER_FACTOR * lo.abs(), None)
+        } else {
+            (zero_bound, Some(zero_bound))
+        };
+        let mut out: Vec<Outlier> = self.high[..k]
             .iter()
             .filter(|(x, _)| *x - hi > far)
             .chain(self.low[..k].iter().filter(|(x, _)| lo - *x > far))
-            .map(|(x, l)| (*x, *l, lo, hi))
+            .map(|(x, l)| Outlier {
+                value: *x,
+                line: *l,
+                lo,
+                hi,
+                zero_bound: bound,
+            })
             .collect();
-        out.sort_by_key(|o| o.1);
+        out.sort_by_key(|o| o.line);
         out
     }
 }
@@ -706,82 +940,28 @@ pub struct Block {
 #[derive(Clone, Debug)]
 struct Scanned {
     header_line: u64,
-    layout: Layout,
     blocks: Vec<Block>,
     notes: FileNotes,
 }
 
+/// What the validating pass hands on for each sample: its block, its
+/// physical line, its values and its time stamp.
+type Sink<'a> = dyn FnMut(usize, u64, &Row, Option<f64>) -> Result<(), DataError> + 'a;
+
 /// The validating pass over one file: every check (cells, header, columns,
 /// units, experiments contiguous, time stamps, gross outliers), in one read
-/// with reused buffers; `sink(block, row, time)` sees every sample.
+/// with reused buffers; `sink(block, line, row, time)` sees every sample.
 fn scan<R: std::io::BufRead>(
     file: &str,
     input: R,
     ir: &Ir,
     options: &LoadOptions,
-    sink: &mut dyn FnMut(usize, &Row, Option<f64>),
+    sink: &mut Sink,
 ) -> Result<Scanned, DataError> {
-    let mut reader = csv_builder()
-        .has_headers(true)
-        .from_reader(Filter::new(input));
-    let io_error = |r: &csv::Reader<Filter<R>>, e: &csv::Error| -> Option<DataError> {
-        if let csv::ErrorKind::Io(io) = e.kind() {
-            let why = r
-                .get_ref()
-                .error
-                .as_ref()
-                .map_or(io.to_string(), ToString::to_string);
-            return Some(DataError::new(
-                file,
-                format!("cannot read the file: {why}"),
-                "check the path passed to --data",
-            ));
-        }
-        None
-    };
-    let headers: Vec<String> = match reader.byte_headers() {
-        Ok(h) => h
-            .iter()
-            .map(|c| String::from_utf8_lossy(c).into_owned())
-            .collect(),
-        Err(e) => {
-            if let Some(d) = io_error(&reader, &e) {
-                return Err(d);
-            }
-            let line = reader.get_ref().physical_line(1);
-            return Err(DataError::new(
-                format!("{file}:{line}"),
-                format!("cannot read the header row: {e}"),
-                "the first row names the columns",
-            ));
-        }
-    };
-    let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
-        reader.get_ref().physical + 1
-    } else {
-        reader.get_ref().physical_line(1)
-    };
-    if reader.get_ref().kept == 0 {
-        return Err(DataError::new(
-            format!("{file}:{header_line}"),
-            "the file has no header row (it is empty, or only comments and blank lines)",
-            "the first row names the columns",
-        ));
-    }
+    let mut records = Records::new(file, input, "--data")?;
+    let header_line = records.header_line();
+    let headers = records.headers().to_vec();
     let find = |name: &str| headers.iter().position(|h| h == name);
-    for (i, h) in headers.iter().enumerate() {
-        if let Some(j) = headers[..i].iter().position(|g| g == h) {
-            return Err(DataError::new(
-                format!("{file}:{header_line}:{}", i + 1),
-                format!(
-                    "column `{h}` appears twice (columns {} and {})",
-                    j + 1,
-                    i + 1
-                ),
-                "rename one of them; leeway will not guess which is meant",
-            ));
-        }
-    }
     let mut cols: Vec<(Role, usize, String, f64)> = Vec::new();
     for (signal, role) in required_signals(ir) {
         let col = column_name(ir, &signal);
@@ -798,7 +978,7 @@ fn scan<R: std::io::BufRead>(
                     format!("missing column `{col}`{mapped}"),
                     format!(
                         "the header has: {}. Name the column `{col}`, or map it in the model: data {{ {signal} = \"<column>\" }}",
-                        headers.join(", ")
+                        leeway_structure::grammar::join_capped(&headers, ", ")
                     ),
                 ));
             }
@@ -817,40 +997,12 @@ fn scan<R: std::io::BufRead>(
     let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
     let mut current: Option<Vec<u8>> = None;
     let mut buf = RowBuf::new(ir);
-    let mut record = csv::ByteRecord::new();
     let n_cols = layout.cols.len();
-    loop {
-        match reader.read_byte_record(&mut record) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => {
-                if let Some(d) = io_error(&reader, &e) {
-                    return Err(d);
-                }
-                let at = e.position().map_or(reader.get_ref().physical, |p| {
-                    reader.get_ref().physical_line(p.line())
-                });
-                let what = match e.kind() {
-                    csv::ErrorKind::UnequalLengths {
-                        expected_len, len, ..
-                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
-                    _ => format!("malformed row: {e}"),
-                };
-                return Err(DataError::new(
-                    format!("{file}:{at}"),
-                    what,
-                    "every row needs as many cells as the header",
-                ));
-            }
-        }
-        let pos = record
-            .position()
-            .cloned()
-            .unwrap_or_else(csv::Position::new);
-        let line = reader.get_ref().physical_line(pos.line());
-        let t = parse_row(file, line, &record, &layout, &mut buf, true)?;
+    while records.next_record()? {
+        let line = records.line();
+        let t = parse_row(file, line, &records.record, &layout, &mut buf, true)?;
         let exp_name: &[u8] = match layout.exp_col {
-            Some(i) => record.get(i).unwrap_or(b""),
+            Some(i) => records.raw(i),
             None => base_name.as_bytes(),
         };
         if current.as_deref() != Some(exp_name) {
@@ -871,7 +1023,7 @@ fn scan<R: std::io::BufRead>(
             current = Some(exp_name.to_vec());
             blocks.push(Block {
                 name,
-                start: reader.get_ref().physical_byte(pos.byte()),
+                start: records.byte(),
                 first_line: line,
                 rows: 0,
                 h: 0.0,
@@ -895,13 +1047,13 @@ fn scan<R: std::io::BufRead>(
             };
             block.extremes[j].push(v, line);
         }
-        sink(b, &buf.row(), t);
+        sink(b, line, &buf.row(), t)?;
     }
-    let filter = reader.get_ref();
+    let (comment_lines, blank_lines) = records.dropped();
     let mut notes = FileNotes {
         file: file.to_string(),
-        comment_lines: filter.comments,
-        blank_lines: filter.blanks,
+        comment_lines,
+        blank_lines,
         experiments: Vec::new(),
     };
     if blocks.is_empty() {
@@ -923,26 +1075,45 @@ fn scan<R: std::io::BufRead>(
                 "an estimate needs many more samples than parameters; record a longer experiment",
             ));
         }
-        for (j, (_, i, name, _)) in layout.cols.iter().enumerate() {
-            let found = block.extremes[j].outliers(n);
-            if let Some((v, line, lo, hi)) = found.first() {
+        for (j, (role, i, name, _)) in layout.cols.iter().enumerate() {
+            let zero_bound = match role {
+                Role::Input(_) => ZERO_OUTLIER_INPUT,
+                _ => ZERO_OUTLIER,
+            };
+            let found = block.extremes[j].outliers(n, zero_bound);
+            if let Some(o) = found.first() {
                 let more = match found.len() - 1 {
                     0 => String::new(),
                     m => format!(" ({m} more in this column)"),
                 };
-                return Err(DataError::new(
-                    format!("{file}:{line}:{} ({name})", i + 1),
+                let (v, lo, hi) = (o.value, o.lo, o.hi);
+                let why = if hi > lo {
                     format!(
-                        "`{name}` = {v:e} is a gross outlier: the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away{more}",
+                        "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
                         block.name,
-                        if *v > *hi {
+                        if v > hi {
                             (v - hi) / (hi - lo)
                         } else {
                             (lo - v) / (hi - lo)
                         }
-                    ),
+                    )
+                } else if let Some(bound) = o.zero_bound {
                     format!(
-                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column is taken for a logging error"
+                        "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
+                        block.name
+                    )
+                } else {
+                    format!(
+                        "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+                        block.name,
+                        (v - lo).abs() / lo.abs()
+                    )
+                };
+                return Err(DataError::new(
+                    format!("{file}:{}:{} ({name})", o.line, i + 1),
+                    format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+                    format!(
+                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
                     ),
                 ));
             }
@@ -959,7 +1130,6 @@ fn scan<R: std::io::BufRead>(
     }
     Ok(Scanned {
         header_line,
-        layout,
         blocks,
         notes,
     })
@@ -987,7 +1157,7 @@ fn read_noted<R: std::io::BufRead>(
     options: &LoadOptions,
 ) -> Result<LoadedFile, DataError> {
     let mut held: Vec<(Experiment, Vec<f64>)> = Vec::new();
-    let scanned = scan(file, input, ir, options, &mut |b, row, t| {
+    let scanned = scan(file, input, ir, options, &mut |b, _, row, t| {
         if held.len() <= b {
             held.push((Experiment::new(ir, "", 0.0), Vec::new()));
         }
@@ -996,6 +1166,7 @@ fn read_noted<R: std::io::BufRead>(
         if let Some(t) = t {
             times.push(t);
         }
+        Ok(())
     })?;
     let mut notes = scanned.notes;
     let mut out = Vec::new();
@@ -1052,22 +1223,70 @@ fn read_noted<R: std::io::BufRead>(
     })
 }
 
-/// An experiment of a CSV file visited by re-reading the file: each
-/// [`Source::visit`] seeks to the experiment's first row and parses its rows
-/// again with the same code as the validating pass (so values are
-/// bit-identical to loading into memory), in flat memory whatever N.
+/// The validated samples of a file, as the validating pass parsed them:
+/// per row its physical line (`u64`) and the layout's values (`f64`, base
+/// units), little-endian, in a temporary file removed when the last
+/// [`CsvSource`] of the file is dropped. Later passes read these bytes
+/// instead of parsing the text again: the values are the validated ones, bit
+/// for bit, and a file rewritten after validation changes nothing.
+#[derive(Debug)]
+struct Spill {
+    file: tempfile::NamedTempFile,
+    /// Values per row (the layout's columns).
+    width: usize,
+}
+
+impl Spill {
+    /// Bytes per row: the line and the values.
+    fn record(&self) -> u64 {
+        8 * (1 + self.width as u64)
+    }
+}
+
+/// Writes validated rows to a [`Spill`].
+struct SpillWriter {
+    out: std::io::BufWriter<std::fs::File>,
+    bytes: Vec<u8>,
+}
+
+impl SpillWriter {
+    fn push(&mut self, line: u64, roles: &[Role], row: &Row) -> std::io::Result<()> {
+        use std::io::Write;
+        self.bytes.clear();
+        self.bytes.extend_from_slice(&line.to_le_bytes());
+        for role in roles {
+            let v = match role {
+                Role::State(s) => row.states[*s],
+                Role::Input(s) => row.inputs[*s],
+                Role::Heading => row.heading,
+                Role::Rotation(s) => row.rotation[*s],
+                Role::Disturbance(s) => row.disturbances[*s],
+            };
+            self.bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        self.out.write_all(&self.bytes)
+    }
+}
+
+/// An experiment of a CSV file visited in passes: the validating pass wrote
+/// its samples to a spill file ([`open_csv`]), and each [`Source::visit`]
+/// reads them back from there (binary, buffered; no text is parsed again),
+/// in flat memory whatever N.
 #[derive(Debug)]
 pub struct CsvSource {
-    path: std::path::PathBuf,
     file: String,
-    layout: Layout,
+    /// What each value of a spilled row is.
+    roles: Vec<Role>,
     block: Block,
+    spill: std::sync::Arc<Spill>,
+    /// The block's first row in the spill.
+    first_record: u64,
     n_states: usize,
     n_inputs: usize,
     n_rotation: usize,
     n_comp: usize,
-    /// A problem met while re-reading (the file changed or vanished between
-    /// passes); visiting then stops short.
+    /// A problem met while reading the spill file back (it vanished or the
+    /// disk failed); visiting then stops short.
     failure: std::sync::Mutex<Option<DataError>>,
 }
 
@@ -1080,7 +1299,7 @@ impl CsvSource {
     pub fn file(&self) -> &str {
         &self.file
     }
-    /// A problem met by a later pass, if any (the file changed between passes).
+    /// A problem met by a later pass, if any (the spill file could not be read).
     pub fn failure(&self) -> Option<DataError> {
         self.failure.lock().ok().and_then(|f| f.clone())
     }
@@ -1091,29 +1310,30 @@ impl CsvSource {
             *f = Some(e);
         }
     }
-    /// Re-reads the rows, `f(index, physical line, row)` on each; stops at
-    /// the first problem (recorded) or when `f` returns false.
-    fn read(&self, f: &mut dyn FnMut(usize, u64, &Row) -> bool) {
-        use std::io::{Seek, SeekFrom};
-        let changed = |why: String| {
+    /// Reads the rows from `from` on, `f(index, physical line, row)` on each;
+    /// stops at the first problem (recorded) or when `f` returns false.
+    fn read(&self, from: usize, f: &mut dyn FnMut(usize, u64, &Row) -> bool) {
+        use std::io::{Read, Seek, SeekFrom};
+        let lost = |why: String| {
             DataError::new(
                 &self.file,
-                format!("the file changed while it was being read: {why}"),
-                "estimate from a file that is not being written to (copy it first)",
+                format!(
+                    "cannot read back the validated samples of experiment `{}`: {why}",
+                    self.block.name
+                ),
+                "the temporary copy of the data (in the system's temporary directory, TMPDIR) was removed or could not be read; check that directory and run again",
             )
         };
-        let mut handle = match std::fs::File::open(&self.path) {
+        let record = self.spill.record();
+        let mut handle = match self.spill.file.reopen() {
             Ok(h) => h,
-            Err(e) => return self.fail(changed(e.to_string())),
+            Err(e) => return self.fail(lost(e.to_string())),
         };
-        if let Err(e) = handle.seek(SeekFrom::Start(self.block.start)) {
-            return self.fail(changed(e.to_string()));
+        if let Err(e) = handle.seek(SeekFrom::Start((self.first_record + from as u64) * record)) {
+            return self.fail(lost(e.to_string()));
         }
-        let input = std::io::BufReader::with_capacity(1 << 16, handle);
-        let mut reader = csv_builder()
-            .has_headers(false)
-            .from_reader(Filter::new(input));
-        let mut record = csv::ByteRecord::new();
+        let mut input = std::io::BufReader::with_capacity(1 << 16, handle);
+        let mut bytes = vec![0u8; 8 * (1 + self.spill.width)];
         let mut buf = RowBuf {
             states: vec![0.0; self.n_states],
             inputs: vec![0.0; self.n_inputs],
@@ -1121,23 +1341,25 @@ impl CsvSource {
             dist: vec![0.0; self.n_comp],
             heading: 0.0,
         };
-        for k in 0..self.block.rows {
-            match reader.read_byte_record(&mut record) {
-                Ok(true) => {}
-                Ok(false) => {
-                    return self.fail(changed(format!(
-                        "experiment `{}` ended after {k} of its {} rows",
-                        self.block.name, self.block.rows
-                    )));
-                }
-                Err(e) => return self.fail(changed(e.to_string())),
+        let word = |b: &[u8], i: usize| -> [u8; 8] {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(&b[8 * i..8 * i + 8]);
+            w
+        };
+        for k in from..self.block.rows {
+            if let Err(e) = input.read_exact(&mut bytes) {
+                return self.fail(lost(format!("row {} of {}: {e}", k + 1, self.block.rows)));
             }
-            let line = self.block.first_line - 1
-                + reader
-                    .get_ref()
-                    .physical_line(record.position().map_or(1, csv::Position::line));
-            if let Err(e) = parse_row(&self.file, line, &record, &self.layout, &mut buf, false) {
-                return self.fail(changed(e.to_string()));
+            let line = u64::from_le_bytes(word(&bytes, 0));
+            for (j, role) in self.roles.iter().enumerate() {
+                let v = f64::from_le_bytes(word(&bytes, j + 1));
+                match role {
+                    Role::State(s) => buf.states[*s] = v,
+                    Role::Input(s) => buf.inputs[*s] = v,
+                    Role::Heading => buf.heading = v,
+                    Role::Rotation(s) => buf.rotation[*s] = v,
+                    Role::Disturbance(s) => buf.dist[*s] = v,
+                }
             }
             if !f(k, line, &buf.row()) {
                 return;
@@ -1157,19 +1379,19 @@ impl Source for CsvSource {
         self.block.h
     }
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
-        self.read(&mut |_, _, row| {
+        self.read(0, &mut |_, _, row| {
             f(row);
             true
         });
     }
     fn locate(&self, k: usize) -> String {
         let mut at = None;
-        self.read(&mut |i, line, _| {
-            if i == k {
+        if k < self.block.rows {
+            self.read(k, &mut |_, line, _| {
                 at = Some(line);
-            }
-            i < k
-        });
+                false
+            });
+        }
         match at {
             Some(line) => format!("{}:{line}", self.file),
             None => format!(
@@ -1192,9 +1414,11 @@ pub struct StreamedFile {
 }
 
 /// Opens a CSV file for streaming: one validating pass (every check of
-/// [`load_csv`]), then each experiment is re-read on every visit. Memory is
-/// flat in the number of rows. `--resample` is not streamed: use
-/// [`load_csv_noted`] for it.
+/// [`load_csv`]) that also writes the parsed samples to a temporary spill
+/// file (8 bytes per value and row, in the system's temporary directory,
+/// removed when the sources are dropped); every later visit reads them from
+/// there. Memory is flat in the number of rows. `--resample` is not
+/// streamed: use [`load_csv_noted`] for it.
 pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
     let file = path.display().to_string();
     let handle = std::fs::File::open(path).map_err(|e| {
@@ -1204,24 +1428,58 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
             "check the path passed to --data",
         )
     })?;
+    let spill_error = |e: std::io::Error| {
+        DataError::new(
+            &file,
+            format!("cannot write the temporary copy of the validated samples: {e}"),
+            format!(
+                "leeway streams a file through a binary copy in the system's temporary directory ({}); free space there or point TMPDIR elsewhere",
+                std::env::temp_dir().display()
+            ),
+        )
+    };
+    let spill_file = tempfile::Builder::new()
+        .prefix("leeway-spill-")
+        .tempfile()
+        .map_err(spill_error)?;
+    let mut writer = SpillWriter {
+        out: std::io::BufWriter::with_capacity(1 << 16, spill_file.reopen().map_err(spill_error)?),
+        bytes: Vec::new(),
+    };
     let input = std::io::BufReader::with_capacity(1 << 16, handle);
-    let scanned = scan(&file, input, ir, options, &mut |_, _, _| {})?;
+    // Every signal the model reads from data, in a fixed order.
+    let roles: Vec<Role> = required_signals(ir).into_iter().map(|(_, r)| r).collect();
+    let scanned = scan(&file, input, ir, options, &mut |_, line, row, _| {
+        writer.push(line, &roles, row).map_err(spill_error)
+    })?;
+    std::io::Write::flush(&mut writer.out).map_err(spill_error)?;
+    drop(writer);
+    let spill = std::sync::Arc::new(Spill {
+        file: spill_file,
+        width: roles.len(),
+    });
+    let mut first_record = 0u64;
     let sources = scanned
         .blocks
         .into_iter()
-        .map(|block| CsvSource {
-            path: path.to_path_buf(),
-            file: file.clone(),
-            layout: scanned.layout.clone(),
-            block: Block {
-                extremes: Vec::new(),
-                ..block
-            },
-            n_states: ir.states.len(),
-            n_inputs: ir.inputs.len(),
-            n_rotation: measured_rotation(ir),
-            n_comp: ir.components.len(),
-            failure: std::sync::Mutex::new(None),
+        .map(|block| {
+            let first = first_record;
+            first_record += block.rows as u64;
+            CsvSource {
+                file: file.clone(),
+                roles: roles.clone(),
+                block: Block {
+                    extremes: Vec::new(),
+                    ..block
+                },
+                spill: spill.clone(),
+                first_record: first,
+                n_states: ir.states.len(),
+                n_inputs: ir.inputs.len(),
+                n_rotation: measured_rotation(ir),
+                n_comp: ir.components.len(),
+                failure: std::sync::Mutex::new(None),
+            }
         })
         .collect();
     Ok(StreamedFile {
@@ -1592,6 +1850,64 @@ mod tests {
     }
 
     #[test]
+    fn a_stuck_sensor_with_a_spike_is_an_outlier() {
+        // Issue 10 (the gap of the spread rule): a column constant apart from
+        // a few samples has no spread; a spike far from the constant, or far
+        // from 0 for a column of zeros, is still named by its row.
+        let log = |u: &dyn Fn(usize) -> f64, delta: &dyn Fn(usize) -> f64| {
+            let mut text = String::from("# a log\ntime,u,r,delta\n");
+            for k in 0..200 {
+                text.push_str(&format!(
+                    "{k}.0,{:e},{},{:e}\n",
+                    u(k),
+                    0.01 * (k % 5) as f64,
+                    delta(k)
+                ));
+            }
+            text
+        };
+        let ir = model("step 1.0");
+        let check =
+            |text: String| parse_csv("s.csv", text.as_bytes(), &ir, &LoadOptions::default());
+        let varying = |k: usize| 35.0 * ((k / 7) % 2) as f64;
+        for (c, spike) in [
+            (5.0, 1e300),
+            (5.0, -1e6),
+            (5e-8, 5e-3),
+            (0.0, 1e300),
+            (0.0, -2e6),
+        ] {
+            let err = check(log(&|k| if k == 57 { spike } else { c }, &varying))
+                .err()
+                .unwrap_or_else(|| panic!("{c} with {spike} at row 57"));
+            assert_eq!(err.location, "s.csv:60:2 (u)", "{err}");
+            assert!(err.message.contains("is a gross outlier"), "{err}");
+            assert!(err.message.contains("the column is constant"), "{err}");
+        }
+        // Within the bound: a stuck sensor with small deviations, a pulse.
+        for (c, spike) in [(5.0, 20.0), (5.0, -4e4), (0.0, 35.0), (0.0, 9e5)] {
+            assert!(
+                check(log(
+                    &|k| if (57..60).contains(&k) { spike } else { c },
+                    &varying
+                ))
+                .is_ok(),
+                "{c} with {spike}"
+            );
+        }
+        // Inputs are in the user's units: a thruster kick of 16 samples on a
+        // zero column is data; only beyond 1e12 is a zero column's sample a glitch.
+        let kick = |k: usize| if (100..116).contains(&k) { 2e6 } else { 0.0 };
+        assert!(check(log(&|k| 5.0 + 0.01 * (k % 3) as f64, &kick)).is_ok());
+        let glitch = |k: usize| if k == 120 { 1e13 } else { 0.0 };
+        let err = check(log(&|k| 5.0 + 0.01 * (k % 3) as f64, &glitch))
+            .err()
+            .unwrap_or_else(|| panic!("1e13 on a zero input"));
+        assert_eq!(err.location, "s.csv:123:4 (delta)", "{err}");
+        assert!(err.message.contains("exceeds 1e12 in magnitude"), "{err}");
+    }
+
+    #[test]
     fn streaming_visits_give_the_values_of_loading_bit_for_bit() {
         let ir = model("step 1.0");
         let mut text = String::from("# head\ntime,u,r,delta,experiment\n");
@@ -1619,7 +1935,7 @@ mod tests {
             let mut a: Vec<u64> = Vec::new();
             let mut b: Vec<u64> = Vec::new();
             h.visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
-            // Twice: every visit re-reads.
+            // Twice: every visit reads the spill again.
             for _ in 0..2 {
                 b.clear();
                 s.visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
@@ -1652,25 +1968,44 @@ mod tests {
     }
 
     #[test]
-    fn a_file_that_changes_between_passes_is_reported_not_misread() {
+    fn later_passes_read_the_validated_samples_and_the_spill_is_removed() {
+        // Passes read the binary copy the validating pass wrote: a file
+        // rewritten after validation changes nothing (it used to stop the
+        // visit with "the file changed while it was being read").
         let ir = model("step 1.0");
         let path = std::env::temp_dir().join(format!("leeway-changed-{}.csv", std::process::id()));
         let text = format!("time,u,r,delta\n{}", rows(0, 20));
         std::fs::write(&path, &text).unwrap_or_else(|e| panic!("{e}"));
+        let held = load_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         let streamed =
             open_csv(&path, &ir, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"));
         std::fs::write(&path, format!("time,u,r,delta\n{}", rows(0, 5)))
             .unwrap_or_else(|e| panic!("{e}"));
-        let mut n = 0;
-        streamed.sources[0].visit(&mut |_| n += 1);
-        assert_eq!(n, 5);
-        let failure = streamed.sources[0]
-            .failure()
-            .unwrap_or_else(|| panic!("a failure"));
-        assert!(
-            failure.message.contains("changed while it was being read"),
-            "{failure}"
+        let mut a: Vec<u64> = Vec::new();
+        let mut b: Vec<u64> = Vec::new();
+        held[0].visit(&mut |r| a.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+        streamed.sources[0]
+            .visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
+        assert_eq!(a.len(), 20 * 3);
+        assert_eq!(a, b);
+        assert!(streamed.sources[0].failure().is_none());
+        assert_eq!(
+            streamed.sources[0].locate(19),
+            format!("{}:21", path.display())
         );
+        assert_eq!(
+            streamed.sources[0].locate(20),
+            format!(
+                "{}: experiment `{}`, sample 21",
+                path.display(),
+                streamed.sources[0].name()
+            )
+        );
+        // The spill file is removed with the sources.
+        let spill = streamed.sources[0].spill.file.path().to_path_buf();
+        assert!(spill.exists());
+        drop(streamed);
+        assert!(!spill.exists(), "{}", spill.display());
         let _ = std::fs::remove_file(&path);
     }
 }

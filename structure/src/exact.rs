@@ -210,7 +210,7 @@ pub fn parse_q(s: &str) -> Option<Q> {
 }
 
 /// A field with fallible operations (overflow returns `None`).
-trait Field: Clone + PartialEq {
+pub(crate) trait Field: Clone + PartialEq {
     fn is_zero(&self) -> bool;
     fn sub(&self, o: &Self) -> Option<Self>;
     fn mul(&self, o: &Self) -> Option<Self>;
@@ -221,7 +221,7 @@ trait Field: Clone + PartialEq {
 
 /// An `i128` fraction in lowest terms with a positive denominator.
 #[derive(Clone, Debug, PartialEq)]
-struct Small {
+pub(crate) struct Small {
     n: i128,
     d: i128,
 }
@@ -389,6 +389,157 @@ fn echelon_in<F: Field>(rows: &[Vec<Q>], n_cols: usize) -> Option<Echelon> {
                 && !m[*r][j].is_zero()
             {
                 comb.push((k, m[*r][j].to_q()));
+            }
+        }
+    }
+    Some(Echelon { pivot, combination })
+}
+
+/// Adds one row to a reduced basis; `None` on overflow (the basis is then
+/// left part-updated, and rebuilt by the caller in big rationals).
+pub(crate) fn insert_row<F: Field>(
+    basis: &mut Vec<(usize, Vec<F>)>,
+    mut row: Vec<F>,
+) -> Option<()> {
+    for (pc, b) in basis.iter() {
+        if !row[*pc].is_zero() {
+            let f = row[*pc].clone();
+            for (x, r) in row.iter_mut().zip(b) {
+                if !r.is_zero() {
+                    *x = x.sub(&f.mul(r)?)?;
+                }
+            }
+        }
+    }
+    let Some(pc) = row.iter().position(|q| !q.is_zero()) else {
+        return Some(());
+    };
+    let inv = row[pc].clone();
+    for x in row.iter_mut() {
+        if !x.is_zero() {
+            *x = x.div(&inv)?;
+        }
+    }
+    for (_, b) in basis.iter_mut() {
+        if !b[pc].is_zero() {
+            let f = b[pc].clone();
+            for (x, r) in b.iter_mut().zip(&row) {
+                if !r.is_zero() {
+                    *x = x.sub(&f.mul(r)?)?;
+                }
+            }
+        }
+    }
+    basis.push((pc, row));
+    Some(())
+}
+
+/// A row of ±1 in a field.
+pub(crate) fn field_row<F: Field>(signs: &[i8]) -> Option<Vec<F>> {
+    let (one, minus) = (F::from_q(&Q::one())?, F::from_q(&-Q::one())?);
+    Some(
+        signs
+            .iter()
+            .map(|s| if *s < 0 { minus.clone() } else { one.clone() })
+            .collect(),
+    )
+}
+
+/// An `i128` fraction as a big rational.
+pub(crate) fn small_to_q(x: &Small) -> Q {
+    x.to_q()
+}
+
+/// A sparse row: `(column, value)` with columns increasing and no zero value.
+pub type SparseRow = Vec<(usize, Q)>;
+
+/// Exact RREF of a sparse matrix: the same [`Echelon`] as [`echelon`] on the
+/// dense matrix (the reduced row echelon form is unique), at a cost that
+/// follows the nonzeros rather than rows × columns. Rows are inserted one by
+/// one into a reduced basis: a row is reduced by the basis rows of the
+/// pivot columns it holds (in reduced form those touch no other pivot
+/// column), its first remaining column becomes a pivot, and that column is
+/// cleared from the other basis rows.
+pub fn echelon_sparse(rows: &[SparseRow], n_cols: usize) -> Echelon {
+    if let Some(e) = sparse_in::<Small>(rows, n_cols) {
+        return e;
+    }
+    // Overflow in the fast path: redo exactly with big rationals (cannot fail).
+    sparse_in::<Q>(rows, n_cols).unwrap_or(Echelon {
+        pivot: vec![false; n_cols],
+        combination: vec![Vec::new(); n_cols],
+    })
+}
+
+/// `a − f·b` for sparse rows (columns increasing), without zeros.
+fn axpy<F: Field>(a: &[(usize, F)], f: &F, b: &[(usize, F)]) -> Option<Vec<(usize, F)>> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let ca = a.get(i).map_or(usize::MAX, |e| e.0);
+        let cb = b.get(j).map_or(usize::MAX, |e| e.0);
+        if ca < cb {
+            out.push(a[i].clone());
+            i += 1;
+        } else {
+            let fb = f.mul(&b[j].1)?;
+            let v = if ca == cb {
+                i += 1;
+                a[i - 1].1.sub(&fb)?
+            } else {
+                F::from_q(&Q::zero())?.sub(&fb)?
+            };
+            if !v.is_zero() {
+                out.push((cb, v));
+            }
+            j += 1;
+        }
+    }
+    Some(out)
+}
+
+fn sparse_in<F: Field>(rows: &[SparseRow], n_cols: usize) -> Option<Echelon> {
+    let mut basis: Vec<Vec<(usize, F)>> = Vec::new();
+    // The basis row of each pivot column.
+    let mut pivot_of: Vec<Option<usize>> = vec![None; n_cols];
+    for r in rows {
+        let mut row: Vec<(usize, F)> = Vec::with_capacity(r.len());
+        for (c, q) in r {
+            if *c < n_cols && !Zero::is_zero(q) {
+                row.push((*c, F::from_q(q)?));
+            }
+        }
+        // Reduce by the basis rows of the pivot columns the row holds: their
+        // values stay those of the row, as basis rows vanish on other pivots.
+        let at_pivots: Vec<(usize, F)> = row
+            .iter()
+            .filter_map(|(c, x)| pivot_of[*c].map(|b| (b, x.clone())))
+            .collect();
+        for (b, f) in &at_pivots {
+            row = axpy(&row, f, &basis[*b])?;
+        }
+        let Some((p, lead)) = row.first().cloned() else {
+            continue;
+        };
+        for e in row.iter_mut() {
+            e.1 = e.1.div(&lead)?;
+        }
+        for b in basis.iter_mut() {
+            if let Ok(k) = b.binary_search_by_key(&p, |e| e.0) {
+                let f = b[k].1.clone();
+                *b = axpy(b, &f, &row)?;
+            }
+        }
+        pivot_of[p] = Some(basis.len());
+        basis.push(row);
+    }
+    let pivot: Vec<bool> = pivot_of.iter().map(Option::is_some).collect();
+    let mut combination: Vec<Vec<(usize, Q)>> = vec![Vec::new(); n_cols];
+    for (k, b) in pivot_of.iter().enumerate() {
+        let Some(b) = b else { continue };
+        for (j, v) in &basis[*b] {
+            if !pivot[*j] {
+                combination[*j].push((k, v.to_q()));
             }
         }
     }

@@ -37,12 +37,10 @@ pub fn normal_form(r: &Resolved) -> NormalForm {
 /// measured medium in IV3.
 pub fn sign_args(r: &Resolved, terms: &[TermDecl]) -> Vec<SignArg> {
     let mut out: Vec<SignArg> = Vec::new();
+    let mut seen: std::collections::BTreeSet<Arg> = std::collections::BTreeSet::new();
     for t in terms {
         for f in &t.factors {
-            if f.modulus
-                && matches!(f.arg.signal, Signal::State(_))
-                && !out.iter().any(|s| s.arg == f.arg)
-            {
+            if f.modulus && matches!(f.arg.signal, Signal::State(_)) && seen.insert(f.arg) {
                 let medium = arg_medium(r, &f.arg);
                 let measured = medium.is_some_and(|d| r.disturbances[d].measured);
                 out.push(SignArg {
@@ -88,8 +86,47 @@ fn rotation_entry(r: &Resolved, l: usize, pos: usize) -> Poly {
     }
 }
 
+/// What the expansion looks up per factor, indexed once per model (a model
+/// may have 10⁴ states, sign arguments and body-frame components).
+pub struct Lookup {
+    nf: NormalForm,
+    /// The sign argument of each argument under a modulus.
+    sign_of: BTreeMap<Arg, usize>,
+    /// The components of a body-frame disturbance acting on a state:
+    /// (disturbance, state) → components.
+    body: BTreeMap<(usize, usize), Vec<usize>>,
+}
+
+impl Lookup {
+    /// Indexes a model's sign arguments and body-frame components.
+    pub fn new(r: &Resolved, signs: &[SignArg]) -> Lookup {
+        let mut body: BTreeMap<(usize, usize), Vec<usize>> = BTreeMap::new();
+        for (d, dist) in r.disturbances.iter().enumerate() {
+            if dist.earth {
+                continue;
+            }
+            for &c in &dist.components {
+                if let Some(l) = r.components[c].state {
+                    body.entry((d, l)).or_default().push(c);
+                }
+            }
+        }
+        Lookup {
+            nf: normal_form(r),
+            sign_of: signs
+                .iter()
+                .enumerate()
+                .rev()
+                .map(|(i, s)| (s.arg, i))
+                .collect(),
+            body,
+        }
+    }
+}
+
 /// The argument `a` as a polynomial (disturbance components as variables).
-pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, nf: NormalForm) -> Poly {
+pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, lookup: &Lookup) -> Poly {
+    let nf = lookup.nf;
     let l = match arg.signal {
         Signal::Input(i) => return Poly::var(Var::Input(i)),
         Signal::State(l) => l,
@@ -99,33 +136,36 @@ pub fn arg_poly(r: &Resolved, arg: &Arg, view: View, nf: NormalForm) -> Poly {
     let d = r.relatives[ri].1;
     let dist = &r.disturbances[d];
     let measured_here = dist.measured && view == View::Measured;
+    if !dist.earth {
+        // Body frame: only the components given for this state act on it.
+        for &c in lookup.body.get(&(d, l)).into_iter().flatten() {
+            let v = if measured_here {
+                Var::Measured(c)
+            } else {
+                Var::Dist(c)
+            };
+            p = p.sub(&Poly::var(v));
+        }
+        return p;
+    }
     for (pos, &c) in dist.components.iter().enumerate() {
         let v = if measured_here {
             Var::Measured(c)
         } else {
             Var::Dist(c)
         };
-        let share = if dist.earth {
-            rotation_entry(r, l, pos)
-        } else if r.components[c].state == Some(l) {
-            Poly::constant(Q::one())
-        } else {
-            Poly::zero()
-        };
-        p = p.sub(&share.mul(&Poly::var(v), nf));
+        let share = rotation_entry(r, l, pos);
+        if !share.is_zero() {
+            p = p.sub(&share.mul(&Poly::var(v), nf));
+        }
     }
     p
 }
 
 /// `coefficient · Π factors` with every state modulus replaced by its sign
 /// variable.
-pub fn term_poly(
-    r: &Resolved,
-    t: &TermDecl,
-    signs: &[SignArg],
-    view: View,
-    nf: NormalForm,
-) -> Poly {
+pub fn term_poly(r: &Resolved, t: &TermDecl, view: View, lookup: &Lookup) -> Poly {
+    let nf = lookup.nf;
     let mut p = Poly::constant(t.coefficient.clone());
     for f in &t.factors {
         let base = if f.modulus {
@@ -137,15 +177,15 @@ pub fn term_poly(
                     // structurally: a sign change (even within one experiment)
                     // separates a·|b| from a·b. The analysis decides per experiment
                     // whether that sign is fixed or varies.
-                    let a = arg_poly(r, &f.arg, view, nf);
-                    match signs.iter().position(|s| s.arg == f.arg) {
+                    let a = arg_poly(r, &f.arg, view, lookup);
+                    match lookup.sign_of.get(&f.arg).copied() {
                         Some(i) => Poly::var(Var::Sign(i)).mul(&a, nf),
                         None => a,
                     }
                 }
             }
         } else {
-            arg_poly(r, &f.arg, view, nf)
+            arg_poly(r, &f.arg, view, lookup)
         };
         p = p.mul(&base, nf);
     }
@@ -293,7 +333,7 @@ fn finish(
     let mut kinds: Vec<ColumnKind> = acc.keys().cloned().collect();
     for p in pointwise.keys() {
         let k = ColumnKind::Theta { parameter: *p };
-        if !kinds.contains(&k) {
+        if !acc.contains_key(&k) {
             kinds.push(k);
         }
     }
@@ -342,12 +382,12 @@ pub fn expand(
     terms: &[TermDecl],
     signs: &[SignArg],
 ) -> (Vec<Column>, Vec<Column>, Vec<Column>) {
-    let nf = normal_form(r);
+    let lookup = Lookup::new(r, signs);
     let mut aug: Acc = BTreeMap::new();
     let mut meas: Acc = BTreeMap::new();
     let mut pointwise: BTreeMap<usize, Vec<(usize, usize, Poly)>> = BTreeMap::new();
     for (ti, t) in terms.iter().enumerate() {
-        let pa = term_poly(r, t, signs, View::Augmented, nf);
+        let pa = term_poly(r, t, View::Augmented, &lookup);
         accumulate(&mut aug, t, &pa);
         let measured_medium = t
             .factors
@@ -355,7 +395,7 @@ pub fn expand(
             .find_map(|f| arg_medium(r, &f.arg))
             .is_some_and(|d| r.disturbances[d].measured);
         if measured_medium {
-            let pm = term_poly(r, t, signs, View::Measured, nf);
+            let pm = term_poly(r, t, View::Measured, &lookup);
             pointwise
                 .entry(t.parameter)
                 .or_default()

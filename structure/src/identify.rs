@@ -11,11 +11,14 @@
 //! * with aggregation, the later of two confounded parameters is held at its
 //!   nominal value and the kept one estimates the aggregate.
 
-use crate::exact::{Echelon, Q, echelon, fmt_q, parse_q};
+use crate::exact::{
+    Echelon, Q, Small, SparseRow, echelon_sparse, field_row, fmt_q, insert_row, parse_q, small_to_q,
+};
 use crate::ir::{
     Aggregate, Column, ColumnKind, Combination, DroppedNuisance, Ir, KeptNuisance, NuisanceReport,
     PredictorKind, Report, Separation, SignArg, SignPattern, StructVar,
 };
+use leeway_grammar::{MAX_LISTED, and_list, join_capped};
 use num_traits::{One, Signed, Zero};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
@@ -64,11 +67,7 @@ impl Centring {
     /// Why this centring is valid for the model, one sentence.
     pub fn reason(self, ir: &Ir, kind: PredictorKind) -> String {
         let media = unmeasured_media(ir, kind);
-        let list = match media.as_slice() {
-            [one] => one.clone(),
-            [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
-            [] => String::new(),
-        };
+        let list = and_list(&media);
         let (is, its) = if media.len() == 1 {
             ("is", "its mean")
         } else {
@@ -202,6 +201,15 @@ pub enum Patterns<'a> {
     Symbolic(&'a [usize]),
     /// These experiments.
     Set(&'a [SignPattern]),
+    /// These experiments, each pattern over `args` only (`set[e][k]` is the
+    /// sign of `args[k]`, sorted; every other sign `+`): the search over a
+    /// few arguments of a large model never builds full patterns.
+    Local {
+        /// The sign arguments the patterns give (sorted).
+        args: &'a [usize],
+        /// The patterns.
+        set: &'a [SignPattern],
+    },
     /// Experiments as recorded: each with its sign pattern and, when its
     /// rotation barely varied, the constant values of the rotation variables
     /// (paper Remark 2: with `R` constant the rotation no longer separates
@@ -359,7 +367,10 @@ pub fn reduce_block(
     cols: &[usize],
     centring: Centring,
 ) -> Echelon {
-    let mut rows: BTreeMap<RowKey, Vec<Q>> = BTreeMap::new();
+    // Sparse rows: entries are added column by column, so each row's
+    // columns come in increasing order (a block may have hundreds of columns
+    // and rows, most entries zero).
+    let mut rows: BTreeMap<RowKey, SparseRow> = BTreeMap::new();
     let width = cols.len();
     for (j, &c) in cols.iter().enumerate() {
         for (o, q, vars) in &s.cols[c] {
@@ -386,30 +397,43 @@ pub fn reduce_block(
                         Centring::None => true,
                     };
                     if kept {
-                        let key = (0, *o, vars);
-                        rows.entry(key).or_insert_with(|| vec![Q::zero(); width])[j] += q;
+                        push_entry(rows.entry((0, *o, vars)).or_default(), j, q.clone());
                     }
                 }
                 Patterns::Set(set) => {
                     for (pi, pat) in set.iter().enumerate() {
                         let ctx = RowContext {
                             pattern: pat,
+                            local: None,
                             frozen: None,
                             varying: &[],
                             keep_constants: centring != Centring::Experiment,
                         };
-                        add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
+                        add_row(&mut rows, pi, *o, q, vars, &ctx, j);
+                    }
+                }
+                Patterns::Local { args, set } => {
+                    for (pi, pat) in set.iter().enumerate() {
+                        let ctx = RowContext {
+                            pattern: pat,
+                            local: Some(args),
+                            frozen: None,
+                            varying: &[],
+                            keep_constants: centring != Centring::Experiment,
+                        };
+                        add_row(&mut rows, pi, *o, q, vars, &ctx, j);
                     }
                 }
                 Patterns::Experiments(list) => {
                     for (pi, e) in list.iter().enumerate() {
                         let ctx = RowContext {
                             pattern: &e.pattern,
+                            local: None,
                             frozen: e.frozen_rotation.as_deref(),
                             varying: &e.varying,
                             keep_constants: centring != Centring::Experiment,
                         };
-                        add_row(&mut rows, pi, *o, q, vars, &ctx, j, width);
+                        add_row(&mut rows, pi, *o, q, vars, &ctx, j);
                     }
                 }
             }
@@ -418,11 +442,45 @@ pub fn reduce_block(
     if centring == Centring::Pooled && !matches!(patterns, Patterns::All | Patterns::Symbolic(_)) {
         pool_constants(&mut rows, &s.intercepts);
     }
-    let matrix: Vec<Vec<Q>> = rows
+    let matrix: Vec<SparseRow> = rows
         .into_values()
-        .filter(|r| r.iter().any(|q| !q.is_zero()))
+        .map(|mut r| {
+            r.retain(|(_, q)| !q.is_zero());
+            r
+        })
+        .filter(|r| !r.is_empty())
         .collect();
-    echelon(&matrix, width)
+    echelon_sparse(&matrix, width)
+}
+
+/// Adds `q` at column `j` of a sparse row whose last column is at most `j`.
+fn push_entry(row: &mut SparseRow, j: usize, q: Q) {
+    match row.last_mut() {
+        Some((last, v)) if *last == j => *v += q,
+        _ => row.push((j, q)),
+    }
+}
+
+/// `a − b` for sparse rows (columns increasing).
+fn sparse_diff(a: &SparseRow, b: &SparseRow) -> SparseRow {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut k) = (0, 0);
+    while i < a.len() || k < b.len() {
+        let ca = a.get(i).map_or(usize::MAX, |e| e.0);
+        let cb = b.get(k).map_or(usize::MAX, |e| e.0);
+        if ca < cb {
+            out.push(a[i].clone());
+            i += 1;
+        } else if cb < ca {
+            out.push((cb, -b[k].1.clone()));
+            k += 1;
+        } else {
+            out.push((ca, &a[i].1 - &b[k].1));
+            i += 1;
+            k += 1;
+        }
+    }
+    out
 }
 
 /// Pooled centring removes, per output, the constant common to every
@@ -430,13 +488,13 @@ pub fn reduce_block(
 /// differences from the first experiment's (the same rank as the projection
 /// onto the complement of the common constant). Outputs with a constant θ
 /// column keep their constants: that column's own instrument is uncentred.
-fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usize>) {
-    let constant: Vec<RowKey> = rows
+fn pool_constants(rows: &mut BTreeMap<RowKey, SparseRow>, intercepts: &BTreeSet<usize>) {
+    let constant: BTreeSet<RowKey> = rows
         .keys()
         .filter(|(_, o, vars)| vars.is_empty() && !intercepts.contains(o))
         .cloned()
         .collect();
-    let mut base: BTreeMap<usize, Vec<Q>> = BTreeMap::new();
+    let mut base: BTreeMap<usize, SparseRow> = BTreeMap::new();
     for key in &constant {
         let Some(row) = rows.remove(key) else {
             continue;
@@ -447,8 +505,7 @@ fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usi
                 base.insert(key.1, row);
             }
             Some(b) => {
-                let diff: Vec<Q> = row.iter().zip(b).map(|(a, c)| a - c).collect();
-                rows.insert(key.clone(), diff);
+                rows.insert(key.clone(), sparse_diff(&row, b));
             }
         }
     }
@@ -458,7 +515,7 @@ fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usi
         for &e in &experiments {
             let key = (e, o, Vec::new());
             if !constant.contains(&key) {
-                let neg: Vec<Q> = b.iter().map(|q| -q.clone()).collect();
+                let neg: SparseRow = b.iter().map(|(j, q)| (*j, -q.clone())).collect();
                 rows.insert(key, neg);
             }
         }
@@ -468,6 +525,8 @@ fn pool_constants(rows: &mut BTreeMap<RowKey, Vec<Q>>, intercepts: &BTreeSet<usi
 /// How one experiment evaluates structural monomials.
 struct RowContext<'a> {
     pattern: &'a [i8],
+    /// The sign arguments `pattern` gives, when not all ([`Patterns::Local`]).
+    local: Option<&'a [usize]>,
     frozen: Option<&'a [Q]>,
     varying: &'a [usize],
     /// Constants within the experiment stay rows (no per-experiment centring).
@@ -477,16 +536,14 @@ struct RowContext<'a> {
 /// Adds one structural monomial of column `j` to the rows of experiment `pi`:
 /// fixed signs evaluated, varying ones kept symbolic, frozen rotation
 /// variables multiplied into the coefficient.
-#[allow(clippy::too_many_arguments)]
 fn add_row(
-    rows: &mut BTreeMap<RowKey, Vec<Q>>,
+    rows: &mut BTreeMap<RowKey, SparseRow>,
     pi: usize,
     output: usize,
     q: &Q,
     vars: &[(StructVar, u32)],
     experiment: &RowContext,
     j: usize,
-    width: usize,
 ) {
     let mut coef = q.clone();
     let mut rest = Vec::with_capacity(vars.len());
@@ -494,7 +551,15 @@ fn add_row(
         match v {
             StructVar::Sign(i) if experiment.varying.contains(i) => rest.push((*v, *e)),
             StructVar::Sign(i) => {
-                if e % 2 == 1 && experiment.pattern.get(*i).copied().unwrap_or(1) < 0 {
+                let at = match experiment.local {
+                    Some(args) => args.binary_search(i).ok(),
+                    None => Some(*i),
+                };
+                let sign = at
+                    .and_then(|k| experiment.pattern.get(k))
+                    .copied()
+                    .unwrap_or(1);
+                if e % 2 == 1 && sign < 0 {
                     coef = -coef;
                 }
             }
@@ -515,10 +580,7 @@ fn add_row(
     if rest.is_empty() && !experiment.keep_constants {
         return;
     }
-    let slot = &mut rows
-        .entry((pi, output, rest))
-        .or_insert_with(|| vec![Q::zero(); width])[j];
-    *slot += coef;
+    push_entry(rows.entry((pi, output, rest)).or_default(), j, coef);
 }
 
 /// Context for messages: names of parameters, columns and components.
@@ -587,6 +649,19 @@ pub fn linear_text(items: &[(String, Q)]) -> String {
     out
 }
 
+/// [`linear_text`] for a message: at most [`MAX_LISTED`] terms, then the
+/// count of the others (`a + b + … (491 more terms)`).
+pub fn linear_text_capped(items: &[(String, Q)]) -> String {
+    if items.len() <= MAX_LISTED {
+        return linear_text(items);
+    }
+    format!(
+        "{} + … ({} more terms)",
+        linear_text(&items[..MAX_LISTED]),
+        items.len() - MAX_LISTED
+    )
+}
+
 /// The θ-level verdict of a reduction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Verdict {
@@ -648,6 +723,7 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
         let kept: Vec<usize> = g.iter().copied().filter(|c| red.pivot[*c]).collect();
         let lost: Vec<usize> = g.iter().copied().filter(|c| !red.pivot[*c]).collect();
         let mut idents = Vec::new();
+        let mut idents_short = Vec::new();
         for &k in &kept {
             let Some(pk) = param_of(k) else { continue };
             let mut items = vec![(names.param(pk).to_string(), Q::one())];
@@ -661,6 +737,7 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
                 }
             }
             let text = linear_text(&items);
+            idents_short.push(linear_text_capped(&items));
             aggregates.push(Aggregate {
                 parameter: pk,
                 estimates: text.clone(),
@@ -690,7 +767,7 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
         let mut message = if idents.is_empty() && !constant_terms.is_empty() {
             format!(
                 "{} {} a constant term, annihilated by {} (zero-mean instruments remove every constant)",
-                constant_terms.join(", "),
+                join_capped(&constant_terms, ", "),
                 if constant_terms.len() == 1 {
                     "is"
                 } else {
@@ -711,18 +788,18 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
             if !empty.is_empty() && nuisance.is_empty() {
                 format!(
                     "{} {} not excited: the regressor vanishes or is constant within an experiment (zero-mean instruments annihilate constants)",
-                    empty.join(", "),
+                    join_capped(&empty, ", "),
                     if empty.len() == 1 { "is" } else { "are" }
                 )
             } else {
                 format!("{list} cannot be told apart from nuisance terms")
             }
         } else {
-            format!("{list} enter only as {}", idents.join(", "))
+            format!("{list} enter only as {}", join_capped(&idents_short, ", "))
         };
         if !nuisance.is_empty() {
             let ns: Vec<String> = nuisance.iter().map(|k| cols[*k].name.clone()).collect();
-            message.push_str(&format!(" (together with {})", ns.join(", ")));
+            message.push_str(&format!(" (together with {})", join_capped(&ns, ", ")));
         }
         combinations.push(Combination {
             parameters: params,
@@ -746,12 +823,7 @@ fn is_constant_term(names: &Names, col: usize) -> bool {
 }
 
 fn quoted_list(items: &[String]) -> String {
-    let q: Vec<String> = items.iter().map(|s| format!("`{s}`")).collect();
-    match q.len() {
-        0 => String::new(),
-        1 => q[0].clone(),
-        n => format!("{} and {}", q[..n - 1].join(", "), q[n - 1]),
-    }
+    and_list(items.iter().map(|s| format!("`{s}`")))
 }
 
 /// The nuisance reduction: kept columns and what each estimates; dropped ones and why.
@@ -836,6 +908,8 @@ pub struct Analysis<'a> {
     block_of: Vec<Option<usize>>,
     /// Columns of each parameter (θ first, then its nuisance columns).
     param_cols: BTreeMap<usize, Vec<usize>>,
+    /// The first term of each parameter (for messages).
+    first_term: BTreeMap<usize, usize>,
 }
 
 /// A set of sign patterns found by [`Analysis::smallest`].
@@ -848,8 +922,9 @@ pub struct Found {
     pub untried: Option<String>,
 }
 
-/// One component's set: its patterns, and when the budget cut the search,
-/// the size from which sets were not all tried.
+/// One component's set: its patterns (over the component's arguments only),
+/// and when the budget cut the search, the size from which sets were not all
+/// tried.
 struct ComponentSet {
     patterns: Vec<SignPattern>,
     exhausted_below: Option<usize>,
@@ -870,68 +945,95 @@ fn odd_signs(vars: &[(StructVar, u32)], args: &[usize]) -> Vec<usize> {
 }
 
 /// One family of rows for [`Analysis::completion`]: its sign characters and
-/// the reduced row echelon form of its evaluation matrix so far.
+/// the reduced row echelon form of its evaluation matrix so far, in `i128`
+/// fractions while they fit (the matrix holds ±1), else exactly in big
+/// rationals, rebuilt from the rows added.
 struct Family {
     chars: Vec<Vec<usize>>,
-    basis: Vec<(usize, Vec<Q>)>,
+    /// The evaluation rows added so far (±1 per character).
+    rows: Vec<Vec<i8>>,
+    basis: Basis,
+}
+
+/// A reduced basis: pivot column and row.
+enum Basis {
+    Small(Vec<(usize, Vec<Small>)>),
+    Big(Vec<(usize, Vec<Q>)>),
+}
+
+impl Basis {
+    fn len(&self) -> usize {
+        match self {
+            Basis::Small(b) => b.len(),
+            Basis::Big(b) => b.len(),
+        }
+    }
 }
 
 impl Family {
+    fn new(chars: Vec<Vec<usize>>) -> Family {
+        Family {
+            chars,
+            rows: Vec::new(),
+            basis: Basis::Small(Vec::new()),
+        }
+    }
     /// Adds the row of pattern `p`.
     fn add(&mut self, p: &SignPattern) {
         if self.basis.len() == self.chars.len() {
             return;
         }
-        let mut row: Vec<Q> = self
+        let signs: Vec<i8> = self
             .chars
             .iter()
             .map(|ch| {
                 if ch.iter().filter(|i| p[**i] < 0).count() % 2 == 1 {
-                    -Q::one()
+                    -1
                 } else {
-                    Q::one()
+                    1
                 }
             })
             .collect();
-        for (pc, b) in &self.basis {
-            if !row[*pc].is_zero() {
-                let f = row[*pc].clone();
-                for (x, r) in row.iter_mut().zip(b) {
-                    if !r.is_zero() {
-                        *x -= &f * r;
-                    }
-                }
+        self.rows.push(signs);
+        let added = match &mut self.basis {
+            Basis::Small(b) => field_row::<Small>(&self.rows[self.rows.len() - 1])
+                .and_then(|row| insert_row(b, row)),
+            Basis::Big(b) => {
+                field_row::<Q>(&self.rows[self.rows.len() - 1]).and_then(|row| insert_row(b, row))
             }
-        }
-        let Some(pc) = row.iter().position(|q| !q.is_zero()) else {
-            return;
         };
-        let inv = row[pc].clone();
-        for x in row.iter_mut() {
-            *x /= &inv;
-        }
-        for (_, b) in self.basis.iter_mut() {
-            if !b[pc].is_zero() {
-                let f = b[pc].clone();
-                for (x, r) in b.iter_mut().zip(&row) {
-                    if !r.is_zero() {
-                        *x -= &f * r;
-                    }
+        if added.is_none() {
+            // Overflow: redo every row exactly (cannot overflow).
+            let mut big = Vec::new();
+            for r in &self.rows {
+                if let Some(row) = field_row::<Q>(r) {
+                    let _ = insert_row(&mut big, row);
                 }
             }
+            self.basis = Basis::Big(big);
         }
-        self.basis.push((pc, row));
     }
     /// `Σ c_S χ_S` for a null vector `c` of the evaluation matrix, if it is
     /// rank deficient: a free column `j`, minus its pivot rows' entries.
     fn null_poly(&self) -> Option<BTreeMap<Vec<usize>, Q>> {
-        let pivots: BTreeSet<usize> = self.basis.iter().map(|(pc, _)| *pc).collect();
+        let pivots: BTreeSet<usize> = match &self.basis {
+            Basis::Small(b) => b.iter().map(|(pc, _)| *pc).collect(),
+            Basis::Big(b) => b.iter().map(|(pc, _)| *pc).collect(),
+        };
         let j = (0..self.chars.len()).find(|j| !pivots.contains(j))?;
         let mut poly = BTreeMap::new();
         poly.insert(self.chars[j].clone(), Q::one());
-        for (pc, row) in &self.basis {
-            if !row[j].is_zero() {
-                poly.insert(self.chars[*pc].clone(), -row[j].clone());
+        // Column `j` of each basis row only (the rest is never needed).
+        let entries: Vec<(usize, Q)> = match &self.basis {
+            Basis::Small(b) => b
+                .iter()
+                .map(|(pc, row)| (*pc, small_to_q(&row[j])))
+                .collect(),
+            Basis::Big(b) => b.iter().map(|(pc, row)| (*pc, row[j].clone())).collect(),
+        };
+        for (pc, x) in entries {
+            if !x.is_zero() {
+                poly.insert(self.chars[pc].clone(), -x);
             }
         }
         Some(poly)
@@ -1068,6 +1170,13 @@ impl<'a> Analysis<'a> {
             },
             blocks: blocks_of.0,
             empty_cols: blocks_of.1,
+            first_term: {
+                let mut m = BTreeMap::new();
+                for (i, t) in ir.terms.iter().enumerate() {
+                    m.entry(t.parameter).or_insert(i);
+                }
+                m
+            },
         }
     }
     /// Reduction for a pattern set.
@@ -1233,9 +1342,11 @@ impl<'a> Analysis<'a> {
                 untried.push(format!(
                     "{sizes} of the {} interacting sign arguments {}",
                     comp_args.len(),
-                    names.join(", ")
+                    join_capped(&names, ", ")
                 ));
             }
+            // Over the component's own arguments: a full pattern per
+            // component would be quadratic in the number of sign arguments.
             sets.push((comp_args, c.patterns));
         }
         let k = sets.iter().map(|(_, s)| s.len()).max().unwrap_or(1);
@@ -1244,8 +1355,8 @@ impl<'a> Analysis<'a> {
                 let mut p = vec![1i8; self.n_signs];
                 for (comp_args, set) in &sets {
                     let w = &set[j.min(set.len() - 1)];
-                    for &a in comp_args {
-                        p[a] = w[a];
+                    for (k, &a) in comp_args.iter().enumerate() {
+                        p[a] = w[k];
                     }
                 }
                 p
@@ -1270,7 +1381,8 @@ impl<'a> Analysis<'a> {
         blocks: &[usize],
         need: &dyn Fn(usize) -> bool,
     ) -> Option<ComponentSet> {
-        let ok = |set: &[SignPattern]| self.blocks_ok(Patterns::Set(set), blocks, need);
+        // Patterns over `args` only (see `Patterns::Local`).
+        let ok = |set: &[SignPattern]| self.blocks_ok(Patterns::Local { args, set }, blocks, need);
         let upper = self.completion(args, blocks);
         if !ok(&upper) {
             return None;
@@ -1312,10 +1424,10 @@ impl<'a> Analysis<'a> {
         let bits = args.len().min(60);
         let n_cand = 1usize << bits;
         let candidate = |index: usize| -> SignPattern {
-            let mut p = vec![1i8; self.n_signs];
-            for (k, a) in args.iter().enumerate().take(bits) {
+            let mut p = vec![1i8; args.len()];
+            for (k, slot) in p.iter_mut().enumerate().take(bits) {
                 if index >> k & 1 == 1 {
-                    p[*a] = -1;
+                    *slot = -1;
                 }
             }
             p
@@ -1366,7 +1478,15 @@ impl<'a> Analysis<'a> {
     /// a point where it does not vanish (found variable by variable, keeping
     /// as many other deficient families' polynomials nonzero as possible)
     /// raises that family's rank. At most one pattern per character.
+    /// The patterns are over `args` only (see [`Patterns::Local`]).
     fn completion(&self, args: &[usize], blocks: &[usize]) -> Vec<SignPattern> {
+        // Characters by position in `args`.
+        let local = |vars: &[(StructVar, u32)]| -> Vec<usize> {
+            odd_signs(vars, args)
+                .iter()
+                .filter_map(|i| args.binary_search(i).ok())
+                .collect()
+        };
         let mut by_family: BTreeMap<FamilyKey, BTreeSet<Vec<usize>>> = BTreeMap::new();
         for &b in blocks {
             for &c in &self.blocks[b] {
@@ -1376,8 +1496,14 @@ impl<'a> Analysis<'a> {
                         .filter(|(v, _)| !matches!(v, StructVar::Sign(_)))
                         .copied()
                         .collect();
+                    // A monomial constant within an experiment gives no row
+                    // under per-experiment centring (symbolic or not), so its
+                    // family needs no pattern of its own.
+                    if rest.is_empty() && self.names.centring == Centring::Experiment {
+                        continue;
+                    }
                     let entry = by_family.entry((*o, rest.clone())).or_default();
-                    entry.insert(odd_signs(vars, args));
+                    entry.insert(local(vars));
                     if rest.is_empty() {
                         entry.insert(Vec::new());
                     }
@@ -1387,12 +1513,10 @@ impl<'a> Analysis<'a> {
         let mut families: Vec<Family> = by_family
             .into_values()
             .filter(|chars| chars.len() > 1)
-            .map(|chars| Family {
-                chars: chars.into_iter().collect(),
-                basis: Vec::new(),
-            })
+            .map(|chars| Family::new(chars.into_iter().collect()))
             .collect();
-        let mut set = vec![vec![1i8; self.n_signs]];
+        let positions: Vec<usize> = (0..args.len()).collect();
+        let mut set = vec![vec![1i8; args.len()]];
         for f in &mut families {
             f.add(&set[0]);
         }
@@ -1402,7 +1526,7 @@ impl<'a> Analysis<'a> {
             if polys.is_empty() {
                 break;
             }
-            let p = nonzero_point(polys, args, self.n_signs);
+            let p = nonzero_point(polys, &positions, args.len());
             for f in &mut families {
                 f.add(&p);
             }
@@ -1528,7 +1652,7 @@ impl<'a> Analysis<'a> {
                 ),
                 many => format!(
                     " ({} are evaluated pointwise: a sign change within one experiment suffices)",
-                    many.join(", ")
+                    join_capped(many, ", ")
                 ),
             }
         };
@@ -1543,34 +1667,57 @@ impl<'a> Analysis<'a> {
             .map(|c| self.structural.homogeneous_signs(*c))
             .collect();
         if !self.group_identifiable(Patterns::All, group) {
-            let texts: Vec<String> = group.iter().map(|p| self.names.term_text(*p)).collect();
+            // Each distinct regressor once (499 parameters of `u` say `u` once).
+            let mut texts: Vec<String> = Vec::new();
+            let mut seen: BTreeSet<String> = BTreeSet::new();
+            for p in group {
+                let text = self
+                    .first_term
+                    .get(p)
+                    .map(|t| self.names.ir.terms[*t].text.clone())
+                    .unwrap_or_default();
+                if seen.insert(text.clone()) {
+                    texts.push(text);
+                }
+            }
+            let carry = if texts.len() == 1 { "carries" } else { "carry" };
             let why = match theta_signs.first() {
                 Some(Some(s))
                     if theta_signs.iter().all(|t| t.as_ref() == Some(s)) && s.is_empty() =>
                 {
                     format!(
-                        "{} carry no modulus, so no sign pattern tells them apart",
-                        texts.join(" and ")
+                        "{} {carry} no modulus, so no sign pattern tells them apart",
+                        and_list(&texts)
                     )
                 }
                 Some(Some(s)) if theta_signs.iter().all(|t| t.as_ref() == Some(s)) => format!(
-                    "{} carry the same sign factor ({}), so every experiment scales them alike",
-                    texts.join(" and "),
-                    s.iter().map(sign_name).collect::<Vec<_>>().join("·")
+                    "{} {carry} the same sign factor ({}), so every experiment scales them alike",
+                    and_list(&texts),
+                    join_capped(s.iter().map(sign_name), "·")
                 ),
                 _ => "their regressors coincide in every sign pattern".to_string(),
             };
             return Separation {
                 parameters: group.clone(),
                 patterns: None,
+                arguments: Vec::new(),
                 message: format!("no experiment separates {list}: {why}"),
             };
         }
         let group_theta = self.group_theta(group);
-        let every: Vec<usize> = (0..self.n_signs).collect();
-        let searched = self
-            .smallest(&args, &group_theta)
-            .or_else(|| self.smallest(&every, &group_theta));
+        // Over the group's own arguments (every other sign +), else over all.
+        let mut over_all = false;
+        let searched = self.smallest(&args, &group_theta).or_else(|| {
+            over_all = true;
+            let every: Vec<usize> = (0..self.n_signs).collect();
+            self.smallest(&every, &group_theta)
+        });
+        // The group's own signs the predictor fixes (and any made negative).
+        let shown_base: Vec<usize> = args
+            .iter()
+            .copied()
+            .filter(|i| self.relevant.binary_search(i).is_ok())
+            .collect();
         let cut = searched.as_ref().and_then(|f| f.untried.clone());
         let found = searched.map(|f| f.patterns);
         let message = match (&found, theta_signs.as_slice()) {
@@ -1590,13 +1737,17 @@ impl<'a> Analysis<'a> {
                     ),
                     _ => format!(
                         "{list} are separated by the sign patterns {}",
-                        patterns_text(self.names.ir, found.as_deref().unwrap_or(&[]), self.kind)
+                        patterns_text_over(
+                            self.names.ir,
+                            found.as_deref().unwrap_or(&[]),
+                            &shown_base
+                        )
                     ),
                 }
             }
             (Some(set), _) => format!(
                 "{list} are separated by the sign patterns {}",
-                patterns_text(self.names.ir, set, self.kind)
+                patterns_text_over(self.names.ir, set, &shown_base)
             ),
             (None, _) => format!("{list}: no set of sign patterns separates them"),
         };
@@ -1604,9 +1755,32 @@ impl<'a> Analysis<'a> {
             Some(cut) => format!("{message} (not proven the fewest: {cut})"),
             None => message,
         };
+        // Stored over the group's arguments and any sign made negative: one
+        // full pattern per group would make the report quadratic in size.
+        let arguments = found
+            .as_deref()
+            .map(|set| {
+                if over_all {
+                    shown_signs(set, &args)
+                } else {
+                    args.clone()
+                }
+            })
+            .unwrap_or_default();
+        let patterns = found.map(|set| {
+            set.iter()
+                .map(|p| {
+                    arguments
+                        .iter()
+                        .map(|a| p.get(*a).copied().unwrap_or(1))
+                        .collect()
+                })
+                .collect()
+        });
         Separation {
             parameters: group.clone(),
-            patterns: found,
+            patterns,
+            arguments,
             message,
         }
     }
@@ -1672,33 +1846,61 @@ pub fn pointwise_signs(ir: &Ir, kind: PredictorKind) -> Vec<usize> {
 /// plus any pointwise (measured-medium) sign that some pattern of the set
 /// makes negative, shown in every pattern of the set.
 pub fn patterns_text(ir: &Ir, set: &[SignPattern], kind: PredictorKind) -> String {
-    let relevant = relevant_signs(ir, kind);
-    let shown: Vec<usize> = (0..ir.sign_args.len())
-        .filter(|i| relevant.contains(i) || set.iter().any(|p| p.get(*i).copied().unwrap_or(1) < 0))
-        .collect();
+    patterns_text_over(ir, set, &relevant_signs(ir, kind))
+}
+
+/// The sign arguments a set of patterns is shown with: `base` (sorted) and
+/// every argument some pattern makes negative, in order. One scan of each
+/// pattern, so showing one set costs no more than reading it.
+pub fn shown_signs(set: &[SignPattern], base: &[usize]) -> Vec<usize> {
+    let mut shown: BTreeSet<usize> = base.iter().copied().collect();
+    for p in set {
+        shown.extend(
+            p.iter()
+                .enumerate()
+                .filter(|(_, s)| **s < 0)
+                .map(|(i, _)| i),
+        );
+    }
+    shown.into_iter().collect()
+}
+
+/// [`patterns_text`] showing the arguments `base` (sorted; e.g. those of
+/// one group of parameters) and the negative ones: at most [`MAX_LISTED`]
+/// signs per pattern and patterns per set, the rest counted, so a message
+/// stays short whatever the number of sign arguments (the JSON report lists
+/// every pattern in full).
+pub fn patterns_text_over(ir: &Ir, set: &[SignPattern], base: &[usize]) -> String {
+    let shown = shown_signs(set, base);
     if shown.is_empty() {
         return "{} (no modulus needs a fixed sign)".to_string();
     }
-    set.iter()
-        .map(|p| {
-            let items: Vec<String> = shown
-                .iter()
-                .map(|i| {
-                    format!(
-                        "{}{}",
-                        if p.get(*i).copied().unwrap_or(1) < 0 {
-                            "-"
-                        } else {
-                            "+"
-                        },
-                        ir.sign_args[*i].name
-                    )
-                })
-                .collect();
-            format!("{{{}}}", items.join(" "))
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
+    let sign = |p: &SignPattern, i: usize| p.get(i).copied().unwrap_or(1) < 0;
+    let one = |p: &SignPattern| -> String {
+        let mut items: Vec<String> = shown
+            .iter()
+            .take(MAX_LISTED)
+            .map(|i| {
+                format!(
+                    "{}{}",
+                    if sign(p, *i) { "-" } else { "+" },
+                    ir.sign_args[*i].name
+                )
+            })
+            .collect();
+        let rest = &shown[shown.len().min(MAX_LISTED)..];
+        if !rest.is_empty() {
+            let minus = rest.iter().filter(|i| sign(p, **i)).count();
+            let plus = rest.len() - minus;
+            items.push(match (plus, minus) {
+                (_, 0) => format!("… and {} more, all +", rest.len()),
+                (0, _) => format!("… and {} more, all -", rest.len()),
+                _ => format!("… and {} more: {plus} +, {minus} -", rest.len()),
+            });
+        }
+        format!("{{{}}}", items.join(" "))
+    };
+    join_capped(set.iter().map(one), ", ")
 }
 
 /// `{+water.u -water.v}`: one pattern (see [`patterns_text`]).
@@ -1717,7 +1919,7 @@ pub fn parse_pattern(sign_args: &[SignArg], spec: &str) -> Result<SignPattern, S
             "this model has no sign argument (no modulus of a noisy state)".to_string()
         } else {
             let list: Vec<&str> = sign_args.iter().map(|s| s.name.as_str()).collect();
-            format!("its sign arguments are {}", list.join(", "))
+            format!("its sign arguments are {}", join_capped(&list, ", "))
         }
     };
     for item in spec.split(',').map(str::trim).filter(|i| !i.is_empty()) {
@@ -1809,15 +2011,16 @@ fn constant_notes(
     if constants.is_empty() {
         return (Vec::new(), Vec::new());
     }
+    let constant_set: BTreeSet<usize> = constants.iter().copied().collect();
     let identifiable_under = |c: Centring| {
         let a = Analysis::with_centring(ir, PredictorKind::Measured, c);
         let red = a.reduce(Patterns::Set(patterns));
-        let theta: Vec<usize> = a
+        let theta: BTreeSet<usize> = a
             .names
             .columns
             .iter()
             .enumerate()
-            .filter(|(_, col)| matches!(col.kind, ColumnKind::Theta { parameter } if constants.contains(&parameter)))
+            .filter(|(_, col)| matches!(col.kind, ColumnKind::Theta { parameter } if constant_set.contains(&parameter)))
             .map(|(i, _)| i)
             .collect();
         red.null_space()
@@ -1875,11 +2078,7 @@ fn constant_notes(
 }
 
 fn quoted_join(q: &[String]) -> String {
-    match q.len() {
-        0 => String::new(),
-        1 => q[0].clone(),
-        n => format!("{} and {}", q[..n - 1].join(", "), q[n - 1]),
-    }
+    and_list(q)
 }
 
 /// The compile-time identifiability report (measured predictor).
@@ -1952,6 +2151,7 @@ pub fn report(ir: &Ir, options: &Options) -> Report {
                 Some((_, message)) => Separation {
                     parameters: c.parameters.clone(),
                     patterns: None,
+                    arguments: Vec::new(),
                     message: message.clone(),
                 },
                 None => a.separation(c),

@@ -542,10 +542,37 @@ pub struct Combination {
 pub struct Separation {
     /// The θ indices of the group.
     pub parameters: Vec<usize>,
-    /// The smallest set of sign patterns that separates them, if one exists.
+    /// The smallest set of sign patterns that separates them, if one exists,
+    /// each over [`Separation::arguments`] only (`patterns[e][k]` is the sign
+    /// of `arguments[k]` in experiment `e`; every other sign is `+`), so the
+    /// report grows with the model, not with its square ([`Separation::full`]
+    /// gives them over every sign argument).
     pub patterns: Option<Vec<SignPattern>>,
+    /// The sign arguments (indices into `Ir::sign_args`, increasing) the
+    /// patterns give.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub arguments: Vec<usize>,
     /// One sentence.
     pub message: String,
+}
+
+impl Separation {
+    /// The patterns over all `n` sign arguments.
+    pub fn full(&self, n: usize) -> Option<Vec<SignPattern>> {
+        self.patterns.as_ref().map(|set| {
+            set.iter()
+                .map(|p| {
+                    let mut full = vec![1i8; n];
+                    for (k, a) in self.arguments.iter().enumerate() {
+                        if let (Some(slot), Some(s)) = (full.get_mut(*a), p.get(k)) {
+                            *slot = *s;
+                        }
+                    }
+                    full
+                })
+                .collect()
+        })
+    }
 }
 
 /// The nuisance parameters before and after reduction to an identifiable basis.

@@ -187,10 +187,13 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
     for t in ir.terms.iter().rev() {
         first_term.insert(t.parameter, t);
     }
+    // At most MAX_LISTED labels: the message names the group (capped too), and
+    // each label would print a source line.
     let labels_for = |params: &[usize]| -> Vec<Label> {
         params
             .iter()
             .filter_map(|p| first_term.get(p).copied())
+            .take(leeway_grammar::MAX_LISTED)
             .enumerate()
             .map(|(i, t)| Label {
                 span: t.span,
@@ -200,7 +203,8 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
             .collect()
     };
     if !r.identifiable {
-        let constants = identify::constant_parameters(ir);
+        let constants: std::collections::BTreeSet<usize> =
+            identify::constant_parameters(ir).into_iter().collect();
         for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
             let mut d = if options.aggregate {
                 Diagnostic::warning(
@@ -253,10 +257,24 @@ fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagn
                 identify::patterns_text(ir, &r.required_patterns, ir::PredictorKind::Measured)
             ),
         );
-        for (c, s) in r.unidentifiable.iter().zip(&r.separations) {
+        // One pair of notes per group, at most MAX_LISTED groups (a model
+        // may have 10⁴ of them; `check --json` lists every one).
+        let groups = r.unidentifiable.len().min(r.separations.len());
+        for (c, s) in r
+            .unidentifiable
+            .iter()
+            .zip(&r.separations)
+            .take(leeway_grammar::MAX_LISTED)
+        {
             d = d
                 .with_note(format!("from one experiment: {}", c.message))
                 .with_note(s.message.clone());
+        }
+        if groups > leeway_grammar::MAX_LISTED {
+            d = d.with_note(format!(
+                "… and {} more groups like these, not shown (`leeway check --json` lists every one in `unidentifiable` and `separations`)",
+                groups - leeway_grammar::MAX_LISTED
+            ));
         }
         if let Some(first) = r.unidentifiable.first() {
             d.labels = labels_for(&first.parameters);

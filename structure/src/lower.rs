@@ -38,9 +38,10 @@ pub fn lower(
             columns.iter().map(|c| c.name.clone()).collect(),
         ),
     };
+    let names: std::collections::BTreeSet<&str> = params.iter().map(|p| p.name.as_str()).collect();
     let mut nominal: BTreeMap<&str, f64> = BTreeMap::new();
     for (id, q, span) in &r.nominal {
-        if params.iter().any(|p| p.name == id.name) {
+        if names.contains(id.name.as_str()) {
             nominal.insert(&id.name, to_f64(q));
         } else {
             diags.push(
@@ -51,20 +52,22 @@ pub fn lower(
                 .with_primary(*span, "no term uses it")
                 .with_help(format!(
                     "parameters: {}",
-                    params
-                        .iter()
-                        .map(|p| p.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    leeway_grammar::join_capped(params.iter().map(|p| p.name.as_str()), ", ")
                 )),
             );
         }
     }
+    // The terms of each parameter, in one pass (a model may have 10⁴ parameters).
+    let mut by_parameter: Vec<Vec<&TermDecl>> = vec![Vec::new(); params.len()];
+    for t in terms {
+        if let Some(mine) = by_parameter.get_mut(t.parameter) {
+            mine.push(t);
+        }
+    }
     let parameters = params
         .iter()
-        .enumerate()
-        .map(|(pi, p)| {
-            let mine: Vec<&TermDecl> = terms.iter().filter(|t| t.parameter == pi).collect();
+        .zip(by_parameter)
+        .map(|(p, mine)| {
             let media: Vec<usize> = {
                 let mut m: Vec<usize> = mine
                     .iter()

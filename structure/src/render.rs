@@ -3,7 +3,7 @@
 
 use crate::identify::{Analysis, Patterns, pattern_text, patterns_text};
 use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation};
-use leeway_grammar::EquationKind;
+use leeway_grammar::{EquationKind, join_capped};
 use std::fmt::Write;
 
 /// The name of an evaluation variable.
@@ -84,6 +84,20 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
     if out.is_empty() { "0".to_string() } else { out }
 }
 
+/// The terms as written of each (parameter, output), in one pass over the
+/// terms (a model may have 10⁴ of them: no scan per column).
+pub fn written_terms(ir: &Ir) -> std::collections::BTreeMap<(usize, usize), Vec<&str>> {
+    let mut written: std::collections::BTreeMap<(usize, usize), Vec<&str>> =
+        std::collections::BTreeMap::new();
+    for t in &ir.terms {
+        written
+            .entry((t.parameter, t.output))
+            .or_default()
+            .push(t.text.as_str());
+    }
+    written
+}
+
 /// The full structure report.
 pub fn render(ir: &Ir) -> String {
     let mut o = String::new();
@@ -92,9 +106,9 @@ pub fn render(ir: &Ir) -> String {
         "model {}: {} states ({}), {} inputs ({}), {} parameters",
         ir.name,
         ir.states.len(),
-        ir.states.join(", "),
+        join_capped(&ir.states, ", "),
         ir.inputs.len(),
-        ir.inputs.join(", "),
+        join_capped(&ir.inputs, ", "),
         ir.parameters.len()
     );
     let kinds: Vec<String> = ir
@@ -115,7 +129,7 @@ pub fn render(ir: &Ir) -> String {
     let _ = writeln!(
         o,
         "  equations: {}; step {}",
-        kinds.join(", "),
+        join_capped(&kinds, ", "),
         ir.step
             .map_or("from the data's sample time".to_string(), |h| format!(
                 "{h}"
@@ -142,6 +156,14 @@ pub fn render(ir: &Ir) -> String {
             );
         }
     }
+    let mut relatives_of: std::collections::BTreeMap<&str, Vec<&str>> =
+        std::collections::BTreeMap::new();
+    for r in &ir.relatives {
+        relatives_of
+            .entry(ir.disturbances[r.disturbance].name.as_str())
+            .or_default()
+            .push(r.name.as_str());
+    }
     for d in &ir.disturbances {
         let comps: Vec<String> = d
             .components
@@ -154,23 +176,21 @@ pub fn render(ir: &Ir) -> String {
                 }
             })
             .collect();
-        let rel: Vec<&str> = ir
-            .relatives
-            .iter()
-            .filter(|r| ir.disturbances[r.disturbance].name == d.name)
-            .map(|r| r.name.as_str())
-            .collect();
+        let rel: Vec<&str> = relatives_of
+            .get(d.name.as_str())
+            .cloned()
+            .unwrap_or_default();
         let _ = writeln!(
             o,
             "  disturbance {} {} {}({}){}",
             d.name,
             if d.measured { "measured" } else { "unmeasured" },
             if d.earth { "earth" } else { "body" },
-            comps.join(", "),
+            join_capped(&comps, ", "),
             if rel.is_empty() {
                 String::new()
             } else {
-                format!(", seen through {}", rel.join(", "))
+                format!(", seen through {}", join_capped(&rel, ", "))
             }
         );
     }
@@ -194,18 +214,21 @@ pub fn render(ir: &Ir) -> String {
         .collect();
     let mut parts = Vec::new();
     if !fixed.is_empty() {
-        parts.push(format!("{} (one sign per experiment)", fixed.join(", ")));
+        parts.push(format!(
+            "{} (one sign per experiment)",
+            join_capped(&fixed, ", ")
+        ));
     }
     if !measured.is_empty() {
         parts.push(format!(
             "{} (measured medium, pointwise in IV3, fixed in IV2)",
-            measured.join(", ")
+            join_capped(&measured, ", ")
         ));
     }
     if !plain.is_empty() {
         parts.push(format!(
             "{} (plain states: pointwise in every predictor, as simulated)",
-            plain.join(", ")
+            join_capped(&plain, ", ")
         ));
     }
     let _ = writeln!(
@@ -224,6 +247,7 @@ pub fn render(ir: &Ir) -> String {
         cols.iter().filter(|c| !c.kind.is_nuisance()),
         ir.states.len(),
     );
+    let written = written_terms(ir);
     for ((out, state), theta) in ir.states.iter().enumerate().zip(by_output) {
         let kind = if ir.equations[out].kind == EquationKind::Der {
             "der"
@@ -233,12 +257,7 @@ pub fn render(ir: &Ir) -> String {
         let _ = writeln!(o, "  {kind} {state} ({} terms)", theta.len());
         for c in theta {
             let p = c.kind.parameter();
-            let text: Vec<String> = ir
-                .terms
-                .iter()
-                .filter(|t| t.parameter == p && t.output == out)
-                .map(|t| t.text.clone())
-                .collect();
+            let text = written.get(&(p, out)).cloned().unwrap_or_default();
             let tag = if ir.parameters[p].measured {
                 "  [Φ2]"
             } else {
@@ -267,7 +286,7 @@ pub fn render(ir: &Ir) -> String {
         if unmeasured.is_empty() {
             "no unmeasured disturbance".to_string()
         } else {
-            unmeasured.join(", ")
+            join_capped(&unmeasured, ", ")
         }
     );
     let by_output = crate::ir::columns_by_output(nuis.iter().copied(), ir.states.len());

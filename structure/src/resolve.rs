@@ -674,15 +674,12 @@ fn rotation_conflict(span: Span, first: Span) -> Diagnostic {
         .with_help("use either `heading .. integrates ..` (planar) or `rotation { .. }` (measured R), once")
 }
 
-/// `a, b, c` or `none`.
+/// `a, b, c` or `none` (at most `MAX_LISTED` names, then a count).
 pub fn names(ids: &[Ident]) -> String {
     if ids.is_empty() {
         "none".to_string()
     } else {
-        ids.iter()
-            .map(|i| i.name.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
+        leeway_grammar::join_capped(ids.iter().map(|i| i.name.as_str()), ", ")
     }
 }
 

@@ -119,9 +119,10 @@ pub fn lower_terms(r: &Resolved, diags: &mut Vec<Diagnostic>) -> (Vec<ParamDecl>
         }
     }
     // Only parameters that survived in some term.
-    let used: Vec<bool> = (0..params.len())
-        .map(|i| terms.iter().any(|t| t.parameter == i))
-        .collect();
+    let mut used = vec![false; params.len()];
+    for t in &terms {
+        used[t.parameter] = true;
+    }
     let mut remap = vec![usize::MAX; params.len()];
     let mut kept = Vec::new();
     for (i, p) in params.into_iter().enumerate() {
@@ -543,9 +544,9 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
             [a, b] => format!(
                 "{a} and {b} are both parameters in one term: the model would not be linear in θ"
             ),
-            [rest @ .., last] => format!(
-                "{} and {last} are all parameters in one term: the model would not be linear in θ",
-                rest.join(", ")
+            [_, _, ..] => format!(
+                "{} are all parameters in one term: the model would not be linear in θ",
+                leeway_grammar::and_list(quoted.iter())
             ),
             [] => String::new(),
         };
@@ -553,7 +554,7 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
             p.span,
             format!("{} unknown factors in one term", params.len()),
         );
-        for extra in params.iter().skip(1) {
+        for extra in params.iter().skip(1).take(leeway_grammar::MAX_LISTED) {
             let label = if extra.name == params[0].name {
                 format!("`{}` again", extra.name)
             } else {

@@ -222,8 +222,8 @@ fn ship_iv2_separations() {
             "{}",
             s.message
         );
-        let set = s
-            .patterns
+        let full = s.full(ir.sign_args.len());
+        let set = full
             .as_ref()
             .unwrap_or_else(|| panic!("{a}/{b} are separable"));
         let products: Vec<i8> = set.iter().map(|p| p[i] * p[j]).collect();

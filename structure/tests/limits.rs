@@ -4,7 +4,7 @@
 //! proportional to the input aborts the test instead of passing by luck on a
 //! large main stack, and under a time bound, so that a hang fails it.
 
-use leeway_structure::grammar::{Diagnostic, MAX_OPERANDS, line_col};
+use leeway_structure::grammar::{Diagnostic, MAX_LISTED, MAX_OPERANDS, line_col};
 use leeway_structure::{Options, compile};
 use std::time::{Duration, Instant};
 
@@ -133,4 +133,93 @@ fn literals_out_of_range_are_one_error_each_and_quick() {
     let (_, d, _) = compile_small(src);
     assert_eq!(d.len(), 1, "{d:#?}");
     assert_eq!(d[0].code, "invalid-number");
+}
+
+/// Issue 10: one `unidentifiable-combination` of 499 parameters was a 96 KB
+/// message. Every list in a message, note or help names at most
+/// `MAX_LISTED` items and counts the rest; the report's structured fields
+/// keep every name.
+#[test]
+fn lists_in_messages_are_capped() {
+    let terms: Vec<String> = (0..499).map(|i| format!("P{i}*u")).collect();
+    let src = format!(
+        "model W {{\n state u\n input t\n der u = B*t + {}\n}}\n",
+        terms.join(" + ")
+    );
+    let (ir, d, _) = compile_small(src.clone());
+    assert!(ir);
+    let errors: Vec<&Diagnostic> = d.iter().filter(|d| d.is_error()).collect();
+    assert_eq!(errors.len(), 1, "{d:#?}");
+    let e = errors[0];
+    assert_eq!(e.code, "unidentifiable-combination");
+    assert_eq!(
+        e.message,
+        "θ is not identifiable: `P0`, `P1`, `P2`, `P3`, `P4`, `P5`, `P6`, `P7` and 491 more enter only as P0 + P1 + P2 + P3 + P4 + P5 + P6 + P7 + … (491 more terms)"
+    );
+    assert!(e.labels.len() <= MAX_LISTED, "{}", e.labels.len());
+    for n in &e.notes {
+        assert!(n.len() < 300, "{n}");
+    }
+    assert!(
+        e.notes.iter().any(|n| n.contains("u carries no modulus")),
+        "{:?}",
+        e.notes
+    );
+    // The structured report keeps the whole group.
+    let c = compile(&src, &Options::default());
+    let r = &c.ir.as_ref().expect("an IR").report;
+    assert_eq!(r.unidentifiable[0].parameters.len(), 499);
+    // A nominal entry that is not a parameter lists at most 8 in its help.
+    let src = format!(
+        "model W {{\n state u\n input t\n der u = B*t + {}\n nominal {{ Q = 1 }}\n}}\n",
+        terms[..99].join(" + ")
+    );
+    let c = compile(&src, &Options::default());
+    let unknown = c
+        .diagnostics
+        .iter()
+        .find(|d| d.code == "unknown-parameter")
+        .expect("unknown-parameter");
+    assert!(
+        unknown
+            .help
+            .as_deref()
+            .unwrap_or_default()
+            .ends_with("P6, … (92 more)"),
+        "{:?}",
+        unknown.help
+    );
+}
+
+/// 2,000 independent states each need both signs of their modulus: the
+/// `required-experiments` note holds one pair of notes per group for at
+/// most `MAX_LISTED` groups, then a count, and names the patterns with at
+/// most `MAX_LISTED` signs each (it held 4,000 notes and every sign).
+#[test]
+fn many_groups_give_a_short_note() {
+    let n = 2000;
+    let states: Vec<String> = (0..n).map(|i| format!("x{i}")).collect();
+    let mut src = format!("model S {{\n state {}\n", states.join(", "));
+    for i in 0..n {
+        src += &format!(" der x{i} = A{i}*x{i} + D{i}*|x{i}|\n");
+    }
+    src += "}\n";
+    let (ir, d, _) = compile_small(src);
+    assert!(ir, "{d:#?}");
+    let note = d
+        .iter()
+        .find(|d| d.code == "required-experiments")
+        .expect("required-experiments");
+    assert!(note.message.len() < 400, "{}", note.message);
+    assert!(
+        note.message.contains("… and 1992 more, all +}"),
+        "{}",
+        note.message
+    );
+    assert_eq!(note.notes.len(), 2 * MAX_LISTED + 1);
+    assert!(
+        note.notes[2 * MAX_LISTED].starts_with("… and 1992 more groups like these"),
+        "{}",
+        note.notes[2 * MAX_LISTED]
+    );
 }

@@ -3,9 +3,9 @@
 
 use leeway_structure::Compilation;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
-use leeway_structure::identify::relevant_signs;
+use leeway_structure::identify::{relevant_signs, shown_signs};
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, SignPattern};
-use leeway_structure::render::column_text;
+use leeway_structure::render::{column_text, written_terms};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -201,10 +201,7 @@ pub fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
 /// fixes, plus any pointwise sign some pattern of the set makes negative (as
 /// the text report shows them).
 fn patterns(ir: &Ir, set: &[SignPattern]) -> Vec<BTreeMap<String, String>> {
-    let relevant = relevant_signs(ir, PredictorKind::Measured);
-    let shown: Vec<usize> = (0..ir.sign_args.len())
-        .filter(|i| relevant.contains(i) || set.iter().any(|p| p.get(*i).copied().unwrap_or(1) < 0))
-        .collect();
+    let shown = shown_signs(set, &relevant_signs(ir, PredictorKind::Measured));
     set.iter()
         .map(|p| {
             shown
@@ -261,21 +258,18 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Re
         };
     };
     let r = &ir.report;
+    let relevant = relevant_signs(ir, PredictorKind::Measured);
     let columns = &ir.predictors.measured;
     let mut regressors = Vec::new();
     let mut nuisance_regressors = Vec::new();
     let by_output = leeway_structure::ir::columns_by_output(columns, ir.states.len());
+    let written = written_terms(ir);
     for ((out, state), mine) in ir.states.iter().enumerate().zip(by_output) {
         for col in mine {
             let expression = column_text(ir, col, out);
             match col.kind {
                 ColumnKind::Theta { parameter } => {
-                    let term: Vec<String> = ir
-                        .terms
-                        .iter()
-                        .filter(|t| t.parameter == parameter && t.output == out)
-                        .map(|t| t.text.clone())
-                        .collect();
+                    let term = written.get(&(parameter, out)).cloned().unwrap_or_default();
                     regressors.push(Regressor {
                         parameter: ir.parameters[parameter].name.clone(),
                         output: state.clone(),
@@ -354,7 +348,23 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Re
             .iter()
             .map(|s| Separation {
                 parameters: names(ir, &s.parameters),
-                sign_patterns: s.patterns.as_ref().map(|set| patterns(ir, set)),
+                sign_patterns: s.patterns.as_ref().map(|set| {
+                    // The group's own arguments the predictor fixes, and any
+                    // sign made negative (the patterns hold nothing else).
+                    set.iter()
+                        .map(|p| {
+                            s.arguments
+                                .iter()
+                                .zip(p)
+                                .filter(|(a, sign)| **sign < 0 || relevant.binary_search(a).is_ok())
+                                .map(|(a, sign)| {
+                                    let text = if *sign < 0 { "-" } else { "+" };
+                                    (ir.sign_args[*a].name.clone(), text.to_string())
+                                })
+                                .collect()
+                        })
+                        .collect()
+                }),
                 message: s.message.clone(),
             })
             .collect(),

@@ -28,18 +28,19 @@ fn percent(f: f64) -> String {
     }
 }
 
+/// The signs of an experiment, at most `MAX_LISTED` (the JSON lists all).
 fn signs(args: &[ArgSign]) -> String {
-    args.iter()
-        .map(|a| {
+    leeway_structure::grammar::join_capped(
+        args.iter().map(|a| {
             format!(
                 "{} {} (other sign {})",
                 a.argument,
                 if a.sign < 0 { '-' } else { '+' },
                 percent(a.minority_fraction)
             )
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
+        }),
+        ", ",
+    )
 }
 
 /// What an estimated parameter stands for when it is an aggregate (`X_uu +
@@ -174,11 +175,12 @@ pub fn render(o: &Outcome) -> String {
         ],
         vec![
             "experiments".to_string(),
-            o.experiments
-                .iter()
-                .map(|(name, k)| format!("{name} ({k} samples)"))
-                .collect::<Vec<_>>()
-                .join(", "),
+            leeway_structure::grammar::join_capped(
+                o.experiments
+                    .iter()
+                    .map(|(name, k)| format!("{name} ({k} samples)")),
+                ", ",
+            ),
         ],
         vec![
             "columns".to_string(),
