@@ -585,35 +585,40 @@ impl RegressorPlan {
         plan
     }
 
-    /// Writes every slot of `out[..len]`.
-    #[inline]
+    /// Writes every slot of `out[..len]`. Never inlined, so that profiles
+    /// name it rather than the thread-local's closure.
+    #[inline(never)]
     pub(super) fn eval(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
         let out = &mut out[..self.len];
-        with_table(self.table.len, |t| {
-            self.table.fill(sig, signs, t);
-            let (t, e) = t.split_at_mut(self.entries_at);
-            let t: &[f64] = t;
-            self.entries.write(t, e);
-            let e: &[f64] = e;
-            for &(start, end) in &self.zeros {
-                out[start as usize..end as usize].fill(0.0);
+        with_table(self.table.len, |t| self.eval_in(t, sig, signs, out));
+    }
+
+    /// [`RegressorPlan::eval`] on a table.
+    #[inline(always)]
+    fn eval_in(&self, t: &mut [f64], sig: &Signals, signs: &[f64], out: &mut [f64]) {
+        self.table.fill(sig, signs, t);
+        let (t, e) = t.split_at_mut(self.entries_at);
+        let t: &[f64] = t;
+        self.entries.write(t, e);
+        let e: &[f64] = e;
+        for &(start, end) in &self.zeros {
+            out[start as usize..end as usize].fill(0.0);
+        }
+        self.slots.write(t, out);
+        for &(slot, a, b) in &self.pairs {
+            out[slot as usize] = e[a as usize] + e[b as usize];
+        }
+        for &(slot, start, end) in &self.sums {
+            let mut acc = 0.0;
+            for (k, &i) in self.summands[start as usize..end as usize]
+                .iter()
+                .enumerate()
+            {
+                let v = e[i as usize];
+                acc = if k == 0 { v } else { acc + v };
             }
-            self.slots.write(t, out);
-            for &(slot, a, b) in &self.pairs {
-                out[slot as usize] = e[a as usize] + e[b as usize];
-            }
-            for &(slot, start, end) in &self.sums {
-                let mut acc = 0.0;
-                for (k, &i) in self.summands[start as usize..end as usize]
-                    .iter()
-                    .enumerate()
-                {
-                    let v = e[i as usize];
-                    acc = if k == 0 { v } else { acc + v };
-                }
-                out[slot as usize] = acc;
-            }
-        });
+            out[slot as usize] = acc;
+        }
     }
 }
 
@@ -706,25 +711,30 @@ impl RhsPlan {
     }
 
     /// `out[o] = θ_p0 · term0 + θ_p1 · term1 + …` (0 without terms).
-    #[inline]
+    /// Never inlined, so that profiles name it.
+    #[inline(never)]
     pub(super) fn eval(&self, theta: &[f64], sig: &Signals, out: &mut [f64]) {
         let out = &mut out[..self.outputs.len()];
-        with_table(self.table.len, |t| {
-            self.table.fill(sig, &[], t);
-            let t: &[f64] = t;
-            for (o, &(start, end)) in out.iter_mut().zip(&self.outputs) {
-                *o = match self.terms[start as usize..end as usize].split_first() {
-                    None => 0.0,
-                    Some((first, rest)) => {
-                        let mut acc = first.value(theta, &self.factors, t);
-                        for term in rest {
-                            acc += term.value(theta, &self.factors, t);
-                        }
-                        acc
+        with_table(self.table.len, |t| self.eval_in(t, theta, sig, out));
+    }
+
+    /// [`RhsPlan::eval`] on a table.
+    #[inline(always)]
+    fn eval_in(&self, t: &mut [f64], theta: &[f64], sig: &Signals, out: &mut [f64]) {
+        self.table.fill(sig, &[], t);
+        let t: &[f64] = t;
+        for (o, &(start, end)) in out.iter_mut().zip(&self.outputs) {
+            *o = match self.terms[start as usize..end as usize].split_first() {
+                None => 0.0,
+                Some((first, rest)) => {
+                    let mut acc = first.value(theta, &self.factors, t);
+                    for term in rest {
+                        acc += term.value(theta, &self.factors, t);
                     }
-                };
-            }
-        });
+                    acc
+                }
+            };
+        }
     }
 }
 
