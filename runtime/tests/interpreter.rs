@@ -328,7 +328,8 @@ fn calls_do_not_leak_into_each_other() {
 
 /// The model class yields products of at most three factors, slots of one
 /// or two entries, and columns in one output; an IR (read from JSON, say)
-/// may hold more. The general paths agree with the reference too.
+/// may hold more, and more values than the table on the stack holds. The
+/// general paths agree with the reference too.
 #[test]
 fn shapes_beyond_the_model_class_take_the_general_path() {
     let ships: Vec<(String, Ir)> = all_models()
@@ -419,6 +420,23 @@ fn shapes_beyond_the_model_class_take_the_general_path() {
             if unsigned {
                 ir.predictors.basic.push(column);
             }
+        }
+        // Seventy more inputs, each read by a column: a table too large
+        // for the stack.
+        let first = ir.inputs.len();
+        for k in 0..70 {
+            ir.inputs.push(format!("extra_input{k}"));
+            let mut column = ir.predictors.augmented[0].clone();
+            column.name = format!("extra_input{k}");
+            column.entries = vec![poly(
+                k % n_out,
+                1.0,
+                vec![],
+                vec![EvalVar::AbsInput(first + k)],
+            )];
+            ir.predictors.augmented.push(column.clone());
+            ir.predictors.measured.push(column.clone());
+            ir.predictors.basic.push(column);
         }
         // A term with three factors and one with none, on the general and
         // constant paths of `rhs`.

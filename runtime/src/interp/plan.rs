@@ -24,17 +24,25 @@ use leeway_structure::ir::{Arg, Column, Entry, EvalVar, Ir, Pointwise, Share, Si
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 
+/// A table of at most this many values lives on the stack of the call
+/// (every example model needs fewer than 40).
+const STACK_TABLE: usize = 64;
+
 thread_local! {
-    /// The per-call table of values, one per thread, grown to the largest
-    /// plan once: no call allocates, and none pays for clearing it.
-    static TABLE: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+    /// The table of a larger plan: one per thread, grown to the largest
+    /// plan once, so that no call allocates.
+    static LARGE_TABLE: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 /// Runs `f` on a table of `len` values (contents unspecified: every plan
 /// writes each value before it reads it).
 #[inline(always)]
 fn with_table<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
-    TABLE.with(|t| {
+    if len <= STACK_TABLE {
+        let mut table = [0.0; STACK_TABLE];
+        return f(&mut table[..len]);
+    }
+    LARGE_TABLE.with(|t| {
         // `f` never re-enters `with_table`, so the cell is free here.
         let mut t = t.borrow_mut();
         if t.len() < len {
