@@ -38,6 +38,15 @@ thread_local! {
 /// writes each value before it reads it).
 #[inline(always)]
 fn with_table<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
+    // Cleared on every call: no larger than the plan needs.
+    if len <= 16 {
+        let mut table = [0.0; 16];
+        return f(&mut table[..len]);
+    }
+    if len <= 32 {
+        let mut table = [0.0; 32];
+        return f(&mut table[..len]);
+    }
     if len <= STACK_TABLE {
         let mut table = [0.0; STACK_TABLE];
         return f(&mut table[..len]);
@@ -630,55 +639,40 @@ impl RegressorPlan {
     }
 }
 
-/// A term's product `k · t[f0] · …` by its number of factors (two at most
-/// in the model class; more take the general path).
+/// A term of the right-hand side weighted by its parameter:
+/// `θ_p · (k · t[f0] · …)`, written to the table's value `at`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum TermShape {
-    Constant,
-    One(u32),
-    Two(u32, u32),
-    General(u32, u32),
-}
-
-/// One term of the right-hand side: `θ_p · (k · t[f0] · …)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct RhsTerm {
-    coefficient: f64,
+struct Weighted<const A: usize> {
     parameter: u32,
-    shape: TermShape,
+    product: Product<A>,
 }
 
-impl RhsTerm {
+impl<const A: usize> Weighted<A> {
     #[inline(always)]
-    fn value(&self, theta: &[f64], factors: &[u32], t: &[f64]) -> f64 {
-        let k = self.coefficient;
-        let term = match self.shape {
-            TermShape::Constant => k,
-            TermShape::One(a) => k * t[a as usize],
-            TermShape::Two(a, b) => (k * t[a as usize]) * t[b as usize],
-            TermShape::General(start, end) => {
-                let mut v = k;
-                for &f in &factors[start as usize..end as usize] {
-                    v *= t[f as usize];
-                }
-                v
-            }
-        };
-        theta[self.parameter as usize] * term
+    fn write(terms: &[Self], theta: &[f64], t: &[f64], dest: &mut [f64]) {
+        for w in terms {
+            dest[w.product.at as usize] = theta[w.parameter as usize] * w.product.value(t);
+        }
     }
 }
 
-/// The right-hand side's plan: per output, its terms in term order, summed
-/// `θ_p0 · term0 + θ_p1 · term1 + …` as they are evaluated (the shapes
-/// of one output's terms are mixed, and their order is the sum's).
+/// The right-hand side's plan: the weighted terms `θ_p · term`, each
+/// evaluated by a loop per number of factors into the table (after the
+/// derived values) in output and term order, then summed per output in
+/// term order `((w0 + w1) + w2) + …`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub(super) struct RhsPlan {
     table: Table,
-    /// Per output, its terms `terms[start..end]`.
-    outputs: Vec<(u32, u32)>,
-    terms: Vec<RhsTerm>,
-    /// Factors of terms on the general path.
+    /// Where the weighted terms start in the table.
+    terms_at: usize,
+    constant: Vec<Weighted<0>>,
+    one: Vec<Weighted<1>>,
+    two: Vec<Weighted<2>>,
+    /// More factors than the model class has: `(parameter, product)`.
+    general: Vec<(u32, u32, General)>,
     factors: Vec<u32>,
+    /// Per output, its weighted terms `[start, end)` (relative to `terms_at`).
+    outputs: Vec<(u32, u32)>,
 }
 
 impl RhsPlan {
@@ -692,29 +686,59 @@ impl RhsPlan {
             }
         }
         let mut plan = RhsPlan::default();
+        let mut at = 0u32;
         for terms in by_output {
-            let start = plan.terms.len() as u32;
+            let start = at;
             for t in terms {
                 let (coefficient, factors) = b.term(t, true);
-                let shape = match *factors.as_slice() {
-                    [] => TermShape::Constant,
-                    [a] => TermShape::One(a),
-                    [a, b] => TermShape::Two(a, b),
+                let parameter = t.parameter as u32;
+                match *factors.as_slice() {
+                    [] => plan.constant.push(Weighted {
+                        parameter,
+                        product: Product {
+                            coefficient,
+                            factors: [],
+                            at,
+                        },
+                    }),
+                    [f0] => plan.one.push(Weighted {
+                        parameter,
+                        product: Product {
+                            coefficient,
+                            factors: [f0],
+                            at,
+                        },
+                    }),
+                    [f0, f1] => plan.two.push(Weighted {
+                        parameter,
+                        product: Product {
+                            coefficient,
+                            factors: [f0, f1],
+                            at,
+                        },
+                    }),
                     _ => {
-                        let start = plan.factors.len() as u32;
+                        let f = plan.factors.len() as u32;
                         plan.factors.extend(factors);
-                        TermShape::General(start, plan.factors.len() as u32)
+                        let end = plan.factors.len() as u32;
+                        plan.general.push((
+                            at,
+                            parameter,
+                            General {
+                                coefficient,
+                                start: f,
+                                end,
+                            },
+                        ));
                     }
-                };
-                plan.terms.push(RhsTerm {
-                    coefficient,
-                    parameter: t.parameter as u32,
-                    shape,
-                });
+                }
+                at += 1;
             }
-            plan.outputs.push((start, plan.terms.len() as u32));
+            plan.outputs.push((start, at));
         }
         plan.table = b.table;
+        plan.terms_at = plan.table.len;
+        plan.table.len += at as usize;
         plan
     }
 
@@ -730,14 +754,22 @@ impl RhsPlan {
     #[inline(always)]
     fn eval_in(&self, t: &mut [f64], theta: &[f64], sig: &Signals, out: &mut [f64]) {
         self.table.fill(sig, &[], t);
+        let (t, w) = t.split_at_mut(self.terms_at);
         let t: &[f64] = t;
+        Weighted::write(&self.constant, theta, t, w);
+        Weighted::write(&self.one, theta, t, w);
+        Weighted::write(&self.two, theta, t, w);
+        for (at, p, product) in &self.general {
+            w[*at as usize] = theta[*p as usize] * product.value(&self.factors, t);
+        }
+        let w: &[f64] = w;
         for (o, &(start, end)) in out.iter_mut().zip(&self.outputs) {
-            *o = match self.terms[start as usize..end as usize].split_first() {
+            *o = match w[start as usize..end as usize].split_first() {
                 None => 0.0,
-                Some((first, rest)) => {
-                    let mut acc = first.value(theta, &self.factors, t);
-                    for term in rest {
-                        acc += term.value(theta, &self.factors, t);
+                Some((&first, rest)) => {
+                    let mut acc = first;
+                    for &v in rest {
+                        acc += v;
                     }
                     acc
                 }
