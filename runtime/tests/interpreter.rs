@@ -450,6 +450,7 @@ fn shapes_beyond_the_model_class_take_the_general_path() {
         constant.factors.clear();
         ir.terms.push(constant);
         check(&name, &ir, 500, 0xba59e);
+        check_blocks(&name, &ir, 0xba59e);
     }
 }
 
@@ -488,4 +489,43 @@ fn outputs_without_terms_are_written() {
         }
     }
     check(&name, &ir, 200, 11);
+    check_blocks(&name, &ir, 11);
+}
+
+/// A block of samples evaluated at once gives, slot by slot, the bits of
+/// the per-sample evaluation, for every model and predictor, blocks of
+/// one, a few and many samples, each sample with its own sign pattern;
+/// every slot of the block is written, nothing past it.
+#[test]
+fn blocks_match_sample_by_sample() {
+    for (seed, (name, ir)) in all_models().iter().enumerate() {
+        check_blocks(name, ir, 0xb10c + seed as u64);
+    }
+}
+
+/// Holds `regressors_block` to `regressors` sample by sample.
+fn check_blocks(name: &str, ir: &Ir, seed: u64) {
+    let interpreter = Interpreter::new(ir.clone());
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for n in [1, 5, 32] {
+        let samples: Vec<Sample> = (0..n).map(|_| sample(ir, &mut rng)).collect();
+        let signals: Vec<Signals> = samples.iter().map(Sample::signals).collect();
+        let signs: Vec<f64> = samples.iter().flat_map(|s| s.signs.clone()).collect();
+        for kind in KINDS {
+            let len = ir.predictors.get(kind).len() * ir.states.len();
+            let mut block = vec![GARBAGE; len * n + 3];
+            interpreter.regressors_block(kind, &signals, &signs, &mut block);
+            let mut want = vec![0.0; len * n];
+            for (s, (sig, sample)) in signals.iter().zip(&samples).enumerate() {
+                let mut one = vec![0.0; len];
+                interpreter.regressors(kind, sig, &sample.signs, &mut one);
+                for (k, v) in one.into_iter().enumerate() {
+                    want[k * n + s] = v;
+                }
+            }
+            if let Some(d) = differs(&block, &want) {
+                panic!("{name}: {kind:?} block of {n}: {d}");
+            }
+        }
+    }
 }

@@ -10,11 +10,14 @@
 //! ```
 //!
 //! `regressors`: the ship's regressors of each predictor and one simulation
-//! step, ns per sample (a batch of 1000 samples per round, 400 rounds).
+//! step, ns per sample (a batch of 1000 samples per round, 400 rounds); for
+//! the regressors also the interpreter's block evaluation
+//! (`Interpreter::regressors_block`, 32 samples a call).
 //! `estimates`: one estimate of the ship per method at N = 5000 (10 m/s
 //! wind, with standard errors), ms (15 rounds); the two models' estimates
 //! are checked to be equal. Without an argument, both.
 
+use leeway::ir::PredictorKind;
 use leeway::runtime::Source;
 use leeway::runtime::estimate::{Method, Options, estimate};
 use leeway::runtime::study;
@@ -116,6 +119,36 @@ fn line(what: &str, unit: &str, mut generated: Vec<f64>, mut interpreted: Vec<f6
     )
 }
 
+/// Samples per call of the block evaluation.
+const BLOCK: usize = 32;
+
+/// Nanoseconds per sample of one round of the interpreter's block
+/// evaluation (`BLOCK` samples per call, sign pattern `+1`).
+fn block_round(
+    interpreter: &Interpreter,
+    kind: PredictorKind,
+    samples: &[Sample],
+    out: &mut [f64],
+) -> f64 {
+    let signs = [1.0; Ship::SIGN_ARGS.len() * BLOCK];
+    let signals: Vec<Signals> = samples
+        .iter()
+        .map(|s| Signals {
+            states: &s.states,
+            inputs: &s.inputs,
+            rotation: &s.rotation,
+            disturbances: &s.disturbances,
+        })
+        .collect();
+    let start = Instant::now();
+    for block in signals.chunks(BLOCK) {
+        let signs = &signs[..block.len() * Ship::SIGN_ARGS.len()];
+        interpreter.regressors_block(kind, black_box(block), black_box(signs), out);
+        black_box(&mut *out);
+    }
+    start.elapsed().as_nanos() as f64 / samples.len() as f64
+}
+
 fn regressors(rounds: usize) {
     let interpreter = Interpreter::new(Ship.ir().clone());
     let samples = samples();
@@ -125,19 +158,34 @@ fn regressors(rounds: usize) {
             .max(Ship::MEASURED_LEN)
             .max(2 * Ship::STATES.len())
     ];
+    let mut block = vec![0.0; Ship::AUGMENTED_LEN.max(Ship::MEASURED_LEN) * BLOCK];
     println!("ns per sample, {rounds} rounds of {BATCH} samples:");
-    for (name, work) in [
-        ("basic", Work::Basic),
-        ("augmented", Work::Augmented),
-        ("measured", Work::Measured),
-        ("step", Work::Step),
+    for (name, work, kind) in [
+        ("basic", Work::Basic, Some(PredictorKind::Basic)),
+        ("augmented", Work::Augmented, Some(PredictorKind::Augmented)),
+        ("measured", Work::Measured, Some(PredictorKind::Measured)),
+        ("step", Work::Step, None),
     ] {
-        let (mut g, mut i) = (Vec::new(), Vec::new());
+        let (mut g, mut i, mut b) = (Vec::new(), Vec::new(), Vec::new());
         for _ in 0..rounds {
             g.push(round(&Ship, work, &samples, &mut out));
             i.push(round(&interpreter, work, &samples, &mut out));
+            if let Some(kind) = kind {
+                b.push(block_round(&interpreter, kind, &samples, &mut block));
+            }
         }
-        println!("{}", line(name, "ns", g, i));
+        let mut text = line(name, "ns", g.clone(), i);
+        if !b.is_empty() {
+            b.sort_by(f64::total_cmp);
+            g.sort_by(f64::total_cmp);
+            text += &format!(
+                " | blocks of {BLOCK}: min {:>6.2} p25 {:>6.2} ns, ratio {:.2}",
+                quantile(&b, 0.0),
+                quantile(&b, 0.25),
+                quantile(&b, 0.25) / quantile(&g, 0.25)
+            );
+        }
+        println!("{text}");
     }
 }
 

@@ -8,16 +8,26 @@
 //! shape, and the plan only has to say, per slot, which table values to
 //! multiply. The table holds, in this order: the states, inputs, rotation
 //! variables and signs the plan reads (copied prefixes of the `Signals`),
-//! then the derived values — moduli and disturbed arguments `x − ((p0 + p1)
-//! + …)` — each computed once per call, however many entries use it.
+//! then the derived values — disturbed arguments `x − ((p0 + p1) + …)` and
+//! moduli — each computed once per call, however many entries use it, then
+//! room for intermediate products (the entries of summed slots, the
+//! weighted terms of `rhs`). It lives on the stack (a per-thread one for a
+//! plan of more than 64 values): no call allocates.
 //!
 //! Slots are grouped by the number of factors of their only entry, so each
-//! group is a tight loop without a branch per slot; a slot summing several
-//! entries (a parameter multiplying a sum) or with more than three factors
-//! (none in the model class: a sign and two variables at most) takes the
-//! general path. The structurally zero
-//! slots are written from a precomputed list of runs, not by clearing the
-//! whole buffer first.
+//! group is a tight loop without a branch per slot; a slot with more than
+//! three factors (none in the model class: a sign and two variables at
+//! most) takes the general path. A slot summing several entries (a
+//! parameter multiplying a sum) has its entries computed the same way into
+//! the table, then added in order. The structurally zero slots are written
+//! from a precomputed list of runs, not by clearing the whole buffer first.
+//!
+//! Nothing is reordered: each product and each sum is evaluated operation
+//! for operation as `leeway_structure::ir::Entry` defines it (and as
+//! generated code does); only *when* each is computed, and where it is
+//! kept, differs.
+
+mod block;
 
 use crate::model::Signals;
 use leeway_structure::ir::{Arg, Column, Entry, EvalVar, Ir, Pointwise, Share, Signal, Term};
