@@ -9,6 +9,9 @@
 //! so the two agree bit for bit (`tests/bit_exact.rs`,
 //! `runtime/tests/interpreter.rs`).
 //!
+//! [`Interpreter::regressors_block`] evaluates the same plans for a block of
+//! samples at once, each product a loop over the samples.
+//!
 //! [`ArgPlan`] and [`TermPlan`] evaluate one argument or term on its own,
 //! for the estimator's fixed-sign instruments and the sign detection.
 
