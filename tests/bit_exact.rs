@@ -36,12 +36,20 @@ mod models {
         leeway::include_model!("../examples/models/ship_iv2.som", aggregate);
     }
     // Fixtures that cover what the examples do not: body-frame media, `next`
-    // equations, moduli of inputs, exact fractions, a measured rotation.
+    // equations, moduli of inputs, exact fractions, a measured rotation, and
+    // the shapes of the interpreter's plans.
     pub mod raft {
         leeway::include_model!("models/raft.som");
     }
     pub mod sub {
         leeway::include_model!("models/sub.som");
+    }
+    // The interpreter's plan shapes: a measured rotation with a measured
+    // earth-frame medium beside a body-frame one, a column in two outputs,
+    // a slot summing entries, a constant term, a pointwise modulus of a plain
+    // state, a modulus alone (θ confounded, hence `aggregate`).
+    pub mod barge {
+        leeway::include_model!("models/barge.som", aggregate);
     }
 }
 
@@ -76,6 +84,7 @@ fn cases() -> Vec<Case> {
         ),
         case("tests/models/raft.som", &models::raft::Raft, false),
         case("tests/models/sub.som", &models::sub::Sub, false),
+        case("tests/models/barge.som", &models::barge::Barge, true),
     ]
 }
 

@@ -1,7 +1,8 @@
 //! Regressor evaluation of the ship, generated (`include_model!`) vs
-//! interpreted (`Interpreter`), per predictor. Each iteration evaluates a
-//! batch of `BATCH` different samples, so the time per sample is the reported
-//! time divided by `BATCH` (criterion also reports the throughput).
+//! interpreted (`Interpreter`), per predictor, and one simulation step
+//! (`rhs` and the update). Each iteration evaluates a batch of `BATCH`
+//! different samples, so the time per sample is the reported time divided
+//! by `BATCH` (criterion also reports the throughput).
 //!
 //! `cargo bench -p leeway-bench --bench regressors`
 
@@ -9,6 +10,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use leeway::ir::PredictorKind;
 use leeway::{Interpreter, Model, Signals, planar_rotation};
 use std::hint::black_box;
+use std::time::Duration;
 
 leeway::include_model!("../../examples/models/ship.som");
 
@@ -86,7 +88,10 @@ fn regressors(c: &mut Criterion) {
         ("measured", PredictorKind::Measured),
     ] {
         let mut group = c.benchmark_group(format!("ship/{name}"));
-        group.throughput(Throughput::Elements(BATCH as u64));
+        group
+            .throughput(Throughput::Elements(BATCH as u64))
+            .sample_size(20)
+            .measurement_time(Duration::from_secs(2));
         group.bench_function("generated", |b| {
             b.iter(|| run(&Ship, kind, &samples, &signs, &mut out))
         });
@@ -94,6 +99,35 @@ fn regressors(c: &mut Criterion) {
             b.iter(|| run(&interpreter, kind, &samples, &signs, &mut out))
         });
         group.finish();
+    }
+    let theta = vec![0.3; Ship::PARAMETERS.len()];
+    let mut group = c.benchmark_group("ship/step");
+    group
+        .throughput(Throughput::Elements(BATCH as u64))
+        .sample_size(20)
+        .measurement_time(Duration::from_secs(2));
+    group.bench_function("generated", |b| {
+        b.iter(|| step(&Ship, &samples, &theta, &mut out))
+    });
+    group.bench_function("interpreted", |b| {
+        b.iter(|| step(&interpreter, &samples, &theta, &mut out))
+    });
+    group.finish();
+}
+
+/// One simulation step per sample (`h` = 1): `rhs`, then `x⁺ = x + h f`.
+fn step(model: &impl Model, samples: &[Sample], theta: &[f64], out: &mut [f64]) {
+    let n = Ship::STATES.len();
+    let (f, next) = out.split_at_mut(n);
+    for s in samples {
+        let sig = Signals {
+            states: &s.states,
+            inputs: &s.inputs,
+            rotation: &s.rotation,
+            disturbances: &s.disturbances,
+        };
+        model.step(black_box(theta), 1.0, black_box(&sig), f, next);
+        black_box(&mut *next);
     }
 }
 
