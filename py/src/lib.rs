@@ -149,7 +149,7 @@ impl Model {
     }
 
     /// `leeway check --json` of this model, for the given sign patterns
-    /// (`"u+ v-"`, as `--pattern` takes them) or the searched ones.
+    /// (`"water.u:+,water.v:-"`, as `--pattern` takes them) or the searched ones.
     #[pyo3(signature = (patterns=None))]
     fn check_json(&self, patterns: Option<Vec<String>>) -> PyResult<String> {
         let patterns = match patterns {

@@ -50,8 +50,8 @@ def test_estimate_recovers_theta_with_standard_errors(ship: leeway.Model, ship_f
 
 def test_to_json_is_bit_identical_to_the_cli(ship: leeway.Model, ship_frame: pd.DataFrame, tmp_path: Path) -> None:
     for args, kwargs in [((), {}), (("--method", "ls"), {"method": "ls"}),
-                         (("--method", "iv1", "--combine", "stacked", "--lags", "3"),
-                          {"method": "iv1", "combine": "stacked", "lags": 3})]:
+                         (("--combine", "stacked", "--lags", "3", "--centring", "pooled"),
+                          {"combine": "stacked", "lags": 3, "centring": "pooled"})]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", leeway.LeewayWarning)
             ours = json.loads(leeway.estimate(ship, ship_frame, **kwargs).to_json())

@@ -56,7 +56,7 @@ def test_check_matches_the_cli_document() -> None:
 def test_check_with_one_pattern_reports_the_combination() -> None:
     model = leeway.Model.load(ROOT / "examples/models/rov.som")
     first = model.check().required_sign_patterns[0]
-    spec = " ".join(f"{k}{v}" for k, v in first.items())
+    spec = ",".join(f"{k}:{v}" for k, v in first.items())
     check = model.check([spec])
     assert not check.identifiable
     assert check.combinations and {"Y_vr", "Y_rv"} <= set(check.combinations[0]["parameters"])

@@ -123,8 +123,9 @@ class Model:
 
     def check(self, patterns: Sequence[str] | None = None) -> Check:
         """The structure and identifiability report of ``leeway check``, for
-        the given experiments' sign patterns (``"u+ v-"``) or the smallest
-        set the compiler finds."""
+        the given experiments' sign patterns or the smallest
+        set the compiler finds. A pattern reads as ``leeway check --pattern``:
+        ``"water.u:+,water.v:-"`` (arguments not named are ``+``)."""
         document = json.loads(
             self._core.check_json(list(patterns) if patterns is not None else None)
         )
