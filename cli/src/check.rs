@@ -2,7 +2,8 @@
 //! (regressors, nuisance reduction, required experiments) and diagnostics,
 //! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
 
-pub mod json;
+// The document is built in the runtime, which the Python package shares.
+pub use leeway_runtime::report::check as json;
 
 use crate::output::{Status, err, out, print_json, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};

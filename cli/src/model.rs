@@ -2,15 +2,19 @@
 //! the model, its data files and parameter files, with every problem located.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::data::{
-    CsvSource, FileNotes, LoadOptions, heading_gain, load_csv_noted, open_csv,
-};
+use leeway_runtime::data::{CsvSource, FileNotes, LoadOptions, load_csv_noted, open_csv};
 use leeway_runtime::{Experiment, Source};
 use leeway_structure::grammar::source::Refused;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
 use leeway_structure::{Options, compile};
 use std::path::{Path, PathBuf};
+
+// The data checks and the JSON of the loading notes live in the runtime, so
+// that the Python package reports exactly what the CLI does.
+pub use leeway_runtime::report::{
+    DataFileJson, data_files_json, heading_gains, heading_warnings, unit_warnings,
+};
 
 /// Largest magnitude of a value given on the command line (`--x0`,
 /// `--disturbance`): squares of larger values approach f64's range inside
@@ -324,54 +328,6 @@ pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
     lines
 }
 
-/// The JSON form of the loading notes (README: `data_files`).
-#[derive(Debug, serde::Serialize)]
-pub struct DataFileJson {
-    /// The file as given.
-    pub file: String,
-    /// Lines skipped as comments (`#`).
-    pub comment_lines: usize,
-    /// Lines skipped as blank (only whitespace).
-    pub blank_lines: usize,
-    /// Per experiment: rows read, largest relative step deviation, samples after resampling.
-    pub experiments: Vec<DataExperimentJson>,
-}
-
-/// One experiment of [`DataFileJson`].
-#[derive(Debug, serde::Serialize)]
-pub struct DataExperimentJson {
-    /// The experiment's name.
-    pub name: String,
-    /// Rows read from the file.
-    pub rows: usize,
-    /// Largest `|Δt − h|/h` over the steps (null without a time column).
-    pub max_step_deviation: Option<f64>,
-    /// Samples after `--resample` (null when not resampled).
-    pub resampled: Option<usize>,
-}
-
-/// [`FileNotes`] as JSON.
-pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
-    notes
-        .iter()
-        .map(|f| DataFileJson {
-            file: f.file.clone(),
-            comment_lines: f.comment_lines,
-            blank_lines: f.blank_lines,
-            experiments: f
-                .experiments
-                .iter()
-                .map(|e| DataExperimentJson {
-                    name: e.experiment.clone(),
-                    rows: e.rows,
-                    max_step_deviation: e.max_step_deviation,
-                    resampled: e.resampled,
-                })
-                .collect(),
-        })
-        .collect()
-}
-
 /// The declared units, one line each: `delta: column rudder_deg in deg, converted to rad`.
 pub fn unit_lines(ir: &Ir) -> Vec<String> {
     ir.data_units
@@ -400,110 +356,6 @@ pub fn axis_label(ir: &Ir, signal: &str) -> String {
         Some((kind, _)) => format!("{signal} ({})", kind.base()),
         None => signal.to_string(),
     }
-}
-
-/// Words in an input's name or column that say it is an angle.
-const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
-
-/// An input without a declared unit, named like an angle (`delta`,
-/// `rudder_deg`, ...), whose values exceed π in magnitude is probably an
-/// angle logged in degrees: say so, with the declaration that fixes it. Only
-/// the name can tell an angle from a force of the same magnitude, so inputs
-/// named otherwise are left alone rather than warned about on every run.
-pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
-    let mut out = Vec::new();
-    let angle_like: Vec<usize> = ir
-        .inputs
-        .iter()
-        .enumerate()
-        .filter(|(_, name)| {
-            let column = leeway_runtime::data::column_name(ir, name).to_lowercase();
-            let angle_like = ANGLE_WORDS
-                .iter()
-                .any(|w| name.to_lowercase().contains(w) || column.contains(w));
-            !ir.data_units.contains_key(*name) && angle_like
-        })
-        .map(|(i, _)| i)
-        .collect();
-    if angle_like.is_empty() {
-        return out;
-    }
-    // One visit of every experiment for all such inputs.
-    let mut peaks = vec![0.0f64; ir.inputs.len()];
-    for e in experiments {
-        e.visit(&mut |row| {
-            for &i in &angle_like {
-                if let Some(v) = row.inputs.get(i) {
-                    peaks[i] = peaks[i].max(v.abs());
-                }
-            }
-        });
-    }
-    for &i in &angle_like {
-        let (name, peak) = (&ir.inputs[i], peaks[i]);
-        if peak > std::f64::consts::PI {
-            out.push(format!(
-                "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
-            ));
-        }
-    }
-    out
-}
-
-/// The heading gain of every experiment (`None` without a planar heading or
-/// with too little yaw motion to tell), one visit each.
-pub fn heading_gains(ir: &Ir, experiments: &[&dyn Source]) -> Vec<(String, Option<f64>)> {
-    if heading_name(ir).is_none() {
-        return Vec::new();
-    }
-    experiments
-        .iter()
-        .map(|e| (e.name().to_string(), heading_gain(ir, *e)))
-        .collect()
-}
-
-/// The heading's unit check (SPEC §5): a warning with the measured gain of
-/// `Δψ/h` on the yaw rate when it is off by more than 20 %, from the gains of
-/// [`heading_gains`].
-pub fn heading_warnings(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<String> {
-    let Some(heading) = heading_name(ir) else {
-        return Vec::new();
-    };
-    gains
-        .iter()
-        .filter_map(|(name, gain)| {
-            let gain = (*gain)?;
-            ((gain - 1.0).abs() > 0.2).then(|| heading_warning(ir, name, &heading, gain))
-        })
-        .collect()
-}
-
-fn heading_name(ir: &Ir) -> Option<String> {
-    match &ir.rotation {
-        leeway_structure::ir::Rotation::Planar { heading, .. } => {
-            Some(leeway_runtime::data::column_name(ir, heading))
-        }
-        _ => None,
-    }
-}
-
-fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> String {
-    let rate = match &ir.rotation {
-        leeway_structure::ir::Rotation::Planar { integrates, .. } => {
-            ir.states.get(*integrates).map_or("r", String::as_str)
-        }
-        _ => "r",
-    };
-    // Far above 1 points at degrees (57.3 = 180/π); the figure itself is
-    // reported as measured, whatever it is.
-    let why = if gain > 20.0 {
-        "a gain near 57.3 (180/π) means the heading is in degrees while the model works in radians"
-    } else {
-        "check the units and frame of both columns"
-    };
-    format!(
-        "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
-    )
 }
 
 /// Parses `--disturbance` values (`name=value` or `disturbance.name=value`,

@@ -135,27 +135,8 @@ pub fn table(rows: &[Vec<String>]) -> String {
     out
 }
 
-/// A JSON object whose keys keep the order given (the model's order), not
-/// the alphabetical order of a map.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Ordered<T>(pub Vec<(String, T)>);
-
-impl<T> Default for Ordered<T> {
-    fn default() -> Ordered<T> {
-        Ordered(Vec::new())
-    }
-}
-
-impl<T: serde::Serialize> serde::Serialize for Ordered<T> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut map = s.serialize_map(Some(self.0.len()))?;
-        for (k, v) in &self.0 {
-            map.serialize_entry(k, v)?;
-        }
-        map.end()
-    }
-}
+/// Objects keyed in the model's order (shared with the Python package).
+pub use leeway_runtime::report::Ordered;
 
 #[cfg(test)]
 mod tests {

@@ -18,6 +18,7 @@ pub mod data;
 pub mod design;
 pub mod estimate;
 pub mod moments;
+pub mod report;
 pub mod resample;
 pub mod signs;
 pub mod simulate;

@@ -43,23 +43,7 @@ fn signs(args: &[ArgSign]) -> String {
     )
 }
 
-/// What an estimated parameter stands for when it is an aggregate (`X_uu +
-/// W_uu`): its column estimates more than itself, or the estimator's
-/// diagnostics name it (`X_uu estimates …`).
-pub fn aggregate_of(c: &ColumnEstimate, aggregates: &[String]) -> Option<String> {
-    if c.kind != "theta" || c.value.is_none() || c.status.starts_with("held") {
-        return None;
-    }
-    if c.estimates != c.name && !c.estimates.is_empty() {
-        return Some(c.estimates.clone());
-    }
-    let prefix = format!("{} estimates ", c.name);
-    aggregates.iter().find_map(|a| {
-        let rest = a.strip_prefix(&prefix)?;
-        // The remark in parentheses is said once, in the diagnostics.
-        Some(rest.split(" (").next().unwrap_or(rest).to_string())
-    })
-}
+pub use leeway_runtime::report::aggregate_of;
 
 /// The whole text.
 pub fn render(o: &Outcome) -> String {

@@ -162,6 +162,7 @@ fn severity(s: Severity) -> &'static str {
     }
 }
 
+/// A diagnostic in the JSON shape, its spans as lines and columns of `source`.
 pub fn diagnostic(file: &str, source: &str, d: &Diagnostic) -> JsonDiagnostic {
     let at = |offset: usize| grammar::line_col(source, offset);
     let primary = d.primary_span();

@@ -1,0 +1,189 @@
+"""leeway.estimate: the API, bit-identity with `leeway estimate --json`,
+warnings, data handed over from pandas/Arrow, and every error class from a
+real failing input."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import leeway
+from conftest import SHIP, SHIP_IV2, TRUE, run_leeway, ship_data
+
+
+@pytest.fixture(scope="module")
+def ship() -> leeway.Model:
+    return leeway.Model.load(SHIP)
+
+
+def cli_json(tmp: Path, frame: pd.DataFrame, *args: str, name: str = "data") -> dict:
+    path = tmp / f"{name}.csv"
+    frame.to_csv(path, index=False)
+    o = run_leeway("estimate", str(SHIP), "--data", str(path), "--json", *args)
+    return json.loads(o.stdout)
+
+
+def provenance_free(document: dict) -> dict:
+    """The document without what names the input files (a frame has none)."""
+    return {k: v for k, v in document.items() if k not in ("file", "data", "data_files")}
+
+
+def test_estimate_recovers_theta_with_standard_errors(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    est = leeway.estimate(ship, ship_frame)
+    assert est.method == "iv3"
+    assert list(est.params.index) == ship.parameters
+    assert list(est.params.columns) == ["kind", "estimate", "std_error", "status", "estimates", "aggregate"]
+    assert est.params["estimate"].dtype == np.float64
+    x_tau = est.params.loc["X_tau"]
+    assert x_tau["status"] == "estimated"
+    assert abs(x_tau["estimate"] - TRUE["X_tau"]) < 5 * x_tau["std_error"]
+    assert (est.nuisance["kind"] != "theta").all()
+    assert set(est.disturbances.index) == {("current", "north"), ("current", "east")}
+    assert est.diagnostics["predictor"] == "measured"
+    assert est.theta["X_tau"] == x_tau["estimate"]
+
+
+def test_to_json_is_bit_identical_to_the_cli(ship: leeway.Model, ship_frame: pd.DataFrame, tmp_path: Path) -> None:
+    for args, kwargs in [((), {}), (("--method", "ls"), {"method": "ls"}),
+                         (("--combine", "stacked", "--lags", "3", "--centring", "pooled"),
+                          {"combine": "stacked", "lags": 3, "centring": "pooled"})]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", leeway.LeewayWarning)
+            ours = json.loads(leeway.estimate(ship, ship_frame, **kwargs).to_json())
+        cli = cli_json(tmp_path, ship_frame, *args)
+        assert cli["errors"] == []
+        # Floats compare by their shortest round-trip text: equal text, equal bits.
+        assert json.dumps(provenance_free(ours)) == json.dumps(provenance_free(cli)), args
+        assert ours["file"] == cli["file"] == str(SHIP)
+
+
+def test_an_experiment_column_splits_a_frame_like_the_cli(ship: leeway.Model, tmp_path: Path) -> None:
+    a = ship_data(tmp_path, 400, 1.0, 1).assign(experiment="a")
+    b = ship_data(tmp_path, 400, 1.0, 2).assign(experiment="b")
+    both = pd.concat([a, b], ignore_index=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", leeway.LeewayWarning)
+        ours = json.loads(leeway.estimate(ship, both).to_json())
+        as_dict = json.loads(leeway.estimate(ship, {"a": a.drop(columns="experiment"), "b": b.drop(columns="experiment")}).to_json())
+    cli = cli_json(tmp_path, both)
+    assert [e["name"] for e in ours["experiments"]] == ["a", "b"]
+    assert json.dumps(provenance_free(ours)) == json.dumps(provenance_free(cli))
+    # A dict names the experiments by its keys: the same estimate.
+    assert as_dict["estimates"] == ours["estimates"]
+
+
+def test_arrow_tables_and_other_dtypes_give_the_same_estimate(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    import pyarrow as pa
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", leeway.LeewayWarning)
+        reference = leeway.estimate(ship, ship_frame).theta
+        table = leeway.estimate(ship, pa.Table.from_pandas(ship_frame)).theta
+        # float32 columns are widened; a Fortran-ordered block is made contiguous.
+        fortran = pd.DataFrame(np.asfortranarray(ship_frame.to_numpy()), columns=ship_frame.columns)
+        assert leeway.estimate(ship, fortran).theta == reference
+    assert table == reference
+
+
+def test_warnings_are_leeway_warnings(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    frame = ship_frame.copy()
+    frame["psi"] = np.degrees(frame["psi"])  # the heading logged in degrees
+    with pytest.warns(leeway.LeewayWarning, match="does not integrate"):
+        est = leeway.estimate(ship, frame, method="ls")
+    assert any("gain" in w for w in est.warnings)
+
+
+def test_a_missing_column_is_a_located_data_error(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    with pytest.raises(leeway.DataError) as e:
+        leeway.estimate(ship, ship_frame.drop(columns="tau2"))
+    assert e.value.code == "data" and "tau2" in e.value.message
+    assert isinstance(e.value, ValueError)
+
+
+def test_a_non_finite_value_names_its_row_and_column(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    frame = ship_frame.copy()
+    frame.loc[17, "v"] = np.nan
+    with pytest.raises(leeway.DataError) as e:
+        leeway.estimate(ship, {"run1": frame})
+    assert e.value.location == "run1: row 17, column `v`", e.value.location
+
+
+def test_a_text_column_is_a_data_error(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    frame = ship_frame.copy()
+    frame["u"] = "fast"
+    with pytest.raises(leeway.DataError, match="not numeric"):
+        leeway.estimate(ship, frame)
+
+
+def test_too_few_samples_is_a_data_error(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    with pytest.raises(leeway.DataError) as e:
+        leeway.estimate(ship, ship_frame.head(5))
+    assert e.value.location is not None
+
+
+def test_unidentifiable(ship_frame: pd.DataFrame) -> None:
+    with pytest.raises(leeway.Unidentifiable) as e:
+        leeway.estimate(leeway.Model.load(SHIP_IV2), ship_frame)
+    assert e.value.code == "unidentifiable" and "aggregate" in (e.value.hint or "")
+    assert isinstance(e.value, leeway.EstimateError)
+
+
+def test_rank_deficient(ship: leeway.Model) -> None:
+    zeros = pd.DataFrame({c: np.zeros(200) for c in ship.columns})
+    zeros["time"] = np.arange(200.0)
+    with pytest.raises(leeway.RankDeficient) as e:
+        leeway.estimate(ship, zeros, method="ls", aggregate=True)
+    assert e.value.code == "rank-deficient"
+
+
+def test_sign_violation_under_strict(tmp_path: Path) -> None:
+    windy = ship_data(tmp_path, 1500, 10.0, 500, "windy")
+    model = leeway.Model.load(SHIP)
+    with pytest.raises(leeway.SignViolation) as e:
+        leeway.estimate(model, windy, method="iv2", aggregate=True, strict=True)
+    assert e.value.code == "sign-violation"
+    with pytest.warns(leeway.LeewayWarning, match="has sign"):
+        leeway.estimate(model, windy, method="iv2", aggregate=True)
+
+
+def test_options_are_checked(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    with pytest.raises(leeway.OptionError, match="method"):
+        leeway.estimate(ship, ship_frame, method="iv4")
+    with pytest.raises(leeway.OptionError, match="lags"):
+        leeway.estimate(ship, ship_frame, lags=0)
+    with pytest.raises(leeway.OptionError, match="missing"):
+        leeway.estimate(ship, ship_frame, nominal={"X_u": -0.1})
+    with pytest.raises(leeway.OptionError, match="conflicts"):
+        leeway.estimate(ship, ship_frame, step=0.5)
+
+
+def test_the_gil_is_released_while_estimating(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
+    import threading
+    import time
+
+    ticks = 0
+    done = threading.Event()
+
+    def tick() -> None:
+        nonlocal ticks
+        while not done.is_set():
+            ticks += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=tick)
+    t.start()
+    start = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", leeway.LeewayWarning)
+        leeway.estimate(ship, ship_frame)
+    elapsed = time.perf_counter() - start
+    done.set()
+    t.join()
+    # A thread that could not run while Rust held the GIL would tick only
+    # before and after; it ticks throughout instead.
+    assert ticks > 0.3 * elapsed / 0.0011, (ticks, elapsed)
