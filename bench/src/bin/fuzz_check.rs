@@ -464,7 +464,9 @@ fn malform(rng: &mut ChaCha8Rng, base: &str) -> Vec<u8> {
             }
             8 => {
                 // A column scaled (units).
-                let f: f64 = format!("1e{}", rng.random_range(-30..30)).parse().unwrap_or(1.0);
+                let f: f64 = format!("1e{}", rng.random_range(-30..30))
+                    .parse()
+                    .unwrap_or(1.0);
                 for row in rows.iter_mut().skip(1) {
                     if let Some(x) = row.get_mut(c) {
                         let v: f64 = x.parse().unwrap_or(0.0);
