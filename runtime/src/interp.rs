@@ -138,9 +138,10 @@ impl Interpreter {
     /// `out[..n_outputs · n_columns · n]` written. `signs` holds the sign
     /// pattern of each sample in turn (`sign_args.len()` values each;
     /// ignored by the basic predictor). Bit for bit what
-    /// [`Model::regressors`] gives sample by sample, at a fraction of the
-    /// cost: the plan is read once per block, and its products loop over
-    /// the samples.
+    /// [`Model::regressors`] gives sample by sample, at about half the cost
+    /// for blocks of 32 (docs/performance.md): the plan is read once per
+    /// block, and its products loop over the samples. Like the per-sample methods it panics when a slice is
+    /// shorter than the model needs.
     pub fn regressors_block(
         &self,
         kind: PredictorKind,
