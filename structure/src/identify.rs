@@ -104,6 +104,10 @@ pub const MAX_ENUMERATED_SIGNS: usize = 8;
 /// Largest number of rank evaluations one experiment search may spend.
 pub const SEARCH_BUDGET: usize = 4000;
 
+/// Of these, the most spent on dropping patterns from the constructed set
+/// before the enumeration (see `Analysis::component_search`).
+pub const PRUNE_BUDGET: usize = 16;
+
 /// One parsed structural monomial: (output, coefficient, variables with powers).
 type StructMonomial = (usize, Q, Vec<(StructVar, u32)>);
 
@@ -1417,6 +1421,33 @@ impl<'a> Analysis<'a> {
             }
         }
         let lower = per_family.values().copied().max().unwrap_or(1).max(1);
+        // The completion asks full rank of every family, which is more than
+        // θ may need (a measured medium's constant character, say): drop
+        // patterns one at a time while the rest still identify, a few rank
+        // evaluations that often bring the upper bound down to the lower one.
+        let (mut upper, mut u) = (upper, u);
+        let mut spent = 0usize;
+        'prune: while lower < u {
+            // The latest first: the all-plus pattern keeps the rows sparse.
+            for drop in (0..u).rev() {
+                if spent >= PRUNE_BUDGET {
+                    break 'prune;
+                }
+                spent += 1;
+                let fewer: Vec<SignPattern> = upper
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != drop)
+                    .map(|(_, p)| p.clone())
+                    .collect();
+                if ok(&fewer) {
+                    upper = fewer;
+                    u -= 1;
+                    continue 'prune;
+                }
+            }
+            break;
+        }
         if lower >= u {
             return done(upper, None);
         }
@@ -1435,7 +1466,6 @@ impl<'a> Analysis<'a> {
         // With homogeneous columns a common flip of every pattern changes no
         // rank, so one experiment may be taken all-plus.
         let fix_first = self.homogeneous_over(blocks, args);
-        let mut spent = 0usize;
         for size in lower..=u {
             // The sets of this size to try; when more than the budget left,
             // the size cannot be exhausted (the found set is minimal anyway

@@ -110,8 +110,17 @@ impl Poly {
         let mut p = Poly::zero();
         for (ma, qa) in &self.terms {
             for (mb, qb) in &other.terms {
-                for (m, q) in mul_monomials(ma, mb, nf) {
-                    p.add_term(m, q * qa * qb);
+                let qab = qa * qb;
+                let mut products = mul_monomials(ma, mb, nf);
+                if products.len() == 1 {
+                    // The usual case: no cos² to reduce, a coefficient 1.
+                    if let Some((m, q)) = products.pop() {
+                        p.add_term(m, if q.is_one() { qab } else { q * qab });
+                    }
+                    continue;
+                }
+                for (m, q) in products {
+                    p.add_term(m, q * &qab);
                 }
             }
         }
@@ -209,6 +218,47 @@ pub fn render_monomial(m: &Monomial, name: &dyn Fn(&Var) -> String) -> String {
 }
 
 fn mul_monomials(a: &Monomial, b: &Monomial, nf: NormalForm) -> Vec<(Monomial, Q)> {
+    // Both sorted by variable: merge them, signs squaring to one.
+    let mut product: Monomial = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let next = match (a.get(i), b.get(j)) {
+            (Some(x), Some(y)) if x.0 == y.0 => {
+                i += 1;
+                j += 1;
+                (x.0, x.1 + y.1)
+            }
+            (Some(x), Some(y)) if x.0 < y.0 => {
+                i += 1;
+                *x
+            }
+            (Some(x), None) => {
+                i += 1;
+                *x
+            }
+            (_, Some(y)) => {
+                j += 1;
+                *y
+            }
+            (None, None) => break,
+        };
+        product.push(next);
+    }
+    product.retain_mut(|(v, e)| match v {
+        Var::Sign(_) if *e % 2 == 1 => {
+            *e = 1;
+            true
+        }
+        Var::Sign(_) => false,
+        _ => true,
+    });
+    let cos = product
+        .iter()
+        .find(|(v, _)| *v == Var::Rot(0))
+        .map_or(0, |(_, e)| *e);
+    if !(nf.planar && cos >= 2) {
+        return vec![(product, Q::one())];
+    }
     let mut merged: BTreeMap<Var, u32> = BTreeMap::new();
     for (v, e) in a.iter().chain(b.iter()) {
         *merged.entry(*v).or_insert(0) += e;

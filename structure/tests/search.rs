@@ -286,16 +286,23 @@ fn timing_of_generated_models() {
 /// `n` unmeasured media around the paper's ship, each with its own quadratic
 /// drag in every equation (`bench/src/models.rs`, `many_media`).
 fn media(n: usize) -> String {
+    media_with_wind(n, 0)
+}
+
+/// [`media`] with `winds` more media, measured (pointwise in IV3).
+fn media_with_wind(n: usize, winds: usize) -> String {
     let mut s = String::from(
         "model Media {\n    step 0.1\n    state u, v, r\n    input tau1, tau2, tau3\n    heading psi integrates r\n",
     );
-    for i in 0..n {
-        s += &format!(
-            "    disturbance d{i} unmeasured earth(n{i}, e{i})\n    m{i} = relative(d{i})\n"
-        );
+    for i in 0..n + winds {
+        let kind = if i < n { "unmeasured" } else { "measured" };
+        s += &format!("    disturbance d{i} {kind} earth(n{i}, e{i})\n    m{i} = relative(d{i})\n");
     }
-    let sum =
-        |f: &dyn Fn(usize) -> String| (0..n).map(|i| format!(" + {}", f(i))).collect::<String>();
+    let sum = |f: &dyn Fn(usize) -> String| {
+        (0..n + winds)
+            .map(|i| format!(" + {}", f(i)))
+            .collect::<String>()
+    };
     s += &format!(
         "    der u = X_u*u + X_tau*tau1{}\n",
         sum(&|i| format!("U{i}*m{i}.u*|m{i}.u|"))
@@ -350,5 +357,21 @@ fn many_media_need_one_experiment_each_exactly() {
             fewer.ir.as_ref().map(|i| i.report.verdict()),
             Some("not-identifiable")
         );
+    }
+}
+
+/// With measured media besides, their drag adds a constant character to the
+/// row family of the unmeasured ones (their signs are not the experiment's),
+/// so the constructed set has n + 1 experiments; dropping one brings it to
+/// the lower bound n, and the verdict is exact again (it was `undecided`
+/// between n and n + 1; found by the fuzz campaign at 127 media).
+#[test]
+fn measured_media_beside_do_not_cost_an_experiment() {
+    for n in [4, 20] {
+        let c = compiled(&media_with_wind(n, 2));
+        assert!(errors(&c).is_empty(), "{n}: {:?}", errors(&c));
+        let r = &c.ir.as_ref().expect("compiles").report;
+        assert_eq!(r.verdict(), "identifiable", "{n}: {:?}", r.search_cut);
+        assert_eq!(r.required_patterns.len(), n);
     }
 }

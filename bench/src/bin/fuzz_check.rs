@@ -14,7 +14,9 @@
 //! Options: `--models N`, `--csvs N`, `--seed S` (every case is derived from
 //! it), `--timeout SECONDS` (default 5), `--leeway PATH` (default
 //! `target/release/leeway`), `--root DIR` (the workspace, for the example
-//! models; default `.`), `--out DIR` (scratch files and failing cases).
+//! models; default `.`), `--out DIR` (scratch files and failing cases),
+//! `--from I` (start at model case I: with `--models 1 --csvs 0`, one case
+//! of a campaign is rerun and left in `DIR/scratch/case.som`).
 
 use leeway::runtime::study;
 use leeway::runtime::{Interpreter, write_csv};
@@ -539,6 +541,7 @@ fn main() {
             .cloned()
     };
     let n_models: usize = opt("--models").and_then(|v| v.parse().ok()).unwrap_or(2000);
+    let from: usize = opt("--from").and_then(|v| v.parse().ok()).unwrap_or(0);
     let n_csvs: usize = opt("--csvs").and_then(|v| v.parse().ok()).unwrap_or(200);
     let seed: u64 = opt("--seed").and_then(|v| v.parse().ok()).unwrap_or(1);
     let timeout =
@@ -576,7 +579,7 @@ fn main() {
     let started = Instant::now();
     let mut models_tally = Tally::default();
     let model_path = scratch.join("case.som");
-    for i in 0..n_models {
+    for i in from..from + n_models {
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
         let text = match rng.random_range(0..3) {
