@@ -112,7 +112,7 @@ impl pulp::WithSimd for BlockKernel<'_> {
 /// Shifted cross-moment sums of instruments `z`, regressors `φ` and target
 /// `t`: what one experiment contributes to the moment equations, whatever
 /// its length (`O(m·p)` numbers).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct CrossMoments {
     /// Samples.
     pub n: usize,

@@ -7,10 +7,10 @@ use crate::interp::{ArgPlan, arg_plan};
 use crate::model::HeadingRotation;
 use leeway_structure::identify::{pointwise_signs, relevant_signs};
 use leeway_structure::ir::{Ir, PredictorKind, Rotation, SignPattern};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// One argument's sign in one experiment.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ArgSign {
     /// `water.u`.
     pub argument: String,
@@ -23,7 +23,7 @@ pub struct ArgSign {
 }
 
 /// The sign pattern of one experiment.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ExperimentSigns {
     /// Experiment name.
     pub experiment: String,

@@ -2,65 +2,67 @@
 
 use super::*;
 
+/// How a moment pass ended.
+pub(super) enum Accumulated {
+    /// `[experiment][output]` moment sums, the largest relative move of the
+    /// instrument simulation, and its mean fit to the data.
+    Done(Vec<Vec<CrossMoments>>, f64, f64),
+    /// The instrument simulation diverged in some experiment.
+    Diverged,
+    /// A non-finite measured value, in experiment `i` (scanning passes).
+    Bad(usize, BadValue),
+}
+
 impl Estimator<'_> {
-    /// One accumulation pass: `[experiment][output]` moment sums over the block's columns.
-    /// With `finite`, the first pass also looks for non-finite measured
-    /// values (no extra pass over the data): the first one found is stored
-    /// as `(experiment, sample, what)`.
+    /// One moment pass over every experiment: `[experiment][output]` moment
+    /// sums over the block's columns, combined in experiment order. With
+    /// `scan`, the first pass also looks for non-finite measured values (no
+    /// extra pass over the data).
     pub(super) fn accumulate(
         &self,
-        experiments: &[&dyn Source],
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
-        finite: Option<&FirstBadValue>,
-    ) -> Result<(Vec<Vec<CrossMoments>>, f64, f64), Diverged> {
-        // An empty θ asks for the delayed bootstrap pass of the refined IV.
-        let walker = if theta_sim.is_empty() {
-            self.walker_with(Some(Instruments::Delayed))
-        } else {
-            self.walker()
+        scan: bool,
+    ) -> Result<Accumulated, EstimateError> {
+        let request = PassRequest {
+            plan: self.pass_plan(),
+            pass: Pass::Moments {
+                theta_sim: theta_sim.to_vec(),
+                mu: mu.to_vec(),
+                reference: reference.map(|(t, m)| (t.to_vec(), m.to_vec())),
+                scan,
+            },
+            infos: self.infos.clone(),
         };
-        let n = self.n_cols;
-        let mut all = Vec::with_capacity(experiments.len());
+        let summaries = self.passes.pass(&request)?;
+        // The first bad value in experiment order is a data error, whatever diverged.
+        for (i, s) in summaries.iter().enumerate() {
+            if let Summary::Moments { bad: Some(b), .. } | Summary::Diverged { bad: Some(b) } = &s.0 {
+                return Ok(Accumulated::Bad(i, b.clone()));
+            }
+        }
+        let mut all = Vec::with_capacity(summaries.len());
         let mut change = 0.0f64;
         let mut fit = 0.0f64;
-        for (i, (e, info)) in experiments.iter().zip(&self.infos).enumerate() {
-            // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
-            let mut k = 1usize;
-            let mut acc: Vec<MomentAccumulator> = (0..self.ir.states.len())
-                .map(|o| {
-                    let m = self.blocks[self.block_of_output[o]].cols.len();
-                    MomentAccumulator::new(m, m)
-                })
-                .collect();
-            let c = walker.walk(*e, info, theta_sim, mu, reference, &mut |z, phi, t| {
-                k += 1;
-                if let Some(cell) = finite
-                    && cell.borrow().is_none()
-                    && let Some((sample, what)) = self.non_finite(k, phi, t)
-                {
-                    *cell.borrow_mut() = Some((i, sample, what));
+        let count = self.facts.len();
+        for s in summaries {
+            match s.0 {
+                Summary::Moments {
+                    moments, change: c, ..
+                } => {
+                    change = change.max(c.relative());
+                    fit += c.fit() / count as f64;
+                    all.push(moments);
                 }
-                for (o, a) in acc.iter_mut().enumerate() {
-                    let cols = &self.blocks[self.block_of_output[o]].cols;
-                    let mut target = t[o];
-                    for (c, v) in &self.held {
-                        target -= phi[o * n + c] * v;
-                    }
-                    a.push_columns(
-                        &z[o * n..(o + 1) * n],
-                        &phi[o * n..(o + 1) * n],
-                        cols,
-                        target,
-                    );
-                }
-            })?;
-            change = change.max(c.relative());
-            fit += c.fit() / experiments.len() as f64;
-            all.push(acc.into_iter().map(MomentAccumulator::finish).collect());
+                Summary::Diverged { .. } => return Ok(Accumulated::Diverged),
+                Summary::LongRun { .. } => return Err(mismatched()),
+            }
         }
-        Ok((all, change, fit))
+        if all.len() != count {
+            return Err(mismatched());
+        }
+        Ok(Accumulated::Done(all, change, fit))
     }
 
     /// The centre of output `o`'s instruments in experiment `i`: their mean
@@ -117,4 +119,13 @@ impl Estimator<'_> {
         }
         (h, g, bound)
     }
+}
+
+/// A pass runner answered with the wrong kind or number of summaries.
+pub(super) fn mismatched() -> EstimateError {
+    err(
+        "invalid-pass",
+        "a pass returned summaries that do not match the request (kind or number of experiments)",
+        "a distributed pass must return one summary per experiment, in experiment order",
+    )
 }

@@ -36,6 +36,7 @@ mod covariance;
 mod disturbances;
 mod options;
 mod outcome;
+mod pass;
 mod plan;
 mod record;
 mod refine;
@@ -45,6 +46,12 @@ mod walk;
 
 pub use options::*;
 pub use outcome::*;
+pub use pass::{
+    ExperimentFacts, FactsRequest, LocalPasses, PassRequest, PassRunner, PassSummary, Passes, decode,
+    encode,
+};
+use accumulate::*;
+use pass::*;
 use record::*;
 use solve::*;
 pub use walk::REGRESSOR_LIMIT;
@@ -59,7 +66,6 @@ struct Block {
 
 /// The estimator for one model, method and set of experiments.
 struct Estimator<'a> {
-    model: &'a dyn Model,
     ir: &'a Ir,
     options: &'a Options,
     kind: PredictorKind,
@@ -82,7 +88,10 @@ struct Estimator<'a> {
     warnings: Vec<String>,
     unexcited: Vec<String>,
     aggregates: Vec<String>,
-    terms: Vec<crate::interp::TermPlan>,
+    /// Runs the passes over the data (here, or on workers).
+    passes: &'a dyn Passes,
+    /// Every experiment's name and length, in order.
+    facts: Vec<ExperimentFacts>,
 }
 
 /// Estimates θ (and nuisance parameters) of `model` from the experiments.
@@ -91,14 +100,21 @@ pub fn estimate(
     experiments: &[&dyn Source],
     options: &Options,
 ) -> Result<Estimate, EstimateError> {
+    estimate_with(model, &LocalPasses::new(model, experiments), options)
+}
+
+/// Estimates like [`estimate`], with every pass over the data run by
+/// `passes`: each pass is mapped over the experiments (their summaries are
+/// small and independent of the experiments' lengths), and this driver
+/// combines them in experiment order, solves and broadcasts the next θ. An
+/// implementation that computes each summary as [`PassRunner`] does gives
+/// the same bits as [`estimate`], wherever it runs.
+pub fn estimate_with(
+    model: &dyn Model,
+    passes: &dyn Passes,
+    options: &Options,
+) -> Result<Estimate, EstimateError> {
     let ir = model.ir();
-    if experiments.is_empty() {
-        return Err(err(
-            "no-data",
-            "no experiment given",
-            "pass at least one --data file",
-        ));
-    }
     let nominal = match &options.nominal {
         Some(v) if v.len() == ir.parameters.len() => v.clone(),
         Some(v) => {
@@ -129,26 +145,33 @@ pub fn estimate(
             "build the start from an estimate of the same model (Start::from_estimate)",
         ));
     }
+    let facts = passes.facts(&FactsRequest::new(options))?;
+    if facts.is_empty() {
+        return Err(err(
+            "no-data",
+            "no experiment given",
+            "pass at least one --data file",
+        ));
+    }
     let kind = options.method.predictor();
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
     // Sign patterns, measured means, bounds and heading spread, in one visit each.
     let mut sign_patterns = Vec::new();
     let mut infos = Vec::new();
-    for e in experiments {
-        if e.len() < crate::data::MIN_SAMPLES {
+    for f in &facts {
+        let Some((s, info)) = f.read.clone() else {
             return Err(err(
                 "too-few-samples",
                 format!(
                     "experiment `{}` has {} samples; at least {} are needed",
-                    e.name(),
-                    e.len(),
+                    f.name,
+                    f.len,
                     crate::data::MIN_SAMPLES
                 ),
                 "record a longer experiment",
             ));
-        }
-        let s = detect(ir, kind, *e);
+        };
         for a in &s.arguments {
             if a.minority_fraction > 0.0 {
                 let msg = format!(
@@ -196,14 +219,14 @@ pub fn estimate(
                 crossing.join(", ")
             ));
         }
-        infos.push(experiment_info(ir, *e, &s, options));
+        infos.push(info);
         sign_patterns.push(s);
     }
-    for (e, info) in experiments.iter().zip(&infos) {
+    for (f, info) in facts.iter().zip(&infos) {
         if info.frozen.is_some() {
             warnings.push(format!(
                 "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
-                e.name(),
+                f.name,
                 info.spread.max(0.0)
             ));
         }
@@ -216,9 +239,11 @@ pub fn estimate(
         infos,
         &sign_patterns,
         warnings,
+        passes,
+        facts,
     )?;
-    est.check_length(experiments)?;
-    let mut estimate = est.run(experiments, sign_patterns)?;
+    est.check_length()?;
+    let mut estimate = est.run(sign_patterns)?;
     estimate.notes = notes;
     Ok(estimate)
 }

@@ -2,10 +2,10 @@
 
 use super::Centring;
 use leeway_structure::ir::PredictorKind;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Which estimator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
     /// Least squares on IV3's predictor, with an intercept per output and experiment.
@@ -54,7 +54,7 @@ impl std::str::FromStr for Method {
 }
 
 /// Where instruments come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Instruments {
     /// Simulated nominal model, refined (default).
@@ -64,7 +64,7 @@ pub enum Instruments {
 }
 
 /// Where the refined IV's first instrument simulation gets its θ.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Initial {
     /// The nominal model (`nominal { }` or `--nominal`).
@@ -76,7 +76,7 @@ pub enum Initial {
 }
 
 /// How the experiments' moment equations are combined.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Combine {
     /// `(Σᵢ Hᵢ) ϑ = Σᵢ gᵢ`: the pooled IV estimator (default). With model

@@ -15,6 +15,8 @@ impl<'a> Estimator<'a> {
         infos: Vec<ExperimentInfo>,
         signs: &[ExperimentSigns],
         warnings: Vec<String>,
+        passes: &'a dyn Passes,
+        facts: Vec<ExperimentFacts>,
     ) -> Result<Estimator<'a>, EstimateError> {
         let ir = model.ir();
         let centring = options
@@ -168,7 +170,6 @@ impl<'a> Estimator<'a> {
             preference[*c] = rank;
         }
         Ok(Estimator {
-            model,
             ir,
             options,
             kind,
@@ -185,7 +186,8 @@ impl<'a> Estimator<'a> {
             warnings,
             unexcited: Vec::new(),
             aggregates,
-            terms: crate::interp::term_plans(ir),
+            passes,
+            facts,
         })
     }
 
@@ -194,8 +196,8 @@ impl<'a> Estimator<'a> {
     }
 
     /// Refuses records too short for the number of columns estimated together.
-    pub(super) fn check_length(&self, experiments: &[&dyn Source]) -> Result<(), EstimateError> {
-        let equations: usize = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
+    pub(super) fn check_length(&self) -> Result<(), EstimateError> {
+        let equations: usize = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
         if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
             let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
             if equations < needed {

@@ -5,7 +5,7 @@ use super::*;
 /// A measured-medium (`Φ2`) column whose modulus arguments keep their sign
 /// in the data: its instrument is the noise-free `s·a_sim·…` rather than a
 /// pointwise `|a_sim|` of a possibly crude simulation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct FixedSignColumn {
     pub(super) column: usize,
     /// `(term, output, sign of each factor's modulus argument)`.
@@ -13,7 +13,7 @@ pub(super) struct FixedSignColumn {
 }
 
 /// Per-experiment facts read before estimating.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct ExperimentInfo {
     pub(super) signs: Vec<f64>,
     /// Pointwise sign arguments on plain states whose sign changes in this
@@ -31,7 +31,8 @@ pub(super) fn experiment_info(
     ir: &Ir,
     e: &dyn Source,
     s: &ExperimentSigns,
-    options: &Options,
+    method: Method,
+    heading_spread: f64,
 ) -> ExperimentInfo {
     let n_comp = ir.components.len();
     let n_out = ir.states.len();
@@ -73,7 +74,7 @@ pub(super) fn experiment_info(
             let (mc, ms) = (sc / nf, ss / nf);
             let r = (mc * mc + ms * ms).sqrt().min(1.0);
             let spread = (-2.0 * r.max(1e-300).ln()).sqrt();
-            let frozen = (spread < options.heading_spread)
+            let frozen = (spread < heading_spread)
                 .then(|| vec![sc / nf / r.max(1e-300), ss / nf / r.max(1e-300)]);
             (spread, frozen)
         }
@@ -86,14 +87,14 @@ pub(super) fn experiment_info(
                 .fold(0.0, f64::max);
             (
                 spread,
-                (spread < options.heading_spread).then(|| rot_sum.iter().map(|v| v / nf).collect()),
+                (spread < heading_spread).then(|| rot_sum.iter().map(|v| v / nf).collect()),
             )
         }
         Rotation::None => (f64::INFINITY, None),
     };
     // Φ2 columns whose modulus arguments never change sign in these data.
     let mut fixed_sign_columns = Vec::new();
-    if options.method.predictor() == PredictorKind::Measured {
+    if method.predictor() == PredictorKind::Measured {
         let sign_of = |arg: &leeway_structure::ir::Arg| -> Option<f64> {
             let i = ir.sign_args.iter().position(|a| a.arg == *arg)?;
             let found = s

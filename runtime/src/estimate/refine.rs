@@ -31,7 +31,6 @@ pub(super) struct Iterate {
 impl Estimator<'_> {
     pub(super) fn run(
         &mut self,
-        experiments: &[&dyn Source],
         sign_patterns: Vec<ExperimentSigns>,
     ) -> Result<Estimate, EstimateError> {
         let n_comp = self.ir.components.len();
@@ -53,30 +52,10 @@ impl Estimator<'_> {
         } else {
             theta_sim.clone()
         };
-        let bad = std::cell::RefCell::new(None);
-        let first_pass = self.accumulate(experiments, &first, &mu, None, Some(&bad));
-        if let Some((i, sample, what)) = bad.into_inner() {
-            return Err(self.non_finite_error(experiments[i], sample, &what));
-        }
-        let moments = match first_pass {
-            Ok((m, _, _)) => m,
-            Err(Diverged) => {
-                // The simulation stopped the pass early: a bad value further
-                // on is still a data error, not a divergence.
-                let walker = self.walker_with(None);
-                for (e, info) in experiments.iter().zip(&self.infos) {
-                    let mut k = 1usize;
-                    let mut found = None;
-                    let _ = walker.walk(*e, info, &[], &[], None, &mut |_, phi, t| {
-                        k += 1;
-                        if found.is_none() {
-                            found = self.non_finite(k, phi, t);
-                        }
-                    });
-                    if let Some((sample, what)) = found {
-                        return Err(self.non_finite_error(*e, sample, &what));
-                    }
-                }
+        let moments = match self.accumulate(&first, &mu, None, true)? {
+            Accumulated::Done(m, _, _) => m,
+            Accumulated::Bad(i, bad) => return Err(self.non_finite_error(i, &bad)),
+            Accumulated::Diverged => {
                 return Err(err(
                     "nominal-diverges",
                     "the simulation of the nominal model diverges on the input of these experiments",
@@ -124,14 +103,10 @@ impl Estimator<'_> {
                     .zip(&new_mu)
                     .map(|(a, b)| a + step * (b - a))
                     .collect();
-                if let Ok(r) = self.accumulate(
-                    experiments,
-                    &trial,
-                    &trial_mu,
-                    Some((&theta_sim, &mu)),
-                    None,
-                ) {
-                    accepted = Some((trial, trial_mu, r));
+                if let Accumulated::Done(m, change, fit) =
+                    self.accumulate(&trial, &trial_mu, Some((&theta_sim, &mu)), false)?
+                {
+                    accepted = Some((trial, trial_mu, (m, change, fit)));
                     break;
                 }
                 step *= 0.5;
@@ -241,7 +216,7 @@ impl Estimator<'_> {
         }
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
         let cov = if self.options.covariance {
-            self.covariance(experiments, &moments, &sol, &theta_sim, &mu)
+            self.covariance(&moments, &sol, &theta_sim, &mu)?
         } else {
             None
         };
@@ -253,7 +228,6 @@ impl Estimator<'_> {
             cov,
             refinements,
             converged,
-            experiments,
         )
     }
 }

@@ -13,7 +13,6 @@ impl Estimator<'_> {
         cov: Option<BTreeMap<(usize, usize), f64>>,
         refinements: usize,
         converged: bool,
-        experiments: &[&dyn Source],
     ) -> Result<Estimate, EstimateError> {
         let cols = self.ir.predictors.get(self.kind);
         let se = |c: usize| {
@@ -137,7 +136,7 @@ impl Estimator<'_> {
                 "regressors of the measurements one sample earlier".to_string()
             }
         };
-        let equations = experiments.iter().map(|e| e.len().saturating_sub(2)).sum();
+        let equations = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
         Ok(Estimate {
             method: self.options.method,
             parameters: self.ir.parameters.iter().map(|p| p.name.clone()).collect(),
@@ -148,7 +147,7 @@ impl Estimator<'_> {
             sign_patterns,
             diagnostics: Diagnostics {
                 predictor: format!("{:?}", self.kind).to_lowercase(),
-                experiments: experiments.len(),
+                experiments: self.facts.len(),
                 equations,
                 columns: cols.len(),
                 estimated: estimated.len(),

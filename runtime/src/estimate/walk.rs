@@ -23,15 +23,12 @@ pub(super) struct Diverged;
 /// 1e290, so sums of squares over 10¹⁸ samples stay finite.
 pub const REGRESSOR_LIMIT: f64 = 1e145;
 
-/// The first non-finite measured value found: `(experiment, sample, what)`.
-pub(super) type FirstBadValue = std::cell::RefCell<Option<(usize, usize, String)>>;
-
 /// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
 pub(super) type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
 
 /// How far an instrument simulation moved from a reference one, per output:
 /// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct SimChange {
     pub(super) diff2: Vec<f64>,
     pub(super) sum: Vec<f64>,
@@ -314,80 +311,32 @@ pub(super) fn simulation_disturbances(
 }
 
 impl Estimator<'_> {
-    pub(super) fn walker(&self) -> EquationWalker<'_> {
-        self.walker_with(if self.options.method == Method::Ls {
-            None
-        } else {
-            Some(self.options.instruments)
-        })
-    }
-
-    pub(super) fn walker_with(&self, instruments: Option<Instruments>) -> EquationWalker<'_> {
-        EquationWalker {
-            model: self.model,
-            ir: self.ir,
-            terms: &self.terms,
+    /// What a data pass needs of this estimator's plan.
+    pub(super) fn pass_plan(&self) -> PassPlan {
+        PassPlan {
             kind: self.kind,
-            instruments,
+            instruments: if self.options.method == Method::Ls {
+                None
+            } else {
+                Some(self.options.instruments)
+            },
             delayed_mean: self.options.instruments == Instruments::Simulated,
             n_cols: self.n_cols,
+            cols: (0..self.ir.states.len())
+                .map(|o| self.blocks[self.block_of_output[o]].cols.clone())
+                .collect(),
+            held: self.held.clone(),
         }
-    }
-
-    /// A measured regressor or target that is not finite, or so large that
-    /// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
-    /// in equation `k` (regressors at `k − 1`): `(sample, what)`.
-    pub(super) fn non_finite(&self, k: usize, phi: &[f64], t: &[f64]) -> Option<(usize, String)> {
-        // The common case in one branch-free sweep (NaN fails `<=` too).
-        // (A fold without early exit vectorises; the rare bad value is then
-        // looked for entry by entry.)
-        let fine = |ok: bool, v: &f64| ok & (v.abs() <= REGRESSOR_LIMIT);
-        if phi.iter().fold(true, fine) & t.iter().fold(true, fine) {
-            return None;
-        }
-        let n = self.n_cols;
-        let predictors = self.ir.predictors.get(self.kind);
-        let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
-        for (o, target) in t.iter().enumerate() {
-            for (c, col) in predictors.iter().enumerate().take(n) {
-                let v = phi[o * n + c];
-                if wrong(v) && v != 0.0 {
-                    return Some((
-                        k - 1,
-                        format!(
-                            "the regressor {} of `{}` evaluates to {v:e}",
-                            col.name, self.ir.states[o]
-                        ),
-                    ));
-                }
-            }
-            if wrong(*target) {
-                return Some((
-                    k,
-                    format!(
-                        "the difference quotient of `{}` evaluates to {target:e}",
-                        self.ir.states[o]
-                    ),
-                ));
-            }
-        }
-        None
     }
 
     /// The located data error for a non-finite value found by the first pass:
     /// never a rank verdict.
-    pub(super) fn non_finite_error(
-        &self,
-        e: &dyn Source,
-        sample: usize,
-        what: &str,
-    ) -> EstimateError {
+    pub(super) fn non_finite_error(&self, i: usize, bad: &BadValue) -> EstimateError {
         err(
             "non-finite-data",
             format!(
-                "{}: {what} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
-                e.locate(sample),
-                e.name()
+                "{}: {} on this sample of experiment `{}`, beyond {REGRESSOR_LIMIT:e}: its products would overflow",
+                bad.location, bad.what, self.facts[i].name
             ),
             "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
         )

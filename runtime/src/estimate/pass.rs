@@ -1,0 +1,428 @@
+//! The map half of estimation: what one experiment contributes to a pass
+//! over the data, as a small summary (moment sums, long-run sums, sign
+//! facts) that serialises exactly, and the [`Passes`] trait through which the
+//! estimator runs its passes — in experiment order on this machine
+//! ([`LocalPasses`]), or mapped over the workers of a distributed engine.
+//! The driver (refinement, covariance) combines the summaries in experiment
+//! order whoever computed them, so local and distributed estimates agree bit
+//! for bit.
+
+use super::*;
+use crate::interp::TermPlan;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+/// What the facts pass needs of the options.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FactsRequest {
+    method: Method,
+    heading_spread: f64,
+}
+
+impl FactsRequest {
+    /// The facts pass of an estimate with these options.
+    pub fn new(options: &Options) -> FactsRequest {
+        FactsRequest {
+            method: options.method,
+            heading_spread: options.heading_spread,
+        }
+    }
+}
+
+/// One experiment as read once before estimating: its name and length and,
+/// when it is long enough to estimate from, its sign pattern (paper A7),
+/// measured disturbance means, state bounds and heading spread.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ExperimentFacts {
+    /// The experiment's name.
+    pub name: String,
+    /// Samples.
+    pub len: usize,
+    pub(super) read: Option<(ExperimentSigns, ExperimentInfo)>,
+}
+
+/// One pass over the data as the driver asks it of every experiment: the
+/// estimator's plan, the θ to simulate the instruments with, and what each
+/// experiment's facts fixed (its signs, means, bounds).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PassRequest {
+    pub(super) plan: PassPlan,
+    pub(super) pass: Pass,
+    pub(super) infos: Vec<ExperimentInfo>,
+}
+
+/// What a data pass needs of the estimator's plan.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct PassPlan {
+    pub(super) kind: PredictorKind,
+    /// The instruments of the method (`None`: least squares).
+    pub(super) instruments: Option<Instruments>,
+    pub(super) delayed_mean: bool,
+    pub(super) n_cols: usize,
+    /// The block columns of each output.
+    pub(super) cols: Vec<Vec<usize>>,
+    /// Structurally dropped columns held at nominal.
+    pub(super) held: Vec<(usize, f64)>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) enum Pass {
+    /// Moment sums per output, the instruments simulated with `theta_sim`
+    /// (empty: the delayed bootstrap), compared with a `reference`
+    /// simulation; `scan` also looks for non-finite measured values.
+    Moments {
+        theta_sim: Vec<f64>,
+        mu: Vec<f64>,
+        reference: Option<(Vec<f64>, Vec<f64>)>,
+        scan: bool,
+    },
+    /// Long-run sums of the moment residuals `ζ` (the covariance).
+    LongRun(LongRunPass),
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct LongRunPass {
+    pub(super) theta_sim: Vec<f64>,
+    pub(super) mu: Vec<f64>,
+    pub(super) lags: usize,
+    /// The regressors are their own instruments (least squares).
+    pub(super) own: bool,
+    /// Every predictor column's value (0 where not estimated).
+    pub(super) values: Vec<f64>,
+    /// Dimension of `ζ`.
+    pub(super) dim: usize,
+    /// Per output: `(ζ row, column, the column's index in the output's block)`.
+    pub(super) rows: Vec<Vec<(usize, usize, usize)>>,
+    /// Per experiment and output: the instruments' centre (by block index)
+    /// and the mean residual.
+    pub(super) centres: Vec<Vec<Vec<f64>>>,
+    pub(super) mean_res: Vec<Vec<f64>>,
+}
+
+/// What one experiment contributed to a pass.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PassSummary(pub(super) Summary);
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) enum Summary {
+    Moments {
+        moments: Vec<CrossMoments>,
+        change: SimChange,
+        bad: Option<BadValue>,
+    },
+    /// The instrument simulation left the states' bounds.
+    Diverged { bad: Option<BadValue> },
+    /// `ζ`'s long-run sum, row-major `dim × dim`; `None` if the simulation diverged.
+    LongRun { dim: usize, sums: Option<Vec<f64>> },
+}
+
+/// A non-finite or overflowing measured value: where, and what.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct BadValue {
+    pub(super) location: String,
+    pub(super) what: String,
+}
+
+/// Runs the passes of an estimate over the experiments. Implementations
+/// return one result per experiment, in experiment order, each exactly what
+/// [`PassRunner::facts`] / [`PassRunner::pass`] compute for it: on this
+/// machine ([`LocalPasses`]) or mapped over workers that each read their own
+/// experiments.
+pub trait Passes {
+    /// The facts of every experiment.
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError>;
+    /// Every experiment's summary of one pass. A moment pass may stop at the
+    /// first experiment whose simulation diverged.
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError>;
+}
+
+/// A model ready to run passes over experiments (its term plans built once).
+pub struct PassRunner<'a> {
+    model: &'a dyn Model,
+    terms: Vec<TermPlan>,
+}
+
+impl<'a> PassRunner<'a> {
+    /// Passes of `model`.
+    pub fn new(model: &'a dyn Model) -> PassRunner<'a> {
+        PassRunner {
+            model,
+            terms: crate::interp::term_plans(model.ir()),
+        }
+    }
+
+    /// The facts of one experiment (one visit for the signs, one for the rest).
+    pub fn facts(&self, e: &dyn Source, request: &FactsRequest) -> ExperimentFacts {
+        let ir = self.model.ir();
+        let read = (e.len() >= crate::data::MIN_SAMPLES).then(|| {
+            let signs = detect(ir, request.method.predictor(), e);
+            let info = experiment_info(ir, e, &signs, request.method, request.heading_spread);
+            (signs, info)
+        });
+        ExperimentFacts {
+            name: e.name().to_string(),
+            len: e.len(),
+            read,
+        }
+    }
+
+    fn walker(&self, plan: &PassPlan, instruments: Option<Instruments>) -> EquationWalker<'_> {
+        EquationWalker {
+            model: self.model,
+            ir: self.model.ir(),
+            terms: &self.terms,
+            kind: plan.kind,
+            instruments,
+            delayed_mean: plan.delayed_mean,
+            n_cols: plan.n_cols,
+        }
+    }
+
+    /// What experiment `index` (`e`) contributes to the pass.
+    pub fn pass(&self, e: &dyn Source, index: usize, request: &PassRequest) -> PassSummary {
+        let info = &request.infos[index];
+        let plan = &request.plan;
+        PassSummary(match &request.pass {
+            Pass::Moments {
+                theta_sim,
+                mu,
+                reference,
+                scan,
+            } => {
+                let reference = reference.as_ref().map(|(t, m)| (t.as_slice(), m.as_slice()));
+                self.moments(e, info, plan, theta_sim, mu, reference, *scan)
+            }
+            Pass::LongRun(lr) => {
+                self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
+            }
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn moments(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        theta_sim: &[f64],
+        mu: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+        scan: bool,
+    ) -> Summary {
+        let ir = self.model.ir();
+        // An empty θ asks for the delayed bootstrap pass of the refined IV.
+        let walker = if theta_sim.is_empty() {
+            self.walker(plan, Some(Instruments::Delayed))
+        } else {
+            self.walker(plan, plan.instruments)
+        };
+        let n = plan.n_cols;
+        // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
+        let mut k = 1usize;
+        let mut bad = None;
+        let mut acc: Vec<MomentAccumulator> = plan
+            .cols
+            .iter()
+            .map(|c| MomentAccumulator::new(c.len(), c.len()))
+            .collect();
+        let walked = walker.walk(e, info, theta_sim, mu, reference, &mut |z, phi, t| {
+            k += 1;
+            if scan && bad.is_none() {
+                bad = non_finite(ir, plan.kind, n, k, phi, t);
+            }
+            for (o, a) in acc.iter_mut().enumerate() {
+                let mut target = t[o];
+                for (c, v) in &plan.held {
+                    target -= phi[o * n + c] * v;
+                }
+                a.push_columns(
+                    &z[o * n..(o + 1) * n],
+                    &phi[o * n..(o + 1) * n],
+                    &plan.cols[o],
+                    target,
+                );
+            }
+        });
+        let located = |bad: Option<(usize, String)>| {
+            bad.map(|(sample, what)| BadValue {
+                location: e.locate(sample),
+                what,
+            })
+        };
+        match walked {
+            Ok(change) => Summary::Moments {
+                moments: acc.into_iter().map(MomentAccumulator::finish).collect(),
+                change,
+                bad: located(bad),
+            },
+            Err(Diverged) => {
+                // The simulation stopped the walk early: a bad value further
+                // on is still a data error, not a divergence.
+                if scan && bad.is_none() {
+                    let mut k = 1usize;
+                    let _ = self
+                        .walker(plan, None)
+                        .walk(e, info, &[], &[], None, &mut |_, phi, t| {
+                            k += 1;
+                            if bad.is_none() {
+                                bad = non_finite(ir, plan.kind, n, k, phi, t);
+                            }
+                        });
+                }
+                Summary::Diverged { bad: located(bad) }
+            }
+        }
+    }
+
+    fn long_run(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        lr: &LongRunPass,
+        centres: &[Vec<f64>],
+        mean_res: &[f64],
+    ) -> Summary {
+        // The instruments of the reported iterate (empty θ: the delayed bootstrap).
+        let walker = if lr.theta_sim.is_empty() && !lr.own {
+            self.walker(plan, Some(Instruments::Delayed))
+        } else {
+            self.walker(plan, plan.instruments)
+        };
+        let n = plan.n_cols;
+        let mut sums = LongRun::new(lr.dim, lr.lags);
+        let mut zeta = DVector::zeros(lr.dim);
+        let walked = walker.walk(e, info, &lr.theta_sim, &lr.mu, None, &mut |z, phi, t| {
+            zeta.fill(0.0);
+            for (o, rows) in lr.rows.iter().enumerate() {
+                let mut res = t[o];
+                for (c, v) in &plan.held {
+                    res -= phi[o * n + c] * v;
+                }
+                for c in &plan.cols[o] {
+                    res -= phi[o * n + c] * lr.values[*c];
+                }
+                res -= mean_res[o];
+                let source = if lr.own { phi } else { z };
+                for (r, c, j) in rows {
+                    zeta[*r] += (source[o * n + c] - centres[o][*j]) * res;
+                }
+            }
+            sums.push(&zeta);
+        });
+        let sums = walked.ok().map(|_| {
+            let g = sums.sum_psd();
+            // Row-major, as documented (g is symmetric).
+            g.transpose().as_slice().to_vec()
+        });
+        Summary::LongRun { dim: lr.dim, sums }
+    }
+}
+
+/// The experiments of this machine, visited in order.
+pub struct LocalPasses<'a> {
+    runner: PassRunner<'a>,
+    experiments: &'a [&'a dyn Source],
+}
+
+impl<'a> LocalPasses<'a> {
+    /// Passes of `model` over `experiments`.
+    pub fn new(model: &'a dyn Model, experiments: &'a [&'a dyn Source]) -> LocalPasses<'a> {
+        LocalPasses {
+            runner: PassRunner::new(model),
+            experiments,
+        }
+    }
+}
+
+impl Passes for LocalPasses<'_> {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        Ok(self
+            .experiments
+            .iter()
+            .map(|e| self.runner.facts(*e, request))
+            .collect())
+    }
+
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
+        let mut out = Vec::with_capacity(self.experiments.len());
+        for (i, e) in self.experiments.iter().enumerate() {
+            let s = self.runner.pass(*e, i, request);
+            let diverged = matches!(s.0, Summary::Diverged { .. });
+            out.push(s);
+            if diverged && stop_early {
+                break;
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// A pass's request, facts or summaries as bytes (CBOR: every f64 bit for
+/// bit, NaN and infinities included), to send to workers and back.
+pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
+    let mut out = Vec::new();
+    // Writing into a Vec cannot fail, and these types serialise without error.
+    if let Err(e) = ciborium::into_writer(value, &mut out) {
+        unreachable!("a pass value failed to serialise: {e}");
+    }
+    out
+}
+
+/// Reads what [`encode`] wrote.
+pub fn decode<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, EstimateError> {
+    ciborium::from_reader(bytes).map_err(|e| {
+        err(
+            "invalid-pass",
+            format!("a pass message cannot be read: {e}"),
+            "driver and workers must run the same version of leeway",
+        )
+    })
+}
+
+/// A measured regressor or target that is not finite, or so large that
+/// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
+/// in equation `k` (regressors at `k − 1`): `(sample, what)`.
+pub(super) fn non_finite(
+    ir: &Ir,
+    kind: PredictorKind,
+    n: usize,
+    k: usize,
+    phi: &[f64],
+    t: &[f64],
+) -> Option<(usize, String)> {
+    // The common case in one branch-free sweep (NaN fails `<=` too).
+    // (A fold without early exit vectorises; the rare bad value is then
+    // looked for entry by entry.)
+    let fine = |ok: bool, v: &f64| ok & (v.abs() <= REGRESSOR_LIMIT);
+    if phi.iter().fold(true, fine) & t.iter().fold(true, fine) {
+        return None;
+    }
+    let predictors = ir.predictors.get(kind);
+    let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
+    for (o, target) in t.iter().enumerate() {
+        for (c, col) in predictors.iter().enumerate().take(n) {
+            let v = phi[o * n + c];
+            if wrong(v) && v != 0.0 {
+                return Some((
+                    k - 1,
+                    format!(
+                        "the regressor {} of `{}` evaluates to {v:e}",
+                        col.name, ir.states[o]
+                    ),
+                ));
+            }
+        }
+        if wrong(*target) {
+            return Some((
+                k,
+                format!(
+                    "the difference quotient of `{}` evaluates to {target:e}",
+                    ir.states[o]
+                ),
+            ));
+        }
+    }
+    None
+}
