@@ -1,0 +1,138 @@
+//! Estimation split into map and reduce: a pass runner that behaves like a
+//! distributed engine — every message crosses as bytes, each experiment's
+//! summary is computed on its own thread in an arbitrary order — must give
+//! the local estimate's bits exactly, because the driver combines the
+//! summaries in experiment order whoever computed them.
+
+use leeway_runtime::Interpreter;
+use leeway_runtime::estimate::{
+    Estimate, EstimateError, ExperimentFacts, FactsRequest, Method, Options, PassRequest,
+    PassRunner, PassSummary, Passes, decode, encode, estimate, estimate_with,
+};
+use leeway_runtime::study::{self, InputDesign};
+use leeway_runtime::{Experiment, Source};
+use rayon::prelude::*;
+
+fn ship() -> Interpreter {
+    let path = format!("{}/../examples/models/ship.som", env!("CARGO_MANIFEST_DIR"));
+    let src = std::fs::read_to_string(path).unwrap_or_default();
+    let c = leeway_runtime::structure::compile(&src, &Default::default());
+    Interpreter::new(c.ir.unwrap_or_else(|| panic!("ship.som compiles: {:?}", c.diagnostics)))
+}
+
+/// Workers that each hold their experiments and see only bytes.
+struct Workers<'a> {
+    model: &'a Interpreter,
+    experiments: &'a [Experiment],
+}
+
+impl Passes for Workers<'_> {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        let bytes = encode(request);
+        let answers: Vec<Vec<u8>> = self
+            .experiments
+            .par_iter()
+            .map(|e| {
+                let request: FactsRequest = decode(&bytes).expect("request");
+                encode(&PassRunner::new(self.model).facts(e, &request))
+            })
+            .collect();
+        answers.iter().map(|b| decode(b)).collect()
+    }
+
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        let bytes = encode(request);
+        // Last experiment first, on whatever thread: order must not matter.
+        let mut answers: Vec<(usize, Vec<u8>)> = (0..self.experiments.len())
+            .rev()
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|i| {
+                let request: PassRequest = decode(&bytes).expect("request");
+                let runner = PassRunner::new(self.model);
+                (i, encode(&runner.pass(&self.experiments[i], i, &request)))
+            })
+            .collect();
+        answers.sort_by_key(|(i, _)| *i);
+        answers.iter().map(|(_, b)| decode(b)).collect()
+    }
+}
+
+fn bits(e: &Estimate) -> (Vec<u64>, Vec<Option<u64>>, Vec<(u64, Option<u64>)>, String) {
+    (
+        e.theta.iter().map(|v| v.to_bits()).collect(),
+        e.std_errors.iter().map(|v| v.map(f64::to_bits)).collect(),
+        e.disturbances
+            .iter()
+            .map(|d| (d.mean.to_bits(), d.std_error.map(f64::to_bits)))
+            .collect(),
+        format!("{:?} {:?}", e.diagnostics, e.warnings),
+    )
+}
+
+fn experiments(model: &Interpreter) -> Vec<Experiment> {
+    let design = InputDesign::default();
+    // Runs of different lengths and winds, as a campaign has.
+    [(10.0, 700, 11), (6.0, 1300, 12), (14.0, 450, 13)]
+        .iter()
+        .map(|&(wind, n, seed)| study::estimation_experiment(model, &design, wind, n, seed).0)
+        .collect()
+}
+
+#[test]
+fn mapped_passes_give_the_local_estimate_bit_for_bit() {
+    let model = ship();
+    let data = experiments(&model);
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let workers = Workers {
+        model: &model,
+        experiments: &data,
+    };
+    for method in [Method::Iv3, Method::Ls, Method::Iv2] {
+        // The study's ship is identifiable only up to its aggregates.
+        let options = Options {
+            method,
+            aggregate: true,
+            ..Options::default()
+        };
+        let local = estimate(&model, &sources, &options).expect("local estimate");
+        let mapped = estimate_with(&model, &workers, &options).expect("mapped estimate");
+        assert_eq!(bits(&local), bits(&mapped), "{method:?}");
+        assert!(local.std_errors.iter().any(Option::is_some), "{method:?}");
+        if method == Method::Iv3 {
+            assert!(local.diagnostics.refinements >= 1, "a refined estimate");
+        }
+    }
+}
+
+/// A runner that loses an experiment.
+struct Lossy<'a>(Workers<'a>);
+
+impl Passes for Lossy<'_> {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        self.0.facts(request)
+    }
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        let mut out = self.0.pass(request)?;
+        out.pop();
+        Ok(out)
+    }
+}
+
+#[test]
+fn a_runner_that_loses_a_summary_is_an_error_not_an_estimate() {
+    let model = ship();
+    let data = experiments(&model);
+    let lossy = Lossy(Workers {
+        model: &model,
+        experiments: &data,
+    });
+    let options = Options {
+        aggregate: true,
+        ..Options::default()
+    };
+    let e = estimate_with(&model, &lossy, &options).expect_err("refused");
+    assert_eq!(e.code, "invalid-pass");
+    let garbage: Result<PassRequest, _> = decode(b"not a pass");
+    assert_eq!(garbage.expect_err("garbage").code, "invalid-pass");
+}
