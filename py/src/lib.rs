@@ -7,6 +7,7 @@
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 
 mod data;
+mod distributed;
 mod failure;
 
 use failure::Failure;
@@ -445,5 +446,7 @@ fn run_estimate(
 fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_function(wrap_pyfunction!(estimate_json, m)?)?;
+    m.add_class::<distributed::Dataset>()?;
+    m.add_function(wrap_pyfunction!(distributed::estimate_mapped, m)?)?;
     Ok(())
 }

@@ -278,7 +278,7 @@ impl Default for LoadOptions {
 
 /// What loading a file did besides reading samples, for the user to see:
 /// nothing is skipped, tolerated or converted silently.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FileNotes {
     /// The file as named in messages.
     pub file: String,
@@ -291,7 +291,7 @@ pub struct FileNotes {
 }
 
 /// How one experiment's time stamps were read.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TimeNotes {
     /// The experiment's name.
     pub experiment: String,

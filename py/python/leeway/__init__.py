@@ -363,23 +363,35 @@ def estimate(
     column if it has one), a list or dict of DataFrames (a dict names the
     experiments), or Arrow/polars tables. Warnings are issued as
     ``LeewayWarning``; errors raise the classes of ``leeway.errors``."""
-    options = {
-        "method": method,
-        "instruments": instruments,
-        "initial": initial,
-        "centring": centring,
-        "combine": combine,
-        "nominal": _nominal(model, nominal),
-        "aggregate": aggregate,
-        "strict": strict,
-        "lags": lags,
-        "max_refinements": max_refinements,
-        "runaway_guard": runaway_guard,
-        "step": step,
-        "time_tolerance": time_tolerance,
-        "resample": resample,
-    }
+    options = _estimate_options(
+        model,
+        method=method,
+        instruments=instruments,
+        initial=initial,
+        centring=centring,
+        combine=combine,
+        nominal=nominal,
+        aggregate=aggregate,
+        strict=strict,
+        lags=lags,
+        max_refinements=max_refinements,
+        runaway_guard=runaway_guard,
+        step=step,
+        time_tolerance=time_tolerance,
+        resample=resample,
+    )
     result = Estimate(_leeway.estimate_json(model._core, _handover(model, data), options))
-    for w in result.warnings:
-        warnings.warn(w, LeewayWarning, stacklevel=2)
+    _warn(result)
     return result
+
+
+def _estimate_options(
+    model: Model, *, nominal: Mapping[str, float] | None, **options: Any
+) -> dict[str, Any]:
+    """The options as the native half takes them (the CLI's flags)."""
+    return {**options, "nominal": _nominal(model, nominal)}
+
+
+def _warn(result: Estimate) -> None:
+    for w in result.warnings:
+        warnings.warn(w, LeewayWarning, stacklevel=3)

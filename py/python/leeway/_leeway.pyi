@@ -1,12 +1,13 @@
 # The native half of leeway (py/src/lib.rs). Checked against the built
 # module by `python -m mypy.stubtest leeway._leeway` (py/tests).
+from collections.abc import Callable
 from typing import Any, final
 
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Model", "estimate_json"]
+__all__ = ["Model", "Dataset", "estimate_json", "estimate_mapped"]
 
 @final
 class Model:
@@ -42,4 +43,22 @@ def estimate_json(
     model: Model,
     frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
     options: dict[str, Any],
+) -> str: ...
+
+@final
+class Dataset:
+    @staticmethod
+    def open(model: Model, path: str, options: dict[str, Any]) -> Dataset: ...
+    def summary(self) -> bytes: ...
+    def __len__(self) -> int: ...
+    def facts(self, request: bytes) -> list[bytes]: ...
+    def run(self, offset: int, request: bytes) -> list[bytes]: ...
+
+def estimate_mapped(
+    model: Model,
+    files: list[str],
+    summaries: list[bytes],
+    options: dict[str, Any],
+    facts: Callable[[bytes], list[bytes]],
+    run: Callable[[bytes], list[bytes]],
 ) -> str: ...

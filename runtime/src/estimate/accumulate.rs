@@ -38,7 +38,8 @@ impl Estimator<'_> {
         let summaries = self.passes.pass(&request)?;
         // The first bad value in experiment order is a data error, whatever diverged.
         for (i, s) in summaries.iter().enumerate() {
-            if let Summary::Moments { bad: Some(b), .. } | Summary::Diverged { bad: Some(b) } = &s.0 {
+            if let Summary::Moments { bad: Some(b), .. } | Summary::Diverged { bad: Some(b) } = &s.0
+            {
                 return Ok(Accumulated::Bad(i, b.clone()));
             }
         }

@@ -44,14 +44,14 @@ mod report;
 mod solve;
 mod walk;
 
+use accumulate::*;
 pub use options::*;
 pub use outcome::*;
-pub use pass::{
-    ExperimentFacts, FactsRequest, LocalPasses, PassRequest, PassRunner, PassSummary, Passes, decode,
-    encode,
-};
-use accumulate::*;
 use pass::*;
+pub use pass::{
+    ExperimentFacts, FactsRequest, LocalPasses, PassRequest, PassRunner, PassSummary, Passes,
+    decode, encode,
+};
 use record::*;
 use solve::*;
 pub use walk::REGRESSOR_LIMIT;

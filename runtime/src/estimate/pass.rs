@@ -189,7 +189,9 @@ impl<'a> PassRunner<'a> {
                 reference,
                 scan,
             } => {
-                let reference = reference.as_ref().map(|(t, m)| (t.as_slice(), m.as_slice()));
+                let reference = reference
+                    .as_ref()
+                    .map(|(t, m)| (t.as_slice(), m.as_slice()));
                 self.moments(e, info, plan, theta_sim, mu, reference, *scan)
             }
             Pass::LongRun(lr) => {
@@ -260,14 +262,14 @@ impl<'a> PassRunner<'a> {
                 // on is still a data error, not a divergence.
                 if scan && bad.is_none() {
                     let mut k = 1usize;
-                    let _ = self
-                        .walker(plan, None)
-                        .walk(e, info, &[], &[], None, &mut |_, phi, t| {
-                            k += 1;
-                            if bad.is_none() {
-                                bad = non_finite(ir, plan.kind, n, k, phi, t);
-                            }
-                        });
+                    let _ =
+                        self.walker(plan, None)
+                            .walk(e, info, &[], &[], None, &mut |_, phi, t| {
+                                k += 1;
+                                if bad.is_none() {
+                                    bad = non_finite(ir, plan.kind, n, k, phi, t);
+                                }
+                            });
                 }
                 Summary::Diverged { bad: located(bad) }
             }

@@ -46,9 +46,12 @@ const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
 /// the name can tell an angle from a force of the same magnitude, so inputs
 /// named otherwise are left alone rather than warned about on every run.
 pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
-    let mut out = Vec::new();
-    let angle_like: Vec<usize> = ir
-        .inputs
+    unit_warnings_from_peaks(ir, &input_peaks(ir, experiments))
+}
+
+/// The inputs whose name or column reads like an angle without a declared unit.
+fn angle_like_inputs(ir: &Ir) -> Vec<usize> {
+    ir.inputs
         .iter()
         .enumerate()
         .filter(|(_, name)| {
@@ -59,12 +62,19 @@ pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
             !ir.data_units.contains_key(*name) && angle_like
         })
         .map(|(i, _)| i)
-        .collect();
+        .collect()
+}
+
+/// The largest magnitude of every angle-like input over the experiments (0
+/// for the other inputs): what [`unit_warnings`] judges. Peaks of disjoint
+/// sets of experiments combine by their maximum, exactly.
+pub fn input_peaks(ir: &Ir, experiments: &[&dyn Source]) -> Vec<f64> {
+    let angle_like = angle_like_inputs(ir);
+    let mut peaks = vec![0.0f64; ir.inputs.len()];
     if angle_like.is_empty() {
-        return out;
+        return peaks;
     }
     // One visit of every experiment for all such inputs.
-    let mut peaks = vec![0.0f64; ir.inputs.len()];
     for e in experiments {
         e.visit(&mut |row| {
             for &i in &angle_like {
@@ -74,8 +84,14 @@ pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
             }
         });
     }
-    for &i in &angle_like {
-        let (name, peak) = (&ir.inputs[i], peaks[i]);
+    peaks
+}
+
+/// [`unit_warnings`] from the peaks of [`input_peaks`].
+pub fn unit_warnings_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<String> {
+    let mut out = Vec::new();
+    for i in angle_like_inputs(ir) {
+        let (name, peak) = (&ir.inputs[i], peaks.get(i).copied().unwrap_or(0.0));
         if peak > std::f64::consts::PI {
             out.push(format!(
                 "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"

@@ -1,0 +1,153 @@
+"""leeway past one machine, on Dask distributed.
+
+An estimate makes a handful of passes over the data (the facts of every
+experiment, then one pass per refinement of the instrumental variables, and
+one for the standard errors). :func:`estimate` maps each pass over the data
+files on the workers of a Dask cluster — every task opens its own file, so
+the data never pass through the driver — and the driver combines the
+experiments' small summaries (moment sums, independent of the experiments'
+lengths) in experiment order, solves, and broadcasts the next θ. The result
+is the same, bit for bit, as :func:`leeway.estimate` on the same files, on
+any number of workers, and when a worker dies mid-pass (Dask re-runs its
+tasks elsewhere; every task is a pure function of its file and request)::
+
+    from dask.distributed import Client, LocalCluster
+    import leeway, leeway.dask
+
+    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    model = leeway.Model.load("ship.som")
+    est = leeway.dask.estimate(model, ["run1.csv", "run2.csv"], client, method="iv3")
+
+Workers keep each file they opened (validated once, then streamed from a
+binary copy: memory does not grow with the file) for the passes that follow.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from . import Estimate, Model, _estimate_options, _leeway, _warn
+from .errors import DataError
+
+__all__ = ["estimate"]
+
+# Files opened on this worker, by model, path and load options.
+_opened: dict[tuple[Any, ...], _leeway.Dataset] = {}
+_lock = threading.Lock()
+
+
+def _dataset(model: Model, path: str, options: dict[str, Any]) -> _leeway.Dataset:
+    key = (
+        model.source,
+        model.file,
+        options["aggregate"],
+        path,
+        options["step"],
+        options["time_tolerance"],
+        options["resample"],
+    )
+    with _lock:
+        found = _opened.get(key)
+    if found is None:
+        found = _leeway.Dataset.open(model._core, path, options)
+        with _lock:
+            found = _opened.setdefault(key, found)
+    return found
+
+
+def _open(model: Model, path: str, options: dict[str, Any]) -> tuple[bytes, int]:
+    d = _dataset(model, path, options)
+    return d.summary(), len(d)
+
+
+def _facts(model: Model, path: str, options: dict[str, Any], request: bytes) -> list[bytes]:
+    return _dataset(model, path, options).facts(request)
+
+
+def _run(model: Model, path: str, options: dict[str, Any], offset: int, request: bytes) -> list[bytes]:
+    return _dataset(model, path, options).run(offset, request)
+
+
+def estimate(
+    model: Model,
+    experiments: Sequence[str | os.PathLike[str]],
+    client: Any = None,
+    method: str = "iv3",
+    *,
+    instruments: str = "simulated",
+    initial: str = "delayed",
+    centring: str | None = None,
+    combine: str = "summed",
+    nominal: Mapping[str, float] | None = None,
+    aggregate: bool = False,
+    strict: bool = False,
+    lags: int = 1,
+    max_refinements: int = 8,
+    runaway_guard: bool = True,
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> Estimate:
+    """Estimates like :func:`leeway.estimate` from data files (CSV, as
+    ``leeway estimate --data`` reads them; a file with an ``experiment``
+    column holds several experiments), each pass mapped over the files on
+    the workers of ``client`` (a ``dask.distributed.Client``; the current
+    one if ``None``). The options are those of :func:`leeway.estimate`."""
+    from distributed import get_client
+
+    client = client if client is not None else get_client()
+    paths = [os.fspath(p) for p in experiments]
+    if not paths:
+        raise DataError(
+            "no experiment given",
+            code="no-data",
+            hint="pass at least one data file",
+        )
+    options = _estimate_options(
+        model,
+        method=method,
+        instruments=instruments,
+        initial=initial,
+        centring=centring,
+        combine=combine,
+        nominal=nominal,
+        aggregate=aggregate,
+        strict=strict,
+        lags=lags,
+        max_refinements=max_refinements,
+        runaway_guard=runaway_guard,
+        step=step,
+        time_tolerance=time_tolerance,
+        resample=resample,
+    )
+    n = len(paths)
+    opened = client.gather(client.map(_open, [model] * n, paths, [options] * n, pure=False))
+    offsets = []
+    total = 0
+    for _, count in opened:
+        offsets.append(total)
+        total += count
+
+    def facts(request: bytes) -> list[bytes]:
+        shared = client.scatter(request, broadcast=True)
+        parts = client.gather(
+            client.map(_facts, [model] * n, paths, [options] * n, [shared] * n, pure=False)
+        )
+        return [b for part in parts for b in part]
+
+    def run(request: bytes) -> list[bytes]:
+        shared = client.scatter(request, broadcast=True)
+        parts = client.gather(
+            client.map(_run, [model] * n, paths, [options] * n, offsets, [shared] * n, pure=False)
+        )
+        return [b for part in parts for b in part]
+
+    document = _leeway.estimate_mapped(
+        model._core, paths, [summary for summary, _ in opened], options, facts, run
+    )
+    result = Estimate(document)
+    _warn(result)
+    return result

@@ -1,0 +1,307 @@
+//! Estimation past one machine: the two halves of `runtime::estimate` as
+//! Python sees them. A [`Dataset`] is one data file opened on a worker
+//! (validated once, streamed on every pass); it answers a pass's request
+//! with its experiments' summaries, as bytes. [`estimate_mapped`] is the
+//! driver: it runs `runtime::estimate::estimate_with` with passes that call
+//! back into Python (`leeway.dask` maps them over the cluster), and writes
+//! the same document as `leeway estimate --json`.
+
+use crate::failure::Failure;
+use crate::{EstimateOptions, Model};
+use leeway_runtime::data::{FileNotes, LoadOptions, load_csv_noted, open_csv};
+use leeway_runtime::estimate::{
+    EstimateError, ExperimentFacts, FactsRequest, PassRequest, PassRunner, PassSummary, Passes,
+    decode, encode, estimate_with,
+};
+use leeway_runtime::report::{
+    Estimated, estimate_report, heading_gains, heading_warnings, input_peaks,
+    unit_warnings_from_peaks,
+};
+use leeway_runtime::{Experiment, Interpreter, Source};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::sync::Mutex;
+
+/// A file's experiments: streamed from a validated copy, or held in memory
+/// when resampled (resampling interpolates over a whole experiment), as the
+/// CLI opens them.
+enum Experiments {
+    Streamed(Vec<leeway_runtime::data::CsvSource>),
+    Held(Vec<Experiment>),
+}
+
+impl Experiments {
+    fn sources(&self) -> Vec<&dyn Source> {
+        match self {
+            Experiments::Streamed(v) => v.iter().map(|e| e as &dyn Source).collect(),
+            Experiments::Held(v) => v.iter().map(|e| e as &dyn Source).collect(),
+        }
+    }
+}
+
+/// What the driver needs to know of a file beyond the passes: its
+/// experiments' names and lengths and the data checks' findings.
+#[derive(Serialize, Deserialize)]
+struct FileSummary {
+    experiments: Vec<(String, usize)>,
+    notes: FileNotes,
+    heading_gains: Vec<(String, Option<f64>)>,
+    input_peaks: Vec<f64>,
+}
+
+/// One data file opened on a worker for the passes of an estimate.
+#[pyclass(module = "leeway._leeway", frozen)]
+pub struct Dataset {
+    model: Interpreter,
+    experiments: Experiments,
+    summary: Vec<u8>,
+}
+
+impl Dataset {
+    fn open_file(model: &Model, path: &str, options: &LoadOptions) -> Result<Dataset, Failure> {
+        let ir = &model.ir;
+        let (experiments, notes) = if options.resample.is_some() {
+            let f = load_csv_noted(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            (Experiments::Held(f.experiments), f.notes)
+        } else {
+            let f = open_csv(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            (Experiments::Streamed(f.sources), f.notes)
+        };
+        let sources = experiments.sources();
+        let summary = FileSummary {
+            experiments: sources
+                .iter()
+                .map(|e| (e.name().to_string(), e.len()))
+                .collect(),
+            notes,
+            heading_gains: heading_gains(ir, &sources),
+            input_peaks: input_peaks(ir, &sources),
+        };
+        let summary = encode(&summary);
+        drop(sources);
+        Ok(Dataset {
+            model: Interpreter::new(ir.clone()),
+            experiments,
+            summary,
+        })
+    }
+
+    /// A problem met while streaming (the validated copy became unreadable).
+    fn failure(&self) -> Option<Failure> {
+        match &self.experiments {
+            Experiments::Streamed(v) => v
+                .iter()
+                .find_map(|s| s.failure())
+                .map(|e| Failure::data(&e)),
+            Experiments::Held(_) => None,
+        }
+    }
+}
+
+fn bytes_list<'py>(py: Python<'py>, items: &[Vec<u8>]) -> Vec<Bound<'py, PyBytes>> {
+    items.iter().map(|b| PyBytes::new(py, b)).collect()
+}
+
+fn failed(e: EstimateError) -> PyErr {
+    Failure::estimate(&e).into()
+}
+
+#[pymethods]
+impl Dataset {
+    /// Opens (validates) a CSV file for `model` with the load options of
+    /// `options` (the estimate's options, as `leeway.estimate` takes them).
+    #[staticmethod]
+    fn open(
+        py: Python<'_>,
+        model: &Model,
+        path: String,
+        options: EstimateOptions,
+    ) -> PyResult<Dataset> {
+        // `aggregate` changes the predictor's columns: compile as the driver does.
+        let recompiled;
+        let model = if options.aggregate == model.aggregate {
+            model
+        } else {
+            recompiled =
+                Model::compile(model.source.clone(), model.file.clone(), options.aggregate)?;
+            &recompiled
+        };
+        let load = options.load_options(&model.ir)?;
+        Ok(py.detach(|| Dataset::open_file(model, &path, &load))?)
+    }
+
+    /// Its experiments' names and lengths and the data checks' findings (bytes for the driver).
+    fn summary<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.summary)
+    }
+
+    /// How many experiments the file holds.
+    fn __len__(&self) -> usize {
+        self.experiments.sources().len()
+    }
+
+    /// The facts of each experiment for a facts request.
+    fn facts<'py>(&self, py: Python<'py>, request: &[u8]) -> PyResult<Vec<Bound<'py, PyBytes>>> {
+        let request: FactsRequest = decode(request).map_err(failed)?;
+        let out: Vec<Vec<u8>> = py.detach(|| {
+            let runner = PassRunner::new(&self.model);
+            self.experiments
+                .sources()
+                .iter()
+                .map(|e| encode(&runner.facts(*e, &request)))
+                .collect()
+        });
+        if let Some(f) = self.failure() {
+            return Err(f.into());
+        }
+        Ok(bytes_list(py, &out))
+    }
+
+    /// Each experiment's summary of a pass; `offset` is the index of the
+    /// file's first experiment among all experiments of the estimate.
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        offset: usize,
+        request: &[u8],
+    ) -> PyResult<Vec<Bound<'py, PyBytes>>> {
+        let request: PassRequest = decode(request).map_err(failed)?;
+        let out: Vec<Vec<u8>> = py.detach(|| {
+            let runner = PassRunner::new(&self.model);
+            self.experiments
+                .sources()
+                .iter()
+                .enumerate()
+                .map(|(i, e)| encode(&runner.pass(*e, offset + i, &request)))
+                .collect()
+        });
+        if let Some(f) = self.failure() {
+            return Err(f.into());
+        }
+        Ok(bytes_list(py, &out))
+    }
+}
+
+/// Passes that call back into Python: `facts(request) -> [bytes]` and
+/// `run(request) -> [bytes]`, one answer per experiment in order. A Python
+/// exception (a worker's data error, a lost cluster) is kept and re-raised
+/// once the driver has stopped.
+struct PythonPasses {
+    facts: Py<PyAny>,
+    run: Py<PyAny>,
+    raised: Mutex<Option<PyErr>>,
+}
+
+impl PythonPasses {
+    fn call<T: serde::de::DeserializeOwned>(
+        &self,
+        f: &Py<PyAny>,
+        request: Vec<u8>,
+    ) -> Result<Vec<T>, EstimateError> {
+        let answers: PyResult<Vec<Vec<u8>>> =
+            Python::attach(|py| f.call1(py, (PyBytes::new(py, &request),))?.extract(py));
+        match answers {
+            Ok(answers) => answers.iter().map(|b| decode(b)).collect(),
+            Err(e) => {
+                let message = e.to_string();
+                if let Ok(mut slot) = self.raised.lock() {
+                    slot.get_or_insert(e);
+                }
+                Err(EstimateError {
+                    code: "pass-failed",
+                    message: format!("a pass over the experiments failed: {message}"),
+                    hint: "see the exception raised".to_string(),
+                })
+            }
+        }
+    }
+}
+
+impl Passes for PythonPasses {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        self.call(&self.facts, encode(request))
+    }
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        self.call(&self.run, encode(request))
+    }
+}
+
+/// `leeway estimate --json` of `model` on data files opened on workers:
+/// `summaries` are their [`Dataset::summary`] bytes in file order, `files`
+/// their names; `facts` and `run` map a request over the files. The GIL is
+/// released except while a callback runs.
+#[pyfunction]
+pub fn estimate_mapped(
+    py: Python<'_>,
+    model: &Model,
+    files: Vec<String>,
+    summaries: Vec<Vec<u8>>,
+    options: EstimateOptions,
+    facts: Py<PyAny>,
+    run: Py<PyAny>,
+) -> PyResult<String> {
+    let runtime_options = options.runtime()?;
+    let recompiled;
+    let model = if options.aggregate == model.aggregate {
+        model
+    } else {
+        recompiled = Model::compile(model.source.clone(), model.file.clone(), options.aggregate)?;
+        &recompiled
+    };
+    let ir = &model.ir;
+    let summaries: Vec<FileSummary> = summaries
+        .iter()
+        .map(|b| decode(b))
+        .collect::<Result<_, _>>()
+        .map_err(failed)?;
+    let passes = PythonPasses {
+        facts,
+        run,
+        raised: Mutex::new(None),
+    };
+    let interpreter = Interpreter::new(ir.clone());
+    let result = py.detach(|| estimate_with(&interpreter, &passes, &runtime_options));
+    if let Some(e) = passes.raised.lock().ok().and_then(|mut s| s.take()) {
+        return Err(e);
+    }
+    let est = result.map_err(failed)?;
+    let mut warnings = model.warnings.clone();
+    let mut peaks = vec![0.0f64; ir.inputs.len()];
+    for s in &summaries {
+        for (p, v) in peaks.iter_mut().zip(&s.input_peaks) {
+            *p = p.max(*v);
+        }
+    }
+    warnings.extend(unit_warnings_from_peaks(ir, &peaks));
+    let gains: Vec<(String, Option<f64>)> = summaries
+        .iter()
+        .flat_map(|s| s.heading_gains.iter().cloned())
+        .collect();
+    warnings.extend(heading_warnings(ir, &gains));
+    warnings.extend(est.warnings.iter().cloned());
+    let experiments: Vec<(String, usize)> = summaries
+        .iter()
+        .flat_map(|s| s.experiments.iter().cloned())
+        .collect();
+    let notes: Vec<FileNotes> = summaries.into_iter().map(|s| s.notes).collect();
+    let report = estimate_report::<serde_json::Value>(
+        model.file.clone(),
+        files,
+        runtime_options.method,
+        Some(ir.name.clone()),
+        Ok(Estimated {
+            model: &ir.name,
+            estimate: &est,
+            experiments: &experiments,
+            heading_gains: &gains,
+            data_notes: &notes,
+            data_units: &ir.data_units,
+        }),
+        warnings,
+    );
+    report
+        .to_json()
+        .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None).into())
+}

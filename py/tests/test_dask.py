@@ -1,0 +1,131 @@
+"""leeway.dask on a LocalCluster of two worker processes: the distributed
+estimate is `leeway estimate --json` on the same files, bit for bit; both
+workers take part; a worker killed in the middle of a pass changes nothing;
+a worker's data error reaches the caller as the located DataError."""
+
+from __future__ import annotations
+
+import json
+import os
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+distributed = pytest.importorskip("distributed")
+from distributed import Client, LocalCluster  # noqa: E402
+from distributed.diagnostics.plugin import WorkerPlugin  # noqa: E402
+
+import leeway  # noqa: E402
+import leeway.dask  # noqa: E402
+from conftest import SHIP, run_leeway, ship_data  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def ship() -> leeway.Model:
+    return leeway.Model.load(SHIP)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory: pytest.TempPathFactory) -> list[str]:
+    """Four files of different lengths; the last holds two experiments."""
+    tmp = tmp_path_factory.mktemp("campaign")
+    paths = []
+    for i, (n, seed) in enumerate([(900, 21), (1400, 22), (600, 23)]):
+        path = tmp / f"run{i}.csv"
+        ship_data(tmp, n, 1.0, seed).to_csv(path, index=False)
+        paths.append(str(path))
+    a = ship_data(tmp, 500, 1.0, 24).assign(experiment="a")
+    b = ship_data(tmp, 700, 1.0, 25).assign(experiment="b")
+    path = tmp / "two.csv"
+    pd.concat([a, b]).to_csv(path, index=False)
+    paths.append(str(path))
+    return paths
+
+
+def cluster() -> LocalCluster:
+    return LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    )
+
+
+@pytest.fixture(scope="module")
+def client():
+    with cluster() as c, Client(c) as client:
+        yield client
+
+
+def cli(files: list[str], *args: str) -> str:
+    data = [a for f in files for a in ("--data", f)]
+    o = run_leeway("estimate", str(SHIP), *data, "--json", *args)
+    return o.stdout
+
+
+def distributed_json(ship: leeway.Model, files: list[str], client: Client, **options) -> str:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", leeway.LeewayWarning)
+        return leeway.dask.estimate(ship, files, client, **options).to_json()
+
+
+def same_document(ours: str, theirs: str) -> None:
+    a, b = json.loads(ours), json.loads(theirs)
+    assert b["errors"] == []
+    # Floats compare by their shortest round-trip text: equal text, equal bits.
+    assert json.dumps(a) == json.dumps(b)
+
+
+def test_the_distributed_estimate_is_the_cli_estimate_bit_for_bit(
+    ship: leeway.Model, files: list[str], client: Client
+) -> None:
+    for args, kwargs in [((), {}), (("--method", "ls", "--lags", "3"), {"method": "ls", "lags": 3})]:
+        with distributed.get_task_stream(client) as stream:
+            ours = distributed_json(ship, files, client, **kwargs)
+        same_document(ours, cli(files, *args))
+        # Every pass ran on the workers, and both took part.
+        ran = {t["worker"] for t in stream.data if str(t["key"]).startswith("_run")}
+        assert len(ran) == 2, ran
+    est = json.loads(ours)
+    assert est["diagnostics"]["experiments"] == 5
+    assert est["diagnostics"]["refinements"] == 0  # LS; the IV3 run above refined
+
+
+def test_a_worker_killed_mid_pass_changes_nothing(
+    ship: leeway.Model, files: list[str], tmp_path: Path
+) -> None:
+    marker = str(tmp_path / "killed")
+
+    class KillOnce(WorkerPlugin):
+        """Kills its worker's process the first time any worker starts a
+        pass task (the marker file makes it once per test)."""
+
+        def __init__(self, marker: str) -> None:
+            self.marker = marker
+
+        def transition(self, key, start, finish, **kwargs) -> None:  # type: ignore[no-untyped-def]
+            if finish == "executing" and str(key).startswith("_run"):
+                try:
+                    os.close(os.open(self.marker, os.O_CREAT | os.O_EXCL))
+                except FileExistsError:
+                    return
+                os._exit(1)
+
+    with cluster() as c, Client(c) as client:
+        client.register_plugin(KillOnce(marker))
+        ours = distributed_json(ship, files, client, method="iv3")
+        assert os.path.exists(marker), "no worker was killed"
+    same_document(ours, cli(files))
+
+
+def test_a_workers_data_error_is_the_located_data_error(
+    ship: leeway.Model, files: list[str], client: Client, tmp_path: Path
+) -> None:
+    frame = pd.read_csv(files[0])
+    frame.loc[40, "u"] = np.nan
+    bad = tmp_path / "bad.csv"
+    frame.to_csv(bad, index=False)
+    with pytest.raises(leeway.DataError) as e:
+        leeway.dask.estimate(ship, [files[1], str(bad)], client)
+    assert "bad.csv" in str(e.value.location)
+    assert "u" in str(e.value) and e.value.code == "data"
