@@ -9,6 +9,7 @@
 mod data;
 mod distributed;
 mod failure;
+mod study;
 
 use failure::Failure;
 use leeway_runtime::data::LoadOptions;
@@ -448,5 +449,8 @@ fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate_json, m)?)?;
     m.add_class::<distributed::Dataset>()?;
     m.add_function(wrap_pyfunction!(distributed::estimate_mapped, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_run, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_summary, m)?)?;
     Ok(())
 }

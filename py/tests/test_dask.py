@@ -47,7 +47,7 @@ def files(tmp_path_factory: pytest.TempPathFactory) -> list[str]:
 
 def cluster() -> LocalCluster:
     return LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0"
     )
 
 
@@ -129,3 +129,22 @@ def test_a_workers_data_error_is_the_located_data_error(
         leeway.dask.estimate(ship, [files[1], str(bad)], client)
     assert "bad.csv" in str(e.value.location)
     assert "u" in str(e.value) and e.value.code == "data"
+
+
+def test_the_distributed_study_gives_reproduces_figures(
+    ship: leeway.Model, client: Client, tmp_path: Path
+) -> None:
+    with distributed.get_task_stream(client) as stream:
+        ours = leeway.dask.study(ship, client, runs=3, n=[300, 600], seed=7)
+    ran = {t["worker"] for t in stream.data if str(t["key"]).startswith("_study_run")}
+    assert len(ran) == 2, ran
+    o = run_leeway("reproduce", "--runs", "3", "--n", "300,600", "--seed", "7", "--out", str(tmp_path))
+    assert o.returncode == 0, o.stderr
+    theirs = json.loads((tmp_path / "results.json").read_text())
+    assert set(ours["cases"]) == {"low", "high"}
+    for case, figures in ours["cases"].items():
+        for name, summary in figures["estimators"].items():
+            reproduced = theirs["cases"][case]["estimators"][name]
+            for key, value in summary.items():
+                assert json.dumps(value) == json.dumps(reproduced[key]), (case, name, key)
+    assert json.dumps(ours["claims"], sort_keys=True) == json.dumps(theirs["claims"], sort_keys=True)

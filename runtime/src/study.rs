@@ -274,7 +274,7 @@ impl Default for StudyConfig {
 }
 
 /// One estimate of the study.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Outcome {
     /// θ (held parameters at nominal), if the estimator returned one.
     pub theta: Option<Vec<f64>>,
@@ -399,33 +399,58 @@ pub fn run_study(
 ) -> StudyOutcomes {
     use rayon::prelude::*;
     let validation = validation_experiment(model, config.validation_len);
-    let n_max = config.n.iter().copied().max().unwrap_or(0);
-    let tasks: Vec<(usize, usize)> = (0..config.cases.len())
-        .flat_map(|c| (0..config.runs).map(move |r| (c, r)))
-        .collect();
+    let tasks = study_tasks(config);
     let results: Vec<Vec<Vec<Outcome>>> = tasks
         .par_iter()
         .map(|&(c, r)| {
-            let (data, _) = estimation_experiment(
-                model,
-                &config.design,
-                config.cases[c].wind,
-                n_max,
-                run_seed(config.seed, &config.cases[c], r),
-            );
-            // Record lengths in increasing order: each warm-starts the next.
-            let mut starts = vec![None; crate::estimate::Method::ALL.len()];
-            let per_n = config
-                .n
-                .iter()
-                .map(|&n| evaluate(model, &data.truncated(n), &validation, config, &mut starts))
-                .collect();
+            let per_n = study_run(model, config, &validation, c, r);
             progress();
             per_n
         })
         .collect();
+    collect_outcomes(config, results)
+}
+
+/// The study's runs as `(case, run)`, cases first: the order in which
+/// [`collect_outcomes`] takes their outcomes.
+pub fn study_tasks(config: &StudyConfig) -> Vec<(usize, usize)> {
+    (0..config.cases.len())
+        .flat_map(|c| (0..config.runs).map(move |r| (c, r)))
+        .collect()
+}
+
+/// One run of the study, `outcomes[n_index][method]`: run `run` of case
+/// `case` simulated once at the largest N, every method estimated on each
+/// prefix and validated on `validation`. A function of its arguments only,
+/// so runs can be computed anywhere (threads, processes, machines).
+pub fn study_run(
+    model: &dyn Model,
+    config: &StudyConfig,
+    validation: &Experiment,
+    case: usize,
+    run: usize,
+) -> Vec<Vec<Outcome>> {
+    let n_max = config.n.iter().copied().max().unwrap_or(0);
+    let (data, _) = estimation_experiment(
+        model,
+        &config.design,
+        config.cases[case].wind,
+        n_max,
+        run_seed(config.seed, &config.cases[case], run),
+    );
+    // Record lengths in increasing order: each warm-starts the next.
+    let mut starts = vec![None; crate::estimate::Method::ALL.len()];
+    config
+        .n
+        .iter()
+        .map(|&n| evaluate(model, &data.truncated(n), validation, config, &mut starts))
+        .collect()
+}
+
+/// The outcomes of the runs of [`study_tasks`], in that order.
+pub fn collect_outcomes(config: &StudyConfig, results: Vec<Vec<Vec<Outcome>>>) -> StudyOutcomes {
     let mut outcomes = vec![Vec::with_capacity(config.runs); config.cases.len()];
-    for ((c, _), res) in tasks.iter().zip(results) {
+    for ((c, _), res) in study_tasks(config).iter().zip(results) {
         outcomes[*c].push(res);
     }
     StudyOutcomes {

@@ -7,7 +7,7 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Model", "Dataset", "estimate_json", "estimate_mapped"]
+__all__ = ["Model", "Dataset", "estimate_json", "estimate_mapped", "study_tasks", "study_run", "study_summary"]
 
 @final
 class Model:
@@ -62,3 +62,7 @@ def estimate_mapped(
     facts: Callable[[bytes], list[bytes]],
     run: Callable[[bytes], list[bytes]],
 ) -> str: ...
+
+def study_tasks(config: dict[str, Any]) -> list[tuple[int, int]]: ...
+def study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes: ...
+def study_summary(config: dict[str, Any], runs: list[bytes]) -> str: ...

@@ -24,6 +24,7 @@ binary copy: memory does not grow with the file) for the passes that follow.
 
 from __future__ import annotations
 
+import json
 import os
 import threading
 from collections.abc import Mapping, Sequence
@@ -32,7 +33,7 @@ from typing import Any
 from . import Estimate, Model, _estimate_options, _leeway, _warn
 from .errors import DataError
 
-__all__ = ["estimate"]
+__all__ = ["estimate", "study"]
 
 # Files opened on this worker, by model, path and load options.
 _opened: dict[tuple[Any, ...], _leeway.Dataset] = {}
@@ -150,4 +151,48 @@ def estimate(
     )
     result = Estimate(document)
     _warn(result)
+    return result
+
+
+def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes:
+    return _leeway.study_run(model._core, config, case, run)
+
+
+def study(
+    model: Model,
+    client: Any = None,
+    *,
+    runs: int = 100,
+    n: Sequence[int] = (1000, 2000, 3000, 4000, 5000),
+    cases: Sequence[str] = ("low", "high"),
+    seed: int = 2024,
+    paper_iv: bool = False,
+) -> dict[str, Any]:
+    """The paper's Monte Carlo study (``leeway reproduce``; ``model`` is the
+    study's ship, examples/models/ship.som) with its runs spread over the
+    workers of ``client``: one task per run and case, each simulating its
+    record from its own seed. Returns the study's figures per case and
+    estimator and its claims (``cases``, ``claims``), the same as
+    ``reproduce``'s ``results.json`` for the same options."""
+    from distributed import get_client
+
+    client = client if client is not None else get_client()
+    config = {
+        "runs": runs,
+        "n": list(n),
+        "cases": list(cases),
+        "seed": seed,
+        "paper_iv": paper_iv,
+    }
+    tasks = _leeway.study_tasks(config)
+    k = len(tasks)
+    futures = client.map(
+        _study_run,
+        [model] * k,
+        [config] * k,
+        [c for c, _ in tasks],
+        [r for _, r in tasks],
+        pure=False,
+    )
+    result: dict[str, Any] = json.loads(_leeway.study_summary(config, client.gather(futures)))
     return result
