@@ -2,6 +2,9 @@
 
 use super::*;
 
+/// Covariance entries by (column, column) of the estimated columns.
+pub(super) type ColumnCovariance = BTreeMap<(usize, usize), f64>;
+
 impl Estimator<'_> {
     /// The sandwich covariance of the estimated columns: `Σ_i B_i G_i B_iᵀ`,
     /// `G_i` the long-run sum of `ζ_k = Σ_o z̃_o (ε_o − ε̄_o)` truncated at
@@ -12,7 +15,7 @@ impl Estimator<'_> {
         sol: &[BlockSolution],
         theta_sim: &[f64],
         mu: &[f64],
-    ) -> Result<Option<BTreeMap<(usize, usize), f64>>, EstimateError> {
+    ) -> Result<Option<ColumnCovariance>, EstimateError> {
         let n = self.n_cols;
         let n_out = self.ir.states.len();
         let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();

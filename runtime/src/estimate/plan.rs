@@ -7,6 +7,7 @@ use super::*;
 pub(super) const MIN_EQUATIONS_PER_COLUMN: usize = 3;
 
 impl<'a> Estimator<'a> {
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn new(
         model: &'a dyn Model,
         options: &'a Options,
