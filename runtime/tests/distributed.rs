@@ -58,15 +58,18 @@ impl Passes for Workers<'_> {
     }
 }
 
-fn bits(e: &Estimate) -> (Vec<u64>, Vec<Option<u64>>, Vec<(u64, Option<u64>)>, String) {
-    (
-        e.theta.iter().map(|v| v.to_bits()).collect(),
-        e.std_errors.iter().map(|v| v.map(f64::to_bits)).collect(),
-        e.disturbances
-            .iter()
-            .map(|d| (d.mean.to_bits(), d.std_error.map(f64::to_bits)))
-            .collect(),
-        format!("{:?} {:?}", e.diagnostics, e.warnings),
+/// Every number of the estimate by its bits, and its diagnostics and warnings.
+fn bits(e: &Estimate) -> String {
+    let theta: Vec<u64> = e.theta.iter().map(|v| v.to_bits()).collect();
+    let se: Vec<Option<u64>> = e.std_errors.iter().map(|v| v.map(f64::to_bits)).collect();
+    let means: Vec<(u64, Option<u64>)> = e
+        .disturbances
+        .iter()
+        .map(|d| (d.mean.to_bits(), d.std_error.map(f64::to_bits)))
+        .collect();
+    format!(
+        "{theta:?} {se:?} {means:?} {:?} {:?}",
+        e.diagnostics, e.warnings
     )
 }
 
