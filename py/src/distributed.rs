@@ -7,7 +7,7 @@
 //! the same document as `leeway estimate --json`.
 
 use crate::failure::Failure;
-use crate::{EstimateOptions, Model};
+use crate::{EstimateOptions, FrameArg, Model, borrow_frames};
 use leeway_runtime::data::{FileNotes, LoadOptions, load_csv_noted, open_csv};
 use leeway_runtime::estimate::{
     EstimateError, ExperimentFacts, FactsRequest, PassRequest, PassRunner, PassSummary, Passes,
@@ -69,6 +69,10 @@ impl Dataset {
             let f = open_csv(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
             (Experiments::Streamed(f.sources), f.notes)
         };
+        Ok(Dataset::new(ir, experiments, notes))
+    }
+
+    fn new(ir: &leeway_structure::ir::Ir, experiments: Experiments, notes: FileNotes) -> Dataset {
         let sources = experiments.sources();
         let summary = FileSummary {
             experiments: sources
@@ -81,11 +85,11 @@ impl Dataset {
         };
         let summary = encode(&summary);
         drop(sources);
-        Ok(Dataset {
+        Dataset {
             model: Interpreter::new(ir.clone()),
             experiments,
             summary,
-        })
+        }
     }
 
     /// A problem met while streaming (the validated copy became unreadable).
@@ -119,17 +123,44 @@ impl Dataset {
         path: String,
         options: EstimateOptions,
     ) -> PyResult<Dataset> {
-        // `aggregate` changes the predictor's columns: compile as the driver does.
-        let recompiled;
-        let model = if options.aggregate == model.aggregate {
-            model
-        } else {
-            recompiled =
-                Model::compile(model.source.clone(), model.file.clone(), options.aggregate)?;
-            &recompiled
-        };
+        let model = model.for_aggregate(options.aggregate)?;
         let load = options.load_options(&model.ir)?;
-        Ok(py.detach(|| Dataset::open_file(model, &path, &load))?)
+        Ok(py.detach(|| Dataset::open_file(&model, &path, &load))?)
+    }
+
+    /// The experiments of frames handed over as `leeway.estimate` hands
+    /// them (validated as files are), held in memory: for engines that give
+    /// each task its data as a DataFrame (Spark's `applyInPandas`).
+    #[staticmethod]
+    fn from_frames(
+        py: Python<'_>,
+        model: &Model,
+        frames: Vec<FrameArg<'_>>,
+        options: EstimateOptions,
+    ) -> PyResult<Dataset> {
+        let model = model.for_aggregate(options.aggregate)?;
+        let load = options.load_options(&model.ir)?;
+        let borrowed = borrow_frames(&frames)?;
+        let ir = &model.ir;
+        let opened = py.detach(|| -> Result<Dataset, Failure> {
+            let (experiments, notes) = crate::data::load(ir, &borrowed, &load)?;
+            let mut notes = notes.into_iter();
+            let notes = match (notes.next(), notes.next()) {
+                (Some(only), None) => only,
+                // Several frames: one summary of them all, named by the first.
+                (first, second) => {
+                    let mut all = first.unwrap_or_default();
+                    for n in second.into_iter().chain(notes) {
+                        all.experiments.extend(n.experiments);
+                        all.comment_lines += n.comment_lines;
+                        all.blank_lines += n.blank_lines;
+                    }
+                    all
+                }
+            };
+            Ok(Dataset::new(ir, Experiments::Held(experiments), notes))
+        })?;
+        Ok(opened)
     }
 
     /// Its experiments' names and lengths and the data checks' findings (bytes for the driver).
@@ -243,13 +274,7 @@ pub fn estimate_mapped(
     run: Py<PyAny>,
 ) -> PyResult<String> {
     let runtime_options = options.runtime()?;
-    let recompiled;
-    let model = if options.aggregate == model.aggregate {
-        model
-    } else {
-        recompiled = Model::compile(model.source.clone(), model.file.clone(), options.aggregate)?;
-        &recompiled
-    };
+    let model = model.for_aggregate(options.aggregate)?;
     let ir = &model.ir;
     let summaries: Vec<FileSummary> = summaries
         .iter()

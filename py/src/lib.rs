@@ -26,6 +26,7 @@ use pyo3::prelude::*;
 /// A compiled model: its source text (what it pickles by), the file it came
 /// from as the user named it, and its structure.
 #[pyclass(module = "leeway._leeway", frozen)]
+#[derive(Clone)]
 struct Model {
     source: String,
     file: String,
@@ -60,6 +61,17 @@ fn warning_lines(c: &Compilation, file: &str, source: &str) -> Vec<String> {
 }
 
 impl Model {
+    /// The model as compiled with `aggregate` (which changes the predictor's
+    /// columns), recompiled only when it differs.
+    fn for_aggregate(&self, aggregate: bool) -> Result<std::borrow::Cow<'_, Model>, Failure> {
+        if aggregate == self.aggregate {
+            Ok(std::borrow::Cow::Borrowed(self))
+        } else {
+            Model::compile(self.source.clone(), self.file.clone(), aggregate)
+                .map(std::borrow::Cow::Owned)
+        }
+    }
+
     fn compile(source: String, file: String, aggregate: bool) -> Result<Model, Failure> {
         let compilation = compile(&source, &options(aggregate, None));
         let Some(ir) = compilation.ir.clone() else {
@@ -359,15 +371,17 @@ fn estimate_json(
     let runtime_options = options.runtime()?;
     // `aggregate` changes what the structure compiler keeps: the CLI compiles
     // with it, so does this.
-    let recompiled;
-    let model = if options.aggregate == model.aggregate {
-        model
-    } else {
-        recompiled = Model::compile(model.source.clone(), model.file.clone(), options.aggregate)?;
-        &recompiled
-    };
+    let model = &*model.for_aggregate(options.aggregate)?;
     let load_options = options.load_options(&model.ir)?;
-    let borrowed: Vec<data::Frame<'_>> = frames
+    let borrowed = borrow_frames(&frames)?;
+    let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
+    Ok(document)
+}
+
+/// The frames' columns borrowed in place (`leeway` hands over contiguous
+/// float64 arrays).
+fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<data::Frame<'a>>, Failure> {
+    frames
         .iter()
         .map(|(name, columns, experiment)| {
             let columns = columns
@@ -388,9 +402,7 @@ fn estimate_json(
                 experiment: experiment.as_deref(),
             })
         })
-        .collect::<Result<_, Failure>>()?;
-    let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
-    Ok(document)
+        .collect()
 }
 
 fn run_estimate(

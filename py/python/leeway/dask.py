@@ -27,10 +27,11 @@ from __future__ import annotations
 import json
 import os
 import threading
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
-from . import Estimate, Model, _estimate_options, _leeway, _warn
+from . import Estimate, Model, _leeway
+from . import mapreduce
 from .errors import DataError
 
 __all__ = ["estimate", "study"]
@@ -53,7 +54,7 @@ def _dataset(model: Model, path: str, options: dict[str, Any]) -> _leeway.Datase
     with _lock:
         found = _opened.get(key)
     if found is None:
-        found = _leeway.Dataset.open(model._core, path, options)
+        found = mapreduce.open_file(model, path, options)
         with _lock:
             found = _opened.setdefault(key, found)
     return found
@@ -76,27 +77,13 @@ def estimate(
     model: Model,
     experiments: Sequence[str | os.PathLike[str]],
     client: Any = None,
-    method: str = "iv3",
-    *,
-    instruments: str = "simulated",
-    initial: str = "delayed",
-    centring: str | None = None,
-    combine: str = "summed",
-    nominal: Mapping[str, float] | None = None,
-    aggregate: bool = False,
-    strict: bool = False,
-    lags: int = 1,
-    max_refinements: int = 8,
-    runaway_guard: bool = True,
-    step: float | None = None,
-    time_tolerance: float = 0.05,
-    resample: float | None = None,
+    **options: Any,
 ) -> Estimate:
-    """Estimates like :func:`leeway.estimate` from data files (CSV, as
-    ``leeway estimate --data`` reads them; a file with an ``experiment``
-    column holds several experiments), each pass mapped over the files on
-    the workers of ``client`` (a ``dask.distributed.Client``; the current
-    one if ``None``). The options are those of :func:`leeway.estimate`."""
+    """Estimates like :func:`leeway.estimate` (the same keyword options and
+    defaults: ``method="iv3"``, …) from data files (CSV, as ``leeway
+    estimate --data`` reads them; a file with an ``experiment`` column holds
+    several experiments), each pass mapped over the files on the workers of
+    ``client`` (a ``dask.distributed.Client``; the current one if ``None``)."""
     from distributed import get_client
 
     client = client if client is not None else get_client()
@@ -107,25 +94,10 @@ def estimate(
             code="no-data",
             hint="pass at least one data file",
         )
-    options = _estimate_options(
-        model,
-        method=method,
-        instruments=instruments,
-        initial=initial,
-        centring=centring,
-        combine=combine,
-        nominal=nominal,
-        aggregate=aggregate,
-        strict=strict,
-        lags=lags,
-        max_refinements=max_refinements,
-        runaway_guard=runaway_guard,
-        step=step,
-        time_tolerance=time_tolerance,
-        resample=resample,
-    )
+    chosen = mapreduce.options(model, **options)
     n = len(paths)
-    opened = client.gather(client.map(_open, [model] * n, paths, [options] * n, pure=False))
+    models, settings = [model] * n, [chosen] * n
+    opened = client.gather(client.map(_open, models, paths, settings, pure=False))
     offsets = []
     total = 0
     for _, count in opened:
@@ -133,25 +105,16 @@ def estimate(
         total += count
 
     def facts(request: bytes) -> list[bytes]:
-        shared = client.scatter(request, broadcast=True)
-        parts = client.gather(
-            client.map(_facts, [model] * n, paths, [options] * n, [shared] * n, pure=False)
-        )
+        shared = [client.scatter(request, broadcast=True)] * n
+        parts = client.gather(client.map(_facts, models, paths, settings, shared, pure=False))
         return [b for part in parts for b in part]
 
     def run(request: bytes) -> list[bytes]:
-        shared = client.scatter(request, broadcast=True)
-        parts = client.gather(
-            client.map(_run, [model] * n, paths, [options] * n, offsets, [shared] * n, pure=False)
-        )
+        shared = [client.scatter(request, broadcast=True)] * n
+        parts = client.gather(client.map(_run, models, paths, settings, offsets, shared, pure=False))
         return [b for part in parts for b in part]
 
-    document = _leeway.estimate_mapped(
-        model._core, paths, [summary for summary, _ in opened], options, facts, run
-    )
-    result = Estimate(document)
-    _warn(result)
-    return result
+    return mapreduce.estimate(model, paths, [s for s, _ in opened], facts, run, chosen)
 
 
 def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes:

@@ -1,0 +1,95 @@
+"""Estimation as map and reduce, for any engine that can run a function
+where the data are and bring small results back.
+
+An estimate makes a handful of passes over the data: the facts of every
+experiment (signs, means, bounds), then one pass per refinement of the
+instrumental variables and one for the standard errors. Each pass maps a
+request (bytes) over the experiments: a :class:`Dataset` — experiments
+opened where they are, from a file (:func:`open_file`) or a DataFrame
+(:func:`open_frame`) — answers it with one small summary per experiment
+(moment sums, independent of the experiment's length). :func:`estimate` is
+the driver: it combines the summaries in experiment order, solves, and sends
+the next request. Whatever runs the map, the estimate is the same, bit for
+bit, as :func:`leeway.estimate` on the same data. :mod:`leeway.dask` is this
+on Dask; docs/distributed.md shows Spark.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+from . import Data, Estimate, Model, _estimate_options, _handover, _leeway, _warn
+from .errors import OptionError
+
+__all__ = ["Dataset", "options", "open_file", "open_frame", "estimate"]
+
+Dataset = _leeway.Dataset
+
+_DEFAULTS: dict[str, Any] = {
+    "method": "iv3",
+    "instruments": "simulated",
+    "initial": "delayed",
+    "centring": None,
+    "combine": "summed",
+    "nominal": None,
+    "aggregate": False,
+    "strict": False,
+    "lags": 1,
+    "max_refinements": 8,
+    "runaway_guard": True,
+    "step": None,
+    "time_tolerance": 0.05,
+    "resample": None,
+}
+
+
+def options(model: Model, **given: Any) -> dict[str, Any]:
+    """The options of :func:`leeway.estimate` (its keyword arguments, with
+    its defaults) as the native half takes them: give the same dict to
+    every :func:`open_file`/:func:`open_frame` and to :func:`estimate`."""
+    unknown = sorted(set(given) - set(_DEFAULTS))
+    if unknown:
+        raise OptionError(
+            f"unknown option {unknown[0]!r}",
+            code="invalid-option",
+            hint=f"the options are {', '.join(_DEFAULTS)}",
+        )
+    chosen = {**_DEFAULTS, **given}
+    return _estimate_options(model, **chosen)
+
+
+def open_file(model: Model, path: str | os.PathLike[str], options: dict[str, Any]) -> Dataset:
+    """A data file's experiments (CSV, as ``leeway estimate --data`` reads
+    it), validated once and streamed on every pass."""
+    return _leeway.Dataset.open(model._core, os.fspath(path), options)
+
+
+def open_frame(model: Model, data: Data, options: dict[str, Any]) -> Dataset:
+    """The experiments of ``data`` (anything :func:`leeway.estimate` takes),
+    validated as files are and held in memory."""
+    return _leeway.Dataset.from_frames(model._core, _handover(model, data), options)
+
+
+def estimate(
+    model: Model,
+    names: Sequence[str],
+    summaries: Sequence[bytes],
+    facts: Callable[[bytes], list[bytes]],
+    run: Callable[[bytes], list[bytes]],
+    options: dict[str, Any],
+) -> Estimate:
+    """Drives an estimate whose passes run elsewhere. ``names`` and
+    ``summaries`` are each dataset's name and :meth:`Dataset.summary`, in
+    the order that fixes the experiments' order; ``facts(request)`` returns
+    ``[d.facts(request) for d in datasets]`` flattened, ``run(request)``
+    returns ``[d.run(offset_d, request) for d in datasets]`` flattened, where
+    ``offset_d`` is the number of experiments in the datasets before ``d``.
+    An exception raised by ``facts`` or ``run`` is raised from here."""
+    document = _leeway.estimate_mapped(
+        model._core, list(names), list(summaries), options, facts, run
+    )
+    result = Estimate(document)
+    _warn(result)
+    return result
