@@ -29,6 +29,7 @@ pub mod zigzag;
 
 pub use data::{DataError, Experiment, Row, Source, load_csv};
 pub use estimate::{
-    Centring, Combine, Estimate, EstimateError, Initial, Instruments, Method, Options, estimate,
+    Centring, Combine, Estimate, EstimateError, EstimateOptions, Initial, Instruments, Method,
+    estimate,
 };
 pub use write::write_csv;

@@ -61,7 +61,7 @@ struct Block {
 struct Estimator<'a> {
     model: &'a dyn Model,
     ir: &'a Ir,
-    options: &'a Options,
+    options: &'a EstimateOptions,
     kind: PredictorKind,
     /// The centring used (the option, or the model's default).
     centring: Centring,
@@ -89,7 +89,7 @@ struct Estimator<'a> {
 pub fn estimate(
     model: &dyn Model,
     experiments: &[&dyn Source],
-    options: &Options,
+    options: &EstimateOptions,
 ) -> Result<Estimate, EstimateError> {
     let ir = model.ir();
     if experiments.is_empty() {

@@ -9,7 +9,7 @@ pub(super) const MIN_EQUATIONS_PER_COLUMN: usize = 3;
 impl<'a> Estimator<'a> {
     pub(super) fn new(
         model: &'a dyn Model,
-        options: &'a Options,
+        options: &'a EstimateOptions,
         kind: PredictorKind,
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,

@@ -31,7 +31,7 @@ pub(super) fn experiment_info(
     ir: &Ir,
     e: &dyn Source,
     s: &ExperimentSigns,
-    options: &Options,
+    options: &EstimateOptions,
 ) -> ExperimentInfo {
     let n_comp = ir.components.len();
     let n_out = ir.states.len();
