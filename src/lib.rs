@@ -305,7 +305,7 @@
 //!
 //! The items above are re-exported here; everything else lives in [`runtime`]
 //! (the `leeway-runtime` crate): [`runtime::data`] (loading, streaming,
-//! the [`Source`] trait), [`runtime::estimate`] (the estimator, one module
+//! the [`Source`] trait), [`runtime::estimate`](mod@runtime::estimate) (the estimator, one module
 //! per phase), [`runtime::simulate`], [`runtime::synth`] (seeded true
 //! systems), [`runtime::study`] (the paper's Monte Carlo study),
 //! [`runtime::zigzag`] (a tanker zigzag campaign), [`runtime::design`]
@@ -335,9 +335,7 @@ pub use leeway_runtime::simulate::{
     Disturbances, Trajectory, fit, fits, heading_fit, simulate, unwrap_heading,
 };
 
-/// The run-time side, the `leeway-runtime` crate: the [`Model`] trait and
-/// the [`Interpreter`], data loading, the estimators, simulation and fit,
-/// synthetic data and the paper's study.
+// Everything else (the `leeway-runtime` crate, documented by its own crate docs).
 #[doc(inline)]
 pub use leeway_runtime as runtime;
 

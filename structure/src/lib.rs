@@ -17,8 +17,11 @@ pub mod resolve;
 pub mod terms;
 pub mod units;
 
+#[doc(inline)]
 pub use identify::CompileOptions;
+#[doc(inline)]
 pub use ir::Ir;
+#[doc(inline)]
 pub use leeway_grammar as grammar;
 use leeway_grammar::{Diagnostic, Label, Severity};
 
