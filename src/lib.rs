@@ -49,9 +49,12 @@
 //! * `der u = X_u*water.u + … + X_uu*water.u*|water.u| + …` — each term is
 //!   one parameter (any name not declared as a signal) times `a`, `|a|`,
 //!   `a·b` or `a·|b|` of states, inputs or relative components: the model
-//!   class. Anything else is a located error.
-//! * `nominal { … }` — prior values (unlisted: 0), the starting point of the
-//!   refined estimator and the value of a parameter it holds.
+//!   class. Anything else is a located error. What stands under a modulus
+//!   (`water.u`) is a *sign argument*: which parameters an experiment
+//!   identifies depends on the signs it holds there (its sign pattern).
+//! * `nominal { … }` — prior values (unlisted: 0): the value of a parameter
+//!   the estimator holds (not identifiable, or not excited by the data), and
+//!   the θ of the first instrument simulation with [`Initial::Nominal`].
 //!
 //! The full reference — every construct, what leeway derives from a model,
 //! and every diagnostic with its cause and fix — is the [`language`] module
