@@ -9,7 +9,7 @@
 //! `examples/models/*.som` is listed.
 
 use leeway::ir::{Ir, PredictorKind, Rotation};
-use leeway::{Interpreter, Model, Options, Signals, compile, planar_rotation};
+use leeway::{CompileOptions, Interpreter, Model, Signals, compile, planar_rotation};
 use rand::rngs::ChaCha8Rng;
 use rand::{RngExt, SeedableRng};
 use std::path::Path;
@@ -106,7 +106,7 @@ fn compiled(case: &Case) -> Ir {
         std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let c = compile(
         &source,
-        &Options {
+        &CompileOptions {
             aggregate: case.aggregate,
             patterns: None,
             centring: None,

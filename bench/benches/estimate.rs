@@ -13,7 +13,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use leeway::runtime::Source;
-use leeway::runtime::estimate::{Method, Options, estimate};
+use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
 use leeway::runtime::study;
 use leeway::{Interpreter, Model};
 use leeway_bench::{flop_line, kept_columns, moment_flops};
@@ -50,11 +50,11 @@ fn bench(c: &mut Criterion) {
         let kind = method.predictor();
         let flops = moment_flops(ir, kind, &kept_columns(ir, kind, &data));
         for covariance in [true, false] {
-            let options = Options {
+            let options = EstimateOptions {
                 method,
                 aggregate: true,
                 covariance,
-                ..Options::default()
+                ..EstimateOptions::default()
             };
             let passes = estimate(&generated, &record, &options)
                 .map(|e| e.diagnostics.refinements + 1)

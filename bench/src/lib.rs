@@ -136,7 +136,7 @@ mod tests {
 
     fn ship() -> Ir {
         let source = include_str!("../../examples/models/ship.som");
-        match leeway::compile(source, &leeway::Options::default()).ir {
+        match leeway::compile(source, &leeway::CompileOptions::default()).ir {
             Some(ir) => ir,
             None => panic!("the ship compiles"),
         }

@@ -8,7 +8,7 @@ pub use leeway_runtime::report::check as json;
 use crate::output::{Status, err, out, print_json, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use leeway_structure::identify::parse_pattern;
-use leeway_structure::{Compilation, Options, compile, render};
+use leeway_structure::{Compilation, CompileOptions, compile, render};
 use std::path::PathBuf;
 
 /// Arguments of `leeway check`.
@@ -36,8 +36,8 @@ pub struct CheckArgs {
 }
 
 impl CheckArgs {
-    fn options(&self, patterns: Option<Vec<leeway_structure::ir::SignPattern>>) -> Options {
-        Options {
+    fn options(&self, patterns: Option<Vec<leeway_structure::ir::SignPattern>>) -> CompileOptions {
+        CompileOptions {
             aggregate: self.aggregate,
             patterns,
             centring: self.centring.map(crate::estimate::CentringArg::centring),

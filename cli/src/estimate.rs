@@ -15,7 +15,8 @@ use crate::model::{
 use crate::output::{Status, err, headline, out, print_json, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_runtime::{
-    Centring, Combine, Estimate, Initial, Instruments, Interpreter, Method, Options, estimate,
+    Centring, Combine, Estimate, EstimateOptions, Initial, Instruments, Interpreter, Method,
+    estimate,
 };
 use std::path::PathBuf;
 
@@ -172,8 +173,8 @@ pub fn positive(s: &str) -> Result<f64, String> {
 }
 
 impl EstimateArgs {
-    fn options(&self, nominal: Option<Vec<f64>>) -> Options {
-        Options {
+    fn options(&self, nominal: Option<Vec<f64>>) -> EstimateOptions {
+        EstimateOptions {
             method: match self.method {
                 MethodArg::Ls => Method::Ls,
                 MethodArg::Iv1 => Method::Iv1,
@@ -199,7 +200,7 @@ impl EstimateArgs {
             strict: self.strict,
             lags: usize::from(self.lags),
             runaway_guard: !self.no_runaway_guard,
-            ..Options::default()
+            ..EstimateOptions::default()
         }
     }
 }

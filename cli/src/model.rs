@@ -7,7 +7,7 @@ use leeway_runtime::{Experiment, Source};
 use leeway_structure::grammar::source::Refused;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
-use leeway_structure::{Options, compile};
+use leeway_structure::{CompileOptions, compile};
 use std::path::{Path, PathBuf};
 
 // The data checks and the JSON of the loading notes live in the runtime, so
@@ -97,7 +97,7 @@ pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
     };
     let compilation = compile(
         &source,
-        &Options {
+        &CompileOptions {
             aggregate,
             patterns: None,
             centring: None,

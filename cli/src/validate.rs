@@ -15,7 +15,7 @@ use crate::model::{
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
-use leeway_runtime::simulate::{Disturbances, fit, fits, simulate};
+use leeway_runtime::simulate::{Disturbances, fits, heading_fit, simulate, unwrap_heading};
 use leeway_runtime::{Interpreter, Source};
 use leeway_structure::ir::Rotation;
 use serde::Serialize;
@@ -214,25 +214,6 @@ pub fn run(args: &ValidateArgs) -> Status {
     status
 }
 
-/// The measured heading unwrapped (steps taken along the short arc), so that
-/// it compares with the simulation, which integrates the yaw rate without
-/// wrapping.
-fn unwrapped(heading: &[f64]) -> Vec<f64> {
-    use std::f64::consts::PI;
-    let mut out = Vec::with_capacity(heading.len());
-    let mut acc = 0.0;
-    for (k, psi) in heading.iter().enumerate() {
-        if k == 0 {
-            acc = *psi;
-        } else {
-            let d = psi - heading[k - 1];
-            acc += d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor();
-        }
-        out.push(acc);
-    }
-    out
-}
-
 /// The mean of the experiments' fits of one output: null when an experiment
 /// diverged (a mean would flatter the model) or none defines the fit;
 /// experiments whose measurement is constant (fit undefined) are left out.
@@ -286,7 +267,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             let measured = if o < ir.states.len() {
                 e.states.get(o).cloned().unwrap_or_default()
             } else {
-                unwrapped(&e.heading)
+                unwrap_heading(&e.heading)
             };
             panel.segments.push(Segment {
                 name: e.name.clone(),
@@ -303,7 +284,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             let sim = simulate(&model, theta, e, Disturbances::Constant(&dist));
             let fit_states = fits(e, &sim);
             let heading_fit = heading.as_ref().map(|_| {
-                let f = fit(&unwrapped(&e.heading), &sim.heading);
+                let f = heading_fit(e, &sim);
                 f.is_finite().then_some(f)
             });
             for (o, out_name) in ir.states.iter().enumerate() {

@@ -388,7 +388,7 @@ fn tanker_log(dir: &Scratch, noisy: bool) -> (String, Vec<String>, Vec<String>) 
     let model_path = dir.write("tanker-raw.som", &source);
     let c = leeway_runtime::structure::compile(&source, &Default::default());
     let model = Interpreter::new(c.ir.expect("the tanker compiles"));
-    let campaign = leeway_runtime::zigzag::campaign(&leeway_runtime::zigzag::Options {
+    let campaign = leeway_runtime::zigzag::campaign(&leeway_runtime::zigzag::CampaignOptions {
         noise: noisy.then(leeway_runtime::zigzag::Noise::default),
         ..Default::default()
     });

@@ -18,7 +18,7 @@ mod fallback;
 mod tokens;
 
 use leeway_structure::grammar::{Diagnostic, RenderStyle, Severity, render};
-use leeway_structure::{Options, compile};
+use leeway_structure::{CompileOptions, compile};
 use proc_macro2::{Span, TokenStream};
 use quote::{quote, quote_spanned};
 use std::path::{Path, PathBuf};
@@ -92,8 +92,8 @@ impl Parse for MacroInput {
 }
 
 impl MacroInput {
-    fn options(&self) -> Options {
-        Options {
+    fn options(&self) -> CompileOptions {
+        CompileOptions {
             aggregate: self.aggregate,
             patterns: None,
             centring: None,
@@ -135,7 +135,7 @@ fn for_macro(d: &Diagnostic) -> Diagnostic {
 /// The expansion of one model source: the model's items, or the fallback
 /// items, plus a `compile_error!` at `span` per error; warnings and notes go
 /// into the model's documentation and never fail the build.
-pub fn expand(source: &Source, options: &Options, span: Span) -> TokenStream {
+pub fn expand(source: &Source, options: &CompileOptions, span: Span) -> TokenStream {
     let compilation = compile(source.text, options);
     let (errors, remarks): (Vec<&Diagnostic>, Vec<&Diagnostic>) =
         compilation.diagnostics.iter().partition(|d| d.is_error());
@@ -368,7 +368,7 @@ mod tests {
     #[test]
     fn error_messages_carry_the_rendered_snippet() {
         let src = "model A {\n  state u\n  der u = X*u*u*u\n}\n";
-        let c = compile(src, &Options::default());
+        let c = compile(src, &CompileOptions::default());
         let d = c
             .diagnostics
             .iter()
@@ -390,7 +390,7 @@ mod tests {
                 label: "a.som",
                 tracked: None,
             },
-            &Options::default(),
+            &CompileOptions::default(),
             Span::call_site(),
         )
         .to_string();
@@ -410,7 +410,7 @@ mod tests {
                     label: "a.som",
                     tracked: None,
                 },
-                &Options::default(),
+                &CompileOptions::default(),
                 Span::call_site(),
             )
             .to_string();
@@ -428,7 +428,7 @@ mod tests {
                 label: "a.som",
                 tracked: Some("/m/a.som"),
             },
-            &Options::default(),
+            &CompileOptions::default(),
             Span::call_site(),
         )
         .to_string();

@@ -3,7 +3,7 @@
 //! snapshot-tested in leeway-structure; its exactness is checked at expansion).
 
 use leeway_codegen::{Source, expand};
-use leeway_structure::Options;
+use leeway_structure::CompileOptions;
 use proc_macro2::Span;
 use std::path::Path;
 
@@ -12,7 +12,7 @@ fn models_dir() -> std::path::PathBuf {
 }
 
 /// The expansion as formatted Rust, with the IR's JSON literal elided.
-fn pretty(text: &str, label: &str, options: &Options) -> String {
+fn pretty(text: &str, label: &str, options: &CompileOptions) -> String {
     let tokens = expand(
         &Source {
             text,
@@ -41,7 +41,7 @@ fn pretty(text: &str, label: &str, options: &Options) -> String {
     out
 }
 
-fn example(name: &str, options: &Options) -> String {
+fn example(name: &str, options: &CompileOptions) -> String {
     let path = models_dir().join(name);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     pretty(&text, &format!("examples/models/{name}"), options)
@@ -49,14 +49,14 @@ fn example(name: &str, options: &Options) -> String {
 
 #[test]
 fn ship() {
-    insta::assert_snapshot!(example("ship.som", &Options::default()));
+    insta::assert_snapshot!(example("ship.som", &CompileOptions::default()));
 }
 
 #[test]
 fn ship_iv2_aggregated() {
     insta::assert_snapshot!(example(
         "ship_iv2.som",
-        &Options {
+        &CompileOptions {
             aggregate: true,
             patterns: None,
             centring: None,
@@ -69,7 +69,11 @@ fn fixture(name: &str) -> String {
         .join("../tests/models")
         .join(name);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    pretty(&text, &format!("tests/models/{name}"), &Options::default())
+    pretty(
+        &text,
+        &format!("tests/models/{name}"),
+        &CompileOptions::default(),
+    )
 }
 
 /// Body-frame media (`d[c]` shares), `next` equations, `|input|`, a
@@ -90,5 +94,5 @@ fn sub() {
 #[test]
 fn broken_model_fallback() {
     let text = "model Boat {\n    state u, v\n    input tau\n    der u = X_u*u + X_uvr*u*v*u + X_tau*tau\n    der v = Y_v*v\n}\n";
-    insta::assert_snapshot!(pretty(text, "models/boat.som", &Options::default()));
+    insta::assert_snapshot!(pretty(text, "models/boat.som", &CompileOptions::default()));
 }

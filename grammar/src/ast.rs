@@ -43,9 +43,9 @@ pub struct Number {
     pub span: Span,
 }
 
-/// A whole model file.
+/// A whole model file as written: the syntax tree [`parse`](crate::parse) returns.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Model {
+pub struct ModelSyntax {
     /// `model Name`.
     pub name: Ident,
     /// The declarations in source order.

@@ -9,9 +9,12 @@ pub mod diagnostic;
 mod parse;
 pub mod source;
 
+#[doc(inline)]
 pub use ast::*;
+#[doc(inline)]
 pub use diagnostic::{
     Diagnostic, Label, MAX_LINE_COLUMNS, MAX_LISTED, MAX_RENDERED, RenderStyle, Severity, and_list,
     join_capped, line_col, render, render_short,
 };
+#[doc(inline)]
 pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};

@@ -27,7 +27,7 @@ pub const MAX_SIGNS: usize = 8;
 
 /// Parses a `.som` source. pest stops at the first syntax error, so a failed
 /// parse returns exactly one diagnostic.
-pub fn parse(source: &str) -> (Option<Model>, Vec<Diagnostic>) {
+pub fn parse(source: &str) -> (Option<ModelSyntax>, Vec<Diagnostic>) {
     if source.len() > MAX_SOURCE_BYTES {
         return (None, vec![crate::source::too_large(source.len() as u64)]);
     }
@@ -474,7 +474,7 @@ fn number(p: Pair<Rule>) -> Number {
     }
 }
 
-fn build_model(p: Pair<Rule>) -> Model {
+fn build_model(p: Pair<Rule>) -> ModelSyntax {
     let span = span_of(&p);
     let mut inner = p.into_inner();
     let name = inner.next().map(ident).unwrap_or(Ident {
@@ -482,7 +482,7 @@ fn build_model(p: Pair<Rule>) -> Model {
         span,
     });
     let items = inner.filter_map(build_item).collect();
-    Model { name, items, span }
+    ModelSyntax { name, items, span }
 }
 
 fn build_item(p: Pair<Rule>) -> Option<Item> {
@@ -780,7 +780,7 @@ mod tests {
         "#;
         let (model, diags) = parse(src);
         assert!(diags.is_empty(), "{diags:?}");
-        let m = model.unwrap_or_else(|| Model {
+        let m = model.unwrap_or_else(|| ModelSyntax {
             name: Ident {
                 name: String::new(),
                 span: Span::default(),

@@ -59,7 +59,7 @@ impl Failure {
         file: &str,
         source: &str,
         first: Option<&Diagnostic>,
-        report: &check::Report,
+        report: &check::CheckReport,
     ) -> Failure {
         let (code, message, hint, location) = match first {
             Some(d) => {

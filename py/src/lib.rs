@@ -13,7 +13,7 @@ mod study;
 
 use failure::Failure;
 use leeway_runtime::data::LoadOptions;
-use leeway_runtime::estimate::{Centring, Combine, Initial, Instruments, Method, Options};
+use leeway_runtime::estimate::{Centring, Combine, Initial, Instruments, Method};
 use leeway_runtime::report::{Estimated, estimate_report, heading_gains, heading_warnings};
 use leeway_runtime::{Interpreter, Source, estimate};
 use leeway_structure::grammar::{self, Diagnostic, Severity};
@@ -38,8 +38,8 @@ struct Model {
 fn options(
     aggregate: bool,
     patterns: Option<Vec<leeway_structure::ir::SignPattern>>,
-) -> leeway_structure::Options {
-    leeway_structure::Options {
+) -> leeway_structure::CompileOptions {
+    leeway_structure::CompileOptions {
         aggregate,
         patterns,
         centring: None,
@@ -233,7 +233,7 @@ const MAX_REFINEMENTS: usize = 100;
 const STEP_RANGE: (f64, f64) = (1e-6, 1e6);
 
 impl EstimateOptions {
-    fn runtime(&self) -> Result<Options, Failure> {
+    fn runtime(&self) -> Result<leeway_runtime::EstimateOptions, Failure> {
         if !(1..=MAX_LAGS).contains(&self.lags) {
             return Err(Failure::option(
                 format!("lags={} is not in 1..={MAX_LAGS}", self.lags),
@@ -270,7 +270,7 @@ impl EstimateOptions {
                 Some("write 0.05 for 5 %; 0.5 or more would accept a dropped sample".into()),
             ));
         }
-        Ok(Options {
+        Ok(leeway_runtime::EstimateOptions {
             method: choice(
                 "method",
                 &self.method,
@@ -317,7 +317,7 @@ impl EstimateOptions {
             strict: self.strict,
             lags: self.lags,
             runaway_guard: self.runaway_guard,
-            ..Options::default()
+            ..leeway_runtime::EstimateOptions::default()
         })
     }
 
@@ -409,7 +409,7 @@ fn run_estimate(
     model: &Model,
     frames: &[data::Frame<'_>],
     load_options: &LoadOptions,
-    options: &Options,
+    options: &leeway_runtime::EstimateOptions,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
     let (experiments, notes) = data::load(ir, frames, load_options)?;

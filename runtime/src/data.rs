@@ -1627,7 +1627,7 @@ mod tests {
         let src = format!(
             "model M {{ state u, r input delta der u = X*u + T*delta der r = N*r {data} }}"
         );
-        leeway_structure::compile(&src, &leeway_structure::Options::default())
+        leeway_structure::compile(&src, &leeway_structure::CompileOptions::default())
             .ir
             .unwrap_or_else(|| panic!("the test model compiles"))
     }

@@ -111,7 +111,7 @@ mod tests {
     fn ship() -> Ir {
         let src = "model M { state u, v, r input d heading psi integrates r
             der u = X*u + T*d der v = Y*v der r = N*r }";
-        leeway_structure::compile(src, &leeway_structure::Options::default())
+        leeway_structure::compile(src, &leeway_structure::CompileOptions::default())
             .ir
             .unwrap_or_else(|| panic!("the test model compiles"))
     }

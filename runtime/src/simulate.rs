@@ -126,11 +126,39 @@ pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
     100.0 * (1.0 - num / den)
 }
 
-/// Fit of every output of a simulation against an experiment.
+/// Fit of every output of a simulation against an experiment, in the
+/// model's state order: [`fit`] of each measured state against its
+/// simulation, as `leeway validate` reports it.
 pub fn fits(data: &Experiment, sim: &Trajectory) -> Vec<f64> {
     data.states
         .iter()
         .zip(&sim.states)
         .map(|(y, s)| fit(y, s))
         .collect()
+}
+
+/// Fit of the integrated heading of a simulation against the measured one
+/// ([`unwrap_heading`]), as `leeway validate` reports it; `NaN` when the
+/// model has no planar heading (the simulation integrates none).
+pub fn heading_fit(data: &Experiment, sim: &Trajectory) -> f64 {
+    fit(&unwrap_heading(&data.heading), &sim.heading)
+}
+
+/// The measured heading unwrapped (steps taken along the short arc), so that
+/// it compares with a simulation, which integrates the yaw rate without
+/// wrapping.
+pub fn unwrap_heading(heading: &[f64]) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let mut out = Vec::with_capacity(heading.len());
+    let mut acc = 0.0;
+    for (k, psi) in heading.iter().enumerate() {
+        if k == 0 {
+            acc = *psi;
+        } else {
+            let d = psi - heading[k - 1];
+            acc += d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor();
+        }
+        out.push(acc);
+    }
+    out
 }

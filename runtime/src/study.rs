@@ -317,15 +317,15 @@ pub fn keyed_seed(seed: u64, name: &str, run: usize) -> u64 {
 }
 
 /// The estimator options the study uses for a method: the refined IV as in
-/// [`crate::estimate::Options::default`], aggregated where the structure
+/// [`crate::estimate::EstimateOptions::default`], aggregated where the structure
 /// requires it (IV1, IV2; IV3 at low wind holds the unexcited wind
 /// parameters), no standard errors (only fits are compared).
 pub fn study_options(
     method: crate::estimate::Method,
     max_refinements: usize,
     paper_iv: bool,
-) -> crate::estimate::Options {
-    crate::estimate::Options {
+) -> crate::estimate::EstimateOptions {
+    crate::estimate::EstimateOptions {
         method,
         aggregate: true,
         covariance: false,
@@ -360,7 +360,7 @@ pub fn evaluate(
         .iter()
         .zip(starts.iter_mut())
         .map(|(m, start)| {
-            let options = crate::estimate::Options {
+            let options = crate::estimate::EstimateOptions {
                 start: if config.paper_iv { None } else { start.take() },
                 ..study_options(*m, config.max_refinements, config.paper_iv)
             };

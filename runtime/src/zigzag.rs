@@ -53,7 +53,7 @@
 //! [`RUDDER_RATE`] (14°/s model scale ≈ 2.3°/s full scale). The system is
 //! integrated by RK4 at 0.01 s; states, heading and rudder are sampled at
 //! 20 Hz, low-pass filtered by a 2nd-order Butterworth filter (a logger's
-//! anti-alias filter, [`Options::cutoff`]) and decimated by 10 to
+//! anti-alias filter, [`CampaignOptions::cutoff`]) and decimated by 10 to
 //! `h = 0.5 s`. Optional white measurement noise (on `u`, `v`, `r`) is added
 //! to the decimated training runs only; validation runs are noise-free.
 //! Every run has its own ChaCha8 generator keyed by (seed, set, run), and the
@@ -246,9 +246,9 @@ impl Default for Noise {
     }
 }
 
-/// Options of a campaign.
+/// What a zigzag [`campaign`] simulates: seed, noise, logger filter and true system.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Options {
+pub struct CampaignOptions {
     /// Master seed.
     pub seed: u64,
     /// Measurement noise on the training runs (`None`: noise-free).
@@ -259,9 +259,9 @@ pub struct Options {
     pub tanker: Tanker,
 }
 
-impl Default for Options {
-    fn default() -> Options {
-        Options {
+impl Default for CampaignOptions {
+    fn default() -> CampaignOptions {
+        CampaignOptions {
             seed: 2024,
             noise: Some(Noise::default()),
             cutoff: 2.0,
@@ -572,7 +572,7 @@ pub struct Campaign {
 }
 
 /// Generates the campaign of `options` (deterministic in the seed).
-pub fn campaign(options: &Options) -> Campaign {
+pub fn campaign(options: &CampaignOptions) -> Campaign {
     let set = |name: &str, count: usize, noisy: bool| -> Vec<Run> {
         (0..count)
             .map(|i| {
@@ -716,17 +716,17 @@ pub fn reference_fit(train: &[Run], validation: &[Run]) -> ReferenceFit {
 mod tests {
     use super::*;
 
-    fn noise_free() -> Options {
-        Options {
+    fn noise_free() -> CampaignOptions {
+        CampaignOptions {
             noise: None,
-            ..Options::default()
+            ..CampaignOptions::default()
         }
     }
 
     #[test]
     fn zigzag_same_seed_is_bit_identical_and_seeds_differ() {
-        let a = campaign(&Options::default());
-        let b = campaign(&Options::default());
+        let a = campaign(&CampaignOptions::default());
+        let b = campaign(&CampaignOptions::default());
         assert_eq!(a, b);
         let bits = |c: &Campaign| -> Vec<u64> {
             c.train
@@ -741,16 +741,16 @@ mod tests {
                 .collect()
         };
         assert_eq!(bits(&a), bits(&b));
-        let c = campaign(&Options {
+        let c = campaign(&CampaignOptions {
             seed: 7,
-            ..Options::default()
+            ..CampaignOptions::default()
         });
         assert_ne!(bits(&a), bits(&c));
     }
 
     #[test]
     fn zigzag_noise_free_campaign_shares_the_truth() {
-        let noisy = campaign(&Options::default());
+        let noisy = campaign(&CampaignOptions::default());
         let clean = campaign(&noise_free());
         assert_eq!(noisy.validation, clean.validation);
         for (a, b) in noisy.train.iter().zip(&clean.train) {
@@ -771,7 +771,7 @@ mod tests {
     #[test]
     fn zigzag_run_lengths() {
         for seed in 0..20 {
-            let o = Options {
+            let o = CampaignOptions {
                 seed,
                 ..noise_free()
             };
@@ -861,7 +861,7 @@ mod tests {
     #[test]
     fn zigzag_reference_fit_noise_free_and_noisy() {
         let clean = campaign(&noise_free());
-        let noisy = campaign(&Options::default());
+        let noisy = campaign(&CampaignOptions::default());
         let a = reference_fit(&clean.train, &clean.validation);
         let b = reference_fit(&noisy.train, &noisy.validation);
         println!(
@@ -881,7 +881,7 @@ mod tests {
     fn zigzag_tanker_model_matches_the_runs() {
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/models/tanker.som");
         let source = std::fs::read_to_string(path).expect("tanker.som");
-        let comp = leeway_structure::compile(&source, &leeway_structure::Options::default());
+        let comp = leeway_structure::compile(&source, &leeway_structure::CompileOptions::default());
         let errors: Vec<&str> = comp
             .diagnostics
             .iter()
@@ -900,7 +900,7 @@ mod tests {
     #[test]
     fn zigzag_run_to_experiment_by_name() {
         let src = "model T { state u, v, r\n input delta\n der u = X_uu*u*|u| + X_vr*v*r\n der v = Y_uv*u*v + Y_ud*u*delta\n der r = N_ur*u*r + N_ud*u*delta }";
-        let comp = leeway_structure::compile(src, &leeway_structure::Options::default());
+        let comp = leeway_structure::compile(src, &leeway_structure::CompileOptions::default());
         let ir = comp.ir.expect("compiles");
         let c = campaign(&noise_free());
         let e = c.train[0].experiment(&ir).expect("experiment");
@@ -908,7 +908,7 @@ mod tests {
         assert_eq!(e.inputs[0], c.train[0].delta);
         assert_eq!(e.h, H);
         let bad = "model T { state u, v, q\n input delta\n der u = X_uu*u*|u|\n der v = Y_uv*u*v + Y_ud*u*delta\n der q = N_ud*u*delta }";
-        let ir = leeway_structure::compile(bad, &leeway_structure::Options::default())
+        let ir = leeway_structure::compile(bad, &leeway_structure::CompileOptions::default())
             .ir
             .expect("compiles");
         let err = c.train[0].experiment(&ir).expect_err("no column q");

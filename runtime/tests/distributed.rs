@@ -6,7 +6,7 @@
 
 use leeway_runtime::Interpreter;
 use leeway_runtime::estimate::{
-    Estimate, EstimateError, ExperimentFacts, FactsRequest, Method, Options, PassRequest,
+    Estimate, EstimateError, EstimateOptions, ExperimentFacts, FactsRequest, Method, PassRequest,
     PassRunner, PassSummary, Passes, decode, encode, estimate, estimate_with,
 };
 use leeway_runtime::study::{self, InputDesign};
@@ -93,10 +93,10 @@ fn mapped_passes_give_the_local_estimate_bit_for_bit() {
     };
     for method in [Method::Iv3, Method::Ls, Method::Iv2] {
         // The study's ship is identifiable only up to its aggregates.
-        let options = Options {
+        let options = EstimateOptions {
             method,
             aggregate: true,
-            ..Options::default()
+            ..EstimateOptions::default()
         };
         let local = estimate(&model, &sources, &options).expect("local estimate");
         let mapped = estimate_with(&model, &workers, &options).expect("mapped estimate");
@@ -130,9 +130,9 @@ fn a_runner_that_loses_a_summary_is_an_error_not_an_estimate() {
         model: &model,
         experiments: &data,
     });
-    let options = Options {
+    let options = EstimateOptions {
         aggregate: true,
-        ..Options::default()
+        ..EstimateOptions::default()
     };
     let e = estimate_with(&model, &lossy, &options).expect_err("refused");
     assert_eq!(e.code, "invalid-pass");

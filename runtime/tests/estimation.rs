@@ -3,7 +3,7 @@
 //! IV1 consistent only with zero-mean disturbances, and the diagnostics a
 //! user relies on (unexcited combinations, sign violations, low wind).
 
-use leeway_runtime::estimate::{Method, Options, estimate};
+use leeway_runtime::estimate::{EstimateOptions, Method, estimate};
 use leeway_runtime::study::{self, InputDesign};
 use leeway_runtime::synth::{TrueSystem, experiment};
 use leeway_runtime::{Experiment, Interpreter, Model, Signals, Source, planar_rotation};
@@ -25,14 +25,14 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn options(method: Method) -> Options {
+fn options(method: Method) -> EstimateOptions {
     // IV1's basic predictor sees water.u*|water.u| and air.u*|air.u| alike at
     // v = 0: it can only estimate the aggregates.
-    Options {
+    EstimateOptions {
         method,
         covariance: false,
         aggregate: method == Method::Iv1,
-        ..Options::default()
+        ..EstimateOptions::default()
     }
 }
 
@@ -76,9 +76,9 @@ fn current_mean_is_recovered_within_three_standard_errors() {
         let est = estimate(
             &model,
             &[&e as &dyn Source],
-            &Options {
+            &EstimateOptions {
                 method: Method::Iv3,
-                ..Options::default()
+                ..EstimateOptions::default()
             },
         )
         .unwrap_or_else(|err| panic!("{}", err.message));
@@ -204,11 +204,11 @@ fn wind_changing_sign_relative_to_the_ship_gives_the_a7_warning_with_its_fractio
     let est = estimate(
         &model,
         &[&e as &dyn Source],
-        &Options {
+        &EstimateOptions {
             method: Method::Iv2,
             aggregate: true,
             covariance: false,
-            ..Options::default()
+            ..EstimateOptions::default()
         },
     )
     .unwrap_or_else(|err| panic!("{}", err.message));
@@ -232,11 +232,11 @@ fn wind_changing_sign_relative_to_the_ship_gives_the_a7_warning_with_its_fractio
     let strict = estimate(
         &model,
         &[&e as &dyn Source],
-        &Options {
+        &EstimateOptions {
             method: Method::Iv2,
             aggregate: true,
             strict: true,
-            ..Options::default()
+            ..EstimateOptions::default()
         },
     );
     assert_eq!(strict.err().map(|e| e.code), Some("sign-violation"));
@@ -320,8 +320,8 @@ fn a_constant_heading_leaves_the_current_terms_collinear() {
 fn estimates_are_bit_identical_across_runs() {
     let model = ship();
     let (e, _) = study::estimation_experiment(&model, &InputDesign::default(), 10.0, 1500, 600);
-    let a = estimate(&model, &[&e as &dyn Source], &Options::default()).map(|x| x.theta);
-    let b = estimate(&model, &[&e as &dyn Source], &Options::default()).map(|x| x.theta);
+    let a = estimate(&model, &[&e as &dyn Source], &EstimateOptions::default()).map(|x| x.theta);
+    let b = estimate(&model, &[&e as &dyn Source], &EstimateOptions::default()).map(|x| x.theta);
     let bits = |v: &Vec<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
     assert_eq!(a.as_ref().map(bits), b.as_ref().map(bits));
 }

@@ -41,7 +41,7 @@ fn models_in(folder: &str) -> Vec<String> {
 fn compile_file(path: &str) -> Ir {
     let src = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
     // `aggregate`: fixtures whose θ is confounded still get their IR.
-    let options = leeway_runtime::structure::Options {
+    let options = leeway_runtime::structure::CompileOptions {
         aggregate: true,
         ..Default::default()
     };

@@ -11,7 +11,8 @@ use leeway_runtime::structure::identify::Centring;
 use leeway_runtime::structure::ir::PredictorKind;
 use leeway_runtime::zigzag::{self, Campaign};
 use leeway_runtime::{
-    Combine, Estimate, Experiment, Interpreter, Method, Model, Options, Signals, Source, estimate,
+    Combine, Estimate, EstimateOptions, Experiment, Interpreter, Method, Model, Signals, Source,
+    estimate,
 };
 
 fn tanker() -> Interpreter {
@@ -28,9 +29,9 @@ fn experiments(model: &Interpreter, runs: &[zigzag::Run]) -> Vec<Experiment> {
 }
 
 fn campaign(noisy: bool) -> Campaign {
-    zigzag::campaign(&zigzag::Options {
+    zigzag::campaign(&zigzag::CampaignOptions {
         noise: noisy.then(zigzag::Noise::default),
-        ..zigzag::Options::default()
+        ..zigzag::CampaignOptions::default()
     })
 }
 
@@ -122,10 +123,10 @@ fn noise_free_data_of_the_structure_give_theta_back() {
         let est = estimate(
             &model,
             &sources,
-            &Options {
+            &EstimateOptions {
                 method,
                 covariance: false,
-                ..Options::default()
+                ..EstimateOptions::default()
             },
         )
         .unwrap_or_else(|e| panic!("{method:?}: {}", e.message));
@@ -139,7 +140,7 @@ fn noise_free_data_of_the_structure_give_theta_back() {
     }
 }
 
-fn run(model: &Interpreter, data: &[Experiment], options: &Options) -> Estimate {
+fn run(model: &Interpreter, data: &[Experiment], options: &EstimateOptions) -> Estimate {
     let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
     estimate(model, &sources, options).unwrap_or_else(|e| panic!("{}: {}", e.message, e.hint))
 }
@@ -166,7 +167,7 @@ fn constant_terms_follow_the_centring() {
     let model = tanker();
     let c = campaign(false);
     let data = experiments(&model, &c.train);
-    let default = run(&model, &data, &Options::default());
+    let default = run(&model, &data, &EstimateOptions::default());
     assert!(
         default
             .diagnostics
@@ -178,9 +179,9 @@ fn constant_terms_follow_the_centring() {
     let pooled = run(
         &model,
         &data,
-        &Options {
+        &EstimateOptions {
             centring: Some(Centring::Pooled),
-            ..Options::default()
+            ..EstimateOptions::default()
         },
     );
     for (p, (a, b)) in default
@@ -194,9 +195,9 @@ fn constant_terms_follow_the_centring() {
     let err = estimate(
         &model,
         &sources,
-        &Options {
+        &EstimateOptions {
             centring: Some(Centring::Experiment),
-            ..Options::default()
+            ..EstimateOptions::default()
         },
     )
     .expect_err("per-experiment centring annihilates X_0");
@@ -222,11 +223,11 @@ fn zigzag_campaign_summed_iv_matches_the_structure_and_beats_least_squares() {
         let est = run(
             &model,
             &experiments(&model, &c.train),
-            &Options {
+            &EstimateOptions {
                 method,
                 combine,
                 covariance: false,
-                ..Options::default()
+                ..EstimateOptions::default()
             },
         );
         validation_fit(&model, &est.theta, &validation)
@@ -300,9 +301,9 @@ fn a_constant_input_is_reported_not_estimated_from_rounding() {
         let err = estimate(
             &model,
             &sources,
-            &Options {
+            &EstimateOptions {
                 method,
-                ..Options::default()
+                ..EstimateOptions::default()
             },
         )
         .expect_err("X_n is not separately excited");
@@ -312,7 +313,7 @@ fn a_constant_input_is_reported_not_estimated_from_rounding() {
     // Logger jitter of 0.1 %: a real but barely excited column, estimated
     // with a standard error that says so.
     let (model, data) = with_rpm(1e-3);
-    let est = run(&model, &data, &Options::default());
+    let est = run(&model, &data, &EstimateOptions::default());
     let (x_n, se) = (est.theta[1], est.std_errors[1].unwrap_or(f64::INFINITY));
     assert!(
         se > x_n.abs(),
@@ -321,7 +322,7 @@ fn a_constant_input_is_reported_not_estimated_from_rounding() {
     // Jitter at 1e-7: numerically collinear — an error or a warning naming X_n.
     let (model, data) = with_rpm(1e-7);
     let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
-    match estimate(&model, &sources, &Options::default()) {
+    match estimate(&model, &sources, &EstimateOptions::default()) {
         Err(e) => {
             assert_eq!(e.code, "rank-deficient");
             assert!(e.message.contains("X_n"), "{}", e.message);
@@ -343,7 +344,11 @@ fn units_never_change_the_verdict() {
     let model = tanker();
     let c = campaign(true);
     let validation = experiments(&model, &c.validation);
-    let base = run(&model, &experiments(&model, &c.train), &Options::default());
+    let base = run(
+        &model,
+        &experiments(&model, &c.train),
+        &EstimateOptions::default(),
+    );
     let base_fit = validation_fit(&model, &base.theta, &validation);
     for scale in [1e4, 1e-4] {
         let scaled = |runs: &[zigzag::Run]| -> Vec<Experiment> {
@@ -359,7 +364,7 @@ fn units_never_change_the_verdict() {
                 })
                 .collect()
         };
-        let est = run(&model, &scaled(&c.train), &Options::default());
+        let est = run(&model, &scaled(&c.train), &EstimateOptions::default());
         assert_eq!(est.diagnostics.estimated, base.diagnostics.estimated);
         let fit = validation_fit(&model, &est.theta, &scaled(&c.validation));
         for o in 0..3 {

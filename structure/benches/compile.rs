@@ -8,11 +8,11 @@ const SHIP: &str = include_str!("../../examples/models/ship.som");
 const SHIP_IV2: &str = include_str!("../../examples/models/ship_iv2.som");
 
 fn compile(c: &mut Criterion) {
-    let options = leeway_structure::Options::default();
+    let options = leeway_structure::CompileOptions::default();
     c.bench_function("compile ship.som", |b| {
         b.iter(|| leeway_structure::compile(black_box(SHIP), &options))
     });
-    let aggregate = leeway_structure::Options {
+    let aggregate = leeway_structure::CompileOptions {
         aggregate: true,
         ..Default::default()
     };

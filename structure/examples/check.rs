@@ -7,7 +7,7 @@ fn main() {
     let t = std::time::Instant::now();
     let c = leeway_structure::compile(
         &src,
-        &leeway_structure::Options {
+        &leeway_structure::CompileOptions {
             aggregate,
             patterns: None,
             centring: None,

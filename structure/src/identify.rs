@@ -2003,9 +2003,10 @@ pub fn pattern_spec(ir: &Ir, p: &SignPattern, kind: PredictorKind) -> String {
         .join(",")
 }
 
-/// Options of the compile-time analysis.
+/// Options of [`compile`](crate::compile) and of the identifiability [`report`]: aggregation,
+/// the experiments analysed, the centring.
 #[derive(Clone, Debug, Default)]
-pub struct Options {
+pub struct CompileOptions {
     /// Estimate identifiable combinations when θ is not identifiable.
     pub aggregate: bool,
     /// Analyse these experiments instead of searching.
@@ -2112,7 +2113,7 @@ fn quoted_join(q: &[String]) -> String {
 }
 
 /// The compile-time identifiability report (measured predictor).
-pub fn report(ir: &Ir, options: &Options) -> Report {
+pub fn report(ir: &Ir, options: &CompileOptions) -> Report {
     let centring = options
         .centring
         .unwrap_or_else(|| Centring::for_model(ir, PredictorKind::Measured));

@@ -17,8 +17,11 @@ pub mod resolve;
 pub mod terms;
 pub mod units;
 
-pub use identify::Options;
+#[doc(inline)]
+pub use identify::CompileOptions;
+#[doc(inline)]
 pub use ir::Ir;
+#[doc(inline)]
 pub use leeway_grammar as grammar;
 use leeway_grammar::{Diagnostic, Label, Severity};
 
@@ -49,7 +52,7 @@ impl Compilation {
 }
 
 /// Parses and compiles a `.som` source.
-pub fn compile(source: &str, options: &Options) -> Compilation {
+pub fn compile(source: &str, options: &CompileOptions) -> Compilation {
     let (model, mut diagnostics) = leeway_grammar::parse(source);
     let Some(model) = model else {
         return Compilation {
@@ -180,7 +183,7 @@ fn unused_declarations(
     }
 }
 
-fn identifiability_diagnostics(ir: &Ir, options: &Options, diags: &mut Vec<Diagnostic>) {
+fn identifiability_diagnostics(ir: &Ir, options: &CompileOptions, diags: &mut Vec<Diagnostic>) {
     let r = &ir.report;
     // The first term of each parameter, once (a model may have 10⁴ groups).
     let mut first_term: std::collections::BTreeMap<usize, &ir::Term> = Default::default();

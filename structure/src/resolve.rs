@@ -3,7 +3,7 @@
 
 use crate::exact::{Q, decimal};
 use leeway_grammar::{
-    Diagnostic, EquationKind, Expr, Frame, Ident, Item, Measurement, Model, Span,
+    Diagnostic, EquationKind, Expr, Frame, Ident, Item, Measurement, ModelSyntax, Span,
 };
 use num_traits::Zero;
 use std::collections::BTreeMap;
@@ -177,7 +177,7 @@ fn duplicate(name: &Ident, first: Span, what: &str) -> Diagnostic {
 }
 
 /// Resolves the declarations of a parsed model.
-pub fn resolve(model: &Model, diags: &mut Vec<Diagnostic>) -> Resolved {
+pub fn resolve(model: &ModelSyntax, diags: &mut Vec<Diagnostic>) -> Resolved {
     let mut r = Resolved {
         name: model.name.clone(),
         step: None,

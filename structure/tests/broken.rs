@@ -13,7 +13,7 @@
 //! code the compiler can emit has a broken model here.
 
 use leeway_structure::grammar::{Diagnostic, RenderStyle, Severity, line_col, render};
-use leeway_structure::{Options, compile};
+use leeway_structure::{CompileOptions, compile};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -130,7 +130,7 @@ fn check(path: &Path) -> String {
         !expected.is_empty(),
         "{name}: a broken model states what it expects"
     );
-    let c = compile(&source, &Options::default());
+    let c = compile(&source, &CompileOptions::default());
     let mut actual: Vec<Expected> = c
         .diagnostics
         .iter()

@@ -6,7 +6,7 @@ use leeway_structure::identify::{
     Analysis, Centring, ExperimentStructure, Patterns, all_patterns, parse_pattern,
 };
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, SignPattern};
-use leeway_structure::{Compilation, Options, compile, render};
+use leeway_structure::{Compilation, CompileOptions, compile, render};
 
 fn source(path: &str) -> String {
     let full = format!("{}/../examples/models/{path}", env!("CARGO_MANIFEST_DIR"));
@@ -16,7 +16,7 @@ fn source(path: &str) -> String {
 fn with(path: &str, aggregate: bool, patterns: Option<Vec<SignPattern>>) -> Compilation {
     compile(
         &source(path),
-        &Options {
+        &CompileOptions {
             aggregate,
             patterns,
             centring: None,
@@ -472,7 +472,7 @@ fn measured_medium_modulus_is_separated_by_a_sign_change() {
         der u = A*air.u + T1*t1
         der v = B*air.v*|air.u| + F*air.u*air.v + T2*t2
     }";
-    let c = leeway_structure::compile(src, &Options::default());
+    let c = leeway_structure::compile(src, &CompileOptions::default());
     let ir = ir_of(&c);
     assert!(ir.report.identifiable, "{:?}", c.diagnostics);
     assert!(!ir.report.any_single_pattern);
@@ -486,7 +486,7 @@ fn measured_medium_modulus_is_separated_by_a_sign_change() {
 fn compile_with(source: &str, centring: Option<Centring>) -> Compilation {
     compile(
         source,
-        &Options {
+        &CompileOptions {
             aggregate: false,
             patterns: None,
             centring,

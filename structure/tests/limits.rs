@@ -5,7 +5,7 @@
 //! large main stack, and under a time bound, so that a hang fails it.
 
 use leeway_structure::grammar::{Diagnostic, MAX_LISTED, MAX_OPERANDS, line_col};
-use leeway_structure::{Options, compile};
+use leeway_structure::{CompileOptions, compile};
 use std::time::{Duration, Instant};
 
 /// Compiles on a 256 KiB stack (the main thread has 8 MiB, a test thread
@@ -21,7 +21,7 @@ fn compile_small(source: String) -> (bool, Vec<Diagnostic>, Duration) {
         )
         .spawn(move || {
             let start = Instant::now();
-            let c = compile(&source, &Options::default());
+            let c = compile(&source, &CompileOptions::default());
             let ir = c.ir.is_some();
             (ir, c.diagnostics, start.elapsed())
         })
@@ -166,7 +166,7 @@ fn lists_in_messages_are_capped() {
         e.notes
     );
     // The structured report keeps the whole group.
-    let c = compile(&src, &Options::default());
+    let c = compile(&src, &CompileOptions::default());
     let r = &c.ir.as_ref().expect("an IR").report;
     assert_eq!(r.unidentifiable[0].parameters.len(), 499);
     // A nominal entry that is not a parameter lists at most 8 in its help.
@@ -174,7 +174,7 @@ fn lists_in_messages_are_capped() {
         "model W {{\n state u\n input t\n der u = B*t + {}\n nominal {{ Q = 1 }}\n}}\n",
         terms[..99].join(" + ")
     );
-    let c = compile(&src, &Options::default());
+    let c = compile(&src, &CompileOptions::default());
     let unknown = c
         .diagnostics
         .iter()

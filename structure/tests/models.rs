@@ -4,11 +4,11 @@
 //! `ship_phi_is_the_papers` and `identifiability.rs` for the facts asserted.
 
 use leeway_structure::grammar::{RenderStyle, render};
-use leeway_structure::{Options, compile, render as structure};
+use leeway_structure::{CompileOptions, compile, render as structure};
 use std::path::Path;
 
 /// `render::render` of the IR (if any) followed by the plain diagnostics.
-fn derived(path: &Path, options: &Options) -> String {
+fn derived(path: &Path, options: &CompileOptions) -> String {
     let source =
         std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let name = format!(
@@ -32,13 +32,13 @@ fn models() -> std::path::PathBuf {
 #[test]
 fn structure_of_every_example_model() {
     insta::glob!("../../examples/models", "*.som", |path| {
-        insta::assert_snapshot!(derived(path, &Options::default()));
+        insta::assert_snapshot!(derived(path, &CompileOptions::default()));
     });
 }
 
 #[test]
 fn ship_iv2_aggregated() {
-    let options = Options {
+    let options = CompileOptions {
         aggregate: true,
         patterns: None,
         centring: None,
@@ -49,7 +49,7 @@ fn ship_iv2_aggregated() {
 #[test]
 fn rov_from_one_experiment() {
     // One all-plus experiment (an empty pattern means every sign +).
-    let options = Options {
+    let options = CompileOptions {
         aggregate: false,
         patterns: Some(vec![Vec::new()]),
         centring: None,
@@ -65,7 +65,7 @@ fn every_example_model_compiles() {
         if path.extension().is_some_and(|e| e == "som") {
             seen += 1;
             let source = std::fs::read_to_string(&path).expect("read");
-            let c = compile(&source, &Options::default());
+            let c = compile(&source, &CompileOptions::default());
             assert!(
                 c.ir.is_some(),
                 "{} must compile: {:?}",

@@ -5,7 +5,7 @@
 //! 2000); the default keeps `cargo test` quick in debug builds.
 
 use leeway_structure::grammar::{RenderStyle, render};
-use leeway_structure::{Options, compile, render as structure};
+use leeway_structure::{CompileOptions, compile, render as structure};
 use proptest::prelude::*;
 use std::path::Path;
 
@@ -206,7 +206,7 @@ fn apply(text: &mut String, m: &Mutation) {
 fn check(source: &str, aggregate: bool) -> Result<(), TestCaseError> {
     let c = compile(
         source,
-        &Options {
+        &CompileOptions {
             aggregate,
             patterns: None,
             centring: None,
@@ -403,7 +403,7 @@ fn deep_nesting_and_huge_input_are_rejected_not_overflowed() {
         "(".repeat(100_000),
         ")".repeat(100_000)
     );
-    let c = compile(&deep, &Options::default());
+    let c = compile(&deep, &CompileOptions::default());
     assert!(
         c.diagnostics.iter().any(|d| d.code == "nesting-too-deep"),
         "{:?}",
@@ -414,10 +414,10 @@ fn deep_nesting_and_huge_input_are_rejected_not_overflowed() {
         "|".repeat(50_000),
         "|".repeat(50_000)
     );
-    let c = compile(&moduli, &Options::default());
+    let c = compile(&moduli, &CompileOptions::default());
     assert!(c.has_errors());
     let huge = "// padding\n".repeat(200_000);
-    let c = compile(&huge, &Options::default());
+    let c = compile(&huge, &CompileOptions::default());
     assert_eq!(
         c.diagnostics.first().map(|d| d.code.as_str()),
         Some("file-too-large")

@@ -8,7 +8,7 @@
 use leeway_structure::exact::{Q, echelon, parse_q};
 use leeway_structure::identify::{Analysis, Centring, Patterns, relevant_signs};
 use leeway_structure::ir::{Column, Entry, EvalVar, Ir, PredictorKind, SignPattern, StructVar};
-use leeway_structure::{Options, compile};
+use leeway_structure::{CompileOptions, compile};
 use num_traits::Zero;
 use proptest::prelude::*;
 use std::collections::{BTreeMap, BTreeSet};
@@ -28,7 +28,7 @@ fn compile_examples() -> Vec<(String, Ir)> {
         let path = entry.expect("entry").path();
         if path.extension().is_some_and(|e| e == "som") {
             let src = std::fs::read_to_string(&path).expect("read");
-            let c = compile(&src, &Options::default());
+            let c = compile(&src, &CompileOptions::default());
             let name = path
                 .file_name()
                 .unwrap_or_default()

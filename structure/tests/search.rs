@@ -6,7 +6,7 @@
 
 use leeway_structure::identify::{Analysis, Patterns};
 use leeway_structure::ir::{PredictorKind, SignPattern};
-use leeway_structure::{Compilation, Options, compile};
+use leeway_structure::{Compilation, CompileOptions, compile};
 use proptest::prelude::*;
 
 /// `n` states `der x_i = A_i*x_i + D_i*|x_i| + B_i*t_i`, plain (pointwise
@@ -38,7 +38,7 @@ fn independent(n: usize, medium: bool) -> String {
 }
 
 fn compiled(source: &str) -> Compilation {
-    compile(source, &Options::default())
+    compile(source, &CompileOptions::default())
 }
 
 fn errors(c: &Compilation) -> Vec<String> {
@@ -141,9 +141,9 @@ fn interacting_arguments_beyond_the_budget_are_undecided_never_unidentifiable() 
     // The experiments it names do identify θ (exactly).
     let given = compile(
         &tangle(),
-        &Options {
+        &CompileOptions {
             patterns: Some(r.required_patterns.clone()),
-            ..Options::default()
+            ..CompileOptions::default()
         },
     );
     assert!(errors(&given).is_empty(), "{:?}", errors(&given));
@@ -336,9 +336,9 @@ fn many_media_need_one_experiment_each_exactly() {
         // The experiments named identify θ when analysed as given.
         let given = compile(
             &media(n),
-            &Options {
+            &CompileOptions {
                 patterns: Some(r.required_patterns.clone()),
-                ..Options::default()
+                ..CompileOptions::default()
             },
         );
         assert_eq!(
@@ -348,9 +348,9 @@ fn many_media_need_one_experiment_each_exactly() {
         // And one fewer does not (the lower bound is real): drop the last.
         let fewer = compile(
             &media(n),
-            &Options {
+            &CompileOptions {
                 patterns: Some(r.required_patterns[..n - 1].to_vec()),
-                ..Options::default()
+                ..CompileOptions::default()
             },
         );
         assert_eq!(

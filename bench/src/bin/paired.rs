@@ -19,7 +19,7 @@
 
 use leeway::ir::PredictorKind;
 use leeway::runtime::Source;
-use leeway::runtime::estimate::{Method, Options, estimate};
+use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
 use leeway::runtime::study;
 use leeway::{Interpreter, Model, Signals, planar_rotation};
 use std::hint::black_box;
@@ -195,10 +195,10 @@ fn estimates(rounds: usize) -> Result<(), String> {
     let record = [&data as &dyn Source];
     println!("ms per estimate (ship, N = 5000, with standard errors), {rounds} rounds:");
     for method in Method::ALL {
-        let options = Options {
+        let options = EstimateOptions {
             method,
             aggregate: true,
-            ..Options::default()
+            ..EstimateOptions::default()
         };
         let time = |model: &dyn Model| {
             let start = Instant::now();

@@ -9,7 +9,7 @@
 //! a file: `/usr/bin/time -v leeway estimate examples/models/ship.som --data FILE.csv`.
 
 use leeway::runtime::Source;
-use leeway::runtime::estimate::{Method, Options, estimate};
+use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
 use leeway::runtime::study::{self, InputDesign, Pulses};
 use leeway::runtime::synth::Stream;
 
@@ -94,9 +94,9 @@ fn main() {
     let result = estimate(
         &Ship,
         &[&stream as &dyn Source],
-        &Options {
+        &EstimateOptions {
             method: Method::Iv3,
-            ..Options::default()
+            ..EstimateOptions::default()
         },
     );
     let seconds = start.elapsed().as_secs_f64();

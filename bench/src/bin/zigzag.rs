@@ -14,7 +14,7 @@
 //! `--reference` prints the runs and the least-squares reference fit of the
 //! 17-term structure on noise-free and on noisy training runs.
 
-use leeway::runtime::zigzag::{self, Campaign, Noise, Options, Run};
+use leeway::runtime::zigzag::{self, Campaign, CampaignOptions, Noise, Run};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::fmt::Write as _;
@@ -35,7 +35,7 @@ struct Args {
 fn parse() -> Result<Args, String> {
     let mut args = Args {
         out: None,
-        seed: Options::default().seed,
+        seed: CampaignOptions::default().seed,
         noise: false,
         raw: false,
         reference: false,
@@ -141,15 +141,15 @@ fn write(dir: &std::path::Path, c: &Campaign, args: &Args) -> Result<(), String>
 
 fn reference(seed: u64) {
     let deg = 180.0 / std::f64::consts::PI;
-    let clean = zigzag::campaign(&Options {
+    let clean = zigzag::campaign(&CampaignOptions {
         seed,
         noise: None,
-        ..Options::default()
+        ..CampaignOptions::default()
     });
-    let noisy = zigzag::campaign(&Options {
+    let noisy = zigzag::campaign(&CampaignOptions {
         seed,
         noise: Some(Noise::default()),
-        ..Options::default()
+        ..CampaignOptions::default()
     });
     println!("run      angles  samples  u0     speed drop  overshoot");
     for r in clean.train.iter().chain(&clean.validation) {
@@ -213,10 +213,10 @@ fn main() -> ExitCode {
         reference(args.seed);
     }
     if let Some(dir) = &args.out {
-        let c = zigzag::campaign(&Options {
+        let c = zigzag::campaign(&CampaignOptions {
             seed: args.seed,
             noise: args.noise.then(Noise::default),
-            ..Options::default()
+            ..CampaignOptions::default()
         });
         if let Err(e) = write(dir, &c, &args) {
             eprintln!("error: {e}");

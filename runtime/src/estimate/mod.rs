@@ -67,7 +67,7 @@ struct Block {
 /// The estimator for one model, method and set of experiments.
 struct Estimator<'a> {
     ir: &'a Ir,
-    options: &'a Options,
+    options: &'a EstimateOptions,
     kind: PredictorKind,
     /// The centring used (the option, or the model's default).
     centring: Centring,
@@ -98,7 +98,7 @@ struct Estimator<'a> {
 pub fn estimate(
     model: &dyn Model,
     experiments: &[&dyn Source],
-    options: &Options,
+    options: &EstimateOptions,
 ) -> Result<Estimate, EstimateError> {
     estimate_with(model, &LocalPasses::new(model, experiments), options)
 }
@@ -112,7 +112,7 @@ pub fn estimate(
 pub fn estimate_with(
     model: &dyn Model,
     passes: &dyn Passes,
-    options: &Options,
+    options: &EstimateOptions,
 ) -> Result<Estimate, EstimateError> {
     let ir = model.ir();
     let nominal = match &options.nominal {

@@ -98,9 +98,10 @@ impl Combine {
     }
 }
 
-/// Estimation options.
+/// Options of [`estimate`](crate::estimate::estimate): the method, its instruments, how
+/// experiments combine, the refinement and what is reported.
 #[derive(Clone, Debug)]
-pub struct Options {
+pub struct EstimateOptions {
     /// The estimator.
     pub method: Method,
     /// Instrument kind.
@@ -176,9 +177,9 @@ impl Start {
     }
 }
 
-impl Default for Options {
-    fn default() -> Options {
-        Options {
+impl Default for EstimateOptions {
+    fn default() -> EstimateOptions {
+        EstimateOptions {
             method: Method::Iv3,
             instruments: Instruments::Simulated,
             initial: Initial::Delayed,

@@ -21,7 +21,7 @@ pub struct FactsRequest {
 
 impl FactsRequest {
     /// The facts pass of an estimate with these options.
-    pub fn new(options: &Options) -> FactsRequest {
+    pub fn new(options: &EstimateOptions) -> FactsRequest {
         FactsRequest {
             method: options.method,
             heading_spread: options.heading_spread,

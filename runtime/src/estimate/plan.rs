@@ -10,7 +10,7 @@ impl<'a> Estimator<'a> {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn new(
         model: &'a dyn Model,
-        options: &'a Options,
+        options: &'a EstimateOptions,
         kind: PredictorKind,
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 
 /// The whole document.
 #[derive(Debug, Serialize)]
-pub struct Report {
+pub struct CheckReport {
     /// `model Name`, or null when the file does not parse.
     model: Option<String>,
     /// The file as given on the command line.
@@ -228,14 +228,14 @@ fn names(ir: &Ir, params: &[usize]) -> Vec<String> {
 }
 
 /// The document for a compiled (or rejected) model.
-pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
+pub fn report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> CheckReport {
     let mut report = full_report(file, source, c, aggregate);
     let listed = report.errors.len() + report.warnings.len() + report.notes.len();
     report.omitted = c.diagnostics.len().saturating_sub(listed);
     report
 }
 
-fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Report {
+fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> CheckReport {
     let by = |s: Severity| -> Vec<JsonDiagnostic> {
         c.diagnostics
             .iter()
@@ -251,7 +251,7 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Re
     );
     let Some(ir) = &c.ir else {
         let model = grammar::parse(source).0.map(|m| m.name.name);
-        return Report {
+        return CheckReport {
             errors,
             warnings,
             notes,
@@ -291,7 +291,7 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Re
             }
         }
     }
-    Report {
+    CheckReport {
         model: Some(ir.name.clone()),
         file: file.to_string(),
         outputs: ir.states.clone(),
@@ -386,7 +386,7 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Re
 }
 
 /// The document for a failure before compiling (unreadable file, bad `--pattern`).
-pub fn failure(file: &str, d: Diagnostic, aggregate: bool) -> Report {
+pub fn failure(file: &str, d: Diagnostic, aggregate: bool) -> CheckReport {
     let error = JsonDiagnostic {
         code: d.code,
         severity: severity(d.severity),
@@ -401,14 +401,14 @@ pub fn failure(file: &str, d: Diagnostic, aggregate: bool) -> Report {
         help: d.help,
         notes: d.notes,
     };
-    Report {
+    CheckReport {
         errors: vec![error],
         ..empty(None, file, aggregate)
     }
 }
 
-fn empty(model: Option<String>, file: &str, aggregate: bool) -> Report {
-    Report {
+fn empty(model: Option<String>, file: &str, aggregate: bool) -> CheckReport {
+    CheckReport {
         model,
         file: file.to_string(),
         outputs: Vec::new(),
