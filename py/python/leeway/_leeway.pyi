@@ -6,7 +6,7 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Model", "estimate_json"]
+__all__ = ["Model", "estimate_json", "simulate_columns", "validate_fits"]
 
 @final
 class Model:
@@ -43,3 +43,27 @@ def estimate_json(
     frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
     options: dict[str, Any],
 ) -> str: ...
+
+def simulate_columns(
+    model: Model,
+    frame: tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None],
+    theta: list[float],
+    x0: list[tuple[str, float]],
+    disturbances: list[tuple[str, float]],
+    step: float | None = None,
+) -> tuple[list[tuple[str, npt.NDArray[np.float64]]], str | None]: ...
+def validate_fits(
+    model: Model,
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
+    thetas: list[list[float]],
+    names: list[str],
+    disturbances: list[tuple[str, float]],
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> tuple[
+    list[str],
+    list[tuple[int, str, int, bool, list[float | None]]],
+    list[list[float | None]],
+    list[str],
+]: ...
