@@ -96,8 +96,6 @@ pub fn initial_values(ir: &Ir, specs: &[String]) -> Result<Vec<(String, f64)>, P
 }
 
 /// Loads the input file, reading it record by record (the text is never
-
-/// Loads the input file, reading it record by record (the text is never
 /// held: memory is the parsed columns).
 pub fn load_input(
     path: &Path,
