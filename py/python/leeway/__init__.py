@@ -415,7 +415,9 @@ values in the model's parameter order, or an ``Estimate`` (its θ, held
 parameters at their nominal values)."""
 
 
-def _theta(model: Model, theta: Theta, what: str = "theta") -> list[float]:
+def _theta(model: Model, theta: Any, what: str = "theta") -> list[float]:
+    """θ in the model's parameter order from anything ``Theta`` allows
+    (checked here, since the caller may pass anything)."""
     if isinstance(theta, Estimate):
         theta = theta.theta
     if isinstance(theta, Mapping):
