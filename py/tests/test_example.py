@@ -25,5 +25,5 @@ def test_the_example_keeps_its_cells_and_the_dask_section() -> None:
     text = EXAMPLE.read_text()
     cells = [line for line in text.splitlines() if line.startswith("# %%")]
     assert len(cells) >= 8, cells
-    # The distributed part is filled in by `leeway.dask`'s author.
-    assert cells[-1] == "# %% Past one machine: Dask"
+    # The section of the distributed estimate (`leeway.dask`).
+    assert "# %% Past one machine: Dask" in cells
