@@ -1,7 +1,9 @@
 //! The input file of `leeway simulate`: a CSV file with a header row, one
-//! experiment, read by the data files' reader (`leeway_runtime::data::Records`:
-//! comment and blank lines skipped, CRLF, quoted cells) and located the same
-//! way (`file:row:column (name)`, the physical line).
+//! experiment, read by `leeway_runtime::input` (the reader `leeway.simulate`
+//! shares in Python) through the data files' reader
+//! (`leeway_runtime::data::Records`: comment and blank lines skipped, CRLF,
+//! quoted cells) and located the same way (`file:row:column (name)`, the
+//! physical line). What is left here is the command line's own: `--x0`.
 //!
 //! Required columns (after the model's `data { }` mapping): every input, the
 //! columns of a measured `R`, and every measured disturbance component, on
@@ -13,28 +15,18 @@
 //! either is an error; nothing is assumed to be zero.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::DataError;
-use leeway_runtime::Experiment;
-use leeway_runtime::data::{LoadOptions, Records, column_name};
+use leeway_runtime::data::{LoadOptions, Records};
+use leeway_runtime::input::{OptionNames, read_input};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
-/// A loaded input: the experiment to simulate on, and the time of its first row.
-#[derive(Clone, Debug)]
-pub struct Input {
-    /// States and heading hold their initial value on every row.
-    pub experiment: Experiment,
-    /// The first row's time (0 without a time column).
-    pub t0: f64,
-}
+pub use leeway_runtime::input::Input;
 
-/// How one required column is read.
-#[derive(Clone, Copy, Debug)]
-enum Role {
-    Input(usize),
-    Rotation(usize),
-    Disturbance(usize),
-}
+/// The options of `leeway simulate` as hints name them.
+const NAMES: OptionNames = OptionNames {
+    x0: |name| format!("--x0 {name}=VALUE"),
+    step: "--step H",
+};
 
 /// Parses `--x0` values (`name=value`, comma-separated) against the model's
 /// states and heading.
@@ -112,7 +104,7 @@ pub fn load_input(
     x0: &[(String, f64)],
 ) -> Result<Input, Failure> {
     let records = Records::open(path, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0).map_err(Failure::from)
+    read_input(records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e).into())
 }
 
 /// Parses the input file's bytes (see [`load_input`]).
@@ -125,258 +117,7 @@ pub fn parse_input(
     x0: &[(String, f64)],
 ) -> Result<Input, Problem> {
     let records = Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0)
-}
-
-/// Reads the input through the data files' reader ([`Records`]: comment and
-/// blank lines skipped and counted, every problem at its physical line).
-fn read_input<R: std::io::BufRead>(
-    mut records: Records<R>,
-    ir: &Ir,
-    options: &LoadOptions,
-    x0: &[(String, f64)],
-) -> Result<Input, Problem> {
-    let data = |e: DataError| Problem::data(&e);
-    let file = records.file().to_string();
-    let file = file.as_str();
-    let header_line = records.header_line();
-    let headers = records.headers().to_vec();
-    let find = |name: &str| headers.iter().position(|h| h == name);
-    let mut required: Vec<(Role, usize, String)> = Vec::new();
-    let mut wanted: Vec<(Role, String)> = ir
-        .inputs
-        .iter()
-        .enumerate()
-        .map(|(i, s)| (Role::Input(i), s.clone()))
-        .collect();
-    if matches!(ir.rotation, Rotation::Measured { .. }) {
-        wanted.extend(
-            ir.rotation_vars
-                .iter()
-                .enumerate()
-                .map(|(i, s)| (Role::Rotation(i), s.clone())),
-        );
-    }
-    for (i, c) in ir.components.iter().enumerate() {
-        if ir.disturbances[c.disturbance].measured {
-            wanted.push((Role::Disturbance(i), c.name.clone()));
-        }
-    }
-    for (role, signal) in wanted {
-        let col = column_name(ir, &signal);
-        match find(&col) {
-            Some(i) => required.push((role, i, col)),
-            None => {
-                return Err(Problem::error("data", format!("missing column `{col}`"))
-                    .at(format!("{file}:{header_line}"))
-                    .help(format!(
-                        "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
-                        leeway_structure::grammar::join_capped(&headers, ", ")
-                    )));
-            }
-        }
-    }
-    // Initial values: --x0 first, else the first row of the column.
-    let mut initial: Vec<(String, Option<f64>, Option<usize>)> = ir
-        .states
-        .iter()
-        .map(|s| (s.clone(), None, find(&column_name(ir, s))))
-        .collect();
-    if let Rotation::Planar { heading, .. } = &ir.rotation {
-        initial.push((heading.clone(), None, find(&column_name(ir, heading))));
-    }
-    for (name, value, col) in &mut initial {
-        if let Some((_, v)) = x0.iter().find(|(n, _)| n == name) {
-            *value = Some(*v);
-            *col = None;
-        } else if col.is_none() {
-            return Err(Problem::error(
-                "data",
-                format!(
-                    "no initial value for `{name}`: the input has no column `{}`",
-                    column_name(ir, name)
-                ),
-            )
-            .at(format!("{file}:{header_line}"))
-            .help(format!(
-                "add a `{}` column (only its first row is read) or pass --x0 {name}=VALUE",
-                column_name(ir, name)
-            )));
-        }
-    }
-    let time_col = find(&column_name(ir, "time"));
-    let time_name = column_name(ir, "time");
-    let exp_col = find(&column_name(ir, "experiment"));
-    let n_comp = ir.components.len();
-    let mut inputs = vec![Vec::new(); ir.inputs.len()];
-    let mut rotation = vec![Vec::new(); ir.rotation_vars.len()];
-    let mut dist = vec![Vec::new(); n_comp];
-    let mut times = TimeSteps::default();
-    let mut experiment: Option<String> = None;
-    let mut rows = 0usize;
-    let mut first_line = header_line + 1;
-    while records.next_record().map_err(data)? {
-        let line = records.line();
-        for (role, i, name) in &required {
-            // Declared units are converted to base units, as for data files.
-            let signal = match role {
-                Role::Input(s) => ir.inputs.get(*s),
-                Role::Rotation(s) => ir.rotation_vars.get(*s),
-                Role::Disturbance(s) => ir.components.get(*s).map(|c| &c.name),
-            };
-            let v = records.number(*i, name).map_err(data)? * signal.map_or(1.0, |s| unit(ir, s));
-            match role {
-                Role::Input(s) => inputs[*s].push(v),
-                Role::Rotation(s) => rotation[*s].push(v),
-                Role::Disturbance(s) => dist[*s].push(v),
-            }
-        }
-        if rows == 0 {
-            first_line = line;
-            for (name, value, col) in &mut initial {
-                if let Some(i) = *col {
-                    *value = Some(
-                        records.number(i, &column_name(ir, name)).map_err(data)? * unit(ir, name),
-                    );
-                }
-            }
-        }
-        if let Some(i) = time_col {
-            let t = records.number(i, &time_name).map_err(data)? * unit(ir, "time");
-            times.push(t, || format!("{file}:{line}:{} ({time_name})", i + 1))?;
-        }
-        if let Some(i) = exp_col {
-            let name = String::from_utf8_lossy(records.raw(i)).into_owned();
-            match &experiment {
-                None => experiment = Some(name),
-                Some(first) if *first != name => {
-                    return Err(Problem::error(
-                        "data",
-                        format!("a second experiment `{name}` starts here (after `{first}`)"),
-                    )
-                    .at(format!("{file}:{line}:{} (experiment)", i + 1))
-                    .help("leeway simulate takes one experiment: split the file"));
-                }
-                Some(_) => {}
-            }
-        }
-        rows += 1;
-    }
-    if rows == 0 {
-        return Err(
-            Problem::error("data", "the file has a header but no samples")
-                .at(format!("{file}:{}", header_line + 1))
-                .help("one row per sample of the input"),
-        );
-    }
-    let first_time_at = time_col.map(|i| format!("{file}:{first_line}:{} ({time_name})", i + 1));
-    let h = sample_time(file, ir, &times, first_time_at, options)?;
-    let name = experiment.unwrap_or_else(|| {
-        Path::new(file)
-            .file_stem()
-            .map_or(file.to_string(), |s| s.to_string_lossy().to_string())
-    });
-    let mut e = Experiment::new(ir, &name, h);
-    let value = |name: &str| {
-        initial
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .and_then(|(_, v, _)| *v)
-            .unwrap_or(0.0)
-    };
-    e.states = ir.states.iter().map(|s| vec![value(s); rows]).collect();
-    if let Rotation::Planar { heading, .. } = &ir.rotation {
-        e.heading = vec![value(heading); rows];
-    }
-    e.inputs = inputs;
-    if matches!(ir.rotation, Rotation::Measured { .. }) {
-        e.rotation = rotation;
-    }
-    for (i, c) in ir.components.iter().enumerate() {
-        if ir.disturbances[c.disturbance].measured {
-            e.disturbances[i] = std::mem::take(&mut dist[i]);
-        }
-    }
-    Ok(Input {
-        experiment: e,
-        t0: times.first.unwrap_or(0.0),
-    })
-}
-
-/// The time stamps of the input, checked as they are read: each step equal
-/// to the first within 0.1 % and positive (a simulation steps uniformly),
-/// without holding them.
-#[derive(Clone, Debug, Default)]
-struct TimeSteps {
-    first: Option<f64>,
-    last: f64,
-    /// The first step.
-    h: Option<f64>,
-    count: usize,
-}
-
-impl TimeSteps {
-    fn push(&mut self, t: f64, at: impl Fn() -> String) -> Result<(), Problem> {
-        if self.first.is_some() {
-            let dt = t - self.last;
-            let h = *self.h.get_or_insert(dt);
-            if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
-                return Err(Problem::error(
-                    "data",
-                    format!("inconsistent sample time: step {dt} here, {h} at the start"),
-                )
-                .at(at())
-                .help("leeway needs uniformly sampled data; resample the input"));
-            }
-        } else {
-            self.first = Some(t);
-        }
-        self.last = t;
-        self.count += 1;
-        Ok(())
-    }
-}
-
-/// The factor from a signal's declared unit to its base unit (1 without one).
-fn unit(ir: &Ir, signal: &str) -> f64 {
-    ir.data_units
-        .get(signal)
-        .map_or(1.0, |u| leeway_structure::units::factor(u))
-}
-
-/// The sample time: from the time column (uniform, checked as read, and
-/// against the model's `step`), else the model's `step`, else `--step`.
-/// `first_at` locates the first row's time cell.
-fn sample_time(
-    file: &str,
-    ir: &Ir,
-    times: &TimeSteps,
-    first_at: Option<String>,
-    options: &LoadOptions,
-) -> Result<f64, Problem> {
-    let declared = ir.step.or(options.step);
-    let (Some(first), true) = (times.first, times.count >= 2) else {
-        return declared.ok_or_else(|| {
-            Problem::error(
-                "data",
-                "no sample time: the model declares no `step` and the input has no `time` column (or one row)",
-            )
-            .at(file)
-            .help("declare `step h` in the model, add a `time` column, or pass --step H")
-        });
-    };
-    let mean = (times.last - first) / (times.count - 1) as f64;
-    if let Some(d) = declared
-        && (mean - d).abs() > 1e-3 * d
-    {
-        return Err(Problem::error(
-            "data",
-            format!("the input is sampled every {mean} s but the model declares step {d}"),
-        )
-        .at(first_at.unwrap_or_else(|| file.to_string()))
-        .help("make `step` in the model match the data, or resample the input"));
-    }
-    Ok(declared.unwrap_or(mean))
+    read_input(records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e))
 }
 
 #[cfg(test)]

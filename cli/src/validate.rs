@@ -15,7 +15,7 @@ use crate::model::{
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
-use leeway_runtime::simulate::{Disturbances, fits, heading_fit, simulate, unwrap_heading};
+use leeway_runtime::simulate::{Disturbances, mean_fits, unwrap_heading, validate};
 use leeway_runtime::{Interpreter, Source};
 use leeway_structure::ir::Rotation;
 use serde::Serialize;
@@ -214,17 +214,6 @@ pub fn run(args: &ValidateArgs) -> Status {
     status
 }
 
-/// The mean of the experiments' fits of one output: null when an experiment
-/// diverged (a mean would flatter the model) or none defines the fit;
-/// experiments whose measurement is constant (fit undefined) are left out.
-fn mean_fit(fits: &[(Option<f64>, bool)]) -> Option<f64> {
-    if fits.iter().any(|(_, diverged)| *diverged) {
-        return None;
-    }
-    let defined: Vec<f64> = fits.iter().filter_map(|(f, _)| *f).collect();
-    (!defined.is_empty()).then(|| defined.iter().sum::<f64>() / defined.len() as f64)
-}
-
 fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, false)?;
     warnings.extend(loaded.warnings);
@@ -280,17 +269,13 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     let mut results = Vec::new();
     for (theta, name) in thetas.iter().zip(&names) {
         let mut fits_of_model = Vec::new();
+        let mut validations = Vec::new();
         for (k, e) in experiments.iter().enumerate() {
-            let sim = simulate(&model, theta, e, Disturbances::Constant(&dist));
-            let fit_states = fits(e, &sim);
-            let heading_fit = heading.as_ref().map(|_| {
-                let f = heading_fit(e, &sim);
-                f.is_finite().then_some(f)
-            });
-            for (o, out_name) in ir.states.iter().enumerate() {
-                let f = fit_states.get(o).copied().unwrap_or(f64::NAN);
+            let v = validate(&model, theta, e, Disturbances::Constant(&dist));
+            let sim = &v.trajectory;
+            for (f, out_name) in v.fits.iter().zip(&ir.states) {
                 // Said once, for the first model: it is a property of the data.
-                if !f.is_finite() && !sim.diverged && results.is_empty() {
+                if f.is_none() && !sim.diverged && results.is_empty() {
                     warnings.push(format!(
                         "experiment `{}`: `{out_name}` is constant in the data, so its fit is undefined",
                         e.name
@@ -316,32 +301,17 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             fits_of_model.push(ExperimentFit {
                 name: e.name.clone(),
                 samples: e.len(),
-                fit: Ordered(
-                    ir.states
-                        .iter()
-                        .zip(&fit_states)
-                        .map(|(n, f)| (n.clone(), f.is_finite().then_some(*f)))
-                        .collect(),
-                ),
-                heading_fit,
+                fit: Ordered(ir.states.iter().cloned().zip(v.fits.clone()).collect()),
+                heading_fit: v.heading_fit,
                 diverged: sim.diverged,
             });
+            validations.push(v);
         }
-        let mut mean = Vec::new();
-        for (o, out_name) in outputs.iter().enumerate() {
-            let per: Vec<(Option<f64>, bool)> = fits_of_model
-                .iter()
-                .map(|f| {
-                    let v = if o < ir.states.len() {
-                        f.fit.0.get(o).and_then(|(_, v)| *v)
-                    } else {
-                        f.heading_fit.flatten()
-                    };
-                    (v, f.diverged)
-                })
-                .collect();
-            mean.push((out_name.clone(), mean_fit(&per)));
-        }
+        let mean = outputs
+            .iter()
+            .cloned()
+            .zip(mean_fits(&validations))
+            .collect();
         results.push(ModelFits {
             params: args
                 .params

@@ -60,6 +60,21 @@ fn estimate_prints_the_json_contract() {
         );
         assert!((mean - 0.2).abs() < 3.0 * se, "current.{c}: {mean} ± {se}");
     }
+    // The covariance of θ: rows and columns in the model's order, symmetric,
+    // its diagonal the squared standard errors (√ of it, bit for bit).
+    let cov = v["covariance"].as_object().cloned().unwrap_or_default();
+    assert_eq!(cov.keys().collect::<Vec<_>>(), names);
+    for (a, row) in &cov {
+        let row = row.as_object().cloned().unwrap_or_default();
+        assert_eq!(row.keys().collect::<Vec<_>>(), names);
+        for (b, value) in &row {
+            assert_eq!(value, &v["covariance"][b][a], "{a}, {b}");
+        }
+        match (row[a].as_f64(), v["std_errors"][a].as_f64()) {
+            (Some(var), Some(se)) => assert_eq!(var.max(0.0).sqrt().to_bits(), se.to_bits(), "{a}"),
+            (var, se) => assert!(var.is_none() && se.is_none(), "{a}: {var:?} {se:?}"),
+        }
+    }
     let patterns = v["sign_patterns"].as_array().cloned().unwrap_or_default();
     assert_eq!(patterns.len(), 1);
     assert_eq!(patterns[0]["experiment"], "run");

@@ -35,7 +35,7 @@ pub fn class_of(code: &str) -> &'static str {
         "rank-deficient" => "RankDeficient",
         "sign-violation" => "SignViolation",
         "data" | "no-data" | "too-few-samples" | "non-finite-data" => "DataError",
-        "invalid-option" | "invalid-nominal" | "invalid-start" => "OptionError",
+        "invalid-option" | "invalid-params" | "invalid-nominal" | "invalid-start" => "OptionError",
         _ => "EstimateError",
     }
 }
@@ -117,6 +117,18 @@ impl Failure {
             code: "invalid-option".to_string(),
             message,
             hint,
+            location: None,
+            report: None,
+        }))
+    }
+
+    /// θ that the model cannot take (the CLI's parameter-file errors).
+    pub fn params(message: String) -> Failure {
+        Failure(Box::new(Details {
+            class: "OptionError",
+            code: "invalid-params".to_string(),
+            message,
+            hint: Some("give every parameter of the model once, as a finite number".into()),
             location: None,
             report: None,
         }))

@@ -2,13 +2,16 @@
 //! models, checks them and estimates from columns handed over by
 //! `python/leeway` (numpy float64 arrays, read in place), and answers with the
 //! same JSON documents as `leeway check --json` and `leeway estimate --json`,
-//! built by the same code ([`leeway_runtime::report`]). The Python half turns
+//! built by the same code ([`leeway_runtime::report`]); it simulates and
+//! validates with the runtime functions `leeway simulate` and `leeway
+//! validate` call (`simulate.rs`), answering with columns and fits. The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 
 mod data;
 mod distributed;
 mod failure;
+mod simulate;
 mod study;
 
 use failure::Failure;
@@ -233,6 +236,11 @@ const MAX_REFINEMENTS: usize = 100;
 const STEP_RANGE: (f64, f64) = (1e-6, 1e6);
 
 impl EstimateOptions {
+    /// The load options these options give, checked against the model.
+    fn load_options(&self, ir: &Ir) -> Result<LoadOptions, Failure> {
+        load_options(ir, self.step, Some(self.time_tolerance), self.resample)
+    }
+
     fn runtime(&self) -> Result<leeway_runtime::EstimateOptions, Failure> {
         if !(1..=MAX_LAGS).contains(&self.lags) {
             return Err(Failure::option(
@@ -247,27 +255,6 @@ impl EstimateOptions {
                     self.max_refinements
                 ),
                 None,
-            ));
-        }
-        for (what, v) in [("step", self.step), ("resample", self.resample)] {
-            if let Some(v) = v
-                && !(v.is_finite() && (STEP_RANGE.0..=STEP_RANGE.1).contains(&v))
-            {
-                return Err(Failure::option(
-                    format!(
-                        "{what}={v} is outside 1e-6..=1e6 seconds, the sample times leeway accepts"
-                    ),
-                    None,
-                ));
-            }
-        }
-        if !(self.time_tolerance > 0.0 && self.time_tolerance < 0.5) {
-            return Err(Failure::option(
-                format!(
-                    "time_tolerance={} is not a fraction in (0, 0.5)",
-                    self.time_tolerance
-                ),
-                Some("write 0.05 for 5 %; 0.5 or more would accept a dropped sample".into()),
             ));
         }
         Ok(leeway_runtime::EstimateOptions {
@@ -320,34 +307,60 @@ impl EstimateOptions {
             ..leeway_runtime::EstimateOptions::default()
         })
     }
+}
 
-    /// `step` against the model's own `step`, and `resample` against both:
-    /// a conflict is an error, never silently resolved (as in the CLI).
-    fn load_options(&self, ir: &Ir) -> Result<LoadOptions, Failure> {
-        if let (Some(declared), Some(given)) = (ir.step, self.step)
-            && (declared - given).abs() > 1e-9 * declared.abs()
-        {
-            return Err(Failure::option(
-                format!("step={given} conflicts with the model's `step {declared}`"),
-                Some("drop step= (the model's step is used), or change `step` in the model".into()),
-            ));
-        }
-        if let (Some(declared), Some(given)) = (ir.step.or(self.step), self.resample)
-            && (declared - given).abs() > 1e-9 * declared.abs()
+/// How data are read: `step`, `time_tolerance` (`None`: the default) and
+/// `resample` within the CLI's bounds, `step` against the model's own
+/// `step`, and `resample` against both: a conflict is an error, never
+/// silently resolved (as in the CLI).
+fn load_options(
+    ir: &Ir,
+    step: Option<f64>,
+    time_tolerance: Option<f64>,
+    resample: Option<f64>,
+) -> Result<LoadOptions, Failure> {
+    for (what, v) in [("step", step), ("resample", resample)] {
+        if let Some(v) = v
+            && !(v.is_finite() && (STEP_RANGE.0..=STEP_RANGE.1).contains(&v))
         {
             return Err(Failure::option(
                 format!(
-                    "resample={given} conflicts with the sample time {declared} (the model's `step` or step=)"
+                    "{what}={v} is outside 1e-6..=1e6 seconds, the sample times leeway accepts"
                 ),
-                Some(format!("resample at the model's step: resample={declared}")),
+                None,
             ));
         }
-        Ok(LoadOptions {
-            step: self.step,
-            time_tolerance: self.time_tolerance,
-            resample: self.resample,
-        })
     }
+    let time_tolerance = time_tolerance.unwrap_or(LoadOptions::default().time_tolerance);
+    if !(time_tolerance > 0.0 && time_tolerance < 0.5) {
+        return Err(Failure::option(
+            format!("time_tolerance={time_tolerance} is not a fraction in (0, 0.5)"),
+            Some("write 0.05 for 5 %; 0.5 or more would accept a dropped sample".into()),
+        ));
+    }
+    if let (Some(declared), Some(given)) = (ir.step, step)
+        && (declared - given).abs() > 1e-9 * declared.abs()
+    {
+        return Err(Failure::option(
+            format!("step={given} conflicts with the model's `step {declared}`"),
+            Some("drop step= (the model's step is used), or change `step` in the model".into()),
+        ));
+    }
+    if let (Some(declared), Some(given)) = (ir.step.or(step), resample)
+        && (declared - given).abs() > 1e-9 * declared.abs()
+    {
+        return Err(Failure::option(
+            format!(
+                "resample={given} conflicts with the sample time {declared} (the model's `step` or step=)"
+            ),
+            Some(format!("resample at the model's step: resample={declared}")),
+        ));
+    }
+    Ok(LoadOptions {
+        step,
+        time_tolerance,
+        resample,
+    })
 }
 
 /// A frame as `leeway` hands it over: name, float64 columns, experiment labels.
@@ -356,6 +369,32 @@ type FrameArg<'py> = (
     Vec<(String, PyReadonlyArray1<'py, f64>)>,
     Option<Vec<String>>,
 );
+
+/// The frames' columns borrowed in place (`leeway` hands over contiguous
+/// float64 arrays).
+fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<data::Frame<'a>>, Failure> {
+    frames
+        .iter()
+        .map(|(name, columns, experiment)| {
+            let columns = columns
+                .iter()
+                .map(|(c, a)| {
+                    a.as_slice().map(|s| (c.as_str(), s)).map_err(|_| {
+                        Failure::data_plain(
+                            name,
+                            format!("column `{c}` is not a contiguous float64 array"),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            Ok(data::Frame {
+                name,
+                columns,
+                experiment: experiment.as_deref(),
+            })
+        })
+        .collect()
+}
 
 /// `leeway estimate --json` of `model` on the frames: each frame is
 /// `(name, [(column, float64 array)], experiment labels or None)`. The GIL is
@@ -372,37 +411,15 @@ fn estimate_json(
     // `aggregate` changes what the structure compiler keeps: the CLI compiles
     // with it, so does this.
     let model = &*model.for_aggregate(options.aggregate)?;
-    let load_options = options.load_options(&model.ir)?;
+    let load_options = load_options(
+        &model.ir,
+        options.step,
+        Some(options.time_tolerance),
+        options.resample,
+    )?;
     let borrowed = borrow_frames(&frames)?;
     let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
     Ok(document)
-}
-
-/// The frames' columns borrowed in place (`leeway` hands over contiguous
-/// float64 arrays).
-fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<data::Frame<'a>>, Failure> {
-    frames
-        .iter()
-        .map(|(name, columns, experiment)| {
-            let columns = columns
-                .iter()
-                .map(|(c, a)| {
-                    // Read in place: `leeway` hands over contiguous float64 arrays.
-                    a.as_slice().map(|s| (c.as_str(), s)).map_err(|_| {
-                        Failure::data_plain(
-                            name,
-                            format!("column `{c}` is not a contiguous float64 array"),
-                        )
-                    })
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            Ok(data::Frame {
-                name,
-                columns,
-                experiment: experiment.as_deref(),
-            })
-        })
-        .collect()
 }
 
 fn run_estimate(
@@ -459,6 +476,8 @@ fn run_estimate(
 fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Model>()?;
     m.add_function(wrap_pyfunction!(estimate_json, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::validate_fits, m)?)?;
     m.add_class::<distributed::Dataset>()?;
     m.add_function(wrap_pyfunction!(distributed::estimate_mapped, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_tasks, m)?)?;

@@ -23,6 +23,7 @@ pub use model::{Model, Signals, next_heading, planar_rotation};
 pub mod data;
 pub mod design;
 pub mod estimate;
+pub mod input;
 pub mod moments;
 pub mod report;
 pub mod resample;

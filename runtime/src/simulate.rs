@@ -1,4 +1,6 @@
-//! Simulation of a model on an input, and the normalised fit.
+//! Simulation of a model on an input, the normalised fit, and validation:
+//! the fits of one θ on a recorded experiment (what `leeway validate` and
+//! `leeway.validate` report).
 
 use crate::data::{Experiment, Source};
 use crate::model::{Model, Signals, next_heading, planar_rotation};
@@ -161,4 +163,76 @@ pub fn unwrap_heading(heading: &[f64]) -> Vec<f64> {
         out.push(acc);
     }
     out
+}
+
+/// One θ simulated on one recorded experiment, against its measurement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Validation {
+    /// The simulation (from the experiment's first sample, with its inputs,
+    /// measured disturbances and rotation).
+    pub trajectory: Trajectory,
+    /// Fit per state in % ([`fit`]); `None` when the measurement is constant
+    /// or the simulation diverged.
+    pub fits: Vec<Option<f64>>,
+    /// For a planar heading, the fit of the integrated heading against the
+    /// measured one [`unwrap_heading`] (`Some(None)` when undefined); `None` for
+    /// a model without one.
+    pub heading_fit: Option<Option<f64>>,
+}
+
+impl Validation {
+    /// The simulation left the finite numbers.
+    pub fn diverged(&self) -> bool {
+        self.trajectory.diverged
+    }
+
+    /// The fits per output: the states, then the heading when integrated.
+    pub fn outputs(&self) -> Vec<Option<f64>> {
+        let mut out = self.fits.clone();
+        out.extend(self.heading_fit);
+        out
+    }
+}
+
+/// Simulates `model` with `theta` on the experiment and fits every output,
+/// as MATLAB's `compare` does.
+pub fn validate(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &Experiment,
+    disturbances: Disturbances,
+) -> Validation {
+    let trajectory = simulate(model, theta, data, disturbances);
+    let fits = fits(data, &trajectory)
+        .into_iter()
+        .map(|f| f.is_finite().then_some(f))
+        .collect();
+    let heading_fit = matches!(model.ir().rotation, Rotation::Planar { .. }).then(|| {
+        let f = heading_fit(data, &trajectory);
+        f.is_finite().then_some(f)
+    });
+    Validation {
+        trajectory,
+        fits,
+        heading_fit,
+    }
+}
+
+/// The mean fit over experiments per output ([`Validation::outputs`]):
+/// `None` for every output when an experiment diverged (a mean would flatter
+/// the model), and for an output no experiment defines; experiments whose
+/// measurement is constant (fit undefined) are left out.
+pub fn mean_fits(validations: &[Validation]) -> Vec<Option<f64>> {
+    let outputs: Vec<Vec<Option<f64>>> = validations.iter().map(Validation::outputs).collect();
+    let n = outputs.first().map_or(0, Vec::len);
+    let diverged = validations.iter().any(Validation::diverged);
+    (0..n)
+        .map(|o| {
+            if diverged {
+                return None;
+            }
+            let defined: Vec<f64> = outputs.iter().filter_map(|f| f[o]).collect();
+            (!defined.is_empty()).then(|| defined.iter().sum::<f64>() / defined.len() as f64)
+        })
+        .collect()
 }

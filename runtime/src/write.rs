@@ -32,9 +32,53 @@ pub fn header(ir: &Ir, experiments: usize) -> Vec<String> {
     h
 }
 
-/// Writes experiments shaped for `ir` as one CSV file. Sample `k` of an
-/// experiment is stamped `t0 + k·h`. Values are written as held (a non-finite
-/// value is written as `NaN`/`inf` and would be rejected when read back).
+/// The columns [`write_csv`] writes for one experiment, aligned with
+/// [`header`]`(ir, 1)`: the time stamps `t0 + k·h`, then every value back in
+/// the unit the model declares for it (`data { r in deg/s }`), so that the
+/// file reads back as the data it stands for. A value missing from a column
+/// shorter than the states is `NaN`.
+pub fn columns(ir: &Ir, e: &Experiment, t0: f64) -> Vec<Vec<f64>> {
+    let unit = |signal: &str| {
+        ir.data_units
+            .get(signal)
+            .map_or(1.0, |u| leeway_structure::units::factor(u))
+    };
+    let n = e.states.first().map_or(0, Vec::len);
+    let scaled = |c: Option<&Vec<f64>>, f: f64| -> Vec<f64> {
+        (0..n)
+            .map(|k| c.and_then(|c| c.get(k)).copied().unwrap_or(f64::NAN) / f)
+            .collect()
+    };
+    let time = unit("time");
+    let mut out = vec![(0..n).map(|k| (t0 + k as f64 * e.h) / time).collect()];
+    for (c, s) in e.states.iter().zip(&ir.states) {
+        out.push(scaled(Some(c), unit(s)));
+    }
+    match &ir.rotation {
+        Rotation::Planar { heading, .. } => out.push(scaled(Some(&e.heading), unit(heading))),
+        Rotation::Measured { .. } => {
+            for c in &e.rotation {
+                out.push(scaled(Some(c), 1.0));
+            }
+        }
+        Rotation::None => {}
+    }
+    for (c, s) in e.inputs.iter().zip(&ir.inputs) {
+        out.push(scaled(Some(c), unit(s)));
+    }
+    for (i, c) in ir.components.iter().enumerate() {
+        if ir.disturbances[c.disturbance].measured {
+            out.push(scaled(e.disturbances.get(i), unit(&c.name)));
+        }
+    }
+    out
+}
+
+/// Writes experiments shaped for `ir` as one CSV file: per experiment the
+/// [`columns`] (sample `k` stamped `t0 + k·h`), with the experiment's name
+/// after the time when there are several. Values are written as held (a
+/// non-finite value is written as `NaN`/`inf` and would be rejected when
+/// read back).
 pub fn write_csv(
     ir: &Ir,
     experiments: &[&Experiment],
@@ -43,63 +87,21 @@ pub fn write_csv(
 ) -> std::io::Result<()> {
     let header = header(ir, experiments.len());
     writeln!(out, "{}", header.join(","))?;
-    let measured: Vec<usize> = ir
-        .components
-        .iter()
-        .enumerate()
-        .filter(|(_, c)| ir.disturbances[c.disturbance].measured)
-        .map(|(i, _)| i)
-        .collect();
-    // Each column back in the unit the model declares for it (`data { r in
-    // deg/s }`), so that the file reads back as the data it stands for.
-    let unit = |signal: &str| {
-        ir.data_units
-            .get(signal)
-            .map_or(1.0, |u| leeway_structure::units::factor(u))
-    };
-    let states: Vec<f64> = ir.states.iter().map(|s| unit(s)).collect();
-    let inputs: Vec<f64> = ir.inputs.iter().map(|s| unit(s)).collect();
-    let heading = match &ir.rotation {
-        Rotation::Planar { heading, .. } => unit(heading),
-        _ => 1.0,
-    };
-    let time = unit("time");
     let mut line = String::new();
     for e in experiments {
-        let n = e.states.first().map_or(0, Vec::len);
+        let columns = columns(ir, e, t0);
+        let n = columns.first().map_or(0, Vec::len);
         for k in 0..n {
             line.clear();
-            push(&mut line, (t0 + k as f64 * e.h) / time);
-            if experiments.len() > 1 {
-                line.push(',');
-                line.push_str(&e.name);
-            }
-            let value = |c: &Vec<f64>| c.get(k).copied().unwrap_or(f64::NAN);
-            for (c, f) in e.states.iter().zip(&states) {
-                line.push(',');
-                push(&mut line, value(c) / f);
-            }
-            match &ir.rotation {
-                Rotation::Planar { .. } => {
+            for (j, c) in columns.iter().enumerate() {
+                if j > 0 {
                     line.push(',');
-                    push(&mut line, value(&e.heading) / heading);
                 }
-                Rotation::Measured { .. } => {
-                    for c in &e.rotation {
-                        line.push(',');
-                        push(&mut line, value(c));
-                    }
+                push(&mut line, c[k]);
+                if j == 0 && experiments.len() > 1 {
+                    line.push(',');
+                    line.push_str(&e.name);
                 }
-                Rotation::None => {}
-            }
-            for (c, f) in e.inputs.iter().zip(&inputs) {
-                line.push(',');
-                push(&mut line, value(c) / f);
-            }
-            for &i in &measured {
-                line.push(',');
-                let f = unit(&ir.components[i].name);
-                push(&mut line, e.disturbances.get(i).map_or(f64::NAN, value) / f);
             }
             writeln!(out, "{line}")?;
         }

@@ -6,9 +6,14 @@ instrumental variables from pandas DataFrames.
 >>> model.check().identifiable                               # doctest: +SKIP
 >>> est = leeway.estimate(model, df, method="iv3")           # doctest: +SKIP
 >>> est.params                                               # doctest: +SKIP
+>>> est.cov                                                  # doctest: +SKIP
+>>> leeway.simulate(model, est, inputs)                      # doctest: +SKIP
+>>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
 
 Everything is computed by the same Rust code as the ``leeway`` command:
-``Estimate.to_json()`` is the document of ``leeway estimate --json``.
+``Estimate.to_json()`` is the document of ``leeway estimate --json``,
+``simulate`` returns what ``leeway simulate`` writes and ``validate`` the
+fits ``leeway validate`` prints, bit for bit.
 """
 
 from __future__ import annotations
@@ -41,6 +46,9 @@ __all__ = [
     "Check",
     "Estimate",
     "estimate",
+    "simulate",
+    "validate",
+    "Theta",
     "LeewayError",
     "ModelError",
     "DataError",
@@ -217,6 +225,22 @@ class Estimate:
         """θ: estimate, std_error, status, estimates (what it estimates), aggregate."""
         self.nuisance: pd.DataFrame = _columns(d["nuisance"])
         """The nuisance columns (``rho``/``lambda``), as ``params``."""
+        names = list(d["estimates"])
+        covariance = d.get("covariance", {})
+        self.cov: pd.DataFrame = pd.DataFrame(
+            [
+                [np.nan if (v := covariance.get(a, {}).get(b)) is None else v for b in names]
+                for a in names
+            ],
+            index=pd.Index(names, name="parameter"),
+            columns=pd.Index(names, name="parameter"),
+            dtype="float64",
+        )
+        """The covariance of θ (the robust sandwich the standard errors come
+        from: ``std_error == sqrt(diag(cov))`` bit for bit), indexed and
+        columned by parameter in the model's order; NaN in the row and column
+        of a parameter that was not estimated (held, or absorbed by an
+        aggregate)."""
         rows = [
             (dist, comp, m["mean"], m["std_error"])
             for dist, comps in d["disturbances"].items()
@@ -395,3 +419,173 @@ def _estimate_options(
 def _warn(result: Estimate) -> None:
     for w in result.warnings:
         warnings.warn(w, LeewayWarning, stacklevel=3)
+
+
+Theta = Union[Mapping[str, float], Sequence[float], Estimate]
+"""θ for a simulation: ``{name: value}`` with every parameter of the model,
+values in the model's parameter order, or an ``Estimate`` (its θ, held
+parameters at their nominal values)."""
+
+
+def _theta(model: Model, theta: Any, what: str = "theta") -> list[float]:
+    """θ in the model's parameter order from anything ``Theta`` allows
+    (checked here, since the caller may pass anything)."""
+    if isinstance(theta, Estimate):
+        theta = theta.theta
+    if isinstance(theta, Mapping):
+        unknown = [str(k) for k in theta if k not in model.parameters]
+        missing = [p for p in model.parameters if p not in theta]
+        if unknown or missing:
+            raise OptionError(
+                f"{what} must give every parameter of the model once"
+                + (f"; unknown: {', '.join(unknown)}" if unknown else "")
+                + (f"; missing: {', '.join(missing)}" if missing else ""),
+                code="invalid-params",
+                hint=f"the parameters are {', '.join(model.parameters)}",
+            )
+        values = [theta[p] for p in model.parameters]
+    elif isinstance(theta, (str, bytes)) or not isinstance(theta, (Sequence, np.ndarray)):
+        raise OptionError(
+            f"{what} is a {type(theta).__name__}",
+            code="invalid-params",
+            hint="pass {name: value}, a sequence in the model's parameter order, or an Estimate",
+        )
+    else:
+        values = list(theta)
+    try:
+        return [float(v) for v in values]
+    except (TypeError, ValueError) as e:
+        raise OptionError(
+            f"{what} holds a value that is not a number: {e}",
+            code="invalid-params",
+            hint="θ values are numbers",
+        ) from None
+
+
+def _named_values(values: Mapping[str, float] | None, what: str) -> list[tuple[str, float]]:
+    if values is None:
+        return []
+    if not isinstance(values, Mapping):
+        raise OptionError(
+            f"{what} is a {type(values).__name__}, not a mapping",
+            code="invalid-option",
+            hint=f"pass {what}={{name: value}}",
+        )
+    try:
+        return [(str(k), float(v)) for k, v in values.items()]
+    except (TypeError, ValueError) as e:
+        raise OptionError(f"{what}: {e}", code="invalid-option") from None
+
+
+def simulate(
+    model: Model,
+    theta: Theta,
+    inputs: Frame,
+    *,
+    x0: Mapping[str, float] | None = None,
+    disturbances: Mapping[str, float] | None = None,
+    step: float | None = None,
+) -> pd.DataFrame:
+    """Simulates ``model`` with ``theta`` on ``inputs`` from its first row, as
+    ``leeway simulate`` does (README, "leeway simulate"), and returns the
+    trajectory: the columns ``leeway simulate`` writes (time, states,
+    heading, inputs, measured rotation and disturbances; data column names,
+    declared units), bit for bit.
+
+    ``inputs`` is one experiment (a DataFrame, or an Arrow/polars table)
+    with every input, measured rotation and measured disturbance on every
+    row, and optionally ``time``; the states and the heading are read from
+    its first row, and ``x0={"u": 5.0, "psi": 0.0}`` gives or overrides
+    them (base units). ``disturbances={"current.north": 0.2}`` holds
+    unmeasured components constant (others are zero). When the simulation
+    diverges, a ``LeewayWarning`` says where, and the rows before are
+    returned (``frame.attrs["diverged"]`` is then true)."""
+    (name, columns, labels), = _handover(model, {"inputs": inputs})
+    values, diverged = _leeway.simulate_columns(
+        model._core,
+        (name, columns, labels),
+        _theta(model, theta),
+        _named_values(x0, "x0"),
+        _named_values(disturbances, "disturbances"),
+        step,
+    )
+    frame = pd.DataFrame(dict(values))
+    frame.attrs["diverged"] = diverged is not None
+    if diverged is not None:
+        warnings.warn(diverged, LeewayWarning, stacklevel=2)
+    return frame
+
+
+Thetas = Union[Theta, Sequence[Theta], Mapping[str, Theta]]
+
+
+def _thetas(model: Model, given: Thetas) -> list[tuple[str, list[float]]]:
+    if isinstance(given, Estimate):
+        return [(given.method, _theta(model, given))]
+    if isinstance(given, Mapping):
+        if all(isinstance(v, (Estimate, Mapping, Sequence, np.ndarray)) and not isinstance(v, str)
+               for v in given.values()) and given:
+            return [(str(k), _theta(model, v, f"thetas[{k!r}]")) for k, v in given.items()]
+        return [("theta", _theta(model, given))]
+    if isinstance(given, (Sequence, np.ndarray)) and not isinstance(given, (str, bytes)):
+        items = list(given)
+        if items and all(isinstance(v, (Estimate, Mapping, Sequence, np.ndarray)) for v in items):
+            names = [v.method if isinstance(v, Estimate) else f"theta[{i}]" for i, v in enumerate(items)]
+            if len(set(names)) < len(names):
+                names = [f"theta[{i}]" for i in range(len(items))]
+            return [(n, _theta(model, v, n)) for n, v in zip(names, items)]
+        return [("theta", _theta(model, given))]
+    return [("theta", _theta(model, given))]
+
+
+def validate(
+    model: Model,
+    thetas: Thetas,
+    data: Data,
+    *,
+    disturbances: Mapping[str, float] | None = None,
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> pd.DataFrame:
+    """Simulates the model with each θ on every experiment of ``data`` (from
+    its first sample, with its inputs, measured disturbances and rotation)
+    and returns the fits ``leeway validate`` reports, bit for bit:
+    ``100·(1 − ‖y − ŷ‖/‖y − ȳ‖)`` in % per output, as MATLAB's ``compare``.
+
+    ``thetas`` is one θ (a mapping, a sequence or an ``Estimate``), a list of
+    them (named by the estimates' methods, else ``theta[i]``) or a dict
+    naming each. ``data`` is what ``leeway.estimate`` takes. The frame is
+    indexed by (``model``, ``experiment``) with the columns ``samples``,
+    ``diverged`` and one per output (the states, then the integrated
+    heading); after each θ's experiments a row ``experiment="mean"`` holds
+    the mean over experiments (NaN when a simulation diverged; experiments
+    with a constant measurement left out), as ``leeway validate --json``'s
+    ``mean``. A fit is NaN when undefined (constant measurement, or the
+    simulation diverged). Warnings are issued as ``LeewayWarning``."""
+    named = _thetas(model, thetas)
+    outputs, rows, means, issued = _leeway.validate_fits(
+        model._core,
+        _handover(model, data),
+        [t for _, t in named],
+        [n for n, _ in named],
+        _named_values(disturbances, "disturbances"),
+        step,
+        time_tolerance,
+        resample,
+    )
+    records = []
+    for m, (name, _) in enumerate(named):
+        mine = [r for r in rows if r[0] == m]
+        for _, experiment, samples, diverged, fits in mine:
+            records.append((name, experiment, samples, diverged, *fits))
+        records.append((
+            name, "mean", sum(r[2] for r in mine), any(r[3] for r in mine), *means[m],
+        ))
+    frame = pd.DataFrame(
+        records, columns=["model", "experiment", "samples", "diverged", *outputs]
+    ).set_index(["model", "experiment"])
+    frame[outputs] = frame[outputs].astype("float64")
+    for w in issued:
+        warnings.warn(w, LeewayWarning, stacklevel=2)
+    return frame

@@ -7,7 +7,17 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Model", "Dataset", "estimate_json", "estimate_mapped", "study_tasks", "study_run", "study_summary"]
+__all__ = [
+    "Model",
+    "Dataset",
+    "estimate_json",
+    "estimate_mapped",
+    "simulate_columns",
+    "validate_fits",
+    "study_tasks",
+    "study_run",
+    "study_summary",
+]
 
 @final
 class Model:
@@ -72,3 +82,26 @@ def estimate_mapped(
 def study_tasks(config: dict[str, Any]) -> list[tuple[int, int]]: ...
 def study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes: ...
 def study_summary(config: dict[str, Any], runs: list[bytes]) -> str: ...
+def simulate_columns(
+    model: Model,
+    frame: tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None],
+    theta: list[float],
+    x0: list[tuple[str, float]],
+    disturbances: list[tuple[str, float]],
+    step: float | None = None,
+) -> tuple[list[tuple[str, npt.NDArray[np.float64]]], str | None]: ...
+def validate_fits(
+    model: Model,
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
+    thetas: list[list[float]],
+    names: list[str],
+    disturbances: list[tuple[str, float]],
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> tuple[
+    list[str],
+    list[tuple[int, str, int, bool, list[float | None]]],
+    list[list[float | None]],
+    list[str],
+]: ...

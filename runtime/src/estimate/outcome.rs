@@ -80,6 +80,15 @@ pub struct Estimate {
     pub theta: Vec<f64>,
     /// Standard errors of θ (`None` for held parameters).
     pub std_errors: Vec<Option<f64>>,
+    /// The covariance of θ, the robust sandwich the standard errors come
+    /// from: `covariance[i][j]` for parameters `i` and `j` in the order of
+    /// `parameters` (square; symmetric, off-diagonal entries the mean of the
+    /// sandwich's two round-off-different triangles). An entry is `None` when `i` or `j`
+    /// was not estimated (held, or an aggregate's absorbed parameter), and
+    /// every entry is `None` when the covariance could not be computed (then
+    /// `std_errors` are all `None` too). A diagonal entry `v` gives the
+    /// standard error `√max(v, 0)` bit for bit.
+    pub covariance: Vec<Vec<Option<f64>>>,
     /// Every column of the predictor.
     pub columns: Vec<ColumnEstimate>,
     /// Means of the unmeasured disturbances.

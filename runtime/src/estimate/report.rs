@@ -87,6 +87,25 @@ impl Estimator<'_> {
             .iter()
             .map(|c| c.filter(|c| estimated.contains(c)).and_then(se))
             .collect();
+        let covariance = theta_cols
+            .iter()
+            .map(|a| {
+                theta_cols
+                    .iter()
+                    .map(|b| {
+                        let (a, b) = ((*a)?, (*b)?);
+                        if !(estimated.contains(&a) && estimated.contains(&b)) {
+                            return None;
+                        }
+                        let m = cov.as_ref()?;
+                        let (ab, ba) = (*m.get(&(a, b))?, *m.get(&(b, a))?);
+                        // `B G Bᵀ` is symmetric up to round-off; the mean
+                        // makes it exactly so and keeps the diagonal.
+                        Some(if a == b { ab } else { 0.5 * (ab + ba) })
+                    })
+                    .collect()
+            })
+            .collect();
         let disturbances = if self.kind == PredictorKind::Basic {
             Vec::new()
         } else {
@@ -142,6 +161,7 @@ impl Estimator<'_> {
             parameters: self.ir.parameters.iter().map(|p| p.name.clone()).collect(),
             theta,
             std_errors,
+            covariance,
             columns,
             disturbances,
             sign_patterns,

@@ -240,6 +240,10 @@ pub struct EstimateReport<E> {
     estimates: Ordered<f64>,
     /// Standard errors of θ (null for held parameters).
     std_errors: Ordered<Option<f64>>,
+    /// The covariance of θ, `{row: {column: number or null}}` in the model's
+    /// order (the sandwich the standard errors come from; null where a
+    /// parameter was not estimated).
+    covariance: Ordered<Ordered<Option<f64>>>,
     /// θ with status and meaning.
     parameters: Vec<Column>,
     /// The nuisance parameters (moments of the unmeasured disturbances times θ).
@@ -398,6 +402,7 @@ pub fn estimate_report<E>(
         experiments: Vec::new(),
         estimates: Ordered::default(),
         std_errors: Ordered::default(),
+        covariance: Ordered::default(),
         parameters: Vec::new(),
         nuisance: Vec::new(),
         disturbances: Ordered::default(),
@@ -440,6 +445,16 @@ pub fn estimate_report<E>(
             .iter()
             .cloned()
             .zip(e.std_errors.clone())
+            .collect(),
+    );
+    r.covariance = Ordered(
+        e.parameters
+            .iter()
+            .zip(&e.covariance)
+            .map(|(name, row)| {
+                let row = e.parameters.iter().cloned().zip(row.clone()).collect();
+                (name.clone(), Ordered(row))
+            })
             .collect(),
     );
     r.parameters = e

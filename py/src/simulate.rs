@@ -1,0 +1,331 @@
+//! `leeway.simulate` and `leeway.validate`: the runtime's simulation and
+//! validation (`leeway_runtime::input`, `leeway_runtime::simulate`), the code
+//! `leeway simulate` and `leeway validate` run, on frames handed over from
+//! Python. A simulation's input frame is read by the CLI's input reader (the
+//! frame written once as CSV text in memory, every value in its shortest
+//! round-trip form, so the reader sees the bits numpy holds); validation data
+//! are loaded as `leeway.estimate` loads them.
+
+use crate::failure::Failure;
+use crate::{FrameArg, Model, borrow_frames, data, load_options};
+use leeway_runtime::data::{Records, column_name};
+use leeway_runtime::input::{OptionNames, read_input};
+use leeway_runtime::report::{heading_gains, heading_warnings, unit_warnings};
+use leeway_runtime::simulate::{Disturbances, mean_fits, simulate, validate};
+use leeway_runtime::{DataError, Experiment, Interpreter, Source, write};
+use leeway_structure::ir::{Ir, Rotation};
+use numpy::PyArray1;
+use pyo3::prelude::*;
+
+/// The largest initial value or disturbance accepted, as on the command line.
+const MAX_VALUE: f64 = 1e12;
+
+/// The Python keywords as hints name them.
+const NAMES: OptionNames = OptionNames {
+    x0: |name| format!("x0={{\"{name}\": VALUE}}"),
+    step: "step=H",
+};
+
+fn checked(what: &str, name: &str, v: f64) -> Result<f64, Failure> {
+    if v.is_finite() && v.abs() <= MAX_VALUE {
+        Ok(v)
+    } else {
+        Err(Failure::option(
+            format!(
+                "{what}[{name:?}] = {v} is not a finite number of at most {MAX_VALUE:e} in magnitude"
+            ),
+            Some("give values in the model's base units".into()),
+        ))
+    }
+}
+
+/// Initial values by state or heading name (as `--x0` takes them).
+fn initial_values(ir: &Ir, x0: &[(String, f64)]) -> Result<Vec<(String, f64)>, Failure> {
+    let heading = match &ir.rotation {
+        Rotation::Planar { heading, .. } => Some(heading.as_str()),
+        _ => None,
+    };
+    let mut known: Vec<&str> = ir.states.iter().map(String::as_str).collect();
+    known.extend(heading);
+    x0.iter()
+        .map(|(name, v)| {
+            if !known.contains(&name.as_str()) {
+                return Err(Failure::option(
+                    format!(
+                        "x0: `{name}` is not a state or the heading of model `{}`",
+                        ir.name
+                    ),
+                    Some(format!(
+                        "initial values can be given for {}",
+                        leeway_structure::grammar::join_capped(&known, ", ")
+                    )),
+                ));
+            }
+            Ok((name.clone(), checked("x0", name, *v)?))
+        })
+        .collect()
+}
+
+/// Constant unmeasured disturbance components by name (`north` or
+/// `current.north`, as `--disturbance` takes them); others are zero.
+fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Failure> {
+    let mut values = vec![0.0; ir.components.len()];
+    let mut set = vec![false; ir.components.len()];
+    let unmeasured: Vec<String> = ir
+        .components
+        .iter()
+        .filter(|c| !ir.disturbances[c.disturbance].measured)
+        .map(|c| format!("{}.{}", ir.disturbances[c.disturbance].name, c.name))
+        .collect();
+    let hint = if unmeasured.is_empty() {
+        format!("model `{}` has no unmeasured disturbance", ir.name)
+    } else {
+        format!(
+            "the unmeasured components are {}",
+            leeway_structure::grammar::join_capped(&unmeasured, ", ")
+        )
+    };
+    for (name, v) in given {
+        let bad = |why: String| Failure::option(format!("disturbances: {why}"), Some(hint.clone()));
+        let found = ir.components.iter().position(|c| {
+            let d = &ir.disturbances[c.disturbance].name;
+            *name == c.name || *name == format!("{d}.{}", c.name)
+        });
+        let Some(i) = found else {
+            return Err(bad(format!("`{name}` is not a disturbance component")));
+        };
+        if ir.disturbances[ir.components[i].disturbance].measured {
+            return Err(bad(format!(
+                "`{name}` is measured: its values come from the data"
+            )));
+        }
+        if set[i] {
+            return Err(bad(format!("`{name}` is given twice")));
+        }
+        values[i] = checked("disturbances", name, *v)?;
+        set[i] = true;
+    }
+    Ok(values)
+}
+
+/// The frame as CSV text for the input reader: its columns in their
+/// shortest round-trip form, and the experiment labels.
+fn csv_text(ir: &Ir, frame: &data::Frame<'_>) -> Result<Vec<u8>, Failure> {
+    let rows = frame.columns.first().map_or(0, |(_, c)| c.len());
+    if let Some((name, c)) = frame.columns.iter().find(|(_, c)| c.len() != rows) {
+        return Err(Failure::data_plain(
+            frame.name,
+            format!("column `{name}` has {} rows, the others {rows}", c.len()),
+        ));
+    }
+    let fail = |e: csv::Error| Failure::data_plain(frame.name, format!("cannot hand over: {e}"));
+    let mut writer = csv::Writer::from_writer(Vec::new());
+    let mut header: Vec<String> = frame.columns.iter().map(|(n, _)| n.to_string()).collect();
+    if frame.experiment.is_some() {
+        header.push(column_name(ir, "experiment"));
+    }
+    writer.write_record(&header).map_err(fail)?;
+    let mut record: Vec<String> = Vec::with_capacity(header.len());
+    for k in 0..rows {
+        record.clear();
+        record.extend(frame.columns.iter().map(|(_, c)| format!("{:?}", c[k])));
+        if let Some(labels) = frame.experiment {
+            record.push(labels.get(k).cloned().unwrap_or_default());
+        }
+        writer.write_record(&record).map_err(fail)?;
+    }
+    writer
+        .into_inner()
+        .map_err(|e| Failure::data_plain(frame.name, format!("cannot hand over: {e}")))
+}
+
+/// The reader's `frame:line[:column (name)]` as the frame's positional row
+/// (line 1 is the header, so line `l` is row `l − 2`, as `iloc` counts).
+fn located(frame: &str, e: DataError) -> DataError {
+    let Some(rest) = e
+        .location
+        .strip_prefix(frame)
+        .and_then(|r| r.strip_prefix(':'))
+    else {
+        return e;
+    };
+    let (line, column) = match rest.split_once(':') {
+        Some((l, c)) => (l, c.split_once(" (").map(|(_, n)| n.trim_end_matches(')'))),
+        None => (rest, None),
+    };
+    let Ok(line) = line.parse::<u64>() else {
+        return e;
+    };
+    let row = match line {
+        0 | 1 => "header".to_string(),
+        l => format!("row {}", l - 2),
+    };
+    let location = match column {
+        Some(c) => format!("{frame}: {row}, column `{c}`"),
+        None => format!("{frame}: {row}"),
+    };
+    DataError { location, ..e }
+}
+
+/// A simulated trajectory: the columns of `leeway simulate`'s output
+/// (`leeway_runtime::write::header`) and, when it diverged, why (the
+/// columns then hold the samples before).
+type Simulated<'py> = (Vec<(String, Bound<'py, PyArray1<f64>>)>, Option<String>);
+
+/// `leeway simulate` of `model` with `theta` on the input frame: `x0` gives
+/// or overrides initial values, `disturbances` constant unmeasured
+/// components. The GIL is released while the frame is read and simulated.
+#[pyfunction]
+#[pyo3(signature = (model, frame, theta, x0, disturbances, step=None))]
+pub fn simulate_columns<'py>(
+    py: Python<'py>,
+    model: &Model,
+    frame: FrameArg<'py>,
+    theta: Vec<f64>,
+    x0: Vec<(String, f64)>,
+    disturbances: Vec<(String, f64)>,
+    step: Option<f64>,
+) -> PyResult<Simulated<'py>> {
+    let ir = &model.ir;
+    check_theta(ir, &theta)?;
+    let options = load_options(ir, step, None, None)?;
+    let x0 = initial_values(ir, &x0)?;
+    let dist = disturbance_values(ir, &disturbances)?;
+    let frames = borrow_frames(std::slice::from_ref(&frame))?;
+    let frame = &frames[0];
+    let (header, columns, diverged) = py.detach(|| -> Result<_, Failure> {
+        let text = csv_text(ir, frame)?;
+        let read = |e: DataError| Failure::data(&located(frame.name, e));
+        let records = Records::new(frame.name, text.as_slice(), "the inputs").map_err(read)?;
+        let input = read_input(records, ir, &options, &x0, &NAMES).map_err(read)?;
+        let interpreter = Interpreter::new(ir.clone());
+        let e = &input.experiment;
+        let trajectory = simulate(&interpreter, &theta, e, Disturbances::Constant(&dist));
+        // As the CLI: the samples before a divergence.
+        let finite = trajectory
+            .states
+            .first()
+            .map_or(0, |s| s.iter().take_while(|v| v.is_finite()).count());
+        let result = Experiment {
+            states: trajectory.states,
+            heading: trajectory.heading,
+            ..e.clone()
+        }
+        .truncated(finite);
+        let diverged = trajectory.diverged.then(|| {
+            let t = input.t0 + finite as f64 * e.h;
+            format!(
+                "the simulation diverged at sample {finite} (time {t}): the states left the finite numbers; the {finite} rows before are returned"
+            )
+        });
+        Ok((
+            write::header(ir, 1),
+            write::columns(ir, &result, input.t0),
+            diverged,
+        ))
+    })?;
+    let columns = header
+        .into_iter()
+        .zip(columns)
+        .map(|(name, c)| (name, PyArray1::from_vec(py, c)))
+        .collect();
+    Ok((columns, diverged))
+}
+
+fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
+    if theta.len() != ir.parameters.len() {
+        return Err(Failure::params(format!(
+            "θ has {} values, model `{}` {} parameters",
+            theta.len(),
+            ir.name,
+            ir.parameters.len()
+        )));
+    }
+    if let Some((p, v)) = ir
+        .parameters
+        .iter()
+        .zip(theta)
+        .find(|(_, v)| !v.is_finite())
+    {
+        return Err(Failure::params(format!(
+            "θ[{:?}] = {v} is not a finite number",
+            p.name
+        )));
+    }
+    Ok(())
+}
+
+/// One row of validation fits: which θ, the experiment, its samples,
+/// whether the simulation diverged, and the fit per output (the states,
+/// then the heading when integrated; `None` when undefined).
+type FitRow = (usize, String, usize, bool, Vec<Option<f64>>);
+
+/// What `leeway validate` reports: the outputs (table columns), a row per θ
+/// and experiment, per θ the mean fit per output, and the warnings.
+type Fits = (Vec<String>, Vec<FitRow>, Vec<Vec<Option<f64>>>, Vec<String>);
+
+/// `leeway validate` of `model` with each θ on the frames' experiments
+/// (loaded as `leeway.estimate` loads them). `names` names each θ in
+/// warnings. The GIL is released while loading and simulating.
+#[pyfunction]
+#[pyo3(signature = (model, frames, thetas, names, disturbances, step=None, time_tolerance=0.05, resample=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn validate_fits(
+    py: Python<'_>,
+    model: &Model,
+    frames: Vec<FrameArg<'_>>,
+    thetas: Vec<Vec<f64>>,
+    names: Vec<String>,
+    disturbances: Vec<(String, f64)>,
+    step: Option<f64>,
+    time_tolerance: f64,
+    resample: Option<f64>,
+) -> PyResult<Fits> {
+    let ir = &model.ir;
+    for theta in &thetas {
+        check_theta(ir, theta)?;
+    }
+    let options = load_options(ir, step, Some(time_tolerance), resample)?;
+    let dist = disturbance_values(ir, &disturbances)?;
+    let frames = borrow_frames(&frames)?;
+    let fits = py.detach(|| -> Result<Fits, Failure> {
+        let (experiments, _notes) = data::load(ir, &frames, &options)?;
+        let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
+        let mut warnings = unit_warnings(ir, &sources);
+        warnings.extend(heading_warnings(ir, &heading_gains(ir, &sources)));
+        let mut outputs = ir.states.clone();
+        if let Rotation::Planar { heading, .. } = &ir.rotation {
+            outputs.push(heading.clone());
+        }
+        let interpreter = Interpreter::new(ir.clone());
+        let mut rows = Vec::new();
+        let mut means = Vec::new();
+        for (m, theta) in thetas.iter().enumerate() {
+            let name = names.get(m).map_or("θ", String::as_str);
+            let mut validations = Vec::new();
+            for e in &experiments {
+                let v = validate(&interpreter, theta, e, Disturbances::Constant(&dist));
+                for (f, output) in v.fits.iter().zip(&ir.states) {
+                    // Said once, for the first θ: it is a property of the data.
+                    if f.is_none() && !v.diverged() && m == 0 {
+                        warnings.push(format!(
+                            "experiment `{}`: `{output}` is constant in the data, so its fit is undefined",
+                            e.name
+                        ));
+                    }
+                }
+                if v.diverged() {
+                    warnings.push(format!(
+                        "{name}, experiment `{}`: the simulation diverged (the states left the finite numbers); check the parameters",
+                        e.name
+                    ));
+                }
+                rows.push((m, e.name.clone(), e.len(), v.diverged(), v.outputs()));
+                validations.push(v);
+            }
+            means.push(mean_fits(&validations));
+        }
+        Ok((outputs, rows, means, warnings))
+    })?;
+    Ok(fits)
+}
