@@ -15,7 +15,7 @@
 use crate::problem::{Failure, Problem};
 use leeway_runtime::DataError;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{LoadOptions, Records, column_name};
+use leeway_runtime::data::{LoadOptions, Records, Table, column_name};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
