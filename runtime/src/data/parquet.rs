@@ -118,7 +118,7 @@ impl ParquetFile {
             ));
         }
         let reader = guarded(|| SerializedFileReader::new(handle))
-            .and_then(|r| r.map_err(|e| e.to_string()))
+            .and_then(|r| r.map_err(|e| reason(&e)))
             .map_err(|e| {
                 DataError::new(
                     &file,
@@ -169,7 +169,7 @@ impl ParquetFile {
         let group = self
             .reader
             .get_row_group(g)
-            .map_err(|e| self.damaged(at, None, &e.to_string()))?;
+            .map_err(|e| self.damaged(at, None, &reason(&e)))?;
         self.remaining = u64::try_from(group.metadata().num_rows()).unwrap_or(0);
         let mut readers = Vec::with_capacity(self.headers.len());
         for (i, wanted) in self.selected.iter().enumerate() {
@@ -177,7 +177,7 @@ impl ParquetFile {
                 Some(
                     group
                         .get_column_reader(i)
-                        .map_err(|e| self.damaged(at, Some(i), &e.to_string()))?,
+                        .map_err(|e| self.damaged(at, Some(i), &reason(&e)))?,
                 )
             } else {
                 None
@@ -220,7 +220,7 @@ impl ParquetFile {
             let max_def = column.max_def_level();
             let batch = &mut self.batches[i];
             let read = guarded(|| fill(reader, max_def, want, batch))
-                .and_then(|r| r.map_err(|e| e.to_string()));
+                .and_then(|r| r.map_err(|e| reason(&e)));
             match read {
                 Ok(n) if n == want => {}
                 Ok(n) => {
@@ -271,6 +271,13 @@ impl ParquetFile {
         let schema = self.reader.metadata().file_metadata().schema_descr();
         schema.column(i).physical_type().to_string()
     }
+}
+
+/// A parquet error's text without its `Parquet error: ` prefix.
+fn reason(e: &parquet::errors::ParquetError) -> String {
+    let text = e.to_string();
+    text.strip_prefix("Parquet error: ")
+        .map_or(text.clone(), str::to_string)
 }
 
 /// Runs a call into the parquet crate, turning a panic on a malformed file
