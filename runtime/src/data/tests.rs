@@ -381,3 +381,185 @@ fn later_passes_read_the_validated_samples_and_the_spill_is_removed() {
     assert!(!spill.exists(), "{}", spill.display());
     let _ = std::fs::remove_file(&path);
 }
+
+/// The columns of CSV text (all but `experiment` parsed as numbers; the
+/// parse of a cell is the CSV loader's own, so values agree bit for bit).
+fn columns_of(text: &str) -> (Vec<(String, Vec<f64>)>, Option<Vec<String>>) {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let mut cols: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut labels: Option<Vec<String>> = None;
+    for h in &header {
+        if *h == "experiment" {
+            labels = Some(Vec::new());
+        } else {
+            cols.push((h.to_string(), Vec::new()));
+        }
+    }
+    for line in lines {
+        let mut c = cols.iter_mut();
+        for (h, cell) in header.iter().zip(line.split(',')) {
+            if *h == "experiment" {
+                labels.as_mut().map(|l| l.push(cell.to_string()));
+            } else if let Some((_, v)) = c.next() {
+                v.push(cell.parse().unwrap_or(f64::NAN));
+            }
+        }
+    }
+    (cols, labels)
+}
+
+fn load_columns_of(text: &str, ir: &Ir, options: &LoadOptions) -> Result<LoadedFile, DataError> {
+    let (cols, labels) = columns_of(text);
+    let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();
+    load_columns("run", &borrowed, labels.as_deref(), ir, options)
+}
+
+fn bits(e: &Experiment) -> Vec<u64> {
+    let mut out = vec![e.h.to_bits()];
+    e.visit(&mut |r| {
+        out.extend(
+            r.states
+                .iter()
+                .chain(r.inputs)
+                .chain(r.rotation)
+                .chain(r.disturbances)
+                .chain([&r.heading])
+                .map(|v| v.to_bits()),
+        );
+    });
+    out
+}
+
+/// A log with units, two experiments, values whose bits matter (-0.0,
+/// thirds, subnormal-ish small numbers) and jittered time stamps.
+fn log_text() -> String {
+    let mut text = String::from("time,u,r,rudder,experiment,note\n");
+    for k in 0..60 {
+        let e = if k < 25 { "east" } else { "west" };
+        let jitter = if k % 3 == 0 { 1.0 } else { 0.0 };
+        let u = if k == 4 { -0.0 } else { 1.0 / (k + 3) as f64 };
+        text.push_str(&format!(
+            "{:?},{u:?},{:?},{:?},{e},x\n",
+            500.0 * k as f64 + jitter,
+            (k as f64 * 0.7).sin() * 1e-300,
+            (k % 7) as f64 / 3.0
+        ));
+    }
+    text
+}
+
+#[test]
+fn columns_load_bit_for_bit_as_the_csv_of_the_same_values() {
+    let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
+    let text = log_text();
+    for options in [
+        LoadOptions::default(),
+        LoadOptions {
+            resample: Some(0.5),
+            ..LoadOptions::default()
+        },
+    ] {
+        let csv = parse_csv_noted("run", text.as_bytes(), &ir, &options)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let cols = load_columns_of(&text, &ir, &options).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(csv.experiments.len(), 2);
+        assert_eq!(csv.notes, cols.notes);
+        for (a, b) in csv.experiments.iter().zip(&cols.experiments) {
+            assert_eq!((&a.name, a.len()), (&b.name, b.len()));
+            assert_eq!(bits(a), bits(b), "{}", a.name);
+        }
+        assert!(csv.notes.experiments[0].max_step_deviation > Some(0.0));
+    }
+    // Without labels the frame is one experiment named after it.
+    let one = format!("time,u,r,rudder\n{}", rows(0, 12)).replace(",35\n", ",35\n");
+    let csv = parse_csv_noted(
+        "run",
+        one.as_bytes(),
+        &model("step 1.0 data { delta = \"rudder\" }"),
+        &LoadOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let cols = load_columns_of(
+        &one,
+        &model("step 1.0 data { delta = \"rudder\" }"),
+        &LoadOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(csv.experiments, cols.experiments);
+    assert_eq!(cols.experiments[0].name, "run");
+}
+
+#[test]
+fn columns_fail_as_csv_does_located_by_positional_row() {
+    // Each broken log fails with the CSV loader's message and hint; the
+    // place is the same row, counted from 0 below the header (line 1).
+    let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
+    let good = log_text();
+    let edit = |row: usize, f: &dyn Fn(&str) -> String| -> String {
+        good.lines()
+            .enumerate()
+            .map(|(i, l)| if i == row + 1 { f(l) } else { l.to_string() } + "\n")
+            .collect()
+    };
+    let cell = |row: usize, col: usize, v: &str| {
+        edit(row, &|l: &str| {
+            let mut c: Vec<&str> = l.split(',').collect();
+            c[col] = v;
+            c.join(",")
+        })
+    };
+    let cases = [
+        (cell(17, 1, "NaN"), "run: row 17, column `u`"),
+        (cell(18, 2, "-inf"), "run: row 18, column `r`"),
+        (cell(30, 0, "1000"), "run: row 30, column `time`"),
+        (cell(40, 3, "1e30"), "run: row 40, column `rudder`"),
+        (cell(50, 4, "east"), "run: row 50, column `experiment`"),
+        (cell(20, 0, "30000"), "run: row 21, column `time`"),
+        (good.replace("rudder", "delta"), "run: header"),
+        (
+            good.lines().take(5).map(|l| format!("{l}\n")).collect(),
+            "run: row 0",
+        ),
+    ];
+    for (text, place) in cases {
+        let csv = parse_csv("run", text.as_bytes(), &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("an error expected at {place}"));
+        let cols = load_columns_of(&text, &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("an error expected at {place}"));
+        assert_eq!(cols.location, place, "{cols}");
+        assert_eq!(cols.message, csv.message, "{place}");
+        // The header's list differs only in order (labels come last).
+        if place != "run: header" {
+            assert_eq!(cols.hint, csv.hint, "{place}");
+        }
+    }
+    // Columns of unequal length and a name given twice.
+    let a = [1.0, 2.0];
+    let b = [1.0];
+    let err = load_columns(
+        "f",
+        &[("u", &a), ("r", &b)],
+        None,
+        &ir,
+        &LoadOptions::default(),
+    )
+    .err()
+    .unwrap_or_else(|| panic!("unequal lengths"));
+    assert_eq!(
+        (err.location.as_str(), err.message.as_str()),
+        ("f", "column `r` has 1 rows, the others 2")
+    );
+    let err = load_columns(
+        "f",
+        &[("u", &a), ("u", &a)],
+        None,
+        &ir,
+        &LoadOptions::default(),
+    )
+    .err()
+    .unwrap_or_else(|| panic!("a repeated name"));
+    assert_eq!(err.location, "f: header, column `u`");
+}
