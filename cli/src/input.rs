@@ -1,7 +1,8 @@
-//! The input file of `leeway simulate`: a CSV file with a header row, one
-//! experiment, read by the data files' reader (`leeway_runtime::data::Records`:
-//! comment and blank lines skipped, CRLF, quoted cells) and located the same
-//! way (`file:row:column (name)`, the physical line).
+//! The input file of `leeway simulate`: a CSV file with a header row, or a
+//! Parquet file, one experiment, read by the data files' readers
+//! (`leeway_runtime::data::with_table`: for CSV comment and blank lines
+//! skipped, CRLF, quoted cells) and located the same way (`file:row:column
+//! (name)`, the physical line; row, row group and column for Parquet).
 //!
 //! Required columns (after the model's `data { }` mapping): every input, the
 //! columns of a measured `R`, and every measured disturbance component, on
@@ -15,7 +16,7 @@
 use crate::problem::{Failure, Problem};
 use leeway_runtime::DataError;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{LoadOptions, Records, Table, column_name};
+use leeway_runtime::data::{LoadOptions, Table, column_name, with_table};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -111,8 +112,11 @@ pub fn load_input(
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Failure> {
-    let records = Records::open(path, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0).map_err(Failure::from)
+    with_table(path, "--input", |table| {
+        Ok(read_input(table, ir, options, x0))
+    })
+    .map_err(|e| Problem::data(&e))?
+    .map_err(Failure::from)
 }
 
 /// Parses the input file's bytes (see [`load_input`]).
@@ -124,14 +128,15 @@ pub fn parse_input(
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Problem> {
-    let records = Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0)
+    let mut records =
+        leeway_runtime::data::Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
+    read_input(&mut records, ir, options, x0)
 }
 
-/// Reads the input through the data files' reader ([`Records`]: comment and
+/// Reads the input through a data file's [`Table`] (for CSV comment and
 /// blank lines skipped and counted, every problem at its physical line).
-fn read_input<R: std::io::BufRead>(
-    mut records: Records<R>,
+fn read_input(
+    records: &mut dyn Table,
     ir: &Ir,
     options: &LoadOptions,
     x0: &[(String, f64)],
@@ -139,7 +144,7 @@ fn read_input<R: std::io::BufRead>(
     let data = |e: DataError| Problem::data(&e);
     let file = records.file().to_string();
     let file = file.as_str();
-    let header_line = records.header_line();
+    let header_at = records.header_at(None);
     let headers = records.headers().to_vec();
     let find = |name: &str| headers.iter().position(|h| h == name);
     let mut required: Vec<(Role, usize, String)> = Vec::new();
@@ -168,7 +173,7 @@ fn read_input<R: std::io::BufRead>(
             Some(i) => required.push((role, i, col)),
             None => {
                 return Err(Problem::error("data", format!("missing column `{col}`"))
-                    .at(format!("{file}:{header_line}"))
+                    .at(&header_at)
                     .help(format!(
                         "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
                         leeway_structure::grammar::join_capped(&headers, ", ")
@@ -197,7 +202,7 @@ fn read_input<R: std::io::BufRead>(
                     column_name(ir, name)
                 ),
             )
-            .at(format!("{file}:{header_line}"))
+            .at(&header_at)
             .help(format!(
                 "add a `{}` column (only its first row is read) or pass --x0 {name}=VALUE",
                 column_name(ir, name)
@@ -214,9 +219,9 @@ fn read_input<R: std::io::BufRead>(
     let mut times = TimeSteps::default();
     let mut experiment: Option<String> = None;
     let mut rows = 0usize;
-    let mut first_line = header_line + 1;
-    while records.next_record().map_err(data)? {
-        let line = records.line();
+    let mut first_line = records.first_position();
+    while records.next_row().map_err(data)? {
+        let line = records.position();
         for (role, i, name) in &required {
             // Declared units are converted to base units, as for data files.
             let signal = match role {
@@ -243,10 +248,10 @@ fn read_input<R: std::io::BufRead>(
         }
         if let Some(i) = time_col {
             let t = records.number(i, &time_name).map_err(data)? * unit(ir, "time");
-            times.push(t, || format!("{file}:{line}:{} ({time_name})", i + 1))?;
+            times.push(t, || records.at(line, Some((i, &time_name))))?;
         }
         if let Some(i) = exp_col {
-            let name = String::from_utf8_lossy(records.raw(i)).into_owned();
+            let name = String::from_utf8_lossy(&records.label(i).map_err(data)?).into_owned();
             match &experiment {
                 None => experiment = Some(name),
                 Some(first) if *first != name => {
@@ -254,7 +259,7 @@ fn read_input<R: std::io::BufRead>(
                         "data",
                         format!("a second experiment `{name}` starts here (after `{first}`)"),
                     )
-                    .at(format!("{file}:{line}:{} (experiment)", i + 1))
+                    .at(records.at(line, Some((i, "experiment"))))
                     .help("leeway simulate takes one experiment: split the file"));
                 }
                 Some(_) => {}
@@ -265,11 +270,11 @@ fn read_input<R: std::io::BufRead>(
     if rows == 0 {
         return Err(
             Problem::error("data", "the file has a header but no samples")
-                .at(format!("{file}:{}", header_line + 1))
+                .at(records.at(records.first_position(), None))
                 .help("one row per sample of the input"),
         );
     }
-    let first_time_at = time_col.map(|i| format!("{file}:{first_line}:{} ({time_name})", i + 1));
+    let first_time_at = time_col.map(|i| records.at(first_line, Some((i, &time_name))));
     let h = sample_time(file, ir, &times, first_time_at, options)?;
     let name = experiment.unwrap_or_else(|| {
         Path::new(file)

@@ -5,9 +5,11 @@
 //! Files are written here with the `parquet` crate's own writer.
 
 use parquet::basic::{Compression, ZstdLevel};
-use parquet::data_type::{ByteArray, ByteArrayType, DoubleType, FloatType, Int32Type, Int64Type};
+use parquet::data_type::{
+    ByteArray, ByteArrayType, DataType, DoubleType, FloatType, Int32Type, Int64Type,
+};
 use parquet::file::properties::WriterProperties;
-use parquet::file::writer::SerializedFileWriter;
+use parquet::file::writer::{SerializedColumnWriter, SerializedFileWriter};
 use parquet::schema::parser::parse_message_type;
 use std::sync::Arc;
 
@@ -51,11 +53,20 @@ impl Data {
     }
 }
 
-/// Values present and definition levels (1 present, 0 null) of `v[range]`.
+/// Values present and definition levels (1 present, 0 null) of `v`.
 fn split<T: Clone>(v: &[Option<T>]) -> (Vec<T>, Vec<i16>) {
     let values = v.iter().flatten().cloned().collect();
     let defs = v.iter().map(|x| i16::from(x.is_some())).collect();
     (values, defs)
+}
+
+/// Writes one column chunk (nulls as definition level 0).
+fn put<T: DataType>(
+    col: &mut SerializedColumnWriter<'_>,
+    v: &[Option<T::T>],
+) -> parquet::errors::Result<usize> {
+    let (values, defs) = split(v);
+    col.typed::<T>().write_batch(&values, Some(&defs), None)
 }
 
 /// Writes `columns` as a Parquet file, `group` rows per row group.
@@ -84,33 +95,18 @@ fn write_parquet(
                 .next_column()
                 .unwrap_or_else(|e| panic!("{e}"))
                 .unwrap_or_else(|| panic!("a column"));
+            let rows = start..end;
             let written = match data {
-                Data::Double(v) => {
-                    let (values, defs) = split(&v[start..end]);
-                    col.typed::<DoubleType>()
-                        .write_batch(&values, Some(&defs), None)
-                }
-                Data::Float(v) => {
-                    let (values, defs) = split(&v[start..end]);
-                    col.typed::<FloatType>()
-                        .write_batch(&values, Some(&defs), None)
-                }
-                Data::Int32(v) => {
-                    let (values, defs) = split(&v[start..end]);
-                    col.typed::<Int32Type>()
-                        .write_batch(&values, Some(&defs), None)
-                }
-                Data::Int64(v) => {
-                    let (values, defs) = split(&v[start..end]);
-                    col.typed::<Int64Type>()
-                        .write_batch(&values, Some(&defs), None)
-                }
+                Data::Double(v) => put::<DoubleType>(&mut col, &v[rows]),
+                Data::Float(v) => put::<FloatType>(&mut col, &v[rows]),
+                Data::Int32(v) => put::<Int32Type>(&mut col, &v[rows]),
+                Data::Int64(v) => put::<Int64Type>(&mut col, &v[rows]),
                 Data::Text(v) => {
-                    let (values, defs) = split(&v[start..end]);
-                    let values: Vec<ByteArray> =
-                        values.iter().map(|s| ByteArray::from(s.as_str())).collect();
-                    col.typed::<ByteArrayType>()
-                        .write_batch(&values, Some(&defs), None)
+                    let bytes: Vec<Option<ByteArray>> = v[rows]
+                        .iter()
+                        .map(|s| s.as_deref().map(ByteArray::from))
+                        .collect();
+                    put::<ByteArrayType>(&mut col, &bytes)
                 }
             };
             written.unwrap_or_else(|e| panic!("{e}"));

@@ -384,7 +384,9 @@ fn later_passes_read_the_validated_samples_and_the_spill_is_removed() {
 
 /// The columns of CSV text (all but `experiment` parsed as numbers; the
 /// parse of a cell is the CSV loader's own, so values agree bit for bit).
-fn columns_of(text: &str) -> (Vec<(String, Vec<f64>)>, Option<Vec<String>>) {
+type Frame = (Vec<(String, Vec<f64>)>, Option<Vec<String>>);
+
+fn columns_of(text: &str) -> Frame {
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
     let mut cols: Vec<(String, Vec<f64>)> = Vec::new();
@@ -400,7 +402,9 @@ fn columns_of(text: &str) -> (Vec<(String, Vec<f64>)>, Option<Vec<String>>) {
         let mut c = cols.iter_mut();
         for (h, cell) in header.iter().zip(line.split(',')) {
             if *h == "experiment" {
-                labels.as_mut().map(|l| l.push(cell.to_string()));
+                if let Some(l) = labels.as_mut() {
+                    l.push(cell.to_string());
+                }
             } else if let Some((_, v)) = c.next() {
                 v.push(cell.parse().unwrap_or(f64::NAN));
             }
