@@ -416,3 +416,51 @@ fn a_damaged_or_empty_file_is_one_clear_error() {
         stderr(&o)
     );
 }
+
+#[test]
+fn simulate_reads_a_parquet_input_as_the_csv_of_the_same_values() {
+    let dir = Scratch::new("parquet-simulate");
+    let text = estimation_csv(200, 1.0, 5);
+    let csv = dir.write("in.csv", &text);
+    let cols = columns_of(&text);
+    let columns: Vec<(&str, Data)> = cols.iter().map(|(n, v)| (n.as_str(), doubles(v))).collect();
+    let path = dir.path("in.parquet");
+    write_parquet(&path, &columns, 64, Compression::SNAPPY);
+    let data = path.display().to_string();
+    let params = dir.write("theta.json", &true_params());
+    let p = leeway(&["simulate", SHIP, "--params", &params, "--input", &data]);
+    let c = leeway(&["simulate", SHIP, "--params", &params, "--input", &csv]);
+    assert_eq!(code(&p), 0, "{}", stderr(&p));
+    assert_eq!(code(&c), 0, "{}", stderr(&c));
+    assert!(stdout(&p).lines().count() > 200);
+    assert_eq!(stdout(&p), stdout(&c));
+    // A null input is located by row group and row.
+    let mut tau: Vec<Option<f64>> = cols
+        .iter()
+        .find(|(n, _)| n == "tau2")
+        .map(|(_, v)| v.iter().copied().map(Some).collect())
+        .unwrap_or_default();
+    tau[70] = None;
+    let broken: Vec<(&str, Data)> = cols
+        .iter()
+        .map(|(n, v)| {
+            let d = if n == "tau2" {
+                Data::Double(tau.clone())
+            } else {
+                doubles(v)
+            };
+            (n.as_str(), d)
+        })
+        .collect();
+    write_parquet(&path, &broken, 64, Compression::SNAPPY);
+    let o = leeway(&["simulate", SHIP, "--params", &params, "--input", &data]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!(
+            "{data}: row 70 (row group 1, row 6), column `tau2`: null"
+        )),
+        "{}",
+        stderr(&o)
+    );
+}

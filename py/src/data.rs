@@ -10,8 +10,8 @@
 
 use crate::failure::Failure;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{FileNotes, LoadOptions, column_name, load_columns};
-use leeway_structure::ir::{Ir, Rotation};
+use leeway_runtime::data::{FileNotes, LoadOptions, load_columns};
+use leeway_structure::ir::Ir;
 
 /// One frame: its name (the "file" of messages and of the experiment name
 /// when it has no experiment column), float64 columns, experiment labels.
@@ -28,27 +28,7 @@ pub struct Frame<'a> {
 /// only these are handed over, so other columns of a frame (notes, labels)
 /// are ignored as the CSV loader ignores them.
 pub fn model_columns(ir: &Ir) -> Vec<String> {
-    let mut signals: Vec<&str> = vec!["time"];
-    signals.extend(ir.states.iter().map(String::as_str));
-    signals.extend(ir.inputs.iter().map(String::as_str));
-    match &ir.rotation {
-        Rotation::Planar { heading, .. } => signals.push(heading),
-        Rotation::Measured { .. } => signals.extend(ir.rotation_vars.iter().map(String::as_str)),
-        Rotation::None => {}
-    }
-    for c in &ir.components {
-        if ir.disturbances[c.disturbance].measured {
-            signals.push(&c.name);
-        }
-    }
-    let mut columns: Vec<String> = Vec::new();
-    for s in signals {
-        let c = column_name(ir, s);
-        if !columns.contains(&c) {
-            columns.push(c);
-        }
-    }
-    columns
+    leeway_runtime::data::columns::model_columns(ir)
 }
 
 /// Every frame's experiments, in order, with what loading noted; the first

@@ -115,6 +115,21 @@ impl Table for Columns<'_> {
     }
 }
 
+/// The data columns a model reads (after `data { }` mapping), time first,
+/// each once: what a caller holding a wide frame needs to hand over (other
+/// columns are ignored, as a file's are; the experiment column is not
+/// among them: its labels are handed over apart).
+pub fn model_columns(ir: &Ir) -> Vec<String> {
+    let mut columns: Vec<String> = vec![column_name(ir, "time")];
+    for (signal, _) in super::required_signals(ir) {
+        let c = column_name(ir, &signal);
+        if !columns.contains(&c) {
+            columns.push(c);
+        }
+    }
+    columns
+}
+
 /// Loads columns in memory exactly as [`load_csv_noted`](super::load_csv_noted)
 /// loads a file of the same values: the model's columns found by name
 /// (`data { }` mapping, [`column_name`]), declared units, time steps,
