@@ -1,9 +1,10 @@
-//! The input file of `leeway simulate`: a CSV file with a header row, one
-//! experiment, read by `leeway_runtime::input` (the reader `leeway.simulate`
-//! shares in Python) through the data files' reader
-//! (`leeway_runtime::data::Records`: comment and blank lines skipped, CRLF,
-//! quoted cells) and located the same way (`file:row:column (name)`, the
-//! physical line). What is left here is the command line's own: `--x0`.
+//! The input file of `leeway simulate`: a CSV file with a header row, or a
+//! Parquet file, one experiment, read by `leeway_runtime::input` (the reader
+//! `leeway.simulate` shares in Python) through the data files' readers
+//! (`leeway_runtime::data::with_table`: for CSV comment and blank lines
+//! skipped, CRLF, quoted cells) and located the same way (`file:row:column
+//! (name)`, the physical line; row, row group and column for Parquet). What
+//! is left here is the command line's own: `--x0`.
 //!
 //! Required columns (after the model's `data { }` mapping): every input, the
 //! columns of a measured `R`, and every measured disturbance component, on
@@ -15,7 +16,7 @@
 //! either is an error; nothing is assumed to be zero.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::data::{LoadOptions, Records};
+use leeway_runtime::data::{LoadOptions, with_table};
 use leeway_runtime::input::{OptionNames, read_input};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
@@ -103,8 +104,10 @@ pub fn load_input(
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Failure> {
-    let records = Records::open(path, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e).into())
+    with_table(path, "--input", |table| {
+        read_input(table, ir, options, x0, &NAMES)
+    })
+    .map_err(|e| Problem::data(&e).into())
 }
 
 /// Parses the input file's bytes (see [`load_input`]).
@@ -116,8 +119,9 @@ pub fn parse_input(
     options: &LoadOptions,
     x0: &[(String, f64)],
 ) -> Result<Input, Problem> {
-    let records = Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
-    read_input(records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e))
+    let mut records =
+        leeway_runtime::data::Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
+    read_input(&mut records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e))
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! the model, its data files and parameter files, with every problem located.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::data::{CsvSource, FileNotes, LoadOptions, load_csv_noted, open_csv};
+use leeway_runtime::data::{FileNotes, FileSource, LoadOptions, load_file_noted, open_file};
 use leeway_runtime::{Experiment, Source};
 use leeway_structure::grammar::source::Refused;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
@@ -186,7 +186,8 @@ pub fn load_options(
     Ok(options)
 }
 
-/// Loads every data file; all files are read and every failing one reported.
+/// Loads every data file (CSV, or Parquet: extension `.parquet` or the
+/// magic `PAR1`); all files are read and every failing one reported.
 /// What was noted while reading (comment lines, jitter, resampling) comes back
 /// per file, for the output.
 pub fn load_data(
@@ -198,7 +199,7 @@ pub fn load_data(
     let mut notes = Vec::new();
     let mut problems = Vec::new();
     for path in files {
-        match load_csv_noted(path, ir, options) {
+        match load_file_noted(path, ir, options) {
             Ok(f) => {
                 experiments.extend(f.experiments);
                 notes.push(f.notes);
@@ -218,7 +219,7 @@ pub fn load_data(
 /// memory under `--resample`, which interpolates over a whole experiment.
 pub enum DataSet {
     /// Read per pass from the validated copy.
-    Streamed(Vec<CsvSource>),
+    Streamed(Vec<FileSource>),
     /// Loaded (resampled).
     Held(Vec<Experiment>),
 }
@@ -243,7 +244,7 @@ impl DataSet {
         match self {
             DataSet::Streamed(v) => v
                 .iter()
-                .find_map(CsvSource::failure)
+                .find_map(FileSource::failure)
                 .map(|e| Problem::data(&e)),
             DataSet::Held(_) => None,
         }
@@ -263,7 +264,7 @@ pub fn open_data(
     let mut notes = Vec::new();
     let mut problems = Vec::new();
     for path in files {
-        match open_csv(path, ir, options) {
+        match open_file(path, ir, options) {
             Ok(f) => {
                 sources.extend(f.sources);
                 notes.push(f.notes);

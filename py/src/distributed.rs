@@ -8,7 +8,7 @@
 
 use crate::failure::Failure;
 use crate::{EstimateOptions, FrameArg, Model, borrow_frames};
-use leeway_runtime::data::{FileNotes, LoadOptions, load_csv_noted, open_csv};
+use leeway_runtime::data::{FileNotes, LoadOptions, load_file_noted, open_file};
 use leeway_runtime::estimate::{
     EstimateError, ExperimentFacts, FactsRequest, PassRequest, PassRunner, PassSummary, Passes,
     decode, encode, estimate_with,
@@ -63,10 +63,10 @@ impl Dataset {
     fn open_file(model: &Model, path: &str, options: &LoadOptions) -> Result<Dataset, Failure> {
         let ir = &model.ir;
         let (experiments, notes) = if options.resample.is_some() {
-            let f = load_csv_noted(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            let f = load_file_noted(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
             (Experiments::Held(f.experiments), f.notes)
         } else {
-            let f = open_csv(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            let f = open_file(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
             (Experiments::Streamed(f.sources), f.notes)
         };
         Ok(Dataset::new(ir, experiments, notes))
@@ -114,7 +114,7 @@ fn failed(e: EstimateError) -> PyErr {
 
 #[pymethods]
 impl Dataset {
-    /// Opens (validates) a CSV file for `model` with the load options of
+    /// Opens (validates) a data file, CSV or Parquet, for `model` with the load options of
     /// `options` (the estimate's options, as `leeway.estimate` takes them).
     #[staticmethod]
     fn open(

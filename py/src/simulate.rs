@@ -8,7 +8,7 @@
 
 use crate::failure::Failure;
 use crate::{FrameArg, Model, borrow_frames, data, load_options};
-use leeway_runtime::data::{Records, column_name};
+use leeway_runtime::data::{Columns, column_name};
 use leeway_runtime::input::{OptionNames, read_input};
 use leeway_runtime::report::{heading_gains, heading_warnings, unit_warnings};
 use leeway_runtime::simulate::{Disturbances, mean_fits, simulate, validate};
@@ -108,65 +108,6 @@ fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Fail
     Ok(values)
 }
 
-/// The frame as CSV text for the input reader: its columns in their
-/// shortest round-trip form, and the experiment labels.
-fn csv_text(ir: &Ir, frame: &data::Frame<'_>) -> Result<Vec<u8>, Failure> {
-    let rows = frame.columns.first().map_or(0, |(_, c)| c.len());
-    if let Some((name, c)) = frame.columns.iter().find(|(_, c)| c.len() != rows) {
-        return Err(Failure::data_plain(
-            frame.name,
-            format!("column `{name}` has {} rows, the others {rows}", c.len()),
-        ));
-    }
-    let fail = |e: csv::Error| Failure::data_plain(frame.name, format!("cannot hand over: {e}"));
-    let mut writer = csv::Writer::from_writer(Vec::new());
-    let mut header: Vec<String> = frame.columns.iter().map(|(n, _)| n.to_string()).collect();
-    if frame.experiment.is_some() {
-        header.push(column_name(ir, "experiment"));
-    }
-    writer.write_record(&header).map_err(fail)?;
-    let mut record: Vec<String> = Vec::with_capacity(header.len());
-    for k in 0..rows {
-        record.clear();
-        record.extend(frame.columns.iter().map(|(_, c)| format!("{:?}", c[k])));
-        if let Some(labels) = frame.experiment {
-            record.push(labels.get(k).cloned().unwrap_or_default());
-        }
-        writer.write_record(&record).map_err(fail)?;
-    }
-    writer
-        .into_inner()
-        .map_err(|e| Failure::data_plain(frame.name, format!("cannot hand over: {e}")))
-}
-
-/// The reader's `frame:line[:column (name)]` as the frame's positional row
-/// (line 1 is the header, so line `l` is row `l − 2`, as `iloc` counts).
-fn located(frame: &str, e: DataError) -> DataError {
-    let Some(rest) = e
-        .location
-        .strip_prefix(frame)
-        .and_then(|r| r.strip_prefix(':'))
-    else {
-        return e;
-    };
-    let (line, column) = match rest.split_once(':') {
-        Some((l, c)) => (l, c.split_once(" (").map(|(_, n)| n.trim_end_matches(')'))),
-        None => (rest, None),
-    };
-    let Ok(line) = line.parse::<u64>() else {
-        return e;
-    };
-    let row = match line {
-        0 | 1 => "header".to_string(),
-        l => format!("row {}", l - 2),
-    };
-    let location = match column {
-        Some(c) => format!("{frame}: {row}, column `{c}`"),
-        None => format!("{frame}: {row}"),
-    };
-    DataError { location, ..e }
-}
-
 /// A simulated trajectory: the columns of `leeway simulate`'s output
 /// (`leeway_runtime::write::header`) and, when it diverged, why (the
 /// columns then hold the samples before).
@@ -194,10 +135,16 @@ pub fn simulate_columns<'py>(
     let frames = borrow_frames(std::slice::from_ref(&frame))?;
     let frame = &frames[0];
     let (header, columns, diverged) = py.detach(|| -> Result<_, Failure> {
-        let text = csv_text(ir, frame)?;
-        let read = |e: DataError| Failure::data(&located(frame.name, e));
-        let records = Records::new(frame.name, text.as_slice(), "the inputs").map_err(read)?;
-        let input = read_input(records, ir, &options, &x0, &NAMES).map_err(read)?;
+        // The columns read in place, located by positional row.
+        let read = |e: DataError| Failure::data(&e);
+        let experiment = column_name(ir, "experiment");
+        let mut table = Columns::new(
+            frame.name,
+            &frame.columns,
+            frame.experiment.map(|l| (experiment.as_str(), l)),
+        )
+        .map_err(read)?;
+        let input = read_input(&mut table, ir, &options, &x0, &NAMES).map_err(read)?;
         let interpreter = Interpreter::new(ir.clone());
         let e = &input.experiment;
         let trajectory = simulate(&interpreter, &theta, e, Disturbances::Constant(&dist));

@@ -1,6 +1,6 @@
 //! The input of a simulation (`leeway simulate --input`, `leeway.simulate`
 //! in Python): a CSV table with a header row and one experiment, read by the
-//! data files' reader ([`Records`]: comment and blank lines skipped, CRLF,
+//! data files' readers ([`Table`]: for CSV comment and blank lines skipped, CRLF,
 //! quoted cells) and located the same way (`file:row:column (name)`, the
 //! physical line).
 //!
@@ -14,7 +14,7 @@
 //! state without either is an error; nothing is assumed to be zero. Declared
 //! units are converted to base units, as for data files.
 
-use crate::data::{DataError, Experiment, LoadOptions, Records, column_name};
+use crate::data::{DataError, Experiment, LoadOptions, Table, column_name};
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -57,12 +57,12 @@ fn located(
     }
 }
 
-/// Reads an input through the data files' reader ([`Records`]: comment and
+/// Reads an input through the data files' readers ([`Table`]: for CSV comment and
 /// blank lines skipped and counted, every problem at its physical line).
 /// `x0` gives or overrides initial values (base units), by state or heading
 /// name; `names` says how the caller's options are spelled in hints.
-pub fn read_input<R: std::io::BufRead>(
-    mut records: Records<R>,
+pub fn read_input(
+    records: &mut dyn Table,
     ir: &Ir,
     options: &LoadOptions,
     x0: &[(String, f64)],
@@ -70,7 +70,7 @@ pub fn read_input<R: std::io::BufRead>(
 ) -> Result<Input, DataError> {
     let file = records.file().to_string();
     let file = file.as_str();
-    let header_line = records.header_line();
+    let header_at = records.header_at(None);
     let headers = records.headers().to_vec();
     let find = |name: &str| headers.iter().position(|h| h == name);
     let mut required: Vec<(Role, usize, String)> = Vec::new();
@@ -99,7 +99,7 @@ pub fn read_input<R: std::io::BufRead>(
             Some(i) => required.push((role, i, col)),
             None => {
                 return Err(located(
-                    format!("{file}:{header_line}"),
+                    header_at.clone(),
                     format!("missing column `{col}`"),
                     format!(
                         "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
@@ -124,7 +124,7 @@ pub fn read_input<R: std::io::BufRead>(
             *col = None;
         } else if col.is_none() {
             return Err(located(
-                format!("{file}:{header_line}"),
+                header_at.clone(),
                 format!(
                     "no initial value for `{name}`: the input has no column `{}`",
                     column_name(ir, name)
@@ -147,9 +147,9 @@ pub fn read_input<R: std::io::BufRead>(
     let mut times = TimeSteps::default();
     let mut experiment: Option<String> = None;
     let mut rows = 0usize;
-    let mut first_line = header_line + 1;
-    while records.next_record()? {
-        let line = records.line();
+    let mut first_line = records.first_position();
+    while records.next_row()? {
+        let line = records.position();
         for (role, i, name) in &required {
             // Declared units are converted to base units, as for data files.
             let signal = match role {
@@ -174,15 +174,15 @@ pub fn read_input<R: std::io::BufRead>(
         }
         if let Some(i) = time_col {
             let t = records.number(i, &time_name)? * unit(ir, "time");
-            times.push(t, || format!("{file}:{line}:{} ({time_name})", i + 1))?;
+            times.push(t, || records.at(line, Some((i, &time_name))))?;
         }
         if let Some(i) = exp_col {
-            let name = String::from_utf8_lossy(records.raw(i)).into_owned();
+            let name = String::from_utf8_lossy(&records.label(i)?).into_owned();
             match &experiment {
                 None => experiment = Some(name),
                 Some(first) if *first != name => {
                     return Err(located(
-                        format!("{file}:{line}:{} (experiment)", i + 1),
+                        records.at(line, Some((i, "experiment"))),
                         format!("a second experiment `{name}` starts here (after `{first}`)"),
                         "a simulation takes one experiment: split the input",
                     ));
@@ -194,12 +194,12 @@ pub fn read_input<R: std::io::BufRead>(
     }
     if rows == 0 {
         return Err(located(
-            format!("{file}:{}", header_line + 1),
+            records.at(records.first_position(), None),
             "the file has a header but no samples",
             "one row per sample of the input",
         ));
     }
-    let first_time_at = time_col.map(|i| format!("{file}:{first_line}:{} ({time_name})", i + 1));
+    let first_time_at = time_col.map(|i| records.at(first_line, Some((i, &time_name))));
     let h = sample_time(file, ir, &times, first_time_at, options, names)?;
     let name = experiment.unwrap_or_else(|| {
         Path::new(file)

@@ -80,9 +80,9 @@ def estimate(
     **options: Any,
 ) -> Estimate:
     """Estimates like :func:`leeway.estimate` (the same keyword options and
-    defaults: ``method="iv3"``, …) from data files (CSV, as ``leeway
-    estimate --data`` reads them; a file with an ``experiment`` column holds
-    several experiments), each pass mapped over the files on the workers of
+    defaults: ``method="iv3"``, …) from data files (CSV or Parquet, as
+    ``leeway estimate --data`` reads them; a file with an ``experiment``
+    column holds several experiments), each pass mapped over the files on the workers of
     ``client`` (a ``dask.distributed.Client``; the current one if ``None``)."""
     from distributed import get_client
 

@@ -61,8 +61,8 @@ def options(model: Model, **given: Any) -> dict[str, Any]:
 
 
 def open_file(model: Model, path: str | os.PathLike[str], options: dict[str, Any]) -> Dataset:
-    """A data file's experiments (CSV, as ``leeway estimate --data`` reads
-    it), validated once and streamed on every pass."""
+    """A data file's experiments (CSV or Parquet, as ``leeway estimate
+    --data`` reads it), validated once and streamed on every pass."""
     return _leeway.Dataset.open(model._core, os.fspath(path), options)
 
 

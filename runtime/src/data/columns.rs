@@ -1,0 +1,154 @@
+//! Columns in memory (what the Python package hands over from a DataFrame
+//! or an Arrow table): read as a [`Table`] by the same validating pass as a
+//! file, without a text pass, and located by positional row (from 0, as
+//! pandas' `iloc`): `frame: row R, column `c``.
+
+use super::validate::{Table, finite, load_table};
+use super::{DataError, LoadOptions, LoadedFile, Places, column_name};
+use leeway_structure::ir::Ir;
+use std::borrow::Cow;
+
+/// Named float columns of equal length, with optional experiment labels per
+/// row, read row by row.
+#[derive(Clone, Debug)]
+pub struct Columns<'a> {
+    name: String,
+    headers: Vec<String>,
+    columns: Vec<&'a [f64]>,
+    labels: Option<&'a [String]>,
+    rows: usize,
+    /// The current row, `None` before the first.
+    row: Option<usize>,
+}
+
+impl<'a> Columns<'a> {
+    /// Columns named `columns` (`name` names the frame in messages), and
+    /// `labels` (one per row) as the column `label_column`. Every column
+    /// must have as many rows as the first, and each name must appear once.
+    pub fn new(
+        name: &str,
+        columns: &[(&str, &'a [f64])],
+        labels: Option<(&str, &'a [String])>,
+    ) -> Result<Columns<'a>, DataError> {
+        let rows = columns
+            .first()
+            .map(|(_, c)| c.len())
+            .or(labels.map(|(_, l)| l.len()))
+            .unwrap_or(0);
+        let lengths = columns
+            .iter()
+            .map(|(n, c)| (*n, c.len()))
+            .chain(labels.map(|(n, l)| (n, l.len())));
+        for (column, len) in lengths {
+            if len != rows {
+                return Err(DataError::new(
+                    name,
+                    format!("column `{column}` has {len} rows, the others {rows}"),
+                    "every column of a frame needs one value per row",
+                ));
+            }
+        }
+        let mut headers: Vec<String> = columns.iter().map(|(n, _)| n.to_string()).collect();
+        headers.extend(labels.map(|(n, _)| n.to_string()));
+        let table = Columns {
+            name: name.to_string(),
+            headers,
+            columns: columns.iter().map(|(_, c)| *c).collect(),
+            labels: labels.map(|(_, l)| l),
+            rows,
+            row: None,
+        };
+        super::validate::unique_headers(&table.headers, |i| table.header_at(Some(i)))?;
+        Ok(table)
+    }
+    /// The current row (0 before the first).
+    fn k(&self) -> usize {
+        self.row.unwrap_or(0)
+    }
+}
+
+impl Table for Columns<'_> {
+    fn file(&self) -> &str {
+        &self.name
+    }
+    fn headers(&self) -> &[String] {
+        &self.headers
+    }
+    fn places(&self) -> &Places {
+        &Places::Rows
+    }
+    fn header_at(&self, column: Option<usize>) -> String {
+        match column.and_then(|i| self.headers.get(i)) {
+            Some(c) => format!("{}: header, column `{c}`", self.name),
+            None => format!("{}: header", self.name),
+        }
+    }
+    fn first_position(&self) -> u64 {
+        0
+    }
+    fn next_row(&mut self) -> Result<bool, DataError> {
+        let next = self.row.map_or(0, |k| k + 1);
+        self.row = Some(next.min(self.rows));
+        Ok(next < self.rows)
+    }
+    fn position(&self) -> u64 {
+        self.k() as u64
+    }
+    fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
+        let k = self.k();
+        match self.columns.get(i) {
+            Some(c) => finite(c[k], || self.at(k as u64, Some((i, name)))),
+            // The label column named as a signal.
+            None => Err(super::validate::not_a_number(
+                self.at(k as u64, Some((i, name))),
+                &String::from_utf8_lossy(&self.label(i)?),
+                "hand over the column as numbers",
+            )),
+        }
+    }
+    fn label(&self, i: usize) -> Result<Cow<'_, [u8]>, DataError> {
+        let k = self.k();
+        Ok(match self.columns.get(i) {
+            Some(c) => Cow::Owned(c[k].to_string().into_bytes()),
+            None => Cow::Borrowed(self.labels.map_or(&b""[..], |l| l[k].as_bytes())),
+        })
+    }
+}
+
+/// The data columns a model reads (after `data { }` mapping), time first,
+/// each once: what a caller holding a wide frame needs to hand over (other
+/// columns are ignored, as a file's are; the experiment column is not
+/// among them: its labels are handed over apart).
+pub fn model_columns(ir: &Ir) -> Vec<String> {
+    let mut columns: Vec<String> = vec![column_name(ir, "time")];
+    for (signal, _) in super::required_signals(ir) {
+        let c = column_name(ir, &signal);
+        if !columns.contains(&c) {
+            columns.push(c);
+        }
+    }
+    columns
+}
+
+/// Loads columns in memory exactly as [`load_csv_noted`](super::load_csv_noted)
+/// loads a file of the same values: the model's columns found by name
+/// (`data { }` mapping, [`column_name`]), declared units, time steps,
+/// experiments split on `experiment` (the labels, one per row, named
+/// `column_name(ir, "experiment")`), gross outliers, finiteness, and the
+/// same errors, located as `name: row R, column `c`` (R from 0,
+/// positional). Other columns are ignored, as a file's are.
+pub fn load_columns(
+    name: &str,
+    columns: &[(&str, &[f64])],
+    experiment: Option<&[String]>,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    let label_column = column_name(ir, "experiment");
+    let mut table = Columns::new(
+        name,
+        columns,
+        experiment.map(|l| (label_column.as_str(), l)),
+    )?;
+    load_table(&mut table, ir, options)
+}

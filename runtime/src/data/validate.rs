@@ -1,0 +1,771 @@
+//! The one validating pass every reader feeds: a [`Table`] (CSV records,
+//! columns in memory, Parquet row groups) hands over rows, and [`scan`]
+//! checks them — the model's columns found by name (`data { }` mapping),
+//! declared units converted to base units, every cell a finite number,
+//! experiments split into contiguous blocks, time steps against the mean
+//! step, gross outliers — and locates every problem in the table's own
+//! terms ([`Places`]). [`load_table`] holds the validated experiments in
+//! memory; `open_table` (in `spill`) streams them through a binary copy.
+
+use super::{
+    DataError, Experiment, FileNotes, LoadOptions, LoadedFile, MIN_SAMPLES, Role, Row, Source,
+    TimeNotes, column_name, required_signals, unit_factor,
+};
+use leeway_structure::ir::{Ir, Rotation};
+use std::path::Path;
+
+/// How a table names the place of a row in messages. A row's *position* is
+/// what the validating pass records and what [`Places::at`] renders.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Places {
+    /// CSV text: positions are physical lines, from 1 (`file:line`,
+    /// `file:line:column (name)`, the column from 1).
+    Lines,
+    /// Columns in memory: positions are rows, from 0, positional as pandas'
+    /// `iloc` (`frame: row R`, `frame: row R, column `c``).
+    Rows,
+    /// A Parquet file: positions are rows of the file, from 0, in row groups
+    /// that start at these rows (`file: row R (row group G, row r)`, then
+    /// `, column `c``; groups and rows within a group from 0).
+    Groups(std::sync::Arc<[u64]>),
+}
+
+impl Places {
+    /// Where the row at `position` is, naming column `column` (index, name)
+    /// when given.
+    pub fn at(&self, file: &str, position: u64, column: Option<(usize, &str)>) -> String {
+        let row = match self {
+            Places::Lines => {
+                return match column {
+                    Some((i, name)) => format!("{file}:{position}:{} ({name})", i + 1),
+                    None => format!("{file}:{position}"),
+                };
+            }
+            Places::Rows => format!("{file}: row {position}"),
+            Places::Groups(starts) => {
+                let g = starts.partition_point(|s| *s <= position).saturating_sub(1);
+                let first = starts.get(g).copied().unwrap_or(0);
+                format!(
+                    "{file}: row {position} (row group {g}, row {})",
+                    position - first
+                )
+            }
+        };
+        match column {
+            Some((_, name)) => format!("{row}, column `{name}`"),
+            None => row,
+        }
+    }
+}
+
+/// A table of named columns read row by row: what the validating pass
+/// reads. Implemented by CSV [`Records`](super::Records), in-memory
+/// [`Columns`](super::Columns) and, with the `parquet` feature, Parquet
+/// files. Every method that reads a cell returns the located reason when
+/// it cannot give a value.
+pub trait Table {
+    /// The table as named in messages (file or frame).
+    fn file(&self) -> &str;
+    /// The column names, in order.
+    fn headers(&self) -> &[String];
+    /// How positions are named.
+    fn places(&self) -> &Places;
+    /// The place of the header (or schema), naming column `column` when given.
+    fn header_at(&self, column: Option<usize>) -> String;
+    /// The position a first row would have (where "no samples" is located).
+    fn first_position(&self) -> u64;
+    /// Advances to the next row: `false` at the end.
+    fn next_row(&mut self) -> Result<bool, DataError>;
+    /// The current row's position.
+    fn position(&self) -> u64;
+    /// Where the current row starts in the file (bytes for CSV; the position otherwise).
+    fn offset(&self) -> u64 {
+        self.position()
+    }
+    /// Cell `i` of the current row as a finite number (`name`: the column's
+    /// name in messages).
+    fn number(&self, i: usize, name: &str) -> Result<f64, DataError>;
+    /// Cell `i` of the current row as a label (an experiment's name).
+    fn label(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>, DataError>;
+    /// Only these columns will be read (a columnar format may skip the
+    /// others); called once, before the first row.
+    fn select(&mut self, _columns: &[usize]) {}
+    /// Comment and blank lines dropped so far (CSV only).
+    fn dropped(&self) -> (usize, usize) {
+        (0, 0)
+    }
+    /// Where the row at `position` is, naming a column when given.
+    fn at(&self, position: u64, column: Option<(usize, &str)>) -> String {
+        self.places().at(self.file(), position, column)
+    }
+}
+
+/// The hint for a value that is not a finite number.
+const NOT_FINITE_HINT: &str = "NaN and infinite values are not accepted; remove or repair the sample, leeway does not interpolate";
+
+/// A value that is not finite (`raw`: as the table holds it).
+pub fn not_finite(at: String, raw: &str) -> DataError {
+    DataError::new(
+        at,
+        format!("`{raw}` is not a finite number"),
+        NOT_FINITE_HINT,
+    )
+}
+
+/// A missing value (`what`: "empty cell", "null").
+pub fn missing(at: String, what: &str) -> DataError {
+    DataError::new(
+        at,
+        what,
+        "every sample needs every signal; leeway does not fill gaps",
+    )
+}
+
+/// A value that is not a number (`raw`: as the table holds it).
+pub fn not_a_number(at: String, raw: &str, hint: &str) -> DataError {
+    DataError::new(
+        at,
+        format!("`{}` is not a number", raw.escape_debug()),
+        hint,
+    )
+}
+
+/// `v` when finite, else the located reason (the value shown as Rust
+/// prints it: `NaN`, `inf`, `-inf`).
+pub fn finite(v: f64, at: impl FnOnce() -> String) -> Result<f64, DataError> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(not_finite(at(), &format!("{v:?}")))
+    }
+}
+
+/// Every column named once: a repeated name is an error at its second place.
+pub fn unique_headers(headers: &[String], at: impl Fn(usize) -> String) -> Result<(), DataError> {
+    for (i, h) in headers.iter().enumerate() {
+        if let Some(j) = headers[..i].iter().position(|g| g == h) {
+            return Err(DataError::new(
+                at(i),
+                format!(
+                    "column `{h}` appears twice (columns {} and {})",
+                    j + 1,
+                    i + 1
+                ),
+                "rename one of them; leeway will not guess which is meant",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Where each model signal is read from in a table's rows.
+#[derive(Clone, Debug)]
+struct Layout {
+    /// `(role, column index, column name, unit factor)`.
+    cols: Vec<(Role, usize, String, f64)>,
+    time_col: Option<usize>,
+    time_factor: f64,
+    exp_col: Option<usize>,
+}
+
+impl Layout {
+    /// Finds every signal the model reads from data among the table's
+    /// columns; a missing one is an error at the header.
+    fn new(table: &dyn Table, ir: &Ir) -> Result<Layout, DataError> {
+        let headers = table.headers();
+        let find = |name: &str| headers.iter().position(|h| h == name);
+        let mut cols: Vec<(Role, usize, String, f64)> = Vec::new();
+        for (signal, role) in required_signals(ir) {
+            let col = column_name(ir, &signal);
+            match find(&col) {
+                Some(i) => cols.push((role, i, col, unit_factor(ir, &signal))),
+                None => {
+                    let mapped = if col != signal {
+                        format!(" (mapped from `{signal}` by the model's data block)")
+                    } else {
+                        String::new()
+                    };
+                    return Err(DataError::new(
+                        table.header_at(None),
+                        format!("missing column `{col}`{mapped}"),
+                        format!(
+                            "the header has: {}. Name the column `{col}`, or map it in the model: data {{ {signal} = \"<column>\" }}",
+                            leeway_structure::grammar::join_capped(headers, ", ")
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(Layout {
+            cols,
+            time_col: find(&column_name(ir, "time")),
+            time_factor: unit_factor(ir, "time"),
+            exp_col: find(&column_name(ir, "experiment")),
+        })
+    }
+
+    /// Reads the current row's signals into `buf` (declared units converted
+    /// to the model's base units, once, here) and returns its time stamp.
+    fn read(&self, table: &dyn Table, buf: &mut RowBuf) -> Result<Option<f64>, DataError> {
+        for (role, i, name, factor) in &self.cols {
+            buf.set(role, table.number(*i, name)? * factor);
+        }
+        match self.time_col {
+            Some(i) => Ok(Some(table.number(i, "time")? * self.time_factor)),
+            None => Ok(None),
+        }
+    }
+}
+
+/// The number of rotation columns read from data (a measured `R`), else 0.
+pub(super) fn measured_rotation(ir: &Ir) -> usize {
+    if matches!(ir.rotation, Rotation::Measured { .. }) {
+        ir.rotation_vars.len()
+    } else {
+        0
+    }
+}
+
+/// One sample's values, reused from row to row.
+pub(super) struct RowBuf {
+    states: Vec<f64>,
+    inputs: Vec<f64>,
+    rotation: Vec<f64>,
+    dist: Vec<f64>,
+    heading: f64,
+}
+
+impl RowBuf {
+    pub(super) fn new(ir: &Ir) -> RowBuf {
+        RowBuf::sized(
+            ir.states.len(),
+            ir.inputs.len(),
+            measured_rotation(ir),
+            ir.components.len(),
+        )
+    }
+    pub(super) fn sized(states: usize, inputs: usize, rotation: usize, comp: usize) -> RowBuf {
+        RowBuf {
+            states: vec![0.0; states],
+            inputs: vec![0.0; inputs],
+            rotation: vec![0.0; rotation],
+            dist: vec![0.0; comp],
+            heading: 0.0,
+        }
+    }
+    pub(super) fn set(&mut self, role: &Role, v: f64) {
+        match role {
+            Role::State(s) => self.states[*s] = v,
+            Role::Input(s) => self.inputs[*s] = v,
+            Role::Heading => self.heading = v,
+            Role::Rotation(s) => self.rotation[*s] = v,
+            Role::Disturbance(s) => self.dist[*s] = v,
+        }
+    }
+    pub(super) fn row(&self) -> Row<'_> {
+        Row {
+            states: &self.states,
+            inputs: &self.inputs,
+            heading: self.heading,
+            rotation: &self.rotation,
+            disturbances: &self.dist,
+        }
+    }
+}
+
+/// The value of `role` in a row.
+pub(super) fn value(row: &Row, role: &Role) -> f64 {
+    match role {
+        Role::State(s) => row.states[*s],
+        Role::Input(s) => row.inputs[*s],
+        Role::Heading => row.heading,
+        Role::Rotation(s) => row.rotation[*s],
+        Role::Disturbance(s) => row.disturbances[*s],
+    }
+}
+
+/// The most extreme samples of each signal column kept for the outlier check.
+const EXTREMES: usize = 17;
+
+/// How far outside the range of the bulk of a column a sample must lie to be
+/// a gross outlier, in multiples of that range (see `Extremes`).
+pub const OUTLIER_FACTOR: f64 = 1e4;
+
+/// The gross-outlier bound for a column that is otherwise exactly 0, for
+/// states, the heading, rotation entries and measured disturbances (base
+/// units m/s, rad, rad/s: no physical value comes near).
+pub const ZERO_OUTLIER: f64 = 1e6;
+
+/// The same for inputs (forces, angles and rates in the user's units).
+pub const ZERO_OUTLIER_INPUT: f64 = 1e12;
+
+/// A gross outlier found by [`Extremes::outliers`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Outlier {
+    value: f64,
+    line: u64,
+    /// The bulk's range (equal ends for a constant column).
+    lo: f64,
+    hi: f64,
+    /// The bound it broke, for a constant column of 0: `Some(bound)`.
+    zero_bound: Option<f64>,
+}
+
+/// The [`EXTREMES`] largest and smallest values of one column, with their
+/// physical lines: enough to find isolated gross outliers in one pass and
+/// flat memory.
+///
+/// The rule: with `K = min(16, (n − 1)/4)`, the bulk of the column is the
+/// range `[lo, hi]` of its values without the `K` smallest and `K` largest;
+/// a value farther than [`OUTLIER_FACTOR`] × `(hi − lo)` outside it is a gross
+/// outlier. A real zigzag (the rudder switching between ±35°, held for many
+/// samples each time) has its extremes inside the bulk, and any physical
+/// excursion held for more than `K` samples is part of the bulk. The rule is
+/// scale-free: units do not change it.
+///
+/// A column constant apart from at most `K` samples (`hi = lo = c`: a
+/// sensor stuck at one value) has no spread to compare with; there a value
+/// farther than [`OUTLIER_FACTOR`] × `|c|` from `c` is a gross outlier (still
+/// scale-free), and when `c = 0`, one beyond an absolute bound in base units:
+/// [`ZERO_OUTLIER`] for states, heading, rotation and measured disturbances
+/// (speeds in m/s, angles in rad, rates in rad/s), [`ZERO_OUTLIER_INPUT`]
+/// for inputs, whose units are the user's. A short pulse on a column that is
+/// otherwise zero (a thruster kick) stays accepted.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Extremes {
+    /// Largest first.
+    high: Vec<(f64, u64)>,
+    /// Smallest first.
+    low: Vec<(f64, u64)>,
+}
+
+impl Extremes {
+    fn push(&mut self, v: f64, line: u64) {
+        if self.high.len() < EXTREMES || v > self.high[EXTREMES - 1].0 {
+            let i = self.high.partition_point(|(x, _)| *x >= v);
+            self.high.insert(i, (v, line));
+            self.high.truncate(EXTREMES);
+        }
+        if self.low.len() < EXTREMES || v < self.low[EXTREMES - 1].0 {
+            let i = self.low.partition_point(|(x, _)| *x <= v);
+            self.low.insert(i, (v, line));
+            self.low.truncate(EXTREMES);
+        }
+    }
+    /// The gross outliers among `n` samples, by line (`zero_bound`: the
+    /// absolute bound of a column that is otherwise 0).
+    fn outliers(&self, n: usize, zero_bound: f64) -> Vec<Outlier> {
+        let k = ((n.saturating_sub(1)) / 4).min(EXTREMES - 1);
+        if k == 0 || self.high.len() <= k || self.low.len() <= k {
+            return Vec::new();
+        }
+        let (lo, hi) = (self.low[k].0, self.high[k].0);
+        let w = hi - lo;
+        if !w.is_finite() || w < 0.0 {
+            return Vec::new();
+        }
+        // A spread to compare with, else the constant's own magnitude, else
+        // (a column of zeros) the absolute bound.
+        let (far, bound) = if w > 0.0 {
+            (OUTLIER_FACTOR * w, None)
+        } else if lo != 0.0 {
+            (OUTLIER_FACTOR * lo.abs(), None)
+        } else {
+            (zero_bound, Some(zero_bound))
+        };
+        let mut out: Vec<Outlier> = self.high[..k]
+            .iter()
+            .filter(|(x, _)| *x - hi > far)
+            .chain(self.low[..k].iter().filter(|(x, _)| lo - *x > far))
+            .map(|(x, l)| Outlier {
+                value: *x,
+                line: *l,
+                lo,
+                hi,
+                zero_bound: bound,
+            })
+            .collect();
+        out.sort_by_key(|o| o.line);
+        out
+    }
+}
+
+/// What one pass found about one experiment's time stamps: enough to check
+/// them against the mean step without holding them.
+#[derive(Clone, Debug, Default)]
+pub(super) struct TimeScan {
+    first: Option<f64>,
+    last: f64,
+    /// First non-increasing step: `(step, line)`.
+    backwards: Option<(f64, u64)>,
+    /// Smallest and largest step, first occurrence: `(step, line)`.
+    min: Option<(f64, u64)>,
+    max: Option<(f64, u64)>,
+}
+
+impl TimeScan {
+    fn push(&mut self, t: f64, line: u64) {
+        if self.first.is_some() {
+            let dt = t - self.last;
+            if dt <= 0.0 && self.backwards.is_none() {
+                self.backwards = Some((dt, line));
+            }
+            if self.min.is_none_or(|(m, _)| dt < m) {
+                self.min = Some((dt, line));
+            }
+            if self.max.is_none_or(|(m, _)| dt > m) {
+                self.max = Some((dt, line));
+            }
+        } else {
+            self.first = Some(t);
+        }
+        self.last = t;
+    }
+}
+
+/// One experiment of a file as the validating pass found it: what visiting
+/// it again needs, and what was noted.
+#[derive(Clone, Debug)]
+pub struct Block {
+    /// The experiment's name.
+    pub name: String,
+    /// Where its first row starts: the physical byte offset in a CSV
+    /// file, the first row's position otherwise.
+    pub start: u64,
+    /// Its first row's position (see [`Places`]): the physical line in a
+    /// CSV file, the row from 0 otherwise.
+    pub first: u64,
+    /// Rows (samples).
+    pub rows: usize,
+    /// Sample time.
+    pub h: f64,
+    pub(super) times: TimeScan,
+    pub(super) extremes: Vec<Extremes>,
+}
+
+/// A validated table: its experiments' blocks and the notes.
+#[derive(Clone, Debug)]
+pub(super) struct Scanned {
+    /// The header's place.
+    header_at: String,
+    pub(super) blocks: Vec<Block>,
+    pub(super) notes: FileNotes,
+}
+
+/// What the validating pass hands on for each sample: its block, its
+/// position, its values and its time stamp.
+pub(super) type Sink<'a> = dyn FnMut(usize, u64, &Row, Option<f64>) -> Result<(), DataError> + 'a;
+
+/// The validating pass over one table: every check (cells, columns, units,
+/// experiments contiguous, time stamps, gross outliers), in one read with
+/// reused buffers; `sink(block, position, row, time)` sees every sample.
+pub(super) fn scan(
+    table: &mut dyn Table,
+    ir: &Ir,
+    options: &LoadOptions,
+    sink: &mut Sink,
+) -> Result<Scanned, DataError> {
+    let layout = Layout::new(table, ir)?;
+    let used: Vec<usize> = layout
+        .cols
+        .iter()
+        .map(|c| c.1)
+        .chain(layout.time_col)
+        .chain(layout.exp_col)
+        .collect();
+    table.select(&used);
+    let file = table.file().to_string();
+    let base_name = Path::new(&file)
+        .file_stem()
+        .map_or(file.clone(), |s| s.to_string_lossy().to_string());
+    let mut blocks: Vec<Block> = Vec::new();
+    let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
+    let mut current: Option<Vec<u8>> = None;
+    let mut buf = RowBuf::new(ir);
+    let n_cols = layout.cols.len();
+    while table.next_row()? {
+        let line = table.position();
+        let t = layout.read(table, &mut buf)?;
+        let label = match layout.exp_col {
+            Some(i) => table.label(i)?,
+            None => std::borrow::Cow::Borrowed(base_name.as_bytes()),
+        };
+        let exp_name: &[u8] = &label;
+        if current.as_deref() != Some(exp_name) {
+            let name = String::from_utf8_lossy(exp_name).into_owned();
+            if finished.contains(exp_name) {
+                return Err(DataError::new(
+                    table.at(line, Some((layout.exp_col.unwrap_or(0), "experiment"))),
+                    format!("experiment `{name}` resumes after another experiment started"),
+                    "keep the rows of one experiment together, in time order",
+                ));
+            }
+            if let Some(c) = current.take() {
+                finished.insert(c);
+            }
+            current = Some(exp_name.to_vec());
+            blocks.push(Block {
+                name,
+                start: table.offset(),
+                first: line,
+                rows: 0,
+                h: 0.0,
+                times: TimeScan::default(),
+                extremes: vec![Extremes::default(); n_cols + 1],
+            });
+        }
+        let b = blocks.len() - 1;
+        let block = &mut blocks[b];
+        block.rows += 1;
+        if let Some(t) = t {
+            block.times.push(t, line);
+        }
+        let row = buf.row();
+        for (j, (role, ..)) in layout.cols.iter().enumerate() {
+            block.extremes[j].push(value(&row, role), line);
+        }
+        sink(b, line, &row, t)?;
+    }
+    let (comment_lines, blank_lines) = table.dropped();
+    let mut notes = FileNotes {
+        file,
+        comment_lines,
+        blank_lines,
+        experiments: Vec::new(),
+    };
+    if blocks.is_empty() {
+        return Err(DataError::new(
+            table.at(table.first_position(), None),
+            "the file has a header but no samples",
+            "record at least a few hundred samples per experiment",
+        ));
+    }
+    for block in &mut blocks {
+        let n = block.rows;
+        if n < MIN_SAMPLES {
+            return Err(DataError::new(
+                table.at(block.first, None),
+                format!(
+                    "experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed",
+                    block.name
+                ),
+                "an estimate needs many more samples than parameters; record a longer experiment",
+            ));
+        }
+        for (j, (role, i, name, _)) in layout.cols.iter().enumerate() {
+            let zero_bound = match role {
+                Role::Input(_) => ZERO_OUTLIER_INPUT,
+                _ => ZERO_OUTLIER,
+            };
+            let found = block.extremes[j].outliers(n, zero_bound);
+            if let Some(o) = found.first() {
+                let more = match found.len() - 1 {
+                    0 => String::new(),
+                    m => format!(" ({m} more in this column)"),
+                };
+                let (v, lo, hi) = (o.value, o.lo, o.hi);
+                let why = if hi > lo {
+                    format!(
+                        "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
+                        block.name,
+                        if v > hi {
+                            (v - hi) / (hi - lo)
+                        } else {
+                            (lo - v) / (hi - lo)
+                        }
+                    )
+                } else if let Some(bound) = o.zero_bound {
+                    format!(
+                        "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
+                        block.name
+                    )
+                } else {
+                    format!(
+                        "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+                        block.name,
+                        (v - lo).abs() / lo.abs()
+                    )
+                };
+                return Err(DataError::new(
+                    table.at(o.line, Some((*i, name))),
+                    format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+                    format!(
+                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
+                    ),
+                ));
+            }
+        }
+        let time_at =
+            |position: u64| table.at(position, Some((layout.time_col.unwrap_or(0), "time")));
+        let (h, deviation) = sample_time(table.file(), ir, block, &time_at, options)?;
+        block.h = h;
+        notes.experiments.push(TimeNotes {
+            experiment: block.name.clone(),
+            rows: n,
+            max_step_deviation: deviation,
+            resampled: None,
+        });
+    }
+    Ok(Scanned {
+        header_at: table.header_at(None),
+        blocks,
+        notes,
+    })
+}
+
+/// Most samples `--resample` may make per row read: a finer grid only
+/// interpolates, and memory would follow the grid.
+pub const MAX_RESAMPLE_RATIO: f64 = 100.0;
+/// Loads a table into memory through the validating pass (resampled under
+/// `options.resample`): what every `load_*` function of this module does
+/// after opening its format.
+pub fn load_table(
+    table: &mut dyn Table,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    let mut held: Vec<(Experiment, Vec<f64>)> = Vec::new();
+    let scanned = scan(table, ir, options, &mut |b, _, row, t| {
+        if held.len() <= b {
+            held.push((Experiment::new(ir, "", 0.0), Vec::new()));
+        }
+        let (e, times) = &mut held[b];
+        e.push(ir, row);
+        if let Some(t) = t {
+            times.push(t);
+        }
+        Ok(())
+    })?;
+    let mut notes = scanned.notes;
+    let mut out = Vec::new();
+    for ((mut e, times), (block, time_notes)) in held
+        .into_iter()
+        .zip(scanned.blocks.iter().zip(notes.experiments.iter_mut()))
+    {
+        e.name = block.name.clone();
+        e.h = block.h;
+        if let Some(step) = options.resample {
+            let first = table.at(block.first, None);
+            if times.len() != e.len() {
+                return Err(DataError::new(
+                    scanned.header_at.clone(),
+                    "--resample needs a time column, and the file has none",
+                    format!(
+                        "add a `{}` column of time stamps (or map one with data {{ time = \"<column>\" }}), or drop --resample",
+                        column_name(ir, "time")
+                    ),
+                ));
+            }
+            let span = times[times.len() - 1] - times[0];
+            let count = span / step + 1.0;
+            if count > MAX_RESAMPLE_RATIO * e.len() as f64 {
+                return Err(DataError::new(
+                    first.clone(),
+                    format!(
+                        "--resample {step} would make {count:.0} samples of experiment `{}` from its {} rows; at most {MAX_RESAMPLE_RATIO} per row",
+                        e.name,
+                        e.len()
+                    ),
+                    "choose a resampling step near the logger's own step",
+                ));
+            }
+            e = crate::resample::resample(ir, &e, &times, step);
+            if e.len() < MIN_SAMPLES {
+                return Err(DataError::new(
+                    first.clone(),
+                    format!(
+                        "experiment `{}` has {} samples at --resample {step}; at least {MIN_SAMPLES} are needed",
+                        e.name,
+                        e.len()
+                    ),
+                    "choose a smaller --resample step",
+                ));
+            }
+            time_notes.resampled = Some(e.len());
+        }
+        out.push(e);
+    }
+    Ok(LoadedFile {
+        experiments: out,
+        notes,
+    })
+}
+/// The sample time of one experiment and the largest relative deviation of
+/// its steps from it (`None` without time stamps). The nominal step is the
+/// mean step; every step must lie within `options.time_tolerance` of it, in
+/// relative terms. The worst step is the smallest or the largest, which the
+/// validating pass kept with their positions (`at` locates one in the time
+/// column).
+fn sample_time(
+    file: &str,
+    ir: &Ir,
+    block: &Block,
+    at: &dyn Fn(u64) -> String,
+    options: &LoadOptions,
+) -> Result<(f64, Option<f64>), DataError> {
+    let declared = ir.step.or(options.step);
+    let t = &block.times;
+    let (Some(first), Some(min), Some(max)) = (t.first, t.min, t.max) else {
+        let h = declared.ok_or_else(|| {
+            DataError::new(
+                file,
+                "no sample time: the model declares no `step` and the data have no `time` column",
+                "declare `step h` in the model or add a `time` column",
+            )
+        })?;
+        return Ok((h, None));
+    };
+    // The nominal step is the mean step, the best estimate of a uniform h
+    // under jitter. A gap shifts the mean of a short record, so that good
+    // steps may fall outside the tolerance too: the error names the worst
+    // step, which is the gap.
+    let mean = (t.last - first) / (block.rows - 1) as f64;
+    let tol = options.time_tolerance;
+    let hint = "leeway needs uniformly sampled data: a larger jitter may be allowed with --time-tolerance, \
+                --resample H interpolates onto a uniform grid, or split the log into experiments at the gaps";
+    if let Some((dt, line)) = t.backwards {
+        return Err(DataError::new(
+            at(line),
+            format!("time does not increase: step {dt} s here"),
+            hint,
+        ));
+    }
+    let dev = |dt: f64| (dt - mean).abs() / mean;
+    // The first of the two on a tie, as a scan in file order would find it.
+    let (dmin, dmax) = (dev(min.0), dev(max.0));
+    let ((dt, line), worst) = if dmax > dmin || (dmax == dmin && max.1 < min.1) {
+        (max, dmax)
+    } else {
+        (min, dmin)
+    };
+    // Resampling interpolates over any spacing; only the order matters then.
+    if options.resample.is_none() && worst > tol {
+        return Err(DataError::new(
+            at(line),
+            format!(
+                "inconsistent sample time: step {dt} s here, {:.1} % off the nominal (mean) step {mean} s; the tolerance is {:.1} %",
+                100.0 * worst,
+                100.0 * tol
+            ),
+            hint,
+        ));
+    }
+    // Under resampling the grid step is the sample time, checked against the
+    // model's step by the caller.
+    let h = options.resample.unwrap_or(mean);
+    if let Some(d) = declared
+        && (h - d).abs() > 1e-3 * d
+    {
+        let what = if options.resample.is_some() {
+            format!("--resample {h} conflicts with the model's step {d}")
+        } else {
+            format!("the data are sampled every {mean} s but the model declares step {d}")
+        };
+        return Err(DataError::new(
+            at(block.first),
+            what,
+            "make `step` in the model match the data, or resample the data (--resample H)",
+        ));
+    }
+    Ok((declared.unwrap_or(h), Some(worst)))
+}
