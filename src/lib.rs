@@ -315,6 +315,15 @@
 //! (checks of an input design), [`runtime::report`] (the JSON documents of
 //! `check --json` and `estimate --json`), and [`runtime::structure`] — the
 //! structure compiler behind [`compile`], with its grammar and diagnostics.
+//!
+//! Past one machine, the estimator's passes over the data are its map half:
+//! [`runtime::estimate::PassRunner`] computes what one experiment
+//! contributes to a pass (a small summary that serialises exactly,
+//! [`runtime::estimate::encode`]), and [`runtime::estimate::estimate_with`]
+//! drives an estimate whose passes a [`runtime::estimate::Passes`]
+//! implementation runs wherever the data are, combining the summaries in
+//! experiment order: the same bits as [`estimate`]. The Python package's
+//! `leeway.dask` is this on Dask (`docs/distributed.md`).
 
 pub use leeway_macros::{include_model, inline_model};
 

@@ -7,15 +7,14 @@
 //! the same document as `leeway estimate --json`.
 
 use crate::failure::Failure;
-use crate::{EstimateOptions, FrameArg, Model, borrow_frames};
+use crate::{EstimateOptions, FrameArg, Model, borrow_frames, estimate_document};
 use leeway_runtime::data::{FileNotes, LoadOptions, load_file_noted, open_file};
 use leeway_runtime::estimate::{
     EstimateError, ExperimentFacts, FactsRequest, PassRequest, PassRunner, PassSummary, Passes,
     decode, encode, estimate_with,
 };
 use leeway_runtime::report::{
-    Estimated, estimate_report, heading_gains, heading_warnings, input_peaks,
-    unit_warnings_from_peaks,
+    heading_gains, heading_warnings, input_peaks, unit_warnings_from_peaks,
 };
 use leeway_runtime::{Experiment, Interpreter, Source};
 use pyo3::prelude::*;
@@ -104,10 +103,6 @@ impl Dataset {
     }
 }
 
-fn bytes_list<'py>(py: Python<'py>, items: &[Vec<u8>]) -> Vec<Bound<'py, PyBytes>> {
-    items.iter().map(|b| PyBytes::new(py, b)).collect()
-}
-
 fn failed(e: EstimateError) -> PyErr {
     Failure::estimate(&e).into()
 }
@@ -176,18 +171,7 @@ impl Dataset {
     /// The facts of each experiment for a facts request.
     fn facts<'py>(&self, py: Python<'py>, request: &[u8]) -> PyResult<Vec<Bound<'py, PyBytes>>> {
         let request: FactsRequest = decode(request).map_err(failed)?;
-        let out: Vec<Vec<u8>> = py.detach(|| {
-            let runner = PassRunner::new(&self.model);
-            self.experiments
-                .sources()
-                .iter()
-                .map(|e| encode(&runner.facts(*e, &request)))
-                .collect()
-        });
-        if let Some(f) = self.failure() {
-            return Err(f.into());
-        }
-        Ok(bytes_list(py, &out))
+        self.answer(py, |runner, _, e| encode(&runner.facts(e, &request)))
     }
 
     /// Each experiment's summary of a pass; `offset` is the index of the
@@ -199,19 +183,33 @@ impl Dataset {
         request: &[u8],
     ) -> PyResult<Vec<Bound<'py, PyBytes>>> {
         let request: PassRequest = decode(request).map_err(failed)?;
+        self.answer(py, |runner, i, e| {
+            encode(&runner.pass(e, offset + i, &request))
+        })
+    }
+}
+
+impl Dataset {
+    /// `f(runner, i, experiment)` for each experiment, without the GIL; a
+    /// file that could no longer be read fails the whole answer.
+    fn answer<'py>(
+        &self,
+        py: Python<'py>,
+        f: impl Fn(&PassRunner<'_>, usize, &dyn Source) -> Vec<u8> + Sync,
+    ) -> PyResult<Vec<Bound<'py, PyBytes>>> {
         let out: Vec<Vec<u8>> = py.detach(|| {
             let runner = PassRunner::new(&self.model);
-            self.experiments
-                .sources()
+            let sources = self.experiments.sources();
+            sources
                 .iter()
                 .enumerate()
-                .map(|(i, e)| encode(&runner.pass(*e, offset + i, &request)))
+                .map(|(i, e)| f(&runner, i, *e))
                 .collect()
         });
-        if let Some(f) = self.failure() {
-            return Err(f.into());
+        if let Some(failure) = self.failure() {
+            return Err(failure.into());
         }
-        Ok(bytes_list(py, &out))
+        Ok(out.iter().map(|b| PyBytes::new(py, b)).collect())
     }
 }
 
@@ -311,22 +309,13 @@ pub fn estimate_mapped(
         .flat_map(|s| s.experiments.iter().cloned())
         .collect();
     let notes: Vec<FileNotes> = summaries.into_iter().map(|s| s.notes).collect();
-    let report = estimate_report::<serde_json::Value>(
-        model.file.clone(),
+    Ok(estimate_document(
+        &model,
         files,
-        runtime_options.method,
-        Some(ir.name.clone()),
-        Ok(Estimated {
-            model: &ir.name,
-            estimate: &est,
-            experiments: &experiments,
-            heading_gains: &gains,
-            data_notes: &notes,
-            data_units: &ir.data_units,
-        }),
+        &est,
+        &experiments,
+        &gains,
+        &notes,
         warnings,
-    );
-    report
-        .to_json()
-        .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None).into())
+    )?)
 }

@@ -451,17 +451,40 @@ fn run_estimate(
         .iter()
         .map(|e| (e.name().to_string(), e.len()))
         .collect();
+    estimate_document(
+        model,
+        frames.iter().map(|f| f.name.to_string()).collect(),
+        &est,
+        &experiments,
+        &gains,
+        &notes,
+        warnings,
+    )
+}
+
+/// `leeway estimate --json`'s document of an estimate of `model` from the
+/// named data (frames or files), with what loading and the data checks found.
+fn estimate_document(
+    model: &Model,
+    data: Vec<String>,
+    est: &leeway_runtime::Estimate,
+    experiments: &[(String, usize)],
+    gains: &[(String, Option<f64>)],
+    notes: &[leeway_runtime::data::FileNotes],
+    warnings: Vec<String>,
+) -> Result<String, Failure> {
+    let ir = &model.ir;
     let report = estimate_report::<serde_json::Value>(
         model.file.clone(),
-        frames.iter().map(|f| f.name.to_string()).collect(),
-        options.method,
+        data,
+        est.method,
         Some(ir.name.clone()),
         Ok(Estimated {
             model: &ir.name,
-            estimate: &est,
-            experiments: &experiments,
-            heading_gains: &gains,
-            data_notes: &notes,
+            estimate: est,
+            experiments,
+            heading_gains: gains,
+            data_notes: notes,
             data_units: &ir.data_units,
         }),
         warnings,

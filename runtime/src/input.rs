@@ -45,18 +45,6 @@ enum Role {
     Disturbance(usize),
 }
 
-fn located(
-    location: impl Into<String>,
-    message: impl Into<String>,
-    hint: impl Into<String>,
-) -> DataError {
-    DataError {
-        location: location.into(),
-        message: message.into(),
-        hint: hint.into(),
-    }
-}
-
 /// Reads an input through the data files' readers ([`Table`]: for CSV comment and
 /// blank lines skipped and counted, every problem at its physical line).
 /// `x0` gives or overrides initial values (base units), by state or heading
@@ -98,7 +86,7 @@ pub fn read_input(
         match find(&col) {
             Some(i) => required.push((role, i, col)),
             None => {
-                return Err(located(
+                return Err(DataError::new(
                     header_at.clone(),
                     format!("missing column `{col}`"),
                     format!(
@@ -123,7 +111,7 @@ pub fn read_input(
             *value = Some(*v);
             *col = None;
         } else if col.is_none() {
-            return Err(located(
+            return Err(DataError::new(
                 header_at.clone(),
                 format!(
                     "no initial value for `{name}`: the input has no column `{}`",
@@ -181,7 +169,7 @@ pub fn read_input(
             match &experiment {
                 None => experiment = Some(name),
                 Some(first) if *first != name => {
-                    return Err(located(
+                    return Err(DataError::new(
                         records.at(line, Some((i, "experiment"))),
                         format!("a second experiment `{name}` starts here (after `{first}`)"),
                         "a simulation takes one experiment: split the input",
@@ -193,7 +181,7 @@ pub fn read_input(
         rows += 1;
     }
     if rows == 0 {
-        return Err(located(
+        return Err(DataError::new(
             records.at(records.first_position(), None),
             "the file has a header but no samples",
             "one row per sample of the input",
@@ -251,7 +239,7 @@ impl TimeSteps {
             let dt = t - self.last;
             let h = *self.h.get_or_insert(dt);
             if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
-                return Err(located(
+                return Err(DataError::new(
                     at(),
                     format!("inconsistent sample time: step {dt} here, {h} at the start"),
                     "leeway needs uniformly sampled data; resample the input",
@@ -287,7 +275,7 @@ fn sample_time(
     let declared = ir.step.or(options.step);
     let (Some(first), true) = (times.first, times.count >= 2) else {
         return declared.ok_or_else(|| {
-            located(
+            DataError::new(
                 file,
                 "no sample time: the model declares no `step` and the input has no `time` column (or one row)",
                 format!(
@@ -301,7 +289,7 @@ fn sample_time(
     if let Some(d) = declared
         && (mean - d).abs() > 1e-3 * d
     {
-        return Err(located(
+        return Err(DataError::new(
             first_at.unwrap_or_else(|| file.to_string()),
             format!("the input is sampled every {mean} s but the model declares step {d}"),
             "make `step` in the model match the data, or resample the input",
