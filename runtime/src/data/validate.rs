@@ -1,5 +1,5 @@
 //! The one validating pass every reader feeds: a [`Table`] (CSV records,
-//! columns in memory, Parquet row groups) hands over rows, and [`scan`]
+//! columns in memory, Parquet row groups) hands over rows, and `scan`
 //! checks them — the model's columns found by name (`data { }` mapping),
 //! declared units converted to base units, every cell a finite number,
 //! experiments split into contiguous blocks, time steps against the mean
