@@ -22,6 +22,7 @@
 //! of its validated samples ([`open_csv`], [`open_file`], [`FileSource`]) so
 //! that memory stays flat in N and no pass parses the file again.
 
+mod checks;
 pub mod columns;
 pub mod csv;
 mod experiment;

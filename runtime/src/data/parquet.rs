@@ -241,10 +241,16 @@ impl ParquetFile {
 
     /// A decoding failure at `position` (in column `column`).
     fn damaged(&self, position: u64, column: Option<usize>, why: &str) -> DataError {
-        let hint = if why.contains("isabled feature") || why.contains("not supported") {
-            "this leeway reads pages compressed with Snappy, Zstandard, LZ4 or gzip (or none): write the file with one of them (pyarrow's default is Snappy)"
+        let (what, hint) = if why.contains("isabled feature") || why.contains("not supported") {
+            (
+                format!("cannot decode the Parquet data, its compression is not read here: {why}"),
+                "this leeway reads pages compressed with Snappy, Zstandard, LZ4 or gzip (or none): write the file with one of them (pyarrow's default is Snappy)",
+            )
         } else {
-            DAMAGED
+            (
+                format!("cannot decode the Parquet data (a damaged file?): {why}"),
+                DAMAGED,
+            )
         };
         DataError::new(
             self.places.at(
@@ -252,7 +258,7 @@ impl ParquetFile {
                 position,
                 column.map(|i| (i, self.headers[i].as_str())),
             ),
-            format!("cannot decode the Parquet data (a damaged file?): {why}"),
+            what,
             hint,
         )
     }
