@@ -23,6 +23,8 @@ enum Data {
     Float(Vec<Option<f32>>),
     Int32(Vec<Option<i32>>),
     Int64(Vec<Option<i64>>),
+    /// INT64 TIMESTAMP(NANOS): what pandas writes for `datetime64[ns]`.
+    Stamps(Vec<Option<i64>>),
     Text(Vec<Option<String>>),
 }
 
@@ -32,22 +34,22 @@ impl Data {
             Data::Double(_) => "double",
             Data::Float(_) => "float",
             Data::Int32(_) => "int32",
-            Data::Int64(_) => "int64",
+            Data::Int64(_) | Data::Stamps(_) => "int64",
             Data::Text(_) => "binary",
         };
-        let utf8 = if matches!(self, Data::Text(_)) {
-            " (UTF8)"
-        } else {
-            ""
+        let logical = match self {
+            Data::Text(_) => " (UTF8)",
+            Data::Stamps(_) => " (TIMESTAMP(NANOS,true))",
+            _ => "",
         };
-        format!("optional {t} {name}{utf8};")
+        format!("optional {t} {name}{logical};")
     }
     fn len(&self) -> usize {
         match self {
             Data::Double(v) => v.len(),
             Data::Float(v) => v.len(),
             Data::Int32(v) => v.len(),
-            Data::Int64(v) => v.len(),
+            Data::Int64(v) | Data::Stamps(v) => v.len(),
             Data::Text(v) => v.len(),
         }
     }
@@ -100,7 +102,7 @@ fn write_parquet(
                 Data::Double(v) => put::<DoubleType>(&mut col, &v[rows]),
                 Data::Float(v) => put::<FloatType>(&mut col, &v[rows]),
                 Data::Int32(v) => put::<Int32Type>(&mut col, &v[rows]),
-                Data::Int64(v) => put::<Int64Type>(&mut col, &v[rows]),
+                Data::Int64(v) | Data::Stamps(v) => put::<Int64Type>(&mut col, &v[rows]),
                 Data::Text(v) => {
                     let bytes: Vec<Option<ByteArray>> = v[rows]
                         .iter()
@@ -150,7 +152,8 @@ fn a_parquet_file_gives_the_estimate_of_the_same_values_as_csv_bit_for_bit() {
         .iter()
         .position(|(n, _)| n == "time")
         .unwrap_or_else(|| panic!("a time column"));
-    // Doubles in several row groups; time as INT32 and the rest as doubles;
+    // Doubles in several row groups; time as INT32, or as nanosecond
+    // timestamps (read as seconds since the first), and the rest as doubles;
     // two codecs. Each must give the CSV's document, bit for bit.
     let expected = {
         let o = leeway(&["estimate", SHIP, "--data", &csv, "--json"]);
@@ -161,6 +164,7 @@ fn a_parquet_file_gives_the_estimate_of_the_same_values_as_csv_bit_for_bit() {
         ("snappy", Compression::SNAPPY, 700),
         ("zstd", Compression::ZSTD(ZstdLevel::default()), 3000),
         ("plain", Compression::UNCOMPRESSED, 1024),
+        ("stamps", Compression::SNAPPY, 1000),
     ] {
         let sub = Scratch::new(&format!("parquet-same-{variant}"));
         let path = sub.path("log.parquet");
@@ -171,6 +175,15 @@ fn a_parquet_file_gives_the_estimate_of_the_same_values_as_csv_bit_for_bit() {
                 let data = if i == time && variant == "zstd" {
                     // Integral stamps stored as INT32 read as the same doubles.
                     Data::Int32(v.iter().map(|t| Some(*t as i32)).collect())
+                } else if i == time && variant == "stamps" {
+                    // 2026-11-23 plus the CSV's seconds, in nanoseconds.
+                    let origin = 1_795_392_000_000_000_000i64;
+                    assert_eq!(v.first(), Some(&0.0), "the CSV's time starts at 0");
+                    Data::Stamps(
+                        v.iter()
+                            .map(|t| Some(origin + (t * 1e9).round() as i64))
+                            .collect(),
+                    )
                 } else {
                     doubles(v)
                 };

@@ -9,7 +9,10 @@
 //!
 //! Columns of physical type DOUBLE, FLOAT, INT32 and INT64 are read as
 //! `f64` (an INT64 beyond ±2⁵³, which `f64` cannot hold exactly, is an
-//! error); a null is an error, as an empty CSV cell is; the experiment
+//! error). An INT64 TIMESTAMP column (milli-, micro- or nanoseconds, what
+//! pandas writes for `datetime64`) is read as seconds since the file's first
+//! stamp: the difference is taken in integers, then divided, so stamps a
+//! whole number of units apart give exact steps; a null is an error, as an empty CSV cell is; the experiment
 //! column may be of any type (text, or numbers printed as text). Pages
 //! compressed with Snappy, Zstandard, LZ4 or gzip are read.
 
@@ -84,6 +87,9 @@ pub struct ParquetFile {
     /// Rows of the current group not yet decoded.
     remaining: u64,
     batches: Vec<Batch>,
+    /// Per column: units per second of an INT64 TIMESTAMP column, and the
+    /// file's first stamp once read (what its seconds count from).
+    stamps: Vec<Option<(f64, Option<i64>)>>,
     /// Rows in the current batch, and the current row's index in it.
     rows: usize,
     index: usize,
@@ -137,9 +143,13 @@ impl ParquetFile {
             starts.push(start);
             start += u64::try_from(g.num_rows()).unwrap_or(0);
         }
+        let stamps = (0..schema.num_columns())
+            .map(|i| stamp_units(&schema.column(i)).map(|per_second| (per_second, None)))
+            .collect();
         let table = ParquetFile {
             file,
             headers,
+            stamps,
             places: Places::Groups(Arc::from(starts)),
             selected: vec![true; schema.num_columns()],
             group: 0,
@@ -219,7 +229,8 @@ impl ParquetFile {
             }
             let max_def = column.max_def_level();
             let batch = &mut self.batches[i];
-            let read = guarded(|| fill(reader, max_def, want, batch))
+            let stamp = self.stamps[i].as_mut();
+            let read = guarded(|| fill(reader, max_def, want, batch, stamp))
                 .and_then(|r| r.map_err(|e| reason(&e)));
             match read {
                 Ok(n) if n == want => {}
@@ -297,12 +308,34 @@ fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     })
 }
 
+/// Units per second of an INT64 TIMESTAMP column (the logical type, or the
+/// legacy converted types); `None` for any other column.
+fn stamp_units(column: &parquet::schema::types::ColumnDescriptor) -> Option<f64> {
+    use parquet::basic::{ConvertedType, LogicalType, TimeUnit, Type};
+    if column.physical_type() != Type::INT64 {
+        return None;
+    }
+    match column.logical_type_ref() {
+        Some(LogicalType::Timestamp(t)) => Some(match t.unit {
+            TimeUnit::MILLIS => 1e3,
+            TimeUnit::MICROS => 1e6,
+            TimeUnit::NANOS => 1e9,
+        }),
+        _ => match column.converted_type() {
+            ConvertedType::TIMESTAMP_MILLIS => Some(1e3),
+            ConvertedType::TIMESTAMP_MICROS => Some(1e6),
+            _ => None,
+        },
+    }
+}
+
 /// Decodes `n` rows of a column into `out`.
 fn fill(
     reader: &mut ColumnReader,
     max_def: i16,
     n: usize,
     out: &mut Batch,
+    stamp: Option<&mut (f64, Option<i64>)>,
 ) -> parquet::errors::Result<usize> {
     out.cells.clear();
     out.text.clear();
@@ -313,6 +346,20 @@ fn fill(
         }
         ColumnReader::Int32ColumnReader(r) => {
             typed(r, max_def, n, out, |v, _| Cell::Num(f64::from(*v)))
+        }
+        ColumnReader::Int64ColumnReader(r) if stamp.is_some() => {
+            let Some((per_second, origin)) = stamp else {
+                unreachable!("guarded by the match arm")
+            };
+            typed(r, max_def, n, out, |v, _| {
+                let first = *origin.get_or_insert(*v);
+                // In integers first: whole units apart give exact seconds.
+                match v.checked_sub(first) {
+                    #[allow(clippy::cast_precision_loss)]
+                    Some(d) => Cell::Num(d as f64 / *per_second),
+                    None => Cell::Big(*v),
+                }
+            })
         }
         ColumnReader::Int64ColumnReader(r) => typed(r, max_def, n, out, |v, _| {
             if (-EXACT..=EXACT).contains(v) {
@@ -345,7 +392,7 @@ fn typed<T: DataType>(
     max_def: i16,
     n: usize,
     out: &mut Batch,
-    convert: impl Fn(&T::T, &mut Vec<u8>) -> Cell,
+    mut convert: impl FnMut(&T::T, &mut Vec<u8>) -> Cell,
 ) -> parquet::errors::Result<usize> {
     let mut values: Vec<T::T> = Vec::with_capacity(n);
     let mut defs: Vec<i16> = Vec::with_capacity(n);
