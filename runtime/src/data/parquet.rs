@@ -11,8 +11,8 @@
 //! `f64` (an INT64 beyond ±2⁵³, which `f64` cannot hold exactly, is an
 //! error). An INT64 TIMESTAMP column (milli-, micro- or nanoseconds, what
 //! pandas writes for `datetime64`) is read as seconds since the file's first
-//! stamp: the difference is taken in integers, then divided, so stamps a
-//! whole number of units apart give exact steps; a null is an error, as an empty CSV cell is; the experiment
+//! stamp: the difference is taken in integers, then divided once, so the
+//! times carry no rounding from large epoch values; a null is an error, as an empty CSV cell is; the experiment
 //! column may be of any type (text, or numbers printed as text). Pages
 //! compressed with Snappy, Zstandard, LZ4 or gzip are read.
 
@@ -353,7 +353,7 @@ fn fill(
             };
             typed(r, max_def, n, out, |v, _| {
                 let first = *origin.get_or_insert(*v);
-                // In integers first: whole units apart give exact seconds.
+                // In integers first: no rounding from the epoch's magnitude.
                 match v.checked_sub(first) {
                     #[allow(clippy::cast_precision_loss)]
                     Some(d) => Cell::Num(d as f64 / *per_second),
