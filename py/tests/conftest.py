@@ -69,3 +69,31 @@ def ship_data(tmp: Path, n: int, wind: float, seed: int, name: str = "run") -> p
 @pytest.fixture(scope="session")
 def ship_frame(tmp_path_factory: pytest.TempPathFactory) -> pd.DataFrame:
     return ship_data(tmp_path_factory.mktemp("ship"), 1500, 1.0, 7)
+
+
+def ticks_during(work) -> tuple[int, float]:  # type: ignore[no-untyped-def]
+    """Runs `work()` while another thread ticks every millisecond: how often
+    it ticked, and how long `work` took. A thread that could not run while
+    Rust held the GIL would tick only before and after."""
+    import threading
+    import time
+
+    ticks = 0
+    done = threading.Event()
+
+    def tick() -> None:
+        nonlocal ticks
+        while not done.is_set():
+            ticks += 1
+            time.sleep(0.001)
+
+    t = threading.Thread(target=tick)
+    t.start()
+    start = time.perf_counter()
+    try:
+        work()
+    finally:
+        elapsed = time.perf_counter() - start
+        done.set()
+        t.join()
+    return ticks, elapsed

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 import leeway
-from conftest import SHIP, SHIP_IV2, TRUE, run_leeway, ship_data
+from conftest import SHIP, SHIP_IV2, TRUE, run_leeway, ship_data, ticks_during
 
 
 @pytest.fixture(scope="module")
@@ -168,27 +168,12 @@ def test_options_are_checked(ship: leeway.Model, ship_frame: pd.DataFrame) -> No
 
 
 def test_the_gil_is_released_while_estimating(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
-    import threading
-    import time
+    def work() -> None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", leeway.LeewayWarning)
+            leeway.estimate(ship, ship_frame)
 
-    ticks = 0
-    done = threading.Event()
-
-    def tick() -> None:
-        nonlocal ticks
-        while not done.is_set():
-            ticks += 1
-            time.sleep(0.001)
-
-    t = threading.Thread(target=tick)
-    t.start()
-    start = time.perf_counter()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", leeway.LeewayWarning)
-        leeway.estimate(ship, ship_frame)
-    elapsed = time.perf_counter() - start
-    done.set()
-    t.join()
+    ticks, elapsed = ticks_during(work)
     # A thread that could not run while Rust held the GIL would tick only
     # before and after; it ticks throughout instead.
     assert ticks > 0.3 * elapsed / 0.0011, (ticks, elapsed)

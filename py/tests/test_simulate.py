@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 import leeway
-from conftest import SHIP, TRUE, run_leeway, ship_data
+from conftest import SHIP, TRUE, run_leeway, ship_data, ticks_during
 
 
 @pytest.fixture(scope="module")
@@ -256,24 +256,9 @@ def test_validate_warns_when_a_simulation_diverges(ship: leeway.Model, ship_fram
 
 
 def test_the_gil_is_released_while_validating(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
-    import threading
-    import time
+    def work() -> None:
+        for _ in range(3):
+            leeway.validate(ship, TRUE, ship_frame)
 
-    ticks = 0
-    done = threading.Event()
-
-    def tick() -> None:
-        nonlocal ticks
-        while not done.is_set():
-            ticks += 1
-            time.sleep(0.001)
-
-    t = threading.Thread(target=tick)
-    t.start()
-    start = time.perf_counter()
-    for _ in range(3):
-        leeway.validate(ship, TRUE, ship_frame)
-    elapsed = time.perf_counter() - start
-    done.set()
-    t.join()
+    ticks, elapsed = ticks_during(work)
     assert ticks > 0.3 * elapsed / 0.0011, (ticks, elapsed)
