@@ -97,6 +97,8 @@ struct BlockKernel<'a> {
     rows: usize,
     wz: usize,
     wf: usize,
+    /// The regressors' squares are already known (kept [`RegressorRows`]).
+    squares_known: bool,
 }
 
 impl pulp::WithSimd for BlockKernel<'_> {
@@ -105,7 +107,41 @@ impl pulp::WithSimd for BlockKernel<'_> {
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
         add_outer_products(self.sums, self.zb, self.fb, self.rows, self.wz, self.wf);
         add_squares(self.zz, self.zb, self.rows, self.wz);
-        add_squares(self.pp, self.fb, self.rows, self.wf);
+        if !self.squares_known {
+            add_squares(self.pp, self.fb, self.rows, self.wf);
+        }
+    }
+}
+
+/// The regressor side of one record's moment sums, kept from a pass for the
+/// later passes that differ only in their instruments (the refinements of
+/// an IV estimate): every block row `[φ − φ₀, t − t₀, 1]` as the
+/// accumulator wrote it, with the shift and the sums of squares. Later
+/// passes read these rows instead of evaluating and gathering the
+/// regressors again, and get the same bits.
+#[derive(Clone, Debug)]
+pub struct RegressorRows {
+    p: usize,
+    wf: usize,
+    phi0: Vec<f64>,
+    t0: f64,
+    /// Row-major `samples × wf`.
+    rows: Vec<f64>,
+    s_pp: Vec<f64>,
+}
+
+impl RegressorRows {
+    /// Samples kept.
+    pub fn len(&self) -> usize {
+        self.rows.len() / self.wf
+    }
+    /// True when no sample was kept.
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.rows.as_slice())
     }
 }
 
@@ -155,6 +191,8 @@ pub struct MomentAccumulator {
     zb: Vec<f64>,
     fb: Vec<f64>,
     filled: usize,
+    /// Every flushed regressor row, when asked to keep them.
+    kept: Option<Vec<f64>>,
 }
 
 impl MomentAccumulator {
@@ -186,7 +224,14 @@ impl MomentAccumulator {
             zb,
             fb,
             filled: 0,
+            kept: None,
         }
+    }
+
+    /// Keeps every regressor row for [`MomentAccumulator::finish_keeping`]
+    /// (`samples` rows expected).
+    pub fn keep_rows(&mut self, samples: usize) {
+        self.kept = Some(Vec::with_capacity(samples * self.wf));
     }
 
     /// Adds one sample.
@@ -260,10 +305,89 @@ impl MomentAccumulator {
         }
     }
 
+    /// Adds one sample whose instruments are the entries `cols` of the dense
+    /// row `z` and whose regressors and target are `kept`'s next row (the
+    /// same sample of the same record).
+    #[inline]
+    pub fn push_instruments(&mut self, z: &[f64], cols: &[usize], kept: &RegressorRows) {
+        debug_assert!(self.m == cols.len() && self.p == kept.p && self.wf == kept.wf);
+        if self.n == 0 {
+            for (a, &c) in self.z0.iter_mut().zip(cols) {
+                *a = z[c];
+            }
+        }
+        let (m, r) = (self.m, self.filled);
+        let zr = &mut self.zb[r * self.wz..r * self.wz + m];
+        for ((a, &c), z0) in zr.iter_mut().zip(cols).zip(&self.z0) {
+            *a = z[c] - z0;
+        }
+        self.n += 1;
+        self.filled += 1;
+        if self.filled == BLOCK {
+            self.flush_kept(kept);
+        }
+    }
+
+    /// Adds the buffered instruments against `kept`'s rows of the same samples.
+    fn flush_kept(&mut self, kept: &RegressorRows) {
+        let rows = self.filled;
+        let first = self.n - rows;
+        let Some(fb) = kept.rows.get(first * self.wf..(first + rows) * self.wf) else {
+            // More samples than kept: a different record (never for one
+            // record's passes); leave the sums unusable rather than wrong.
+            self.sums.fill(f64::NAN);
+            self.filled = 0;
+            return;
+        };
+        pulp::Arch::new().dispatch(BlockKernel {
+            sums: &mut self.sums,
+            zz: &mut self.s_zz,
+            pp: &mut self.s_pp,
+            zb: &self.zb,
+            fb,
+            rows,
+            wz: self.wz,
+            wf: self.wf,
+            squares_known: true,
+        });
+        self.filled = 0;
+    }
+
+    /// The sums of every sample pushed by [`MomentAccumulator::push_instruments`].
+    pub fn finish_with(mut self, kept: &RegressorRows) -> CrossMoments {
+        if self.filled > 0 {
+            self.flush_kept(kept);
+        }
+        if self.n != kept.len() {
+            self.sums.fill(f64::NAN);
+        }
+        self.phi0.clone_from(&kept.phi0);
+        self.t0 = kept.t0;
+        self.s_pp[..self.p].copy_from_slice(&kept.s_pp);
+        self.finish()
+    }
+
+    /// The sums, and the regressor rows kept since [`MomentAccumulator::keep_rows`].
+    pub fn finish_keeping(mut self) -> (CrossMoments, Option<RegressorRows>) {
+        self.flush();
+        let rows = self.kept.take().map(|rows| RegressorRows {
+            p: self.p,
+            wf: self.wf,
+            phi0: self.phi0.clone(),
+            t0: self.t0,
+            rows,
+            s_pp: self.s_pp[..self.p].to_vec(),
+        });
+        (self.finish(), rows)
+    }
+
     fn flush(&mut self) {
         let rows = self.filled;
         if rows == 0 {
             return;
+        }
+        if let Some(kept) = &mut self.kept {
+            kept.extend_from_slice(&self.fb[..rows * self.wf]);
         }
         // Compiled for the widest SIMD this CPU has (pulp dispatches at run
         // time); every lane does the same unfused multiply and add, so the
@@ -277,6 +401,7 @@ impl MomentAccumulator {
             rows,
             wz: self.wz,
             wf: self.wf,
+            squares_known: false,
         });
         self.filled = 0;
     }

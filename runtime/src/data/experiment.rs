@@ -38,6 +38,12 @@ pub trait Source: Sync {
     fn locate(&self, k: usize) -> String {
         format!("experiment `{}`, sample {}", self.name(), k + 1)
     }
+    /// The samples are held in memory: an estimate may keep what its passes
+    /// compute per sample for its later passes (its memory then grows with
+    /// the record, as the record's own does). Streamed sources say no.
+    fn resident(&self) -> bool {
+        false
+    }
 }
 
 /// An experiment held in memory, column by column.
@@ -124,6 +130,9 @@ impl Source for Experiment {
     }
     fn step(&self) -> f64 {
         self.h
+    }
+    fn resident(&self) -> bool {
+        true
     }
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
         let mut states = vec![0.0; self.states.len()];

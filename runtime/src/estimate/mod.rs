@@ -32,6 +32,7 @@ use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 
 mod accumulate;
+mod cache;
 mod covariance;
 mod disturbances;
 mod options;

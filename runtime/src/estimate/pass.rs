@@ -7,8 +7,11 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
+use super::cache::{KEEP_BUDGET, RecordCache, keep_bytes};
+use super::walk::Reuse;
 use super::*;
 use crate::interp::TermPlan;
+use crate::moments::RegressorRows;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -136,6 +139,14 @@ pub trait Passes {
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError>;
 }
 
+/// The θ of one moment pass (see [`Pass::Moments`]).
+struct MomentPass<'a> {
+    theta_sim: &'a [f64],
+    mu: &'a [f64],
+    reference: Option<(&'a [f64], &'a [f64])>,
+    scan: bool,
+}
+
 /// A model ready to run passes over experiments (its term plans built once).
 pub struct PassRunner<'a> {
     model: &'a dyn Model,
@@ -180,6 +191,18 @@ impl<'a> PassRunner<'a> {
 
     /// What experiment `index` (`e`) contributes to the pass.
     pub fn pass(&self, e: &dyn Source, index: usize, request: &PassRequest) -> PassSummary {
+        self.pass_keeping(e, index, request, None)
+    }
+
+    /// [`PassRunner::pass`], reading and filling what earlier passes over
+    /// this in-memory record kept: the same summary, sooner.
+    pub(super) fn pass_keeping(
+        &self,
+        e: &dyn Source,
+        index: usize,
+        request: &PassRequest,
+        cache: Option<&mut RecordCache>,
+    ) -> PassSummary {
         let info = &request.infos[index];
         let plan = &request.plan;
         PassSummary(match &request.pass {
@@ -192,7 +215,18 @@ impl<'a> PassRunner<'a> {
                 let reference = reference
                     .as_ref()
                     .map(|(t, m)| (t.as_slice(), m.as_slice()));
-                self.moments(e, info, plan, theta_sim, mu, reference, *scan)
+                self.moments(
+                    e,
+                    info,
+                    plan,
+                    MomentPass {
+                        theta_sim,
+                        mu,
+                        reference,
+                        scan: *scan,
+                    },
+                    cache,
+                )
             }
             Pass::LongRun(lr) => {
                 self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
@@ -200,17 +234,20 @@ impl<'a> PassRunner<'a> {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn moments(
         &self,
         e: &dyn Source,
         info: &ExperimentInfo,
         plan: &PassPlan,
-        theta_sim: &[f64],
-        mu: &[f64],
-        reference: Option<(&[f64], &[f64])>,
-        scan: bool,
+        pass: MomentPass,
+        mut cache: Option<&mut RecordCache>,
     ) -> Summary {
+        let MomentPass {
+            theta_sim,
+            mu,
+            reference,
+            scan,
+        } = pass;
         let ir = self.model.ir();
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
         let walker = if theta_sim.is_empty() {
@@ -218,33 +255,84 @@ impl<'a> PassRunner<'a> {
         } else {
             self.walker(plan, plan.instruments)
         };
+        let simulates = walker.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
         let n = plan.n_cols;
+        if let Some(c) = cache.as_deref_mut() {
+            c.prepare(plan);
+        }
+        // What this pass keeps for the later ones.
+        let mut new_headings = cache
+            .as_deref()
+            .is_some_and(|c| c.headings().is_none())
+            .then(|| Vec::with_capacity(e.len()));
+        let mut new_trajectory = match cache.as_deref_mut() {
+            Some(c) if simulates => Some(c.take_spare()),
+            _ => None,
+        };
+        let kept = cache.as_deref();
+        // Only instrumental passes after the scanning one read kept regressor
+        // rows; the scanning pass keeps them (least squares makes one pass).
+        let rows = kept
+            .and_then(RecordCache::regressors)
+            .filter(|_| plan.instruments.is_some() && !scan);
+        let keep_rows =
+            kept.is_some_and(|c| c.regressors().is_none()) && plan.instruments.is_some();
+        let mut reuse = Reuse {
+            headings: kept.and_then(RecordCache::headings),
+            keep_headings: new_headings.as_mut(),
+            skip_measured: rows.is_some(),
+            reference: match (kept, reference) {
+                (Some(c), Some((t, m))) => c.trajectory_of(t, m),
+                _ => None,
+            },
+            keep_trajectory: new_trajectory.as_mut(),
+        };
         // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
         let mut k = 1usize;
         let mut bad = None;
         let mut acc: Vec<MomentAccumulator> = plan
             .cols
             .iter()
-            .map(|c| MomentAccumulator::new(c.len(), c.len()))
-            .collect();
-        let walked = walker.walk(e, info, theta_sim, mu, reference, &mut |z, phi, t| {
-            k += 1;
-            if scan && bad.is_none() {
-                bad = non_finite(ir, plan.kind, n, k, phi, t);
-            }
-            for (o, a) in acc.iter_mut().enumerate() {
-                let mut target = t[o];
-                for (c, v) in &plan.held {
-                    target -= phi[o * n + c] * v;
+            .map(|c| {
+                let mut a = MomentAccumulator::new(c.len(), c.len());
+                if keep_rows {
+                    a.keep_rows(e.len());
                 }
-                a.push_columns(
-                    &z[o * n..(o + 1) * n],
-                    &phi[o * n..(o + 1) * n],
-                    &plan.cols[o],
-                    target,
-                );
-            }
-        });
+                a
+            })
+            .collect();
+        let walked = walker.walk(
+            e,
+            info,
+            theta_sim,
+            mu,
+            reference,
+            &mut reuse,
+            &mut |z, phi, t| {
+                k += 1;
+                if let Some(rows) = rows {
+                    for ((o, a), r) in acc.iter_mut().enumerate().zip(rows) {
+                        a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
+                    }
+                    return;
+                }
+                if scan && bad.is_none() {
+                    bad = non_finite(ir, plan.kind, n, k, phi, t);
+                }
+                for (o, a) in acc.iter_mut().enumerate() {
+                    let mut target = t[o];
+                    for (c, v) in &plan.held {
+                        target -= phi[o * n + c] * v;
+                    }
+                    a.push_columns(
+                        &z[o * n..(o + 1) * n],
+                        &phi[o * n..(o + 1) * n],
+                        &plan.cols[o],
+                        target,
+                    );
+                }
+            },
+        );
         let located = |bad: Option<(usize, String)>| {
             bad.map(|(sample, what)| BadValue {
                 location: e.locate(sample),
@@ -252,24 +340,56 @@ impl<'a> PassRunner<'a> {
             })
         };
         match walked {
-            Ok(change) => Summary::Moments {
-                moments: acc.into_iter().map(MomentAccumulator::finish).collect(),
-                change,
-                bad: located(bad),
-            },
+            Ok(change) => {
+                let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
+                    match rows {
+                        Some(rows) => acc
+                            .into_iter()
+                            .zip(rows)
+                            .map(|(a, r)| (a.finish_with(r), None))
+                            .unzip(),
+                        None => acc
+                            .into_iter()
+                            .map(MomentAccumulator::finish_keeping)
+                            .unzip(),
+                    };
+                if let Some(c) = cache {
+                    let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
+                    c.keep(
+                        plan,
+                        new_rows.filter(|_| keep_rows && bad.is_none()),
+                        new_headings,
+                        new_trajectory.map(|states| (theta_sim, mu, states)),
+                    );
+                }
+                Summary::Moments {
+                    moments,
+                    change,
+                    bad: located(bad),
+                }
+            }
             Err(Diverged) => {
+                if let (Some(c), Some(v)) = (cache, new_trajectory) {
+                    c.return_spare(v);
+                }
                 // The simulation stopped the walk early: a bad value further
                 // on is still a data error, not a divergence.
                 if scan && bad.is_none() {
                     let mut k = 1usize;
-                    let _ =
-                        self.walker(plan, None)
-                            .walk(e, info, &[], &[], None, &mut |_, phi, t| {
-                                k += 1;
-                                if bad.is_none() {
-                                    bad = non_finite(ir, plan.kind, n, k, phi, t);
-                                }
-                            });
+                    let _ = self.walker(plan, None).walk(
+                        e,
+                        info,
+                        &[],
+                        &[],
+                        None,
+                        &mut Reuse::default(),
+                        &mut |_, phi, t| {
+                            k += 1;
+                            if bad.is_none() {
+                                bad = non_finite(ir, plan.kind, n, k, phi, t);
+                            }
+                        },
+                    );
                 }
                 Summary::Diverged { bad: located(bad) }
             }
@@ -294,24 +414,32 @@ impl<'a> PassRunner<'a> {
         let n = plan.n_cols;
         let mut sums = LongRun::new(lr.dim, lr.lags);
         let mut zeta = DVector::zeros(lr.dim);
-        let walked = walker.walk(e, info, &lr.theta_sim, &lr.mu, None, &mut |z, phi, t| {
-            zeta.fill(0.0);
-            for (o, rows) in lr.rows.iter().enumerate() {
-                let mut res = t[o];
-                for (c, v) in &plan.held {
-                    res -= phi[o * n + c] * v;
+        let walked = walker.walk(
+            e,
+            info,
+            &lr.theta_sim,
+            &lr.mu,
+            None,
+            &mut Reuse::default(),
+            &mut |z, phi, t| {
+                zeta.fill(0.0);
+                for (o, rows) in lr.rows.iter().enumerate() {
+                    let mut res = t[o];
+                    for (c, v) in &plan.held {
+                        res -= phi[o * n + c] * v;
+                    }
+                    for c in &plan.cols[o] {
+                        res -= phi[o * n + c] * lr.values[*c];
+                    }
+                    res -= mean_res[o];
+                    let source = if lr.own { phi } else { z };
+                    for (r, c, j) in rows {
+                        zeta[*r] += (source[o * n + c] - centres[o][*j]) * res;
+                    }
                 }
-                for c in &plan.cols[o] {
-                    res -= phi[o * n + c] * lr.values[*c];
-                }
-                res -= mean_res[o];
-                let source = if lr.own { phi } else { z };
-                for (r, c, j) in rows {
-                    zeta[*r] += (source[o * n + c] - centres[o][*j]) * res;
-                }
-            }
-            sums.push(&zeta);
-        });
+                sums.push(&zeta);
+            },
+        );
         let sums = walked.ok().map(|_| {
             let g = sums.sum_psd();
             // Row-major, as documented (g is symmetric).
@@ -321,10 +449,13 @@ impl<'a> PassRunner<'a> {
     }
 }
 
-/// The experiments of this machine, visited in order.
+/// The experiments of this machine, visited in order. What a pass over an
+/// in-memory experiment computes that later passes of the same estimate
+/// need again is kept (at most 256 MiB an estimate): the same summaries, sooner.
 pub struct LocalPasses<'a> {
     runner: PassRunner<'a>,
     experiments: &'a [&'a dyn Source],
+    caches: std::sync::Mutex<Vec<Option<RecordCache>>>,
 }
 
 impl<'a> LocalPasses<'a> {
@@ -333,6 +464,7 @@ impl<'a> LocalPasses<'a> {
         LocalPasses {
             runner: PassRunner::new(model),
             experiments,
+            caches: std::sync::Mutex::new(Vec::new()),
         }
     }
 }
@@ -348,9 +480,34 @@ impl Passes for LocalPasses<'_> {
 
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
         let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
+        // A poisoned lock only means an earlier pass panicked: its caches are
+        // then dropped, not trusted.
+        let mut caches = match self.caches.lock() {
+            Ok(c) => c,
+            Err(poisoned) => {
+                let mut c = poisoned.into_inner();
+                c.clear();
+                c
+            }
+        };
+        if caches.is_empty() {
+            let n_out = self.runner.model.ir().states.len();
+            let mut budget = KEEP_BUDGET;
+            *caches = self
+                .experiments
+                .iter()
+                .map(|e| {
+                    let bytes = keep_bytes(e.len(), &request.plan, n_out);
+                    (e.resident() && bytes <= budget).then(|| {
+                        budget -= bytes;
+                        RecordCache::default()
+                    })
+                })
+                .collect();
+        }
         let mut out = Vec::with_capacity(self.experiments.len());
-        for (i, e) in self.experiments.iter().enumerate() {
-            let s = self.runner.pass(*e, i, request);
+        for (i, (e, cache)) in self.experiments.iter().zip(caches.iter_mut()).enumerate() {
+            let s = self.runner.pass_keeping(*e, i, request, cache.as_mut());
             let diverged = matches!(s.0, Summary::Diverged { .. });
             out.push(s);
             if diverged && stop_early {

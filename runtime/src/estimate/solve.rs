@@ -130,7 +130,10 @@ impl Estimator<'_> {
             }
             let mut order: Vec<usize> = (0..m).collect();
             order.sort_by_key(|j| self.preference[cols[*j]]);
-            let sel = select_columns(&scaled, &order, self.options.rank_tolerance);
+            // A dropped column's combination of the kept ones is only read in
+            // messages: the recorded solve's, or the error without --aggregate.
+            let explain = record || !self.options.aggregate;
+            let sel = select_columns(&scaled, &order, self.options.rank_tolerance, explain);
             // The square summed system is solved equilibrated (its solution
             // does not depend on row scaling); the stacked one as the paper
             // writes it, by unweighted least squares over the rows.
@@ -350,11 +353,17 @@ pub(super) fn linear_text_f(items: &[(String, Q)]) -> String {
 /// its residual against the kept ones exceeds `tol` relative to its norm.
 pub(crate) struct Selection {
     pub(crate) kept: Vec<usize>,
-    /// Dropped column with its combination of kept columns (original units).
+    /// Dropped column with its combination of kept columns (original units;
+    /// empty unless asked to explain).
     pub(crate) dropped: Vec<(usize, Vec<(usize, f64)>)>,
 }
 
-pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Selection {
+pub(crate) fn select_columns(
+    m: &DMatrix<f64>,
+    order: &[usize],
+    tol: f64,
+    explain: bool,
+) -> Selection {
     let rows = m.nrows();
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut kept = Vec::new();
@@ -386,7 +395,7 @@ pub(crate) fn select_columns(m: &DMatrix<f64>, order: &[usize], tol: f64) -> Sel
     let dropped = dropped_idx
         .into_iter()
         .map(|j| {
-            if kept.is_empty() || m.column(j).norm() == 0.0 {
+            if !explain || kept.is_empty() || m.column(j).norm() == 0.0 {
                 return (j, Vec::new());
             }
             let (alpha, _, _) = solve_equilibrated(&mk, &m.column(j).into_owned());

@@ -23,8 +23,28 @@ pub(super) struct Diverged;
 /// 1e290, so sums of squares over 10¹⁸ samples stay finite.
 pub const REGRESSOR_LIMIT: f64 = 1e145;
 
-/// Receives each equation: instruments, regressors (`n_out × n_cols`) and targets.
+/// Receives each equation: instruments, regressors (`n_out × n_cols`) and
+/// targets (both empty when the walk skips the measured side).
 pub(super) type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
+
+/// What a walk over an in-memory record reuses from an earlier walk over it,
+/// and what it keeps for later ones: values that do not depend on θ, or
+/// the states of a simulation already run. Reused values are the very bits
+/// the walk would compute, so a walk gives the same sums either way.
+#[derive(Default)]
+pub(super) struct Reuse<'a> {
+    /// The rotation of each sample's measured heading (planar models).
+    pub(super) headings: Option<&'a [[f64; 2]]>,
+    /// Keep each sample's heading rotation here.
+    pub(super) keep_headings: Option<&'a mut Vec<[f64; 2]>>,
+    /// The sink takes the regressors and targets from a kept copy: skip them.
+    pub(super) skip_measured: bool,
+    /// The reference simulation's states after each step (`n_out` each),
+    /// from the walk that simulated the reference θ: it need not run again.
+    pub(super) reference: Option<&'a [f64]>,
+    /// Keep the instrument simulation's states after each step here.
+    pub(super) keep_trajectory: Option<&'a mut Vec<f64>>,
+}
 
 /// How far an instrument simulation moved from a reference one, per output:
 /// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
@@ -83,10 +103,18 @@ impl EquationWalker<'_> {
         theta_sim: &[f64],
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
+        reuse: &mut Reuse,
         f: &mut EquationSink,
     ) -> Result<SimChange, Diverged> {
         let ir = self.ir;
+        // Only instruments of their own can leave the regressors out.
+        let skip_measured = reuse.skip_measured && self.instruments.is_some();
         let n_out = ir.states.len();
+        // A kept reference simulation is used whole (one state per step) or not at all.
+        let known_reference = reuse
+            .reference
+            .filter(|r| r.len() == e.len().saturating_sub(1) * n_out);
+        let known_headings = reuse.headings.filter(|r| r.len() == e.len());
         let n_in = ir.inputs.len();
         // Measured rotation columns travel with the data; a planar heading does not.
         let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) {
@@ -161,14 +189,16 @@ impl EquationWalker<'_> {
                 }
             } else {
                 if k >= 2 {
-                    let sig = Signals {
-                        states: &y1,
-                        inputs: &u1,
-                        rotation: if planar.is_some() { &rh1 } else { &rot1 },
-                        disturbances: &d1,
-                    };
-                    set_pointwise_signs(&mut signs, &info.varying, &y1);
-                    self.model.regressors(self.kind, &sig, &signs, &mut phi);
+                    if !skip_measured {
+                        let sig = Signals {
+                            states: &y1,
+                            inputs: &u1,
+                            rotation: if planar.is_some() { &rh1 } else { &rot1 },
+                            disturbances: &d1,
+                        };
+                        set_pointwise_signs(&mut signs, &info.varying, &y1);
+                        self.model.regressors(self.kind, &sig, &signs, &mut phi);
+                    }
                     match self.instruments {
                         // Least squares: the regressors are their own instruments.
                         None => {}
@@ -216,14 +246,18 @@ impl EquationWalker<'_> {
                             self.model.regressors(self.kind, &sig, &signs, &mut z);
                         }
                     }
-                    for (o, eq) in ir.equations.iter().enumerate() {
-                        t[o] = match eq.kind {
-                            EquationKind::Der => (row.states[o] - y1[o]) / h,
-                            EquationKind::Next => row.states[o],
-                        };
+                    if skip_measured {
+                        f(&z, &[], &[]);
+                    } else {
+                        for (o, eq) in ir.equations.iter().enumerate() {
+                            t[o] = match eq.kind {
+                                EquationKind::Der => (row.states[o] - y1[o]) / h,
+                                EquationKind::Next => row.states[o],
+                            };
+                        }
+                        let instruments = if self.instruments.is_some() { &z } else { &phi };
+                        f(instruments, &phi, &t);
                     }
-                    let instruments = if self.instruments.is_some() { &z } else { &phi };
-                    f(instruments, &phi, &t);
                 }
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
@@ -247,7 +281,10 @@ impl EquationWalker<'_> {
                     if let Some(yaw) = planar {
                         rz = rotated(rh1, h * x_sim[yaw]);
                     }
-                    x_sim.copy_from_slice(&x_next);
+                    std::mem::swap(&mut x_sim, &mut x_next);
+                    if let Some(kept) = reuse.keep_trajectory.as_deref_mut() {
+                        kept.extend_from_slice(&x_sim);
+                    }
                     for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
                         change.err2[o] += (y - x) * (y - x);
                         change.y_sum[o] += y;
@@ -255,19 +292,25 @@ impl EquationWalker<'_> {
                     }
                     change.y_n += 1;
                     if let Some((theta_ref, mu_ref)) = reference {
-                        simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
-                        let sig = Signals {
-                            states: &x_ref,
-                            inputs: &u1,
-                            rotation: if planar.is_some() { &rref } else { &rot1 },
-                            disturbances: &ref_dist,
+                        let stepped = change.y_n - 1;
+                        let x_ref: &[f64] = if let Some(known) = known_reference {
+                            &known[stepped * n_out..(stepped + 1) * n_out]
+                        } else {
+                            simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
+                            let sig = Signals {
+                                states: &x_ref,
+                                inputs: &u1,
+                                rotation: if planar.is_some() { &rref } else { &rot1 },
+                                disturbances: &ref_dist,
+                            };
+                            self.model
+                                .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
+                            if let Some(yaw) = planar {
+                                rref = rotated(rh1, h * x_ref[yaw]);
+                            }
+                            std::mem::swap(&mut x_ref, &mut x_ref_next);
+                            &x_ref
                         };
-                        self.model
-                            .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
-                        if let Some(yaw) = planar {
-                            rref = rotated(rh1, h * x_ref[yaw]);
-                        }
-                        x_ref.copy_from_slice(&x_ref_next);
                         for o in 0..n_out {
                             let d = x_sim[o] - x_ref[o];
                             change.diff2[o] += d * d;
@@ -279,16 +322,28 @@ impl EquationWalker<'_> {
                 }
             }
             // Shift the history: (k−2) ← (k−1) ← k.
-            y2.copy_from_slice(&y1);
-            rot2.copy_from_slice(&rot1);
-            d2.copy_from_slice(&d1);
+            // (Swaps, and no copy of an empty slice: copies of a few values
+            // cost a `memcpy` call each.)
+            std::mem::swap(&mut y2, &mut y1);
             y1.copy_from_slice(row.states);
             u1.copy_from_slice(row.inputs);
-            rot1.copy_from_slice(row.rotation);
-            d1.copy_from_slice(row.disturbances);
+            if n_rot > 0 {
+                std::mem::swap(&mut rot2, &mut rot1);
+                rot1.copy_from_slice(row.rotation);
+            }
+            if n_comp > 0 {
+                std::mem::swap(&mut d2, &mut d1);
+                d1.copy_from_slice(row.disturbances);
+            }
             if planar.is_some() {
                 rh2 = rh1;
-                rh1 = headings.next(row.heading);
+                rh1 = match known_headings {
+                    Some(r) => r[k],
+                    None => headings.next(row.heading),
+                };
+                if let Some(kept) = reuse.keep_headings.as_deref_mut() {
+                    kept.push(rh1);
+                }
             }
             k += 1;
         });
