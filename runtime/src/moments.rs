@@ -191,8 +191,10 @@ pub struct MomentAccumulator {
     zb: Vec<f64>,
     fb: Vec<f64>,
     filled: usize,
-    /// Every flushed regressor row, when asked to keep them.
-    kept: Option<Vec<f64>>,
+    /// Keeping every regressor row: `fb` then grows with the record, and
+    /// the current block starts at row `base`.
+    keeping: bool,
+    base: usize,
 }
 
 impl MomentAccumulator {
@@ -224,14 +226,29 @@ impl MomentAccumulator {
             zb,
             fb,
             filled: 0,
-            kept: None,
+            keeping: false,
+            base: 0,
         }
     }
 
     /// Keeps every regressor row for [`MomentAccumulator::finish_keeping`]
-    /// (`samples` rows expected).
+    /// (`samples` rows expected): rows are written where they are kept,
+    /// into zeroed memory that is touched only as it is written.
     pub fn keep_rows(&mut self, samples: usize) {
-        self.kept = Some(Vec::with_capacity(samples * self.wf));
+        if self.n == 0 {
+            self.keeping = true;
+            self.fb = vec![0.0; (samples + BLOCK) * self.wf];
+        }
+    }
+
+    /// Where the next regressor row starts in `fb` (room made if needed).
+    #[inline]
+    fn next_row(&mut self) -> usize {
+        let at = (self.base + self.filled) * self.wf;
+        if at + self.wf > self.fb.len() {
+            self.fb.resize(at + BLOCK * self.wf, 0.0);
+        }
+        at
     }
 
     /// Adds one sample.
@@ -260,8 +277,9 @@ impl MomentAccumulator {
             self.t0 = t;
         }
         let (m, p, r) = (self.m, self.p, self.filled);
+        let at = self.next_row();
         let zr = &mut self.zb[r * self.wz..r * self.wz + m];
-        let fr = &mut self.fb[r * self.wf..r * self.wf + p];
+        let fr = &mut self.fb[at..at + p];
         for (((a, b), &c), (z0, p0)) in zr
             .iter_mut()
             .zip(fr.iter_mut())
@@ -271,7 +289,8 @@ impl MomentAccumulator {
             *a = z[c] - z0;
             *b = phi[c] - p0;
         }
-        self.fb[r * self.wf + p] = t - self.t0;
+        self.fb[at + p] = t - self.t0;
+        self.fb[at + p + 1] = 1.0;
         self.n += 1;
         self.filled += 1;
         if self.filled == BLOCK {
@@ -283,8 +302,9 @@ impl MomentAccumulator {
     #[inline]
     fn push_with(&mut self, write: impl FnOnce(&mut [f64], &mut [f64]), t: f64) {
         let (m, p) = (self.m, self.p);
+        let at = self.next_row();
         let zr = &mut self.zb[self.filled * self.wz..self.filled * self.wz + m];
-        let fr = &mut self.fb[self.filled * self.wf..self.filled * self.wf + p];
+        let fr = &mut self.fb[at..at + p];
         write(zr, fr);
         if self.n == 0 {
             self.z0.copy_from_slice(zr);
@@ -297,7 +317,8 @@ impl MomentAccumulator {
         for (v, c) in fr.iter_mut().zip(&self.phi0) {
             *v -= c;
         }
-        self.fb[self.filled * self.wf + p] = t - self.t0;
+        self.fb[at + p] = t - self.t0;
+        self.fb[at + p + 1] = 1.0;
         self.n += 1;
         self.filled += 1;
         if self.filled == BLOCK {
@@ -370,13 +391,17 @@ impl MomentAccumulator {
     /// The sums, and the regressor rows kept since [`MomentAccumulator::keep_rows`].
     pub fn finish_keeping(mut self) -> (CrossMoments, Option<RegressorRows>) {
         self.flush();
-        let rows = self.kept.take().map(|rows| RegressorRows {
-            p: self.p,
-            wf: self.wf,
-            phi0: self.phi0.clone(),
-            t0: self.t0,
-            rows,
-            s_pp: self.s_pp[..self.p].to_vec(),
+        let rows = self.keeping.then(|| {
+            let mut rows = std::mem::take(&mut self.fb);
+            rows.truncate(self.n * self.wf);
+            RegressorRows {
+                p: self.p,
+                wf: self.wf,
+                phi0: self.phi0.clone(),
+                t0: self.t0,
+                rows,
+                s_pp: self.s_pp[..self.p].to_vec(),
+            }
         });
         (self.finish(), rows)
     }
@@ -386,9 +411,7 @@ impl MomentAccumulator {
         if rows == 0 {
             return;
         }
-        if let Some(kept) = &mut self.kept {
-            kept.extend_from_slice(&self.fb[..rows * self.wf]);
-        }
+        let block = self.base * self.wf..(self.base + rows) * self.wf;
         // Compiled for the widest SIMD this CPU has (pulp dispatches at run
         // time); every lane does the same unfused multiply and add, so the
         // bits do not depend on the CPU.
@@ -397,12 +420,15 @@ impl MomentAccumulator {
             zz: &mut self.s_zz,
             pp: &mut self.s_pp,
             zb: &self.zb,
-            fb: &self.fb,
+            fb: &self.fb[block],
             rows,
             wz: self.wz,
             wf: self.wf,
             squares_known: false,
         });
+        if self.keeping {
+            self.base += rows;
+        }
         self.filled = 0;
     }
 

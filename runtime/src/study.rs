@@ -354,8 +354,12 @@ pub fn evaluate(
     config: &StudyConfig,
     starts: &mut [Option<crate::estimate::Start>],
 ) -> Vec<Outcome> {
-    use crate::estimate::{Method, Start, estimate};
+    use crate::estimate::{LocalPasses, Method, Start, estimate_with};
     use crate::simulate::{Disturbances, fits, simulate};
+    // One set of passes for the four methods: what one method's passes
+    // compute that another's need (facts, regressor rows, headings) is kept.
+    let experiments = [data as &dyn crate::data::Source];
+    let passes = LocalPasses::new(model, &experiments);
     Method::ALL
         .iter()
         .zip(starts.iter_mut())
@@ -364,7 +368,7 @@ pub fn evaluate(
                 start: if config.paper_iv { None } else { start.take() },
                 ..study_options(*m, config.max_refinements, config.paper_iv)
             };
-            match estimate(model, &[data as &dyn crate::data::Source], &options) {
+            match estimate_with(model, &passes, &options) {
                 Ok(est) => {
                     if est.diagnostics.converged {
                         *start = Some(Start::from_estimate(model.ir(), &est));

@@ -1,19 +1,20 @@
-//! What the passes of one estimate over an in-memory record keep for its later passes: the regressor rows and targets, the headings' rotations and the last instrument simulation — values that do not change between the refinements, so later passes reuse their bits instead of computing them again.
+//! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation — values later passes would compute again bit for bit.
 
 use super::*;
 use crate::moments::RegressorRows;
 
-/// The most an estimate keeps for its later passes, over all its records
-/// (bytes). A record beyond it is walked in full on every pass, as a
-/// streamed one is.
-pub(super) const KEEP_BUDGET: usize = 256 << 20;
+/// The most one [`LocalPasses`] keeps for later passes, over all its
+/// records (bytes). What does not fit is computed again on every pass, as
+/// for a streamed record.
+pub(super) const KEEP_BUDGET: usize = 512 << 20;
 
 /// What earlier passes over one record kept (see [`walk::Reuse`]).
 #[derive(Debug, Default)]
 pub(super) struct RecordCache {
-    /// The regressor rows and targets of each output, and the plan they
-    /// were computed for (predictor kind, block columns, held columns' bits).
-    regressors: Option<(PlanKey, Vec<RegressorRows>)>,
+    /// The regressor rows and targets of each output, per plan (predictor
+    /// kind, block columns, held columns' bits), kept by scanning passes:
+    /// their values are known to be finite.
+    regressors: Vec<(PlanKey, Vec<RegressorRows>)>,
     headings: Option<Vec<[f64; 2]>>,
     /// The states after each step of the simulation of `(θ, μ)` (their bits).
     trajectory: Option<(Vec<u64>, Vec<u64>, Vec<f64>)>,
@@ -35,27 +36,22 @@ fn bits(v: &[f64]) -> Vec<u64> {
     v.iter().map(|x| x.to_bits()).collect()
 }
 
-/// Bytes a record of `len` samples keeps for `plan` (an upper bound).
-pub(super) fn keep_bytes(len: usize, plan: &PassPlan, n_out: usize) -> usize {
-    let per_sample: usize = plan.cols.iter().map(|c| c.len() + 6).sum::<usize>() + 2 + 2 * n_out;
-    len.saturating_mul(per_sample).saturating_mul(8)
+/// What a completed pass offers to keep.
+pub(super) struct Kept<'a> {
+    pub(super) regressors: Option<Vec<RegressorRows>>,
+    pub(super) headings: Option<Vec<[f64; 2]>>,
+    /// The simulated `(θ, μ)` and its states after each step.
+    pub(super) trajectory: Option<(&'a [f64], &'a [f64], Vec<f64>)>,
 }
 
 impl RecordCache {
-    /// Forgets regressor rows kept for another plan.
-    pub(super) fn prepare(&mut self, plan: &PassPlan) {
-        if self
-            .regressors
-            .as_ref()
-            .is_some_and(|(k, _)| *k != plan_key(plan))
-        {
-            self.regressors = None;
-        }
-    }
-
-    /// The regressor rows of each output (after [`RecordCache::prepare`]).
-    pub(super) fn regressors(&self) -> Option<&[RegressorRows]> {
-        self.regressors.as_ref().map(|(_, r)| r.as_slice())
+    /// The regressor rows of each output kept for `plan`.
+    pub(super) fn regressors(&self, plan: &PassPlan) -> Option<&[RegressorRows]> {
+        let key = plan_key(plan);
+        self.regressors
+            .iter()
+            .find(|(k, _)| *k == key)
+            .map(|(_, r)| r.as_slice())
     }
 
     /// Every sample's heading rotation.
@@ -78,29 +74,48 @@ impl RecordCache {
         v
     }
 
-    /// Keeps what a completed pass computed.
-    pub(super) fn keep(
-        &mut self,
-        plan: &PassPlan,
-        regressors: Option<Vec<RegressorRows>>,
-        headings: Option<Vec<[f64; 2]>>,
-        trajectory: Option<(&[f64], &[f64], Vec<f64>)>,
-    ) {
-        if let Some(r) = regressors {
-            self.regressors = Some((plan_key(plan), r));
-        }
-        if let Some(h) = headings {
-            self.headings = Some(h);
-        }
-        if let Some((theta, mu, states)) = trajectory {
-            if let Some((_, _, old)) = self.trajectory.replace((bits(theta), bits(mu), states)) {
-                self.spare = old;
-            }
-        }
-    }
-
-    /// Gives back unused trajectory storage.
+    /// Gives back trajectory storage that was not kept.
     pub(super) fn return_spare(&mut self, v: Vec<f64>) {
         self.spare = v;
+    }
+
+    /// Keeps what a completed pass with `plan` computed, as far as
+    /// `budget` (bytes left) allows; what is kept is taken off it.
+    pub(super) fn keep(&mut self, plan: &PassPlan, kept: Kept, budget: &mut usize) {
+        let mut fits = |bytes: usize| {
+            let ok = bytes <= *budget;
+            if ok {
+                *budget -= bytes;
+            }
+            ok
+        };
+        if let Some(r) = kept.regressors {
+            let bytes = r.iter().map(RegressorRows::bytes).sum();
+            if fits(bytes) {
+                self.regressors.push((plan_key(plan), r));
+            }
+        }
+        if let Some(h) = kept.headings
+            && fits(std::mem::size_of_val(h.as_slice()))
+        {
+            self.headings = Some(h);
+        }
+        if let Some((theta, mu, states)) = kept.trajectory {
+            // The kept trajectory is replaced: only the new one's growth counts.
+            let old = self
+                .trajectory
+                .as_ref()
+                .map_or(0, |(_, _, s)| std::mem::size_of_val(s.as_slice()));
+            let new = std::mem::size_of_val(states.as_slice());
+            if new <= old || fits(new - old) {
+                *budget += old.saturating_sub(new);
+                if let Some((_, _, old)) = self.trajectory.replace((bits(theta), bits(mu), states))
+                {
+                    self.spare = old;
+                }
+            } else {
+                self.spare = states;
+            }
+        }
     }
 }

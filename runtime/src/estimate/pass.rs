@@ -7,7 +7,7 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
-use super::cache::{KEEP_BUDGET, RecordCache, keep_bytes};
+use super::cache::{KEEP_BUDGET, Kept, RecordCache};
 use super::walk::Reuse;
 use super::*;
 use crate::interp::TermPlan;
@@ -201,7 +201,7 @@ impl<'a> PassRunner<'a> {
         e: &dyn Source,
         index: usize,
         request: &PassRequest,
-        cache: Option<&mut RecordCache>,
+        cache: Option<(&mut RecordCache, &mut usize)>,
     ) -> PassSummary {
         let info = &request.infos[index];
         let plan = &request.plan;
@@ -240,8 +240,12 @@ impl<'a> PassRunner<'a> {
         info: &ExperimentInfo,
         plan: &PassPlan,
         pass: MomentPass,
-        mut cache: Option<&mut RecordCache>,
+        cache: Option<(&mut RecordCache, &mut usize)>,
     ) -> Summary {
+        let (mut cache, budget) = match cache {
+            Some((c, b)) => (Some(c), Some(b)),
+            None => (None, None),
+        };
         let MomentPass {
             theta_sim,
             mu,
@@ -257,10 +261,7 @@ impl<'a> PassRunner<'a> {
         };
         let simulates = walker.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
         let n = plan.n_cols;
-        if let Some(c) = cache.as_deref_mut() {
-            c.prepare(plan);
-        }
-        // What this pass keeps for the later ones.
+        // What this pass keeps for later ones.
         let mut new_headings = cache
             .as_deref()
             .is_some_and(|c| c.headings().is_none())
@@ -270,13 +271,13 @@ impl<'a> PassRunner<'a> {
             _ => None,
         };
         let kept = cache.as_deref();
-        // Only instrumental passes after the scanning one read kept regressor
-        // rows; the scanning pass keeps them (least squares makes one pass).
+        // Regressor rows are kept by scanning passes (their values are then
+        // known to be finite) and read by any later pass with instruments of
+        // its own; least squares' instruments are its regressors.
         let rows = kept
-            .and_then(RecordCache::regressors)
-            .filter(|_| plan.instruments.is_some() && !scan);
-        let keep_rows =
-            kept.is_some_and(|c| c.regressors().is_none()) && plan.instruments.is_some();
+            .and_then(|c| c.regressors(plan))
+            .filter(|_| plan.instruments.is_some());
+        let keep_rows = scan && kept.is_some_and(|c| c.regressors(plan).is_none());
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
@@ -353,13 +354,16 @@ impl<'a> PassRunner<'a> {
                             .map(MomentAccumulator::finish_keeping)
                             .unzip(),
                     };
-                if let Some(c) = cache {
+                if let (Some(c), Some(budget)) = (cache, budget) {
                     let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
                     c.keep(
                         plan,
-                        new_rows.filter(|_| keep_rows && bad.is_none()),
-                        new_headings,
-                        new_trajectory.map(|states| (theta_sim, mu, states)),
+                        Kept {
+                            regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
+                            headings: new_headings,
+                            trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
+                        },
+                        budget,
                     );
                 }
                 Summary::Moments {
@@ -449,13 +453,25 @@ impl<'a> PassRunner<'a> {
     }
 }
 
-/// The experiments of this machine, visited in order. What a pass over an
-/// in-memory experiment computes that later passes of the same estimate
-/// need again is kept (at most 256 MiB an estimate): the same summaries, sooner.
+/// The experiments of this machine, visited in order. What passes over its
+/// in-memory experiments compute that later passes need again is kept (at
+/// most 512 MiB), for the later passes of an estimate and for other
+/// estimates run through the same `LocalPasses` (other methods on the same
+/// records): their facts, regressor rows and targets, heading rotations and
+/// last instrument simulation. Every summary is what [`PassRunner`] computes,
+/// bit for bit, only sooner.
 pub struct LocalPasses<'a> {
     runner: PassRunner<'a>,
     experiments: &'a [&'a dyn Source],
-    caches: std::sync::Mutex<Vec<Option<RecordCache>>>,
+    kept: std::sync::Mutex<KeptPasses>,
+}
+
+/// What [`LocalPasses`] keeps: facts per request, each experiment's cache
+/// (none for a streamed one), and the bytes it may still keep.
+struct KeptPasses {
+    facts: Vec<((PredictorKind, u64), Vec<ExperimentFacts>)>,
+    records: Vec<Option<RecordCache>>,
+    budget: usize,
 }
 
 impl<'a> LocalPasses<'a> {
@@ -464,50 +480,62 @@ impl<'a> LocalPasses<'a> {
         LocalPasses {
             runner: PassRunner::new(model),
             experiments,
-            caches: std::sync::Mutex::new(Vec::new()),
+            kept: std::sync::Mutex::new(KeptPasses {
+                facts: Vec::new(),
+                records: experiments
+                    .iter()
+                    .map(|e| e.resident().then(RecordCache::default))
+                    .collect(),
+                budget: KEEP_BUDGET,
+            }),
         }
+    }
+
+    fn kept(&self) -> std::sync::MutexGuard<'_, KeptPasses> {
+        // A poisoned lock only means an earlier pass panicked: what it kept
+        // is then dropped, not trusted.
+        self.kept.lock().unwrap_or_else(|poisoned| {
+            let mut k = poisoned.into_inner();
+            k.facts.clear();
+            k.records.iter_mut().for_each(|r| {
+                if r.is_some() {
+                    *r = Some(RecordCache::default());
+                }
+            });
+            k
+        })
     }
 }
 
 impl Passes for LocalPasses<'_> {
     fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
-        Ok(self
+        // Facts depend on the request only through the predictor kind and the spread.
+        let key = (request.method.predictor(), request.heading_spread.to_bits());
+        if let Some((_, f)) = self.kept().facts.iter().find(|(k, _)| *k == key) {
+            return Ok(f.clone());
+        }
+        let facts: Vec<ExperimentFacts> = self
             .experiments
             .iter()
             .map(|e| self.runner.facts(*e, request))
-            .collect())
+            .collect();
+        if self.experiments.iter().all(|e| e.resident()) {
+            self.kept().facts.push((key, facts.clone()));
+        }
+        Ok(facts)
     }
 
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
         let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
-        // A poisoned lock only means an earlier pass panicked: its caches are
-        // then dropped, not trusted.
-        let mut caches = match self.caches.lock() {
-            Ok(c) => c,
-            Err(poisoned) => {
-                let mut c = poisoned.into_inner();
-                c.clear();
-                c
-            }
-        };
-        if caches.is_empty() {
-            let n_out = self.runner.model.ir().states.len();
-            let mut budget = KEEP_BUDGET;
-            *caches = self
-                .experiments
-                .iter()
-                .map(|e| {
-                    let bytes = keep_bytes(e.len(), &request.plan, n_out);
-                    (e.resident() && bytes <= budget).then(|| {
-                        budget -= bytes;
-                        RecordCache::default()
-                    })
-                })
-                .collect();
-        }
+        let mut kept = self.kept();
+        let KeptPasses {
+            records, budget, ..
+        } = &mut *kept;
         let mut out = Vec::with_capacity(self.experiments.len());
-        for (i, (e, cache)) in self.experiments.iter().zip(caches.iter_mut()).enumerate() {
-            let s = self.runner.pass_keeping(*e, i, request, cache.as_mut());
+        for (i, (e, cache)) in self.experiments.iter().zip(records.iter_mut()).enumerate() {
+            let s =
+                self.runner
+                    .pass_keeping(*e, i, request, cache.as_mut().map(|c| (c, &mut *budget)));
             let diverged = matches!(s.0, Summary::Diverged { .. });
             out.push(s);
             if diverged && stop_early {
