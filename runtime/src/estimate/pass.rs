@@ -579,11 +579,15 @@ pub(super) fn non_finite(
     phi: &[f64],
     t: &[f64],
 ) -> Option<(usize, String)> {
-    // The common case in one branch-free sweep (NaN fails `<=` too).
-    // (A fold without early exit vectorises; the rare bad value is then
-    // looked for entry by entry.)
-    let fine = |ok: bool, v: &f64| ok & (v.abs() <= REGRESSOR_LIMIT);
-    if phi.iter().fold(true, fine) & t.iter().fold(true, fine) {
+    // The common case in one branch-free sweep (NaN fails `<=` too): a
+    // count of the entries out of range vectorises (compare, mask, add);
+    // the rare bad value is then looked for entry by entry.
+    let out_of_range = |v: &[f64]| -> u64 {
+        v.iter()
+            .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))
+            .sum()
+    };
+    if out_of_range(phi) + out_of_range(t) == 0 {
         return None;
     }
     let predictors = ir.predictors.get(kind);
