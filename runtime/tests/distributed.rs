@@ -10,7 +10,7 @@ use leeway_runtime::estimate::{
     PassRunner, PassSummary, Passes, decode, encode, estimate, estimate_with,
 };
 use leeway_runtime::study::{self, InputDesign};
-use leeway_runtime::{Experiment, Source};
+use leeway_runtime::{Experiment, Model, Source};
 use rayon::prelude::*;
 
 fn ship() -> Interpreter {
@@ -138,4 +138,57 @@ fn a_runner_that_loses_a_summary_is_an_error_not_an_estimate() {
     assert_eq!(e.code, "invalid-pass");
     let garbage: Result<PassRequest, _> = decode(b"not a pass");
     assert_eq!(garbage.expect_err("garbage").code, "invalid-pass");
+}
+
+/// One `LocalPasses` kept across the four methods (as the study runs them)
+/// reuses facts, regressor rows, heading rotations and simulations between
+/// passes and between estimates: each estimate must still be, bit for bit,
+/// the one computed from scratch by workers that keep nothing — in either
+/// order of the methods, with a warm start, and with nothing kept at all.
+#[test]
+fn passes_that_keep_what_they_computed_change_no_bit() {
+    use leeway_runtime::estimate::{LocalPasses, Start};
+    let model = ship();
+    let data = experiments(&model);
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let workers = Workers {
+        model: &model,
+        experiments: &data,
+    };
+    let options = |method| EstimateOptions {
+        method,
+        aggregate: true,
+        ..EstimateOptions::default()
+    };
+    let fresh: Vec<String> = Method::ALL
+        .iter()
+        .map(|m| bits(&estimate_with(&model, &workers, &options(*m)).expect("fresh")))
+        .collect();
+    for budget in [None, Some(0), Some(300_000)] {
+        let shared = LocalPasses::new(&model, &sources);
+        let shared = match budget {
+            Some(b) => shared.with_budget(b),
+            None => shared,
+        };
+        for order in [
+            Method::ALL.to_vec(),
+            Method::ALL.iter().rev().copied().collect(),
+        ] {
+            for m in order {
+                let kept = estimate_with(&model, &shared, &options(m)).expect("kept");
+                let i = Method::ALL.iter().position(|x| *x == m).expect("a method");
+                assert_eq!(bits(&kept), fresh[i], "{m:?}, budget {budget:?}");
+            }
+        }
+        // A warm start: the refinement's reference simulation is the kept one.
+        let first = estimate_with(&model, &shared, &options(Method::Iv3)).expect("iv3");
+        let warm = EstimateOptions {
+            start: Some(Start::from_estimate(model.ir(), &first)),
+            ..options(Method::Iv3)
+        };
+        let kept = estimate_with(&model, &shared, &warm).expect("warm");
+        let fresh = estimate_with(&model, &workers, &warm).expect("warm, fresh");
+        assert_eq!(bits(&kept), bits(&fresh), "warm start, budget {budget:?}");
+        assert!(kept.diagnostics.refinements >= 1, "a refined estimate");
+    }
 }

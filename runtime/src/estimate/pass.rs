@@ -491,6 +491,18 @@ impl<'a> LocalPasses<'a> {
         }
     }
 
+    /// Keeps at most `bytes` for later passes (0: nothing; every pass then
+    /// computes everything, as for streamed records). The default is 512 MiB.
+    pub fn with_budget(self, bytes: usize) -> LocalPasses<'a> {
+        let mut kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
+        kept.budget = bytes;
+        LocalPasses {
+            runner: self.runner,
+            experiments: self.experiments,
+            kept: std::sync::Mutex::new(kept),
+        }
+    }
+
     fn kept(&self) -> std::sync::MutexGuard<'_, KeptPasses> {
         // A poisoned lock only means an earlier pass panicked: what it kept
         // is then dropped, not trusted.
