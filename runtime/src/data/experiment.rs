@@ -38,11 +38,13 @@ pub trait Source: Sync {
     fn locate(&self, k: usize) -> String {
         format!("experiment `{}`, sample {}", self.name(), k + 1)
     }
-    /// The samples are held in memory: an estimate may keep what its passes
-    /// compute per sample for its later passes (its memory then grows with
-    /// the record, as the record's own does). Streamed sources say no.
-    fn resident(&self) -> bool {
-        false
+    /// The experiment itself when its samples are held in memory: passes
+    /// then walk its columns directly, and an estimate may keep what its
+    /// passes compute per sample for its later passes (its memory then
+    /// grows with the record, as the record's own does). Streamed sources
+    /// say `None`.
+    fn in_memory(&self) -> Option<&Experiment> {
+        None
     }
 }
 
@@ -131,10 +133,18 @@ impl Source for Experiment {
     fn step(&self) -> f64 {
         self.h
     }
-    fn resident(&self) -> bool {
-        true
+    fn in_memory(&self) -> Option<&Experiment> {
+        Some(self)
     }
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
+        self.rows(f);
+    }
+}
+
+impl Experiment {
+    /// Calls `f` on every sample in order, as [`Source::visit`] does;
+    /// generic, so that `f` is inlined into the loop.
+    pub fn rows<F: FnMut(&Row)>(&self, mut f: F) {
         let mut states = vec![0.0; self.states.len()];
         let mut inputs = vec![0.0; self.inputs.len()];
         let mut rotation = vec![0.0; self.rotation.len()];

@@ -309,7 +309,7 @@ impl<'a> PassRunner<'a> {
             mu,
             reference,
             &mut reuse,
-            &mut |z, phi, t| {
+            |z: &[f64], phi: &[f64], t: &[f64]| {
                 k += 1;
                 if let Some(rows) = rows {
                     for ((o, a), r) in acc.iter_mut().enumerate().zip(rows) {
@@ -387,7 +387,7 @@ impl<'a> PassRunner<'a> {
                         &[],
                         None,
                         &mut Reuse::default(),
-                        &mut |_, phi, t| {
+                        |_: &[f64], phi: &[f64], t: &[f64]| {
                             k += 1;
                             if bad.is_none() {
                                 bad = non_finite(ir, plan.kind, n, k, phi, t);
@@ -425,7 +425,7 @@ impl<'a> PassRunner<'a> {
             &lr.mu,
             None,
             &mut Reuse::default(),
-            &mut |z, phi, t| {
+            |z: &[f64], phi: &[f64], t: &[f64]| {
                 zeta.fill(0.0);
                 for (o, rows) in lr.rows.iter().enumerate() {
                     let mut res = t[o];
@@ -484,7 +484,7 @@ impl<'a> LocalPasses<'a> {
                 facts: Vec::new(),
                 records: experiments
                     .iter()
-                    .map(|e| e.resident().then(RecordCache::default))
+                    .map(|e| e.in_memory().is_some().then(RecordCache::default))
                     .collect(),
                 budget: KEEP_BUDGET,
             }),
@@ -531,7 +531,7 @@ impl Passes for LocalPasses<'_> {
             .iter()
             .map(|e| self.runner.facts(*e, request))
             .collect();
-        if self.experiments.iter().all(|e| e.resident()) {
+        if self.experiments.iter().all(|e| e.in_memory().is_some()) {
             self.kept().facts.push((key, facts.clone()));
         }
         Ok(facts)

@@ -23,10 +23,6 @@ pub(super) struct Diverged;
 /// 1e290, so sums of squares over 10¹⁸ samples stay finite.
 pub const REGRESSOR_LIMIT: f64 = 1e145;
 
-/// Receives each equation: instruments, regressors (`n_out × n_cols`) and
-/// targets (both empty when the walk skips the measured side).
-pub(super) type EquationSink<'a> = dyn FnMut(&[f64], &[f64], &[f64]) + 'a;
-
 /// What a walk over an in-memory record reuses from an earlier walk over it,
 /// and what it keeps for later ones: values that do not depend on θ, or
 /// the states of a simulation already run. Reused values are the very bits
@@ -96,7 +92,10 @@ impl SimChange {
 }
 
 impl EquationWalker<'_> {
-    pub(super) fn walk(
+    /// Calls `f(z, φ, t)` on each equation: instruments, regressors
+    /// (`n_out × n_cols`) and targets (both empty when the walk skips the
+    /// measured side). Generic in `f`, so the sink is inlined into the walk.
+    pub(super) fn walk<F: FnMut(&[f64], &[f64], &[f64])>(
         &self,
         e: &dyn Source,
         info: &ExperimentInfo,
@@ -104,7 +103,7 @@ impl EquationWalker<'_> {
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
         reuse: &mut Reuse,
-        f: &mut EquationSink,
+        mut f: F,
     ) -> Result<SimChange, Diverged> {
         let ir = self.ir;
         // Only instruments of their own can leave the regressors out.
@@ -176,7 +175,7 @@ impl EquationWalker<'_> {
         let mut fix_set = vec![false; n_out];
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
-        e.visit(&mut |row| {
+        let mut sample = |row: &crate::data::Row| {
             if diverged {
                 return;
             }
@@ -346,7 +345,12 @@ impl EquationWalker<'_> {
                 }
             }
             k += 1;
-        });
+        };
+        // In-memory columns are walked by a loop the sample is inlined into.
+        match e.in_memory() {
+            Some(x) => x.rows(&mut sample),
+            None => e.visit(&mut sample),
+        }
         if diverged { Err(Diverged) } else { Ok(change) }
     }
 }
