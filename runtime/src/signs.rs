@@ -53,34 +53,7 @@ impl ExperimentSigns {
 /// to an unmeasured medium by its state alone (the disturbance is unknown;
 /// A5/A7 require the state to dominate it).
 pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSigns {
-    let args = if kind == PredictorKind::Basic {
-        Vec::new()
-    } else {
-        relevant_signs(ir, kind)
-    };
-    // Plain states are pointwise in every predictor (IV1's too: its sign
-    // changes decide the structure seen by the data).
-    let extra: Vec<usize> = if kind == PredictorKind::Basic {
-        (0..ir.sign_args.len())
-            .filter(|i| ir.sign_args[*i].pointwise)
-            .collect()
-    } else {
-        pointwise_signs(ir, kind)
-    };
-    let n_fixed = args.len();
-    let plans: Vec<(usize, ArgPlan, bool)> = args
-        .iter()
-        .chain(extra.iter())
-        .map(|&i| {
-            let a = &ir.sign_args[i];
-            (i, arg_plan(ir, &a.arg), a.measured)
-        })
-        .collect();
-    let mut pos = vec![0usize; plans.len()];
-    let mut neg = vec![0usize; plans.len()];
-    let mut crossings = vec![0usize; plans.len()];
-    let mut last = vec![0i8; plans.len()];
-    let mut n = 0usize;
+    let mut counter = SignCounter::new(ir, kind);
     let planar = matches!(ir.rotation, Rotation::Planar { .. });
     let mut headings = HeadingRotation::default();
     source.visit(&mut |row| {
@@ -91,57 +64,119 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
         } else {
             row.rotation
         };
-        let sig = crate::model::Signals {
+        counter.sample(&crate::model::Signals {
             states: row.states,
             inputs: row.inputs,
             rotation,
             disturbances: row.disturbances,
+        });
+    });
+    counter.finish(ir, source.name())
+}
+
+/// The sign counts of [`detect`], sample by sample, for a caller that
+/// reads other facts in the same visit.
+pub struct SignCounter {
+    plans: Vec<(usize, ArgPlan, bool)>,
+    n_fixed: usize,
+    pos: Vec<usize>,
+    neg: Vec<usize>,
+    crossings: Vec<usize>,
+    last: Vec<i8>,
+    n: usize,
+}
+
+impl SignCounter {
+    /// Counts for the arguments `kind` fixes, then those it evaluates pointwise.
+    pub fn new(ir: &Ir, kind: PredictorKind) -> SignCounter {
+        let args = if kind == PredictorKind::Basic {
+            Vec::new()
+        } else {
+            relevant_signs(ir, kind)
         };
-        for (k, (_, plan, measured)) in plans.iter().enumerate() {
-            let v = plan.eval(&sig, *measured);
+        // Plain states are pointwise in every predictor (IV1's too: its sign
+        // changes decide the structure seen by the data).
+        let extra: Vec<usize> = if kind == PredictorKind::Basic {
+            (0..ir.sign_args.len())
+                .filter(|i| ir.sign_args[*i].pointwise)
+                .collect()
+        } else {
+            pointwise_signs(ir, kind)
+        };
+        let plans: Vec<(usize, ArgPlan, bool)> = args
+            .iter()
+            .chain(extra.iter())
+            .map(|&i| {
+                let a = &ir.sign_args[i];
+                (i, arg_plan(ir, &a.arg), a.measured)
+            })
+            .collect();
+        let k = plans.len();
+        SignCounter {
+            plans,
+            n_fixed: args.len(),
+            pos: vec![0; k],
+            neg: vec![0; k],
+            crossings: vec![0; k],
+            last: vec![0; k],
+            n: 0,
+        }
+    }
+
+    /// One sample (the rotation already evaluated).
+    #[inline]
+    pub fn sample(&mut self, sig: &crate::model::Signals) {
+        for (k, (_, plan, measured)) in self.plans.iter().enumerate() {
+            let v = plan.eval(sig, *measured);
             let sign = if v > 0.0 {
-                pos[k] += 1;
+                self.pos[k] += 1;
                 1
             } else {
-                neg[k] += 1;
+                self.neg[k] += 1;
                 -1
             };
-            if last[k] != 0 && last[k] != sign {
-                crossings[k] += 1;
+            if self.last[k] != 0 && self.last[k] != sign {
+                self.crossings[k] += 1;
             }
-            last[k] = sign;
+            self.last[k] = sign;
         }
-        n += 1;
-    });
-    let mut pattern = vec![1i8; ir.sign_args.len()];
-    let mut arguments: Vec<ArgSign> = plans
-        .iter()
-        .enumerate()
-        .map(|(k, (i, _, measured))| {
-            let sign = if neg[k] > pos[k] { -1 } else { 1 };
-            // Pointwise arguments get their majority sign too: it is the sign
-            // wherever they do not change sign (then the analysis uses it).
-            pattern[*i] = sign;
-            let minority = pos[k].min(neg[k]);
-            ArgSign {
-                argument: ir.sign_args[*i].name.clone(),
-                sign,
-                minority_fraction: if n == 0 {
-                    0.0
-                } else {
-                    minority as f64 / n as f64
-                },
-                used_measured_medium: *measured,
-            }
-        })
-        .collect();
-    let pointwise = arguments.split_off(n_fixed);
-    ExperimentSigns {
-        experiment: source.name().to_string(),
-        pattern,
-        arguments,
-        pointwise,
-        crossings: crossings.split_off(n_fixed),
+        self.n += 1;
+    }
+
+    /// The experiment's sign pattern.
+    pub fn finish(mut self, ir: &Ir, experiment: &str) -> ExperimentSigns {
+        let (pos, neg, n) = (&self.pos, &self.neg, self.n);
+        let mut pattern = vec![1i8; ir.sign_args.len()];
+        let mut arguments: Vec<ArgSign> = self
+            .plans
+            .iter()
+            .enumerate()
+            .map(|(k, (i, _, measured))| {
+                let sign = if neg[k] > pos[k] { -1 } else { 1 };
+                // Pointwise arguments get their majority sign too: it is the sign
+                // wherever they do not change sign (then the analysis uses it).
+                pattern[*i] = sign;
+                let minority = pos[k].min(neg[k]);
+                ArgSign {
+                    argument: ir.sign_args[*i].name.clone(),
+                    sign,
+                    minority_fraction: if n == 0 {
+                        0.0
+                    } else {
+                        minority as f64 / n as f64
+                    },
+                    used_measured_medium: *measured,
+                }
+            })
+            .collect();
+        let pointwise = arguments.split_off(self.n_fixed);
+        ExperimentSigns {
+            experiment: experiment.to_string(),
+            pattern,
+            arguments,
+            pointwise,
+            crossings: self.crossings.split_off(self.n_fixed),
+        }
     }
 }
 

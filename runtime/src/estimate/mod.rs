@@ -18,7 +18,7 @@
 use crate::data::Source;
 use crate::model::{HeadingRotation, Model, Signals, planar_rotation, rotated};
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator};
-use crate::signs::{ExperimentSigns, detect, plain_sign_args, set_pointwise_signs};
+use crate::signs::{ExperimentSigns, SignCounter, plain_sign_args, set_pointwise_signs};
 use leeway_structure::exact::Q;
 use leeway_structure::grammar::EquationKind;
 pub use leeway_structure::identify::Centring;

@@ -162,12 +162,27 @@ impl<'a> PassRunner<'a> {
         }
     }
 
-    /// The facts of one experiment (one visit for the signs, one for the rest).
+    /// The facts of one experiment, in one visit.
     pub fn facts(&self, e: &dyn Source, request: &FactsRequest) -> ExperimentFacts {
         let ir = self.model.ir();
         let read = (e.len() >= crate::data::MIN_SAMPLES).then(|| {
-            let signs = detect(ir, request.method.predictor(), e);
-            let info = experiment_info(ir, e, &signs, request.method, request.heading_spread);
+            // Signs and sums in one visit, one heading rotation per sample.
+            let mut counter = SignCounter::new(ir, request.method.predictor());
+            let mut sums = RecordSums::new(ir);
+            let planar = matches!(ir.rotation, Rotation::Planar { .. });
+            let mut headings = HeadingRotation::default();
+            e.visit(&mut |row| {
+                let rot = headings.next(row.heading);
+                counter.sample(&Signals {
+                    states: row.states,
+                    inputs: row.inputs,
+                    rotation: if planar { &rot } else { row.rotation },
+                    disturbances: row.disturbances,
+                });
+                sums.sample(row, rot);
+            });
+            let signs = counter.finish(ir, e.name());
+            let info = record_info(ir, sums, &signs, request.method, request.heading_spread);
             (signs, info)
         });
         ExperimentFacts {

@@ -27,38 +27,71 @@ pub(super) struct ExperimentInfo {
     pub(super) frozen: Option<Vec<f64>>,
 }
 
-pub(super) fn experiment_info(
+/// The sums an experiment's facts are read from, sample by sample (in the
+/// facts pass's one visit, beside the sign counts).
+pub(super) struct RecordSums {
+    sum: Vec<f64>,
+    max_abs: Vec<f64>,
+    sc: f64,
+    ss: f64,
+    n: usize,
+    rot_sum: Vec<f64>,
+    rot_sq: Vec<f64>,
+}
+
+impl RecordSums {
+    pub(super) fn new(ir: &Ir) -> RecordSums {
+        let n_rot = ir.rotation_vars.len();
+        RecordSums {
+            sum: vec![0.0; ir.components.len()],
+            max_abs: vec![0.0; ir.states.len()],
+            sc: 0.0,
+            ss: 0.0,
+            n: 0,
+            rot_sum: vec![0.0; n_rot],
+            rot_sq: vec![0.0; n_rot],
+        }
+    }
+
+    /// One sample, with its heading's rotation.
+    #[inline]
+    pub(super) fn sample(&mut self, row: &crate::data::Row, [c, s]: [f64; 2]) {
+        for (a, v) in self.sum.iter_mut().zip(row.disturbances) {
+            *a += v;
+        }
+        for (m, v) in self.max_abs.iter_mut().zip(row.states) {
+            *m = m.max(v.abs());
+        }
+        self.sc += c;
+        self.ss += s;
+        let n_rot = self.rot_sum.len();
+        for i in 0..row.rotation.len().min(n_rot) {
+            self.rot_sum[i] += row.rotation[i];
+            self.rot_sq[i] += row.rotation[i] * row.rotation[i];
+        }
+        self.n += 1;
+    }
+}
+
+/// The facts of an experiment from its sums and sign pattern.
+pub(super) fn record_info(
     ir: &Ir,
-    e: &dyn Source,
+    sums: RecordSums,
     s: &ExperimentSigns,
     method: Method,
     heading_spread: f64,
 ) -> ExperimentInfo {
+    let RecordSums {
+        sum,
+        max_abs,
+        sc,
+        ss,
+        n,
+        rot_sum,
+        rot_sq,
+    } = sums;
     let n_comp = ir.components.len();
-    let n_out = ir.states.len();
-    let mut sum = vec![0.0; n_comp];
-    let mut max_abs = vec![0.0f64; n_out];
-    let (mut sc, mut ss, mut n) = (0.0, 0.0, 0usize);
     let n_rot = ir.rotation_vars.len();
-    let mut rot_sum = vec![0.0; n_rot];
-    let mut rot_sq = vec![0.0; n_rot];
-    let mut headings = HeadingRotation::default();
-    e.visit(&mut |row| {
-        for (a, v) in sum.iter_mut().zip(row.disturbances) {
-            *a += v;
-        }
-        for (m, v) in max_abs.iter_mut().zip(row.states) {
-            *m = m.max(v.abs());
-        }
-        let [c, s] = headings.next(row.heading);
-        sc += c;
-        ss += s;
-        for i in 0..row.rotation.len().min(n_rot) {
-            rot_sum[i] += row.rotation[i];
-            rot_sq[i] += row.rotation[i] * row.rotation[i];
-        }
-        n += 1;
-    });
     let nf = n.max(1) as f64;
     let measured_mean: Vec<f64> = (0..n_comp)
         .map(|c| {
