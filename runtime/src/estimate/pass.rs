@@ -609,6 +609,8 @@ pub(super) fn non_finite(
     // The common case in one branch-free sweep (NaN fails `<=` too): a
     // count of the entries out of range vectorises (compare, mask, add);
     // the rare bad value is then looked for entry by entry.
+    // `!(|x| <= limit)` and not `|x| > limit`: NaN must count.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     let out_of_range = |v: &[f64]| -> u64 {
         v.iter()
             .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))

@@ -95,6 +95,7 @@ impl EquationWalker<'_> {
     /// Calls `f(z, φ, t)` on each equation: instruments, regressors
     /// (`n_out × n_cols`) and targets (both empty when the walk skips the
     /// measured side). Generic in `f`, so the sink is inlined into the walk.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn walk<F: FnMut(&[f64], &[f64], &[f64])>(
         &self,
         e: &dyn Source,
