@@ -8,6 +8,12 @@
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 
+// As in the CLI: estimates allocate and free record-sized buffers many
+// times a second, and mimalloc reuses freed pages rather than faulting
+// fresh ones in (Python's own objects keep Python's allocator).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod data;
 mod distributed;
 mod failure;
