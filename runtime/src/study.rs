@@ -359,7 +359,7 @@ pub fn evaluate(
     // One set of passes for the four methods: what one method's passes
     // compute that another's need (facts, regressor rows, headings) is kept.
     let experiments = [data as &dyn crate::data::Source];
-    let passes = LocalPasses::new(model, &experiments);
+    let passes = LocalPasses::new(model, &experiments).for_several_estimates();
     Method::ALL
         .iter()
         .zip(starts.iter_mut())

@@ -165,7 +165,7 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
         .map(|m| bits(&estimate_with(&model, &workers, &options(*m)).expect("fresh")))
         .collect();
     for budget in [None, Some(0), Some(300_000)] {
-        let shared = LocalPasses::new(&model, &sources);
+        let shared = LocalPasses::new(&model, &sources).for_several_estimates();
         let shared = match budget {
             Some(b) => shared.with_budget(b),
             None => shared,

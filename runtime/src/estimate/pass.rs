@@ -216,7 +216,7 @@ impl<'a> PassRunner<'a> {
         e: &dyn Source,
         index: usize,
         request: &PassRequest,
-        cache: Option<(&mut RecordCache, &mut usize)>,
+        cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> PassSummary {
         let info = &request.infos[index];
         let plan = &request.plan;
@@ -255,11 +255,11 @@ impl<'a> PassRunner<'a> {
         info: &ExperimentInfo,
         plan: &PassPlan,
         pass: MomentPass,
-        cache: Option<(&mut RecordCache, &mut usize)>,
+        cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> Summary {
-        let (mut cache, budget) = match cache {
-            Some((c, b)) => (Some(c), Some(b)),
-            None => (None, None),
+        let (mut cache, budget, keep_for_others) = match cache {
+            Some((c, b, o)) => (Some(c), Some(b), o),
+            None => (None, None, false),
         };
         let MomentPass {
             theta_sim,
@@ -286,13 +286,17 @@ impl<'a> PassRunner<'a> {
             _ => None,
         };
         let kept = cache.as_deref();
-        // Regressor rows are kept by scanning passes (their values are then
-        // known to be finite) and read by any later pass with instruments of
-        // its own; least squares' instruments are its regressors.
+        // Regressor rows are kept by the scanning pass of an instrumental
+        // estimate (their values are then known to be finite) and read by
+        // its later passes — and by other estimates' passes with the same
+        // plan; least squares makes one pass, and keeps its rows only for
+        // others.
         let rows = kept
             .and_then(|c| c.regressors(plan))
             .filter(|_| plan.instruments.is_some());
-        let keep_rows = scan && kept.is_some_and(|c| c.regressors(plan).is_none());
+        let keep_rows = scan
+            && (plan.instruments.is_some() || keep_for_others)
+            && kept.is_some_and(|c| c.regressors(plan).is_none());
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
@@ -487,6 +491,8 @@ struct KeptPasses {
     facts: Vec<((PredictorKind, u64), Vec<ExperimentFacts>)>,
     records: Vec<Option<RecordCache>>,
     budget: usize,
+    /// Serving several estimates: least squares keeps its rows too.
+    for_others: bool,
 }
 
 impl<'a> LocalPasses<'a> {
@@ -502,6 +508,7 @@ impl<'a> LocalPasses<'a> {
                     .map(|e| e.in_memory().is_some().then(RecordCache::default))
                     .collect(),
                 budget: KEEP_BUDGET,
+                for_others: false,
             }),
         }
     }
@@ -509,8 +516,19 @@ impl<'a> LocalPasses<'a> {
     /// Keeps at most `bytes` for later passes (0: nothing; every pass then
     /// computes everything, as for streamed records). The default is 512 MiB.
     pub fn with_budget(self, bytes: usize) -> LocalPasses<'a> {
+        self.adjusted(|k| k.budget = bytes)
+    }
+
+    /// These passes will serve several estimates on the same records (the
+    /// study's four methods): a least-squares pass then keeps its regressor
+    /// rows for the instrumental estimates with the same plan.
+    pub fn for_several_estimates(self) -> LocalPasses<'a> {
+        self.adjusted(|k| k.for_others = true)
+    }
+
+    fn adjusted(self, f: impl FnOnce(&mut KeptPasses)) -> LocalPasses<'a> {
         let mut kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
-        kept.budget = bytes;
+        f(&mut kept);
         LocalPasses {
             runner: self.runner,
             experiments: self.experiments,
@@ -556,13 +574,19 @@ impl Passes for LocalPasses<'_> {
         let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
         let mut kept = self.kept();
         let KeptPasses {
-            records, budget, ..
+            records,
+            budget,
+            for_others,
+            ..
         } = &mut *kept;
         let mut out = Vec::with_capacity(self.experiments.len());
         for (i, (e, cache)) in self.experiments.iter().zip(records.iter_mut()).enumerate() {
-            let s =
-                self.runner
-                    .pass_keeping(*e, i, request, cache.as_mut().map(|c| (c, &mut *budget)));
+            let s = self.runner.pass_keeping(
+                *e,
+                i,
+                request,
+                cache.as_mut().map(|c| (c, &mut *budget, *for_others)),
+            );
             let diverged = matches!(s.0, Summary::Diverged { .. });
             out.push(s);
             if diverged && stop_early {
