@@ -262,6 +262,14 @@ fn generated_code_matches_the_interpreter_bit_for_bit() {
         let n_out = ir.states.len();
         assert_eq!(generated.n_outputs(), n_out, "{}", case.file);
         let mut rng = ChaCha8Rng::seed_from_u64(0x1ee_3a7 + seed as u64);
+        // One buffer per predictor, zeroed once and reused by
+        // `regressors_update`, as an estimator's pass does: each sample it
+        // must hold exactly what `regressors` writes into garbage.
+        let mut reused: Vec<Vec<f64>> = KINDS
+            .iter()
+            .map(|kind| vec![0.0; ir.predictors.get(*kind).len() * n_out + 3])
+            .collect();
+        let mut reused_interpreted = reused.clone();
         for k in 0..SAMPLES {
             let s = sample(&ir, &mut rng);
             let sig = Signals {
@@ -298,6 +306,23 @@ fn generated_code_matches_the_interpreter_bit_for_bit() {
                     &r,
                     len,
                 );
+                let i = KINDS.iter().position(|x| *x == kind).unwrap_or(0);
+                generated.regressors_update(kind, &sig, &s.signs, &mut reused[i]);
+                interpreter.regressors_update(kind, &sig, &s.signs, &mut reused_interpreted[i]);
+                for (who, u) in [
+                    ("generated", &reused[i]),
+                    ("interpreted", &reused_interpreted[i]),
+                ] {
+                    assert!(
+                        g[..len]
+                            .iter()
+                            .zip(&u[..len])
+                            .all(|(a, b)| a.to_bits() == b.to_bits())
+                            && u[len..].iter().all(|v| *v == 0.0),
+                        "{}: {who} {kind:?} regressors_update, sample {k}, differs from regressors",
+                        case.file
+                    );
+                }
             }
             let states = ir.states.clone();
             let (mut g, mut r) = buffers(n_out);

@@ -381,9 +381,7 @@ pub(crate) fn model(ir: &Ir, label: &str, remarks: &[String]) -> Result<TokenStr
     let doc = model_doc(ir, label, remarks);
     let consts = consts(&shape);
     let params = params(&shape, &names);
-    let basic = eval::predictor(ir, &ir.predictors.basic, false);
-    let augmented = eval::predictor(ir, &ir.predictors.augmented, true);
-    let measured = eval::predictor(ir, &ir.predictors.measured, true);
+    let predictors = eval::predictors(ir);
     let rhs = eval::rhs(ir);
     let step = eval::step(ir);
     let n_basic = index(shape.basic.len());
@@ -424,9 +422,7 @@ pub(crate) fn model(ir: &Ir, label: &str, remarks: &[String]) -> Result<TokenStr
             fn n_outputs(&self) -> usize {
                 #n_out
             }
-            fn basic #basic
-            fn augmented #augmented
-            fn measured #measured
+            #predictors
             fn rhs #rhs
             fn step #step
         }

@@ -234,11 +234,21 @@ fn param(name: &str, used: bool) -> Ident {
     Ident::new(&name, Span::call_site())
 }
 
-/// The body of `basic`, `augmented` or `measured`: fill the buffer with zeros
-/// (as the interpreter does), then write each (output, column) slot.
-/// `with_signs` is false for the basic predictor, whose trait method has no
-/// sign-pattern parameter.
-pub(crate) fn predictor(ir: &Ir, columns: &[Column], with_signs: bool) -> TokenStream {
+/// One predictor's evaluation: the statements that write each structurally
+/// nonzero (output, column) slot of `out` (after the bindings they read),
+/// the buffer's length, and which parameters they read.
+pub(crate) struct PredictorBody {
+    pub(crate) stmts: TokenStream,
+    pub(crate) len: usize,
+    pub(crate) reads_sig: bool,
+    pub(crate) reads_signs: bool,
+}
+
+/// The statements of `basic`, `augmented` or `measured` without the zero
+/// fill: `regressors_update` runs them on a buffer whose other slots are
+/// already zero, and each predictor's trait method fills with zeros (as the
+/// interpreter does) and then runs them.
+pub(crate) fn predictor(ir: &Ir, columns: &[Column]) -> PredictorBody {
     let n_out = ir.states.len();
     let n = columns.len();
     let mut body = Body::new(ir);
@@ -257,31 +267,81 @@ pub(crate) fn predictor(ir: &Ir, columns: &[Column], with_signs: bool) -> TokenS
     }
     slots.sort_by_key(|(k, _)| *k);
     let len = n * n_out;
-    let sig = param("sig", body.reads_sig());
-    let signs = param("signs", body.reads.s.is_some());
-    let out_param = param("out", len > 0);
     let bindings = body.bindings();
     let stmts = slots.into_iter().map(|(_, s)| s);
-    let fill = if len > 0 {
-        let len = index(len);
-        quote! {
-            let out = &mut out[..#len];
-            out.fill(0.0);
-        }
+    let shape = if len > 0 {
+        let l = index(len);
+        quote!(let out = &mut out[..#l];)
     } else {
         TokenStream::new()
     };
-    let signature = if with_signs {
-        quote!(&self, #sig: &::leeway::__private::Signals<'_>, #signs: &[f64], #out_param: &mut [f64])
-    } else {
-        quote!(&self, #sig: &::leeway::__private::Signals<'_>, #out_param: &mut [f64])
-    };
-    quote! {
-        (#signature) {
+    PredictorBody {
+        stmts: quote! {
             #bindings
-            #fill
+            #shape
             #(#stmts)*
+        },
+        len,
+        reads_sig: body.reads_sig(),
+        reads_signs: body.reads.s.is_some(),
+    }
+}
+
+/// The trait methods of the three predictors: `regressors_update` (every
+/// structurally nonzero slot, one arm per predictor) and `basic`,
+/// `augmented`, `measured` (zeros, then `regressors_update`).
+pub(crate) fn predictors(ir: &Ir) -> TokenStream {
+    let kind = quote!(::leeway::__private::PredictorKind);
+    let bodies = [
+        (quote!(Basic), predictor(ir, &ir.predictors.basic)),
+        (quote!(Augmented), predictor(ir, &ir.predictors.augmented)),
+        (quote!(Measured), predictor(ir, &ir.predictors.measured)),
+    ];
+    let sig = param("sig", bodies.iter().any(|(_, b)| b.reads_sig));
+    let signs = param("signs", bodies.iter().any(|(_, b)| b.reads_signs));
+    let out = param("out", bodies.iter().any(|(_, b)| b.len > 0));
+    let arms = bodies.iter().map(|(name, b)| {
+        let stmts = &b.stmts;
+        quote!(#kind::#name => { #stmts })
+    });
+    let filled = |name: TokenStream, b: &PredictorBody, signs_param: bool| {
+        let l = index(b.len);
+        let fill = if b.len > 0 {
+            quote!(out[..#l].fill(0.0);)
+        } else {
+            TokenStream::new()
+        };
+        let (signature, signs_arg) = if signs_param {
+            (
+                quote!((&self, sig: &::leeway::__private::Signals<'_>, signs: &[f64], out: &mut [f64])),
+                quote!(signs),
+            )
+        } else {
+            (
+                quote!((&self, sig: &::leeway::__private::Signals<'_>, out: &mut [f64])),
+                quote!(&[]),
+            )
+        };
+        let method = Ident::new(&name.to_string().to_lowercase(), Span::call_site());
+        quote! {
+            fn #method #signature {
+                #fill
+                self.regressors_update(#kind::#name, sig, #signs_arg, out)
+            }
         }
+    };
+    let basic = filled(quote!(Basic), &bodies[0].1, false);
+    let augmented = filled(quote!(Augmented), &bodies[1].1, true);
+    let measured = filled(quote!(Measured), &bodies[2].1, true);
+    quote! {
+        fn regressors_update(&self, kind: #kind, #sig: &::leeway::__private::Signals<'_>, #signs: &[f64], #out: &mut [f64]) {
+            match kind {
+                #(#arms)*
+            }
+        }
+        #basic
+        #augmented
+        #measured
     }
 }
 

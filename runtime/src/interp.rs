@@ -174,6 +174,20 @@ impl Model for Interpreter {
     fn measured(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
         self.plans.measured.eval(sig, signs, out);
     }
+    fn regressors_update(
+        &self,
+        kind: PredictorKind,
+        sig: &Signals,
+        signs: &[f64],
+        out: &mut [f64],
+    ) {
+        let plan = match kind {
+            PredictorKind::Basic => &self.plans.basic,
+            PredictorKind::Augmented => &self.plans.augmented,
+            PredictorKind::Measured => &self.plans.measured,
+        };
+        plan.eval_nonzero(sig, signs, out);
+    }
     fn rhs(&self, theta: &[f64], sig: &Signals, out: &mut [f64]) {
         self.plans.rhs.eval(theta, sig, out);
     }

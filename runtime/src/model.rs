@@ -58,6 +58,21 @@ pub trait Model: Send + Sync {
             PredictorKind::Measured => self.measured(sig, signs, out),
         }
     }
+    /// [`Model::regressors`] into a buffer that already holds zeros in the
+    /// predictor's structurally zero slots (zeroed once, then only ever
+    /// written by this method for the same predictor): only the other slots
+    /// are written, which saves a sample's zero fill in a pass that reuses
+    /// one buffer. Generated code writes just those slots; the default
+    /// writes every slot.
+    fn regressors_update(
+        &self,
+        kind: PredictorKind,
+        sig: &Signals,
+        signs: &[f64],
+        out: &mut [f64],
+    ) {
+        self.regressors(kind, sig, signs, out);
+    }
     /// The compile-time identifiability report.
     fn report(&self) -> &Report {
         &self.ir().report

@@ -129,6 +129,8 @@ impl EquationWalker<'_> {
         };
         let h = e.step();
         let len = n_out * self.n_cols;
+        // Zeroed once: `regressors_update` then writes only the structurally
+        // nonzero slots, sample after sample.
         let mut phi = vec![0.0; len];
         let mut z = vec![0.0; len];
         let mut t = vec![0.0; n_out];
@@ -197,7 +199,8 @@ impl EquationWalker<'_> {
                             disturbances: &d1,
                         };
                         set_pointwise_signs(&mut signs, &info.varying, &y1);
-                        self.model.regressors(self.kind, &sig, &signs, &mut phi);
+                        self.model
+                            .regressors_update(self.kind, &sig, &signs, &mut phi);
                     }
                     match self.instruments {
                         // Least squares: the regressors are their own instruments.
@@ -210,7 +213,8 @@ impl EquationWalker<'_> {
                                 disturbances: &info.measured_mean,
                             };
                             set_pointwise_signs(&mut signs, &info.varying, &x_sim);
-                            self.model.regressors(self.kind, &sig, &signs, &mut z);
+                            self.model
+                                .regressors_update(self.kind, &sig, &signs, &mut z);
                             for fixed in &info.fixed_sign_columns {
                                 fix_set.fill(false);
                                 for (term, o, signs) in &fixed.terms {
@@ -243,7 +247,8 @@ impl EquationWalker<'_> {
                                 disturbances: dist,
                             };
                             set_pointwise_signs(&mut signs, &info.varying, &y2);
-                            self.model.regressors(self.kind, &sig, &signs, &mut z);
+                            self.model
+                                .regressors_update(self.kind, &sig, &signs, &mut z);
                         }
                     }
                     if skip_measured {

@@ -617,19 +617,29 @@ impl RegressorPlan {
     #[inline(never)]
     pub(super) fn eval(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
         let out = &mut out[..self.len];
-        with_table(self.table.len, |t| self.eval_in(t, sig, signs, out));
+        with_table(self.table.len, |t| self.eval_in(t, sig, signs, out, true));
+    }
+
+    /// [`RegressorPlan::eval`] without writing the structurally zero slots
+    /// (`Model::regressors_update`).
+    #[inline(never)]
+    pub(super) fn eval_nonzero(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
+        let out = &mut out[..self.len];
+        with_table(self.table.len, |t| self.eval_in(t, sig, signs, out, false));
     }
 
     /// [`RegressorPlan::eval`] on a table.
     #[inline(always)]
-    fn eval_in(&self, t: &mut [f64], sig: &Signals, signs: &[f64], out: &mut [f64]) {
+    fn eval_in(&self, t: &mut [f64], sig: &Signals, signs: &[f64], out: &mut [f64], zeros: bool) {
         self.table.fill(sig, signs, t);
         let (t, e) = t.split_at_mut(self.entries_at);
         let t: &[f64] = t;
         self.entries.write(t, e);
         let e: &[f64] = e;
-        for &(start, end) in &self.zeros {
-            out[start as usize..end as usize].fill(0.0);
+        if zeros {
+            for &(start, end) in &self.zeros {
+                out[start as usize..end as usize].fill(0.0);
+            }
         }
         self.slots.write(t, out);
         for &(slot, a, b) in &self.pairs {
