@@ -291,12 +291,12 @@ impl<'a> PassRunner<'a> {
         // its later passes — and by other estimates' passes with the same
         // plan; least squares makes one pass, and keeps its rows only for
         // others.
-        let rows = kept
-            .and_then(|c| c.regressors(plan))
-            .filter(|_| plan.instruments.is_some());
+        let kept_rows = kept.and_then(|c| c.regressors(plan));
+        let rows = kept_rows.filter(|_| plan.instruments.is_some());
         let keep_rows = scan
             && (plan.instruments.is_some() || keep_for_others)
-            && kept.is_some_and(|c| c.regressors(plan).is_none());
+            && kept.is_some()
+            && kept_rows.is_none();
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
