@@ -241,6 +241,57 @@ impl MomentAccumulator {
         }
     }
 
+    /// Keeps every regressor row, as [`MomentAccumulator::keep_rows`], the
+    /// first ones known: `prefix`, kept by an accumulation over the first
+    /// samples of the same record with the same regressors. Their samples are
+    /// then pushed by [`MomentAccumulator::push_over_kept_row`] and those after
+    /// them as usual; the sums and rows are those of pushing every sample.
+    pub fn keep_rows_after(&mut self, prefix: RegressorRows, samples: usize) {
+        if self.n == 0 && prefix.p == self.p && prefix.wf == self.wf {
+            self.keeping = true;
+            self.phi0 = prefix.phi0;
+            self.t0 = prefix.t0;
+            self.fb = prefix.rows;
+            self.fb
+                .reserve((samples + BLOCK).saturating_sub(self.fb.len() / self.wf) * self.wf);
+        }
+    }
+
+    /// Adds one sample whose regressors and target are already in its kept
+    /// row ([`MomentAccumulator::keep_rows_after`]): its instruments are the
+    /// entries `cols` of the dense row `z`, or (`z` empty, least squares) the
+    /// kept regressors themselves. The same bits as
+    /// [`MomentAccumulator::push_columns`] of the same sample.
+    #[inline]
+    pub fn push_over_kept_row(&mut self, z: &[f64], cols: &[usize]) {
+        let (m, r) = (self.m, self.filled);
+        let at = (self.base + r) * self.wf;
+        if z.is_empty() {
+            // `z − z₀` of least squares is `φ − φ₀`, which the row holds.
+            debug_assert!(m == self.p);
+            if self.n == 0 {
+                self.z0.clone_from(&self.phi0);
+            }
+            let (zb, fb) = (&mut self.zb, &self.fb);
+            zb[r * self.wz..r * self.wz + m].copy_from_slice(&fb[at..at + m]);
+        } else {
+            if self.n == 0 {
+                for (a, &c) in self.z0.iter_mut().zip(cols) {
+                    *a = z[c];
+                }
+            }
+            let zr = &mut self.zb[r * self.wz..r * self.wz + m];
+            for ((a, &c), z0) in zr.iter_mut().zip(cols).zip(&self.z0) {
+                *a = z[c] - z0;
+            }
+        }
+        self.n += 1;
+        self.filled += 1;
+        if self.filled == BLOCK {
+            self.flush();
+        }
+    }
+
     /// Where the next regressor row starts in `fb` (room made if needed).
     #[inline]
     fn next_row(&mut self) -> usize {

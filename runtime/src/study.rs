@@ -354,13 +354,31 @@ pub fn evaluate(
     config: &StudyConfig,
     starts: &mut [Option<crate::estimate::Start>],
 ) -> Vec<Outcome> {
+    evaluate_continuing(model, data, validation, config, starts, &mut None)
+}
+
+/// [`evaluate`] on a record that begins with the one `rows` were kept over
+/// (the study's shorter prefix of the same record): the regressors of its
+/// first samples are not evaluated again. `rows` is replaced by what this
+/// record's passes kept. The same outcomes.
+pub fn evaluate_continuing(
+    model: &dyn Model,
+    data: &Experiment,
+    validation: &Experiment,
+    config: &StudyConfig,
+    starts: &mut [Option<crate::estimate::Start>],
+    rows: &mut Option<crate::estimate::PrefixRows>,
+) -> Vec<Outcome> {
     use crate::estimate::{LocalPasses, Method, Start, estimate_with};
     use crate::simulate::{Disturbances, fits, simulate};
     // One set of passes for the four methods: what one method's passes
     // compute that another's need (facts, regressor rows, headings) is kept.
     let experiments = [data as &dyn crate::data::Source];
-    let passes = LocalPasses::new(model, &experiments).for_several_estimates();
-    Method::ALL
+    let mut passes = LocalPasses::new(model, &experiments).for_several_estimates();
+    if let Some(prefix) = rows.take() {
+        passes = passes.continuing(prefix);
+    }
+    let outcomes = Method::ALL
         .iter()
         .zip(starts.iter_mut())
         .map(|(m, start)| {
@@ -391,7 +409,9 @@ pub fn evaluate(
                 },
             }
         })
-        .collect()
+        .collect();
+    *rows = Some(passes.into_prefix_rows());
+    outcomes
 }
 
 /// Runs the Monte Carlo study, in parallel over runs (rayon); `progress` is
@@ -442,12 +462,17 @@ pub fn study_run(
         n_max,
         run_seed(config.seed, &config.cases[case], run),
     );
-    // Record lengths in increasing order: each warm-starts the next.
+    // Record lengths in increasing order: each warm-starts the next, and
+    // its regressor rows are the next one's first rows.
     let mut starts = vec![None; crate::estimate::Method::ALL.len()];
+    let mut rows = None;
     config
         .n
         .iter()
-        .map(|&n| evaluate(model, &data.truncated(n), validation, config, &mut starts))
+        .map(|&n| {
+            let prefix = data.truncated(n);
+            evaluate_continuing(model, &prefix, validation, config, &mut starts, &mut rows)
+        })
         .collect()
 }
 

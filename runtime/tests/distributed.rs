@@ -192,3 +192,54 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
         assert!(kept.diagnostics.refinements >= 1, "a refined estimate");
     }
 }
+
+/// Passes over records that begin with shorter records already estimated
+/// on (the study's longer and longer prefixes) take the regressor rows kept
+/// over the prefix as their first rows: every method's estimate must still
+/// be, bit for bit, the one computed from scratch — for prefixes short
+/// enough that a sign pattern differs, and when the rows were kept over
+/// other records (which must then go unused).
+#[test]
+fn rows_kept_over_a_prefix_change_no_bit() {
+    use leeway_runtime::estimate::LocalPasses;
+    let model = ship();
+    let data = experiments(&model);
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let workers = Workers {
+        model: &model,
+        experiments: &data,
+    };
+    let options = |method| EstimateOptions {
+        method,
+        aggregate: true,
+        ..EstimateOptions::default()
+    };
+    let fresh: Vec<String> = Method::ALL
+        .iter()
+        .map(|m| bits(&estimate_with(&model, &workers, &options(*m)).expect("fresh")))
+        .collect();
+    // The rows of the prefixes, as the study keeps them: all four methods.
+    let rows_over = |records: &[Experiment]| {
+        let sources: Vec<&dyn Source> = records.iter().map(|e| e as &dyn Source).collect();
+        let passes = LocalPasses::new(&model, &sources).for_several_estimates();
+        for m in Method::ALL {
+            let _ = estimate_with(&model, &passes, &options(m));
+        }
+        passes.into_prefix_rows()
+    };
+    for n in [40, 300] {
+        let prefixes: Vec<Experiment> = data.iter().map(|e| e.truncated(n)).collect();
+        // Kept over each record's prefix, and over the others' (shifted by one).
+        let mut others = prefixes.clone();
+        others.rotate_left(1);
+        for (label, prefixes) in [("own", &prefixes), ("others", &others)] {
+            let passes = LocalPasses::new(&model, &sources)
+                .for_several_estimates()
+                .continuing(rows_over(prefixes));
+            for (m, fresh) in Method::ALL.iter().zip(&fresh) {
+                let kept = estimate_with(&model, &passes, &options(*m)).expect("continued");
+                assert_eq!(&bits(&kept), fresh, "{m:?}, prefix {n} ({label})");
+            }
+        }
+    }
+}

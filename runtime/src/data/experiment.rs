@@ -108,6 +108,25 @@ impl Experiment {
             }
         }
     }
+    /// True when this experiment's first samples are `prefix`'s samples,
+    /// bit for bit (same step, same columns).
+    pub fn begins_with(&self, prefix: &Experiment) -> bool {
+        let same = |a: &[f64], b: &[f64]| {
+            b.len() <= a.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        let columns = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(a, b)| same(a, b))
+        };
+        self.h.to_bits() == prefix.h.to_bits()
+            && prefix.len() <= self.len()
+            && columns(&self.states, &prefix.states)
+            && columns(&self.inputs, &prefix.inputs)
+            && same(&self.heading, &prefix.heading)
+            && self.heading.is_empty() == prefix.heading.is_empty()
+            && columns(&self.rotation, &prefix.rotation)
+            && columns(&self.disturbances, &prefix.disturbances)
+    }
+
     /// The first `n` samples.
     pub fn truncated(&self, n: usize) -> Experiment {
         let cut = |v: &Vec<Vec<f64>>| v.iter().map(|c| c[..n.min(c.len())].to_vec()).collect();

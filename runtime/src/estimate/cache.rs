@@ -12,9 +12,13 @@ pub(super) const KEEP_BUDGET: usize = 512 << 20;
 #[derive(Debug, Default)]
 pub(super) struct RecordCache {
     /// The regressor rows and targets of each output, per plan (predictor
-    /// kind, block columns, held columns' bits), kept by scanning passes:
-    /// their values are known to be finite.
-    regressors: Vec<(PlanKey, Vec<RegressorRows>)>,
+    /// kind, block columns, held columns' bits) and sign pattern, kept by
+    /// scanning passes: their values are known to be finite.
+    regressors: KeptRows,
+    /// Rows kept over a shorter prefix of this record
+    /// ([`LocalPasses::continuing`]): the first rows of a scanning pass
+    /// with the same plan and sign pattern.
+    prefix: KeptRows,
     headings: Option<Vec<[f64; 2]>>,
     /// The states after each step of the simulation of `(θ, μ)` (their bits).
     trajectory: Option<(Vec<u64>, Vec<u64>, Vec<f64>)>,
@@ -22,14 +26,29 @@ pub(super) struct RecordCache {
     spare: Vec<f64>,
 }
 
-type PlanKey = (PredictorKind, Vec<Vec<usize>>, Vec<(usize, u64)>);
+/// What a record's regressor rows depend on besides its samples: the plan
+/// (predictor kind, block columns, held columns' bits) and the sign
+/// pattern (the signs' bits and the pointwise ones).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct RowsKey {
+    kind: PredictorKind,
+    cols: Vec<Vec<usize>>,
+    held: Vec<(usize, u64)>,
+    signs: Vec<u64>,
+    varying: Vec<(usize, usize)>,
+}
 
-fn plan_key(plan: &PassPlan) -> PlanKey {
-    (
-        plan.kind,
-        plan.cols.clone(),
-        plan.held.iter().map(|(c, v)| (*c, v.to_bits())).collect(),
-    )
+/// Regressor rows of each output, per plan and sign pattern.
+pub(super) type KeptRows = Vec<(RowsKey, Vec<RegressorRows>)>;
+
+fn rows_key(plan: &PassPlan, info: &ExperimentInfo) -> RowsKey {
+    RowsKey {
+        kind: plan.kind,
+        cols: plan.cols.clone(),
+        held: plan.held.iter().map(|(c, v)| (*c, v.to_bits())).collect(),
+        signs: bits(&info.signs),
+        varying: info.varying.clone(),
+    }
 }
 
 fn bits(v: &[f64]) -> Vec<u64> {
@@ -45,13 +64,57 @@ pub(super) struct Kept<'a> {
 }
 
 impl RecordCache {
-    /// The regressor rows of each output kept for `plan`.
-    pub(super) fn regressors(&self, plan: &PassPlan) -> Option<&[RegressorRows]> {
-        let key = plan_key(plan);
+    /// The regressor rows of each output kept for `plan` and `info`'s signs.
+    pub(super) fn regressors(
+        &self,
+        plan: &PassPlan,
+        info: &ExperimentInfo,
+    ) -> Option<&[RegressorRows]> {
+        let key = rows_key(plan, info);
         self.regressors
             .iter()
             .find(|(k, _)| *k == key)
             .map(|(_, r)| r.as_slice())
+    }
+
+    /// The rows of a shorter prefix of this record kept for `plan` and
+    /// `info`'s signs (taken: the pass that extends them keeps the whole).
+    pub(super) fn take_prefix(
+        &mut self,
+        plan: &PassPlan,
+        info: &ExperimentInfo,
+        budget: &mut usize,
+    ) -> Option<Vec<RegressorRows>> {
+        let key = rows_key(plan, info);
+        let at = self.prefix.iter().position(|(k, _)| *k == key)?;
+        let (_, rows) = self.prefix.swap_remove(at);
+        *budget += rows.iter().map(RegressorRows::bytes).sum::<usize>();
+        Some(rows)
+    }
+
+    /// Every regressor row kept, to begin the cache of a longer prefix.
+    pub(super) fn into_rows(self) -> KeptRows {
+        self.regressors
+    }
+
+    /// A cache that knows `rows`, kept over a prefix of its record, as far
+    /// as `budget` allows.
+    pub(super) fn with_prefix(
+        rows: Vec<(RowsKey, Vec<RegressorRows>)>,
+        budget: &mut usize,
+    ) -> Self {
+        let mut prefix = Vec::new();
+        for (key, r) in rows {
+            let bytes: usize = r.iter().map(RegressorRows::bytes).sum();
+            if bytes <= *budget {
+                *budget -= bytes;
+                prefix.push((key, r));
+            }
+        }
+        RecordCache {
+            prefix,
+            ..RecordCache::default()
+        }
     }
 
     /// Every sample's heading rotation.
@@ -81,7 +144,13 @@ impl RecordCache {
 
     /// Keeps what a completed pass with `plan` computed, as far as
     /// `budget` (bytes left) allows; what is kept is taken off it.
-    pub(super) fn keep(&mut self, plan: &PassPlan, kept: Kept, budget: &mut usize) {
+    pub(super) fn keep(
+        &mut self,
+        plan: &PassPlan,
+        info: &ExperimentInfo,
+        kept: Kept,
+        budget: &mut usize,
+    ) {
         let mut fits = |bytes: usize| {
             let ok = bytes <= *budget;
             if ok {
@@ -92,7 +161,7 @@ impl RecordCache {
         if let Some(r) = kept.regressors {
             let bytes = r.iter().map(RegressorRows::bytes).sum();
             if fits(bytes) {
-                self.regressors.push((plan_key(plan), r));
+                self.regressors.push((rows_key(plan, info), r));
             }
         }
         if let Some(h) = kept.headings

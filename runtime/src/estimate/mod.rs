@@ -51,7 +51,7 @@ pub use outcome::*;
 use pass::*;
 pub use pass::{
     ExperimentFacts, FactsRequest, LocalPasses, PassRequest, PassRunner, PassSummary, Passes,
-    decode, encode,
+    PrefixRows, decode, encode,
 };
 use record::*;
 use solve::*;

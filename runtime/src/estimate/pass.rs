@@ -7,9 +7,10 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
-use super::cache::{KEEP_BUDGET, Kept, RecordCache};
+use super::cache::{KEEP_BUDGET, Kept, KeptRows, RecordCache};
 use super::walk::Reuse;
 use super::*;
+use crate::data::Experiment;
 use crate::interp::TermPlan;
 use crate::moments::RegressorRows;
 use serde::de::DeserializeOwned;
@@ -257,7 +258,7 @@ impl<'a> PassRunner<'a> {
         pass: MomentPass,
         cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> Summary {
-        let (mut cache, budget, keep_for_others) = match cache {
+        let (mut cache, mut budget, keep_for_others) = match cache {
             Some((c, b, o)) => (Some(c), Some(b), o),
             None => (None, None, false),
         };
@@ -285,18 +286,30 @@ impl<'a> PassRunner<'a> {
             Some(c) if simulates => Some(c.take_spare()),
             _ => None,
         };
-        let kept = cache.as_deref();
         // Regressor rows are kept by the scanning pass of an instrumental
         // estimate (their values are then known to be finite) and read by
         // its later passes — and by other estimates' passes with the same
         // plan; least squares makes one pass, and keeps its rows only for
-        // others.
-        let kept_rows = kept.and_then(|c| c.regressors(plan));
+        // others. Rows kept over a shorter prefix of the record are the
+        // scanning pass's first rows.
+        let keeps = scan && (plan.instruments.is_some() || keep_for_others);
+        let equations = e.len().saturating_sub(2);
+        let prefix = match (keeps, cache.as_deref_mut(), budget.as_deref_mut()) {
+            (true, Some(c), Some(b)) if c.regressors(plan, info).is_none() => {
+                c.take_prefix(plan, info, b)
+            }
+            _ => None,
+        }
+        .filter(|p| {
+            p.len() == plan.cols.len()
+                && p.iter()
+                    .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
+        });
+        let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
+        let kept = cache.as_deref();
+        let kept_rows = kept.and_then(|c| c.regressors(plan, info));
         let rows = kept_rows.filter(|_| plan.instruments.is_some());
-        let keep_rows = scan
-            && (plan.instruments.is_some() || keep_for_others)
-            && kept.is_some()
-            && kept_rows.is_none();
+        let keep_rows = keeps && kept.is_some() && kept_rows.is_none();
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
@@ -306,17 +319,21 @@ impl<'a> PassRunner<'a> {
                 _ => None,
             },
             keep_trajectory: new_trajectory.as_mut(),
+            measured_known,
         };
         // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
         let mut k = 1usize;
         let mut bad = None;
+        let mut prefix = prefix.map(Vec::into_iter);
         let mut acc: Vec<MomentAccumulator> = plan
             .cols
             .iter()
             .map(|c| {
                 let mut a = MomentAccumulator::new(c.len(), c.len());
-                if keep_rows {
-                    a.keep_rows(e.len());
+                match prefix.as_mut().and_then(Iterator::next) {
+                    Some(known) => a.keep_rows_after(known, e.len()),
+                    None if keep_rows => a.keep_rows(e.len()),
+                    None => {}
                 }
                 a
             })
@@ -333,6 +350,13 @@ impl<'a> PassRunner<'a> {
                 if let Some(rows) = rows {
                     for ((o, a), r) in acc.iter_mut().enumerate().zip(rows) {
                         a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
+                    }
+                    return;
+                }
+                if k - 2 < measured_known {
+                    for (o, a) in acc.iter_mut().enumerate() {
+                        let z = z.get(o * n..(o + 1) * n).unwrap_or(&[]);
+                        a.push_over_kept_row(z, &plan.cols[o]);
                     }
                     return;
                 }
@@ -377,6 +401,7 @@ impl<'a> PassRunner<'a> {
                     let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
                     c.keep(
                         plan,
+                        info,
                         Kept {
                             regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
                             headings: new_headings,
@@ -485,6 +510,13 @@ pub struct LocalPasses<'a> {
     kept: std::sync::Mutex<KeptPasses>,
 }
 
+/// The regressor rows [`LocalPasses`] kept of each in-memory record (with a
+/// copy of the record they were kept over), for the passes over longer
+/// records that begin with it ([`LocalPasses::continuing`]).
+pub struct PrefixRows {
+    records: Vec<Option<(Experiment, KeptRows)>>,
+}
+
 /// What [`LocalPasses`] keeps: facts per request, each experiment's cache
 /// (none for a streamed one), and the bytes it may still keep.
 struct KeptPasses {
@@ -534,6 +566,48 @@ impl<'a> LocalPasses<'a> {
             experiments: self.experiments,
             kept: std::sync::Mutex::new(kept),
         }
+    }
+
+    /// The regressor rows these passes kept of each in-memory record, to
+    /// begin the passes over longer records that start with the same
+    /// samples ([`LocalPasses::continuing`]).
+    pub fn into_prefix_rows(self) -> PrefixRows {
+        let kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
+        PrefixRows {
+            records: self
+                .experiments
+                .iter()
+                .zip(kept.records)
+                .map(|(e, cache)| match (e.in_memory(), cache) {
+                    (Some(x), Some(c)) => Some((x.clone(), c.into_rows())),
+                    _ => None,
+                })
+                .collect(),
+        }
+    }
+
+    /// These passes begin with the regressor rows `prefix` kept over
+    /// shorter records: where an experiment starts with the samples of the
+    /// one `prefix` was kept over (checked bit for bit), a scanning pass
+    /// evaluates only the regressors of the samples after them (the study,
+    /// which estimates on longer and longer prefixes of one record). The
+    /// same summaries, sooner.
+    pub fn continuing(self, prefix: PrefixRows) -> LocalPasses<'a> {
+        let experiments = self.experiments;
+        self.adjusted(|k| {
+            for ((e, cache), known) in experiments
+                .iter()
+                .zip(k.records.iter_mut())
+                .zip(prefix.records)
+            {
+                if let (Some(x), Some((before, rows))) = (e.in_memory(), known)
+                    && cache.is_some()
+                    && x.begins_with(&before)
+                {
+                    *cache = Some(RecordCache::with_prefix(rows, &mut k.budget));
+                }
+            }
+        })
     }
 
     fn kept(&self) -> std::sync::MutexGuard<'_, KeptPasses> {

@@ -40,6 +40,9 @@ pub(super) struct Reuse<'a> {
     pub(super) reference: Option<&'a [f64]>,
     /// Keep the instrument simulation's states after each step here.
     pub(super) keep_trajectory: Option<&'a mut Vec<f64>>,
+    /// The sink knows the regressors and targets of this many first
+    /// equations (kept over a shorter prefix of the record): skip them there.
+    pub(super) measured_known: usize,
 }
 
 /// How far an instrument simulation moved from a reference one, per output:
@@ -109,6 +112,8 @@ impl EquationWalker<'_> {
         let ir = self.ir;
         // Only instruments of their own can leave the regressors out.
         let skip_measured = reuse.skip_measured && self.instruments.is_some();
+        let measured_known = reuse.measured_known;
+        let mut equation = 0usize;
         let n_out = ir.states.len();
         // A kept reference simulation is used whole (one state per step) or not at all.
         let known_reference = reuse
@@ -191,6 +196,7 @@ impl EquationWalker<'_> {
                 }
             } else {
                 if k >= 2 {
+                    let skip_measured = skip_measured || equation < measured_known;
                     if !skip_measured {
                         let sig = Signals {
                             states: &y1,
@@ -252,7 +258,8 @@ impl EquationWalker<'_> {
                         }
                     }
                     if skip_measured {
-                        f(&z, &[], &[]);
+                        // Least squares has no instruments of its own.
+                        f(if self.instruments.is_some() { &z } else { &[] }, &[], &[]);
                     } else {
                         for (o, eq) in ir.equations.iter().enumerate() {
                             t[o] = match eq.kind {
@@ -263,6 +270,7 @@ impl EquationWalker<'_> {
                         let instruments = if self.instruments.is_some() { &z } else { &phi };
                         f(instruments, &phi, &t);
                     }
+                    equation += 1;
                 }
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
