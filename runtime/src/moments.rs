@@ -139,9 +139,9 @@ impl RegressorRows {
     pub fn is_empty(&self) -> bool {
         self.rows.is_empty()
     }
-    /// Bytes held.
+    /// Bytes held (room reserved included).
     pub fn bytes(&self) -> usize {
-        std::mem::size_of_val(self.rows.as_slice())
+        self.rows.capacity() * std::mem::size_of::<f64>()
     }
 }
 
@@ -232,12 +232,15 @@ impl MomentAccumulator {
     }
 
     /// Keeps every regressor row for [`MomentAccumulator::finish_keeping`]
-    /// (`samples` rows expected): rows are written where they are kept,
-    /// into zeroed memory that is touched only as it is written.
-    pub fn keep_rows(&mut self, samples: usize) {
+    /// (`samples` rows expected, room reserved for `reserve` when more, for
+    /// a longer record that will begin with these rows): rows are written
+    /// where they are kept, into zeroed memory.
+    pub fn keep_rows(&mut self, samples: usize, reserve: usize) {
         if self.n == 0 {
             self.keeping = true;
-            self.fb = vec![0.0; (samples + BLOCK) * self.wf];
+            let mut fb = Vec::with_capacity((samples.max(reserve) + BLOCK) * self.wf);
+            fb.resize((samples + BLOCK) * self.wf, 0.0);
+            self.fb = fb;
         }
     }
 
@@ -789,7 +792,7 @@ mod tests {
         let cols = [0, 2, 3, 5];
         let target = |k: usize| (k as f64 * 0.13).cos() * 7.0 + 2.0;
         let mut first = MomentAccumulator::new(4, 4);
-        first.keep_rows(101);
+        first.keep_rows(101, 0);
         for k in 0..101 {
             first.push_columns(&dense(k, 0.5), &dense(k, 0.0), &cols, target(k));
         }

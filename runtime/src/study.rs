@@ -354,13 +354,14 @@ pub fn evaluate(
     config: &StudyConfig,
     starts: &mut [Option<crate::estimate::Start>],
 ) -> Vec<Outcome> {
-    evaluate_continuing(model, data, validation, config, starts, &mut None)
+    evaluate_continuing(model, data, validation, config, starts, &mut None, 0)
 }
 
 /// [`evaluate`] on a record that begins with the one `rows` were kept over
 /// (the study's shorter prefix of the same record): the regressors of its
 /// first samples are not evaluated again. `rows` is replaced by what this
-/// record's passes kept. The same outcomes.
+/// record's passes kept, with room for a record of `longest` samples. The
+/// same outcomes.
 pub fn evaluate_continuing(
     model: &dyn Model,
     data: &Experiment,
@@ -368,6 +369,7 @@ pub fn evaluate_continuing(
     config: &StudyConfig,
     starts: &mut [Option<crate::estimate::Start>],
     rows: &mut Option<crate::estimate::PrefixRows>,
+    longest: usize,
 ) -> Vec<Outcome> {
     use crate::estimate::{LocalPasses, Method, Start, estimate_with};
     use crate::simulate::{Disturbances, fits, simulate};
@@ -378,6 +380,7 @@ pub fn evaluate_continuing(
     if let Some(prefix) = rows.take() {
         passes = passes.continuing(prefix);
     }
+    let passes = passes.reserving(longest);
     let outcomes = Method::ALL
         .iter()
         .zip(starts.iter_mut())
@@ -471,7 +474,15 @@ pub fn study_run(
         .iter()
         .map(|&n| {
             let prefix = data.truncated(n);
-            evaluate_continuing(model, &prefix, validation, config, &mut starts, &mut rows)
+            evaluate_continuing(
+                model,
+                &prefix,
+                validation,
+                config,
+                &mut starts,
+                &mut rows,
+                n_max,
+            )
         })
         .collect()
 }

@@ -24,6 +24,9 @@ pub(super) struct RecordCache {
     trajectory: Option<(Vec<u64>, Vec<u64>, Vec<f64>)>,
     /// The previous trajectory's storage, reused for the next one.
     spare: Vec<f64>,
+    /// Samples of the longest record that will begin with this one: room
+    /// for their regressor rows is reserved at once.
+    pub(super) reserve: usize,
 }
 
 /// What a record's regressor rows depend on besides its samples: the plan

@@ -306,6 +306,7 @@ impl<'a> PassRunner<'a> {
                     .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
         });
         let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
+        let reserve = cache.as_deref().map_or(0, |c| c.reserve);
         let kept = cache.as_deref();
         let kept_rows = kept.and_then(|c| c.regressors(plan, info));
         let rows = kept_rows.filter(|_| plan.instruments.is_some());
@@ -332,7 +333,7 @@ impl<'a> PassRunner<'a> {
                 let mut a = MomentAccumulator::new(c.len(), c.len());
                 match prefix.as_mut().and_then(Iterator::next) {
                     Some(known) => a.keep_rows_after(known, e.len()),
-                    None if keep_rows => a.keep_rows(e.len()),
+                    None if keep_rows => a.keep_rows(e.len(), reserve),
                     None => {}
                 }
                 a
@@ -606,6 +607,17 @@ impl<'a> LocalPasses<'a> {
                 {
                     *cache = Some(RecordCache::with_prefix(rows, &mut k.budget));
                 }
+            }
+        })
+    }
+
+    /// The records passed over will be continued to at most `samples`
+    /// samples ([`LocalPasses::continuing`]): room for the longest record's
+    /// regressor rows is reserved at once, so that no pass copies them.
+    pub fn reserving(self, samples: usize) -> LocalPasses<'a> {
+        self.adjusted(|k| {
+            for c in k.records.iter_mut().flatten() {
+                c.reserve = samples;
             }
         })
     }
