@@ -249,9 +249,13 @@ fn execute(model: &dyn Model, config: &StudyConfig) -> Report {
         bar.set_style(style);
     }
     bar.set_message("leeway reproduce");
-    let outcomes = study::run_study(model, config, &|| bar.inc(1));
+    // The design check measures the records as the study simulates them.
+    let (outcomes, measured) =
+        study::run_study_inspecting(model, config, &|| bar.inc(1), &|_, run, truth| {
+            margins::measure(model, config, run, truth)
+        });
     bar.finish_and_clear();
-    let margins = margins::check(model, config);
+    let margins = margins::collect(model, config, measured);
     let summaries = study::summarise(&outcomes);
     let claims = study::claims(&summaries);
     let all_estimates = all_estimates(&outcomes);

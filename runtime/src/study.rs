@@ -424,18 +424,31 @@ pub fn run_study(
     config: &StudyConfig,
     progress: &(dyn Fn() + Sync),
 ) -> StudyOutcomes {
+    run_study_inspecting(model, config, progress, &|_, _, _| ()).0
+}
+
+/// [`run_study`], and `inspect(case, run, truth)` of each run's true
+/// trajectory (the estimation record before noise), in the order of
+/// [`study_tasks`]: what is measured on the records the estimators saw,
+/// without simulating them again.
+pub fn run_study_inspecting<T: Send>(
+    model: &dyn Model,
+    config: &StudyConfig,
+    progress: &(dyn Fn() + Sync),
+    inspect: &(dyn Fn(usize, usize, &Truth) -> T + Sync),
+) -> (StudyOutcomes, Vec<T>) {
     use rayon::prelude::*;
     let validation = validation_experiment(model, config.validation_len);
     let tasks = study_tasks(config);
-    let results: Vec<Vec<Vec<Outcome>>> = tasks
+    let (results, inspected): (Vec<Vec<Vec<Outcome>>>, Vec<T>) = tasks
         .par_iter()
         .map(|&(c, r)| {
-            let per_n = study_run(model, config, &validation, c, r);
+            let run = study_run_inspecting(model, config, &validation, c, r, |t| inspect(c, r, t));
             progress();
-            per_n
+            run
         })
-        .collect();
-    collect_outcomes(config, results)
+        .unzip();
+    (collect_outcomes(config, results), inspected)
 }
 
 /// The study's runs as `(case, run)`, cases first: the order in which
@@ -457,19 +470,33 @@ pub fn study_run(
     case: usize,
     run: usize,
 ) -> Vec<Vec<Outcome>> {
+    study_run_inspecting(model, config, validation, case, run, |_| ()).0
+}
+
+/// [`study_run`], and `inspect` of the run's true trajectory.
+pub fn study_run_inspecting<T>(
+    model: &dyn Model,
+    config: &StudyConfig,
+    validation: &Experiment,
+    case: usize,
+    run: usize,
+    inspect: impl FnOnce(&Truth) -> T,
+) -> (Vec<Vec<Outcome>>, T) {
     let n_max = config.n.iter().copied().max().unwrap_or(0);
-    let (data, _) = estimation_experiment(
+    let (data, truth) = estimation_experiment(
         model,
         &config.design,
         config.cases[case].wind,
         n_max,
         run_seed(config.seed, &config.cases[case], run),
     );
+    let inspected = inspect(&truth);
+    drop(truth);
     // Record lengths in increasing order: each warm-starts the next, and
     // its regressor rows are the next one's first rows.
     let mut starts = vec![None; crate::estimate::Method::ALL.len()];
     let mut rows = None;
-    config
+    let outcomes = config
         .n
         .iter()
         .map(|&n| {
@@ -484,7 +511,8 @@ pub fn study_run(
                 n_max,
             )
         })
-        .collect()
+        .collect();
+    (outcomes, inspected)
 }
 
 /// The outcomes of the runs of [`study_tasks`], in that order.

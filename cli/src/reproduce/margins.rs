@@ -1,7 +1,7 @@
 //! The input design checked on the true trajectories (issue 5: "check it and
 //! report the margin"): over every estimation experiment of the study —
-//! regenerated from the same seeds, so these are exactly the records the
-//! estimators saw, at the largest N — the range of each relative velocity
+//! measured as the study simulates them, so these are exactly the records
+//! the estimators saw, at the largest N — the range of each relative velocity
 //! under a modulus (`water.u`, `water.v`: the current; `air.u`, `air.v`: the
 //! wind) and of the yaw rate, from the true states, heading and disturbances.
 
@@ -68,40 +68,43 @@ pub fn medium_of(argument: &str) -> &str {
     argument.split('.').next().unwrap_or(argument)
 }
 
-/// Regenerates every estimation experiment of the study (in parallel, in the
-/// current rayon pool) and measures the ranges; merged in run order, so the
-/// figures do not depend on the thread count.
-pub fn check(model: &dyn Model, config: &StudyConfig) -> DesignCheck {
-    use rayon::prelude::*;
+/// What one run's true trajectory shows: the ranges of the sign arguments,
+/// of the yaw rate, of its block means and of its mean, and the trajectory
+/// itself for the first run.
+pub type Measured = (Vec<(String, Range)>, [Range; 3], Option<Truth>);
+
+/// The yaw-rate state: the one a planar heading integrates, else the last.
+fn yaw_state(model: &dyn Model) -> usize {
     let ir = model.ir();
-    let yaw = match &ir.rotation {
+    match &ir.rotation {
         Rotation::Planar { integrates, .. } => *integrates,
         _ => ir.states.len().saturating_sub(1),
-    };
+    }
+}
+
+/// Measures run `run`'s true trajectory (the study's estimation record at
+/// the largest N, handed over by `study::run_study_inspecting`: exactly the
+/// record the estimators saw, not simulated again).
+pub fn measure(model: &dyn Model, config: &StudyConfig, run: usize, truth: &Truth) -> Measured {
+    let yaw = yaw_state(model);
     let samples = config.n.iter().copied().max().unwrap_or(0);
-    let tasks: Vec<(usize, usize)> = (0..config.cases.len())
-        .flat_map(|c| (0..config.runs).map(move |r| (c, r)))
-        .collect();
-    type Measured = (Vec<(String, Range)>, [Range; 3], Option<Truth>);
-    let measured: Vec<Measured> = tasks
-        .par_iter()
-        .map(|&(c, r)| {
-            let (_, truth) = study::estimation_experiment(
-                model,
-                &config.design,
-                config.cases[c].wind,
-                samples,
-                study::run_seed(config.seed, &config.cases[c], r),
-            );
-            let arguments = sign_argument_ranges(model, &truth);
-            let yaw_rate = [
-                state_range(&truth, yaw),
-                block_mean_range(&truth, yaw, BLOCK),
-                block_mean_range(&truth, yaw, samples.max(1)),
-            ];
-            (arguments, yaw_rate, (r == 0).then_some(truth))
-        })
-        .collect();
+    let arguments = sign_argument_ranges(model, truth);
+    let yaw_rate = [
+        state_range(truth, yaw),
+        block_mean_range(truth, yaw, BLOCK),
+        block_mean_range(truth, yaw, samples.max(1)),
+    ];
+    (arguments, yaw_rate, (run == 0).then(|| truth.clone()))
+}
+
+/// The design check from every run's measurements ([`measure`]), in the
+/// order of `study::study_tasks`: merged in run order, so the figures do
+/// not depend on the thread count.
+pub fn collect(model: &dyn Model, config: &StudyConfig, measured: Vec<Measured>) -> DesignCheck {
+    let ir = model.ir();
+    let yaw = yaw_state(model);
+    let samples = config.n.iter().copied().max().unwrap_or(0);
+    let tasks = study::study_tasks(config);
     let mut cases: Vec<CaseCheck> = config
         .cases
         .iter()
