@@ -76,6 +76,7 @@ pub fn detect(ir: &Ir, kind: PredictorKind, source: &dyn Source) -> ExperimentSi
 
 /// The sign counts of [`detect`], sample by sample, for a caller that
 /// reads other facts in the same visit.
+#[derive(Clone, Debug)]
 pub struct SignCounter {
     plans: Vec<(usize, ArgPlan, bool)>,
     n_fixed: usize,

@@ -163,12 +163,17 @@ impl Source for Experiment {
 impl Experiment {
     /// Calls `f` on every sample in order, as [`Source::visit`] does;
     /// generic, so that `f` is inlined into the loop.
-    pub fn rows<F: FnMut(&Row)>(&self, mut f: F) {
+    pub fn rows<F: FnMut(&Row)>(&self, f: F) {
+        self.rows_from(0, f);
+    }
+
+    /// Calls `f` on every sample from sample `start` on, in order.
+    pub fn rows_from<F: FnMut(&Row)>(&self, start: usize, mut f: F) {
         let mut states = vec![0.0; self.states.len()];
         let mut inputs = vec![0.0; self.inputs.len()];
         let mut rotation = vec![0.0; self.rotation.len()];
         let mut dist = vec![0.0; self.disturbances.len()];
-        for k in 0..self.len() {
+        for k in start..self.len() {
             for (d, c) in states.iter_mut().zip(&self.states) {
                 *d = c[k];
             }

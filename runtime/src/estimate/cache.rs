@@ -1,5 +1,6 @@
 //! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation — values later passes would compute again bit for bit.
 
+use super::record::FactsState;
 use super::*;
 use crate::moments::RegressorRows;
 
@@ -27,6 +28,16 @@ pub(super) struct RecordCache {
     /// Samples of the longest record that will begin with this one: room
     /// for their regressor rows is reserved at once.
     pub(super) reserve: usize,
+    /// Where the facts visit of each predictor kind stood after this
+    /// record's samples (or a prefix's), to go on from.
+    facts: Vec<(PredictorKind, FactsState)>,
+}
+
+/// What a record's cache hands to the passes over a longer record that
+/// begins with it: its regressor rows and where its facts visits stood.
+pub(super) struct Continued {
+    rows: KeptRows,
+    facts: Vec<(PredictorKind, FactsState)>,
 }
 
 /// What a record's regressor rows depend on besides its samples: the plan
@@ -95,19 +106,31 @@ impl RecordCache {
         Some(rows)
     }
 
-    /// Every regressor row kept, to begin the cache of a longer prefix.
-    pub(super) fn into_rows(self) -> KeptRows {
-        self.regressors
+    /// Every regressor row kept and where the facts visits stood, to begin
+    /// the cache of a longer record.
+    pub(super) fn into_continued(self) -> Continued {
+        Continued {
+            rows: self.regressors,
+            facts: self.facts,
+        }
+    }
+
+    /// Where the facts visit of `kind` stood, if kept.
+    pub(super) fn facts_state(&self, kind: PredictorKind) -> Option<&FactsState> {
+        self.facts.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+    }
+
+    /// Keeps where the facts visit of `kind` stands.
+    pub(super) fn keep_facts_state(&mut self, kind: PredictorKind, state: FactsState) {
+        self.facts.retain(|(k, _)| *k != kind);
+        self.facts.push((kind, state));
     }
 
     /// A cache that knows `rows`, kept over a prefix of its record, as far
     /// as `budget` allows.
-    pub(super) fn with_prefix(
-        rows: Vec<(RowsKey, Vec<RegressorRows>)>,
-        budget: &mut usize,
-    ) -> Self {
+    pub(super) fn with_prefix(known: Continued, budget: &mut usize) -> Self {
         let mut prefix = Vec::new();
-        for (key, r) in rows {
+        for (key, r) in known.rows {
             let bytes: usize = r.iter().map(RegressorRows::bytes).sum();
             if bytes <= *budget {
                 *budget -= bytes;
@@ -116,6 +139,7 @@ impl RecordCache {
         }
         RecordCache {
             prefix,
+            facts: known.facts,
             ..RecordCache::default()
         }
     }

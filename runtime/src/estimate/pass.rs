@@ -7,7 +7,8 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
-use super::cache::{KEEP_BUDGET, Kept, KeptRows, RecordCache};
+use super::cache::{Continued, KEEP_BUDGET, Kept, RecordCache};
+use super::record::FactsState;
 use super::walk::Reuse;
 use super::*;
 use crate::data::Experiment;
@@ -165,14 +166,42 @@ impl<'a> PassRunner<'a> {
 
     /// The facts of one experiment, in one visit.
     pub fn facts(&self, e: &dyn Source, request: &FactsRequest) -> ExperimentFacts {
+        self.facts_from(e, request, None).0
+    }
+
+    /// [`PassRunner::facts`], the visit going on from where it stood after
+    /// the first samples (`from`, kept over a record this in-memory one
+    /// begins with); and where it stands after this one's.
+    pub(super) fn facts_from(
+        &self,
+        e: &dyn Source,
+        request: &FactsRequest,
+        from: Option<FactsState>,
+    ) -> (ExperimentFacts, Option<FactsState>) {
         let ir = self.model.ir();
+        let kind = request.method.predictor();
+        let mut stands = None;
         let read = (e.len() >= crate::data::MIN_SAMPLES).then(|| {
             // Signs and sums in one visit, one heading rotation per sample.
-            let mut counter = SignCounter::new(ir, request.method.predictor());
-            let mut sums = RecordSums::new(ir);
+            let memory = e.in_memory();
+            let mut state = match from {
+                Some(s) if memory.is_some() && s.len <= e.len() => s,
+                _ => FactsState {
+                    len: 0,
+                    counter: SignCounter::new(ir, kind),
+                    sums: RecordSums::new(ir),
+                    headings: HeadingRotation::default(),
+                },
+            };
             let planar = matches!(ir.rotation, Rotation::Planar { .. });
-            let mut headings = HeadingRotation::default();
-            e.visit(&mut |row| {
+            let start = state.len;
+            let FactsState {
+                counter,
+                sums,
+                headings,
+                ..
+            } = &mut state;
+            let mut sample = |row: &crate::data::Row| {
                 let rot = headings.next(row.heading);
                 counter.sample(&Signals {
                     states: row.states,
@@ -181,16 +210,29 @@ impl<'a> PassRunner<'a> {
                     disturbances: row.disturbances,
                 });
                 sums.sample(row, rot);
-            });
-            let signs = counter.finish(ir, e.name());
-            let info = record_info(ir, sums, &signs, request.method, request.heading_spread);
+            };
+            match memory {
+                Some(x) => x.rows_from(start, &mut sample),
+                None => e.visit(&mut sample),
+            }
+            state.len = e.len();
+            stands = memory.is_some().then(|| state.clone());
+            let signs = state.counter.finish(ir, e.name());
+            let info = record_info(
+                ir,
+                state.sums,
+                &signs,
+                request.method,
+                request.heading_spread,
+            );
             (signs, info)
         });
-        ExperimentFacts {
+        let facts = ExperimentFacts {
             name: e.name().to_string(),
             len: e.len(),
             read,
-        }
+        };
+        (facts, stands)
     }
 
     fn walker(&self, plan: &PassPlan, instruments: Option<Instruments>) -> EquationWalker<'_> {
@@ -515,7 +557,7 @@ pub struct LocalPasses<'a> {
 /// copy of the record they were kept over), for the passes over longer
 /// records that begin with it ([`LocalPasses::continuing`]).
 pub struct PrefixRows {
-    records: Vec<Option<(Experiment, KeptRows)>>,
+    records: Vec<Option<(Experiment, Continued)>>,
 }
 
 /// What [`LocalPasses`] keeps: facts per request, each experiment's cache
@@ -580,7 +622,7 @@ impl<'a> LocalPasses<'a> {
                 .iter()
                 .zip(kept.records)
                 .map(|(e, cache)| match (e.in_memory(), cache) {
-                    (Some(x), Some(c)) => Some((x.clone(), c.into_rows())),
+                    (Some(x), Some(c)) => Some((x.clone(), c.into_continued())),
                     _ => None,
                 })
                 .collect(),
@@ -645,11 +687,26 @@ impl Passes for LocalPasses<'_> {
         if let Some((_, f)) = self.kept().facts.iter().find(|(k, _)| *k == key) {
             return Ok(f.clone());
         }
-        let facts: Vec<ExperimentFacts> = self
+        // An in-memory record's visit goes on from where the last one over
+        // it (or over a record it begins with) stood.
+        let kind = request.method.predictor();
+        let from: Vec<Option<FactsState>> = self
+            .kept()
+            .records
+            .iter()
+            .map(|c| c.as_ref().and_then(|c| c.facts_state(kind)).cloned())
+            .collect();
+        let (facts, stands): (Vec<ExperimentFacts>, Vec<Option<FactsState>>) = self
             .experiments
             .iter()
-            .map(|e| self.runner.facts(*e, request))
-            .collect();
+            .zip(from)
+            .map(|(e, from)| self.runner.facts_from(*e, request, from))
+            .unzip();
+        for (cache, stands) in self.kept().records.iter_mut().zip(stands) {
+            if let (Some(c), Some(s)) = (cache, stands) {
+                c.keep_facts_state(kind, s);
+            }
+        }
         if self.experiments.iter().all(|e| e.in_memory().is_some()) {
             self.kept().facts.push((key, facts.clone()));
         }

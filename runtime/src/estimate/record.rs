@@ -27,8 +27,19 @@ pub(super) struct ExperimentInfo {
     pub(super) frozen: Option<Vec<f64>>,
 }
 
+/// Where an in-memory experiment's facts visit stood after its samples:
+/// the visit of a longer record that begins with them goes on from here.
+#[derive(Clone, Debug)]
+pub(super) struct FactsState {
+    pub(super) len: usize,
+    pub(super) counter: SignCounter,
+    pub(super) sums: RecordSums,
+    pub(super) headings: HeadingRotation,
+}
+
 /// The sums an experiment's facts are read from, sample by sample (in the
 /// facts pass's one visit, beside the sign counts).
+#[derive(Clone, Debug)]
 pub(super) struct RecordSums {
     sum: Vec<f64>,
     max_abs: Vec<f64>,
