@@ -113,6 +113,10 @@ impl EquationWalker<'_> {
         // Only instruments of their own can leave the regressors out.
         let skip_measured = reuse.skip_measured && self.instruments.is_some();
         let measured_known = reuse.measured_known;
+        // Measured states one and two samples back feed the regressors,
+        // targets and delayed instruments: none of them in a walk that
+        // skips the measured side and simulates its instruments.
+        let keeps_states = !(skip_measured && self.instruments == Some(Instruments::Simulated));
         let mut equation = 0usize;
         let n_out = ir.states.len();
         // A kept reference simulation is used whole (one state per step) or not at all.
@@ -337,8 +341,10 @@ impl EquationWalker<'_> {
             // Shift the history: (k−2) ← (k−1) ← k.
             // (Swaps, and no copy of an empty slice: copies of a few values
             // cost a `memcpy` call each.)
-            std::mem::swap(&mut y2, &mut y1);
-            y1.copy_from_slice(row.states);
+            if keeps_states {
+                std::mem::swap(&mut y2, &mut y1);
+                y1.copy_from_slice(row.states);
+            }
             u1.copy_from_slice(row.inputs);
             if n_rot > 0 {
                 std::mem::swap(&mut rot2, &mut rot1);
