@@ -140,6 +140,24 @@ fn a_runner_that_loses_a_summary_is_an_error_not_an_estimate() {
     assert_eq!(garbage.expect_err("garbage").code, "invalid-pass");
 }
 
+/// The study's options for `method`: aggregated where the data leave a
+/// parameter unexcited.
+fn aggregated(method: Method) -> EstimateOptions {
+    EstimateOptions {
+        method,
+        aggregate: true,
+        ..EstimateOptions::default()
+    }
+}
+
+/// Every method's estimate by workers that keep nothing, by its bits.
+fn from_scratch(workers: &Workers) -> Vec<String> {
+    Method::ALL
+        .iter()
+        .map(|m| bits(&estimate_with(workers.model, workers, &aggregated(*m)).expect("fresh")))
+        .collect()
+}
+
 /// One `LocalPasses` kept across the four methods (as the study runs them)
 /// reuses facts, regressor rows, heading rotations and simulations between
 /// passes and between estimates: each estimate must still be, bit for bit,
@@ -155,15 +173,7 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
         model: &model,
         experiments: &data,
     };
-    let options = |method| EstimateOptions {
-        method,
-        aggregate: true,
-        ..EstimateOptions::default()
-    };
-    let fresh: Vec<String> = Method::ALL
-        .iter()
-        .map(|m| bits(&estimate_with(&model, &workers, &options(*m)).expect("fresh")))
-        .collect();
+    let fresh = from_scratch(&workers);
     for budget in [None, Some(0), Some(300_000)] {
         let shared = LocalPasses::new(&model, &sources).for_several_estimates();
         let shared = match budget {
@@ -175,16 +185,16 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
             Method::ALL.iter().rev().copied().collect(),
         ] {
             for m in order {
-                let kept = estimate_with(&model, &shared, &options(m)).expect("kept");
+                let kept = estimate_with(&model, &shared, &aggregated(m)).expect("kept");
                 let i = Method::ALL.iter().position(|x| *x == m).expect("a method");
                 assert_eq!(bits(&kept), fresh[i], "{m:?}, budget {budget:?}");
             }
         }
         // A warm start: the refinement's reference simulation is the kept one.
-        let first = estimate_with(&model, &shared, &options(Method::Iv3)).expect("iv3");
+        let first = estimate_with(&model, &shared, &aggregated(Method::Iv3)).expect("iv3");
         let warm = EstimateOptions {
             start: Some(Start::from_estimate(model.ir(), &first)),
-            ..options(Method::Iv3)
+            ..aggregated(Method::Iv3)
         };
         let kept = estimate_with(&model, &shared, &warm).expect("warm");
         let fresh = estimate_with(&model, &workers, &warm).expect("warm, fresh");
@@ -209,21 +219,13 @@ fn rows_kept_over_a_prefix_change_no_bit() {
         model: &model,
         experiments: &data,
     };
-    let options = |method| EstimateOptions {
-        method,
-        aggregate: true,
-        ..EstimateOptions::default()
-    };
-    let fresh: Vec<String> = Method::ALL
-        .iter()
-        .map(|m| bits(&estimate_with(&model, &workers, &options(*m)).expect("fresh")))
-        .collect();
+    let fresh = from_scratch(&workers);
     // The rows of the prefixes, as the study keeps them: all four methods.
     let rows_over = |records: &[Experiment]| {
         let sources: Vec<&dyn Source> = records.iter().map(|e| e as &dyn Source).collect();
         let passes = LocalPasses::new(&model, &sources).for_several_estimates();
         for m in Method::ALL {
-            let _ = estimate_with(&model, &passes, &options(m));
+            let _ = estimate_with(&model, &passes, &aggregated(m));
         }
         passes.into_prefix_rows()
     };
@@ -237,7 +239,7 @@ fn rows_kept_over_a_prefix_change_no_bit() {
                 .for_several_estimates()
                 .continuing(rows_over(prefixes));
             for (m, fresh) in Method::ALL.iter().zip(&fresh) {
-                let kept = estimate_with(&model, &passes, &options(*m)).expect("continued");
+                let kept = estimate_with(&model, &passes, &aggregated(*m)).expect("continued");
                 assert_eq!(&bits(&kept), fresh, "{m:?}, prefix {n} ({label})");
             }
         }
