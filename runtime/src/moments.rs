@@ -250,14 +250,14 @@ impl MomentAccumulator {
     /// then pushed by [`MomentAccumulator::push_over_kept_row`] and those after
     /// them as usual; the sums and rows are those of pushing every sample.
     pub fn keep_rows_after(&mut self, prefix: RegressorRows, samples: usize) {
-        if self.n == 0 && prefix.p == self.p && prefix.wf == self.wf {
-            self.keeping = true;
-            self.phi0 = prefix.phi0;
-            self.t0 = prefix.t0;
-            self.fb = prefix.rows;
-            self.fb
-                .reserve((samples + BLOCK).saturating_sub(self.fb.len() / self.wf) * self.wf);
-        }
+        // Rows are kept per plan, so the prefix has this accumulator's shape.
+        debug_assert!(self.n == 0 && prefix.p == self.p && prefix.wf == self.wf);
+        self.keeping = true;
+        self.phi0 = prefix.phi0;
+        self.t0 = prefix.t0;
+        self.fb = prefix.rows;
+        self.fb
+            .reserve((samples + BLOCK).saturating_sub(self.fb.len() / self.wf) * self.wf);
     }
 
     /// Adds one sample whose regressors and target are already in its kept

@@ -553,9 +553,9 @@ pub struct LocalPasses<'a> {
     kept: std::sync::Mutex<KeptPasses>,
 }
 
-/// The regressor rows [`LocalPasses`] kept of each in-memory record (with a
-/// copy of the record they were kept over), for the passes over longer
-/// records that begin with it ([`LocalPasses::continuing`]).
+/// What [`LocalPasses`] kept of each in-memory record — its regressor rows
+/// and where its facts visits stood — with a copy of the record, for the
+/// passes over longer records that begin with it ([`LocalPasses::continuing`]).
 pub struct PrefixRows {
     records: Vec<Option<(Experiment, Continued)>>,
 }
@@ -611,9 +611,9 @@ impl<'a> LocalPasses<'a> {
         }
     }
 
-    /// The regressor rows these passes kept of each in-memory record, to
-    /// begin the passes over longer records that start with the same
-    /// samples ([`LocalPasses::continuing`]).
+    /// The regressor rows and facts visits these passes kept of each
+    /// in-memory record, to begin the passes over longer records that start
+    /// with the same samples ([`LocalPasses::continuing`]).
     pub fn into_prefix_rows(self) -> PrefixRows {
         let kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
         PrefixRows {
@@ -629,12 +629,12 @@ impl<'a> LocalPasses<'a> {
         }
     }
 
-    /// These passes begin with the regressor rows `prefix` kept over
-    /// shorter records: where an experiment starts with the samples of the
-    /// one `prefix` was kept over (checked bit for bit), a scanning pass
-    /// evaluates only the regressors of the samples after them (the study,
-    /// which estimates on longer and longer prefixes of one record). The
-    /// same summaries, sooner.
+    /// These passes begin with what `prefix` kept over shorter records:
+    /// where an experiment starts with the samples of the one `prefix` was
+    /// kept over (checked bit for bit), a scanning pass evaluates only the
+    /// regressors of the samples after them, and a facts visit reads only
+    /// those samples (the study, which estimates on longer and longer
+    /// prefixes of one record). The same summaries, sooner.
     pub fn continuing(self, prefix: PrefixRows) -> LocalPasses<'a> {
         let experiments = self.experiments;
         self.adjusted(|k| {
