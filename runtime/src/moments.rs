@@ -18,42 +18,72 @@ fn padded(n: usize) -> usize {
 }
 
 /// `s += aᵀ b` for row-major `a` (`rows × wa`) and `b` (`rows × wb`), `s`
-/// row-major `wa × wb`, widths multiples of [`TILE`]. Each entry sums its
-/// rows in order in a register tile and is then added once: the same
-/// operations, in the same order, on every machine (no fused multiply-add,
-/// no CPU-dependent kernel), so results stay bit-identical everywhere.
+/// row-major `wa × wb`, widths multiples of [`TILE`], of which only the
+/// first `used` rows of `s` are computed (the others are padding nobody
+/// reads). Each entry sums its rows in order in a register tile and is then
+/// added once: the same operations, in the same order, on every machine (no
+/// fused multiply-add, no CPU-dependent kernel), so results stay
+/// bit-identical everywhere.
 #[inline(always)]
-fn add_outer_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, wa: usize, wb: usize) {
-    for i0 in (0..wa).step_by(TILE) {
-        // Tiles two wide where the row allows (eight accumulators fill the
-        // AVX registers), then one; the order of each entry's sum is the same.
-        let mut j0 = 0;
-        while j0 + 2 * TILE <= wb {
-            add_tile::<{ 2 * TILE }>(s, a, b, rows, wa, wb, i0, j0);
-            j0 += 2 * TILE;
-        }
-        if j0 < wb {
-            add_tile::<TILE>(s, a, b, rows, wa, wb, i0, j0);
-        }
-    }
-}
-
-/// One `TILE × C` tile of [`add_outer_products`] at `(i0, j0)`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn add_tile<const C: usize>(
+fn add_outer_products(
     s: &mut [f64],
     a: &[f64],
     b: &[f64],
     rows: usize,
-    wa: usize,
+    (wa, used): (usize, usize),
     wb: usize,
-    i0: usize,
-    j0: usize,
 ) {
-    let mut acc = [[0.0f64; C]; TILE];
+    debug_assert!(used <= wa);
+    let mut i0 = 0;
+    while i0 + TILE <= used {
+        add_tile_rows::<TILE>(s, a, b, rows, (wa, wb), i0);
+        i0 += TILE;
+    }
+    // The last rows short of a tile: a narrower tile rather than products
+    // with the padding (each entry's sum is the same either way).
+    match used - i0 {
+        1 => add_tile_rows::<1>(s, a, b, rows, (wa, wb), i0),
+        2 => add_tile_rows::<2>(s, a, b, rows, (wa, wb), i0),
+        3 => add_tile_rows::<3>(s, a, b, rows, (wa, wb), i0),
+        _ => {}
+    }
+}
+
+/// `R` rows of [`add_outer_products`] from row `i0`, across every column.
+#[inline(always)]
+fn add_tile_rows<const R: usize>(
+    s: &mut [f64],
+    a: &[f64],
+    b: &[f64],
+    rows: usize,
+    (wa, wb): (usize, usize),
+    i0: usize,
+) {
+    // Tiles two wide where the row allows (eight accumulators fill the
+    // AVX registers), then one; the order of each entry's sum is the same.
+    let mut j0 = 0;
+    while j0 + 2 * TILE <= wb {
+        add_tile::<R, { 2 * TILE }>(s, a, b, rows, (wa, wb), (i0, j0));
+        j0 += 2 * TILE;
+    }
+    if j0 < wb {
+        add_tile::<R, TILE>(s, a, b, rows, (wa, wb), (i0, j0));
+    }
+}
+
+/// One `R × C` tile of [`add_outer_products`] at `(i0, j0)`.
+#[inline(always)]
+fn add_tile<const R: usize, const C: usize>(
+    s: &mut [f64],
+    a: &[f64],
+    b: &[f64],
+    rows: usize,
+    (wa, wb): (usize, usize),
+    (i0, j0): (usize, usize),
+) {
+    let mut acc = [[0.0f64; C]; R];
     for (ar, br) in a.chunks_exact(wa).zip(b.chunks_exact(wb)).take(rows) {
-        let x = &ar[i0..i0 + TILE];
+        let x = &ar[i0..i0 + R];
         let y = &br[j0..j0 + C];
         for (row, &xi) in acc.iter_mut().zip(x) {
             for (v, &yj) in row.iter_mut().zip(y) {
@@ -96,6 +126,8 @@ struct BlockKernel<'a> {
     fb: &'a [f64],
     rows: usize,
     wz: usize,
+    /// The instrument rows in use: the instruments and the constant.
+    used_z: usize,
     wf: usize,
     /// The regressors' squares are already known (kept [`RegressorRows`]).
     squares_known: bool,
@@ -105,7 +137,14 @@ impl pulp::WithSimd for BlockKernel<'_> {
     type Output = ();
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _simd: S) {
-        add_outer_products(self.sums, self.zb, self.fb, self.rows, self.wz, self.wf);
+        add_outer_products(
+            self.sums,
+            self.zb,
+            self.fb,
+            self.rows,
+            (self.wz, self.used_z),
+            self.wf,
+        );
         add_squares(self.zz, self.zb, self.rows, self.wz);
         if !self.squares_known {
             add_squares(self.pp, self.fb, self.rows, self.wf);
@@ -422,6 +461,7 @@ impl MomentAccumulator {
             fb,
             rows,
             wz: self.wz,
+            used_z: self.m + 1,
             wf: self.wf,
             squares_known: true,
         });
@@ -477,6 +517,7 @@ impl MomentAccumulator {
             fb: &self.fb[block],
             rows,
             wz: self.wz,
+            used_z: self.m + 1,
             wf: self.wf,
             squares_known: false,
         });
@@ -589,22 +630,38 @@ impl CrossMoments {
 
 /// `s += aᵀ b` (both `rows × w`, row-major) by [`add_outer_products`],
 /// compiled for the widest SIMD the CPU has.
-fn add_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, w: usize) {
+/// Only the first `used` rows of `s` are computed.
+fn add_products(s: &mut [f64], a: &[f64], b: &[f64], rows: usize, (w, used): (usize, usize)) {
     struct Products<'a> {
         s: &'a mut [f64],
         a: &'a [f64],
         b: &'a [f64],
         rows: usize,
         w: usize,
+        used: usize,
     }
     impl pulp::WithSimd for Products<'_> {
         type Output = ();
         #[inline(always)]
         fn with_simd<S: pulp::Simd>(self, _simd: S) {
-            add_outer_products(self.s, self.a, self.b, self.rows, self.w, self.w);
+            add_outer_products(
+                self.s,
+                self.a,
+                self.b,
+                self.rows,
+                (self.w, self.used),
+                self.w,
+            );
         }
     }
-    pulp::Arch::new().dispatch(Products { s, a, b, rows, w });
+    pulp::Arch::new().dispatch(Products {
+        s,
+        a,
+        b,
+        rows,
+        w,
+        used,
+    });
 }
 
 /// Long-run covariance sums of a vector series `ζ_k` truncated at `lags`
@@ -678,7 +735,13 @@ impl LongRun {
             }
         }
         let current = &self.buf[lags * w..(lags + rows) * w];
-        add_products(&mut self.sums, current, &self.with_lags, rows, w);
+        add_products(
+            &mut self.sums,
+            current,
+            &self.with_lags,
+            rows,
+            (w, self.dim),
+        );
         // The last `lags` rows become the next block's history.
         self.buf.copy_within(rows * w..(rows + lags) * w, 0);
         self.filled = 0;
