@@ -184,6 +184,48 @@ impl RegressorRows {
     }
 }
 
+/// Where an accumulation that keeps its regressor rows stood after a
+/// record's samples, before its last (partial) block was added: the sums
+/// of the full blocks and the instruments of the rows after them. With the
+/// kept rows, an accumulation over a longer record that begins with the
+/// same samples goes on from here ([`MomentAccumulator::keep_rows_resuming`])
+/// and adds the same blocks as one from the start: the same bits.
+#[derive(Clone, Debug)]
+pub struct PartialSums {
+    n: usize,
+    z0: Vec<f64>,
+    sums: Vec<f64>,
+    s_zz: Vec<f64>,
+    s_pp: Vec<f64>,
+    /// The instrument rows of the block being filled.
+    zb: Vec<f64>,
+    filled: usize,
+}
+
+impl PartialSums {
+    /// Whether these sums are where an accumulation of as many instruments
+    /// as regressors stood after `rows`' samples (their number and shapes).
+    pub fn continues(&self, rows: &RegressorRows) -> bool {
+        let wz = padded(rows.p + 1);
+        self.n == rows.len()
+            && self.filled < BLOCK
+            && self.filled <= self.n
+            && self.z0.len() == rows.p
+            && self.sums.len() == wz * rows.wf
+            && self.s_zz.len() == wz
+            && self.s_pp.len() == rows.wf
+            && self.zb.len() == self.filled * wz
+    }
+    /// Samples accumulated.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+    /// True before the first sample.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+}
+
 /// Shifted cross-moment sums of instruments `z`, regressors `φ` and target
 /// `t`: what one experiment contributes to the moment equations, whatever
 /// its length (`O(m·p)` numbers).
@@ -297,6 +339,37 @@ impl MomentAccumulator {
         self.fb = prefix.rows;
         self.fb
             .reserve((samples + BLOCK).saturating_sub(self.fb.len() / self.wf) * self.wf);
+    }
+
+    /// Where this accumulation stands (see [`PartialSums`]); `None` unless
+    /// it keeps its regressor rows, which a resumed accumulation needs.
+    pub fn partial(&self) -> Option<PartialSums> {
+        self.keeping.then(|| PartialSums {
+            n: self.n,
+            z0: self.z0.clone(),
+            sums: self.sums.clone(),
+            s_zz: self.s_zz.clone(),
+            s_pp: self.s_pp.clone(),
+            zb: self.zb[..self.filled * self.wz].to_vec(),
+            filled: self.filled,
+        })
+    }
+
+    /// Keeps every regressor row, as [`MomentAccumulator::keep_rows_after`],
+    /// and goes on from `from`, where an accumulation over `prefix`'s samples
+    /// stood ([`PartialSums::continues`] them): the next sample pushed is the
+    /// one after them.
+    pub fn keep_rows_resuming(&mut self, prefix: RegressorRows, from: PartialSums, samples: usize) {
+        debug_assert!(self.n == 0 && self.m == self.p && from.continues(&prefix));
+        self.keep_rows_after(prefix, samples);
+        self.n = from.n;
+        self.z0 = from.z0;
+        self.sums = from.sums;
+        self.s_zz = from.s_zz;
+        self.s_pp = from.s_pp;
+        self.zb[..from.zb.len()].copy_from_slice(&from.zb);
+        self.filled = from.filled;
+        self.base = from.n - from.filled;
     }
 
     /// Adds one sample whose regressors and target are already in its kept
@@ -890,5 +963,60 @@ mod tests {
                 .iter()
                 .any(|v| v.is_nan())
         );
+    }
+
+    #[test]
+    fn sums_resumed_after_a_prefix_give_the_same_bits() {
+        let dense = |k: usize| -> Vec<f64> {
+            (0..7)
+                .map(|i| 1e2 * (i as f64) + ((k * 3 + i) as f64 * 0.37).sin())
+                .collect()
+        };
+        let cols = [0, 1, 4, 5, 6];
+        let target = |k: usize| (k as f64 * 0.21).cos() * 3.0 - 1.0;
+        let bits = |m: &CrossMoments| format!("{:?}", serde_json::to_string(m).ok());
+        // Prefixes ending inside a block, on a block's end, and before the first.
+        for prefix in [5, 32, 77] {
+            let mut whole = MomentAccumulator::new(5, 5);
+            whole.keep_rows(200, 0);
+            for k in 0..200 {
+                whole.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+            }
+            let (whole, whole_rows) = whole.finish_keeping();
+            let mut first = MomentAccumulator::new(5, 5);
+            first.keep_rows(prefix, 200);
+            for k in 0..prefix {
+                first.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+            }
+            let partial = first.partial().expect("keeps its rows");
+            let (_, rows) = first.finish_keeping();
+            let rows = rows.expect("rows kept");
+            assert!(partial.continues(&rows));
+            let mut resumed = MomentAccumulator::new(5, 5);
+            resumed.keep_rows_resuming(rows, partial, 200);
+            for k in prefix..200 {
+                resumed.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+            }
+            let (resumed, resumed_rows) = resumed.finish_keeping();
+            assert_eq!(bits(&whole), bits(&resumed), "prefix {prefix}");
+            let (a, b) = (whole_rows.expect("kept"), resumed_rows.expect("kept"));
+            assert_eq!(format!("{:?}", a.rows), format!("{:?}", b.rows));
+            assert_eq!(format!("{:?}", a.s_pp), format!("{:?}", b.s_pp));
+        }
+        // Sums of other rows, or of an accumulation that keeps none, do not continue.
+        let mut other = MomentAccumulator::new(5, 5);
+        other.keep_rows(10, 0);
+        for k in 0..10 {
+            other.push_columns(&dense(k), &dense(k), &cols, target(k));
+        }
+        let partial = other.partial().expect("keeps its rows");
+        let mut longer = MomentAccumulator::new(5, 5);
+        longer.keep_rows(11, 0);
+        for k in 0..11 {
+            longer.push_columns(&dense(k), &dense(k), &cols, target(k));
+        }
+        let (_, longer) = longer.finish_keeping();
+        assert!(!partial.continues(&longer.expect("kept")));
+        assert!(MomentAccumulator::new(5, 5).partial().is_none());
     }
 }

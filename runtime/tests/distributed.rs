@@ -205,8 +205,11 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
 
 /// Passes over records that begin with shorter records already estimated
 /// on (the study's longer and longer prefixes) take the regressor rows kept
-/// over the prefix as their first rows: every method's estimate must still
-/// be, bit for bit, the one computed from scratch — for prefixes short
+/// over the prefix as their first rows, and the passes whose instruments
+/// do not depend on θ (least squares, the delayed bootstraps) go on from
+/// where they stood after the prefix, in the middle of a block:
+/// every method's estimate must still be, bit for bit, the one computed
+/// from scratch — for prefixes short
 /// enough that a sign pattern differs, and when the rows were kept over
 /// other records (which must then go unused).
 #[test]

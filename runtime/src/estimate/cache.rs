@@ -2,7 +2,7 @@
 
 use super::record::FactsState;
 use super::*;
-use crate::moments::RegressorRows;
+use crate::moments::{PartialSums, RegressorRows};
 
 /// The most one [`LocalPasses`] keeps for later passes, over all its
 /// records (bytes). What does not fit is computed again on every pass, as
@@ -20,6 +20,8 @@ pub(super) struct RecordCache {
     /// ([`LocalPasses::continuing`]): the first rows of a scanning pass
     /// with the same plan and sign pattern.
     prefix: KeptRows,
+    /// The prefix's heading rotations, for a pass that goes on from it.
+    prefix_headings: Option<Vec<[f64; 2]>>,
     headings: Option<Vec<[f64; 2]>>,
     /// The states after each step of the simulation of `(θ, μ)` (their bits).
     trajectory: Option<(Vec<u64>, Vec<u64>, Vec<f64>)>,
@@ -37,7 +39,31 @@ pub(super) struct RecordCache {
 /// begins with it: its regressor rows and where its facts visits stood.
 pub(super) struct Continued {
     rows: KeptRows,
+    headings: Option<Vec<[f64; 2]>>,
     facts: Vec<(PredictorKind, FactsState)>,
+}
+
+/// Where the scanning pass that kept a plan's rows stood after them, if
+/// its instruments do not depend on θ (least squares, delayed
+/// instruments): the scanning pass over a longer record that begins with
+/// the same samples goes on from here instead of summing them again.
+#[derive(Clone, Debug)]
+pub(super) struct Resume {
+    pub(super) instruments: InstrumentsKey,
+    pub(super) history: History,
+    /// Per output.
+    pub(super) sums: Vec<PartialSums>,
+}
+
+/// What a θ-free pass's instruments depend on besides the samples, the
+/// plan and the sign pattern: their kind, and the measured means where
+/// they are read (delayed instruments of a predictor that reads measured
+/// disturbances take them at their experiment mean, which a longer record
+/// changes).
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct InstrumentsKey {
+    pub(super) instruments: Option<Instruments>,
+    pub(super) means: Vec<u64>,
 }
 
 /// What a record's regressor rows depend on besides its samples: the plan
@@ -52,8 +78,9 @@ pub(super) struct RowsKey {
     varying: Vec<(usize, usize)>,
 }
 
-/// Regressor rows of each output, per plan and sign pattern.
-pub(super) type KeptRows = Vec<(RowsKey, Vec<RegressorRows>)>;
+/// Regressor rows of each output, per plan and sign pattern, and where the
+/// pass that kept them stood, if it can be gone on from.
+pub(super) type KeptRows = Vec<(RowsKey, Vec<RegressorRows>, Option<Resume>)>;
 
 fn rows_key(plan: &PassPlan, info: &ExperimentInfo) -> RowsKey {
     RowsKey {
@@ -65,13 +92,15 @@ fn rows_key(plan: &PassPlan, info: &ExperimentInfo) -> RowsKey {
     }
 }
 
-fn bits(v: &[f64]) -> Vec<u64> {
+pub(super) fn bits(v: &[f64]) -> Vec<u64> {
     v.iter().map(|x| x.to_bits()).collect()
 }
 
 /// What a completed pass offers to keep.
 pub(super) struct Kept<'a> {
     pub(super) regressors: Option<Vec<RegressorRows>>,
+    /// Where the pass that kept the regressors stood, if θ-free.
+    pub(super) resume: Option<Resume>,
     pub(super) headings: Option<Vec<[f64; 2]>>,
     /// The simulated `(θ, μ)` and its states after each step.
     pub(super) trajectory: Option<(&'a [f64], &'a [f64], Vec<f64>)>,
@@ -87,23 +116,30 @@ impl RecordCache {
         let key = rows_key(plan, info);
         self.regressors
             .iter()
-            .find(|(k, _)| *k == key)
-            .map(|(_, r)| r.as_slice())
+            .find(|(k, _, _)| *k == key)
+            .map(|(_, r, _)| r.as_slice())
     }
 
     /// The rows of a shorter prefix of this record kept for `plan` and
-    /// `info`'s signs (taken: the pass that extends them keeps the whole).
+    /// `info`'s signs (taken: the pass that extends them keeps the whole),
+    /// and where the pass that kept them stood.
     pub(super) fn take_prefix(
         &mut self,
         plan: &PassPlan,
         info: &ExperimentInfo,
         budget: &mut usize,
-    ) -> Option<Vec<RegressorRows>> {
+    ) -> Option<(Vec<RegressorRows>, Option<Resume>)> {
         let key = rows_key(plan, info);
-        let at = self.prefix.iter().position(|(k, _)| *k == key)?;
-        let (_, rows) = self.prefix.swap_remove(at);
+        let at = self.prefix.iter().position(|(k, _, _)| *k == key)?;
+        let (_, rows, resume) = self.prefix.swap_remove(at);
         *budget += rows.iter().map(RegressorRows::bytes).sum::<usize>();
-        Some(rows)
+        Some((rows, resume))
+    }
+
+    /// The prefix's heading rotations (taken), for a pass that goes on
+    /// from the prefix's samples.
+    pub(super) fn take_prefix_headings(&mut self) -> Option<Vec<[f64; 2]>> {
+        self.prefix_headings.take()
     }
 
     /// Every regressor row kept and where the facts visits stood, to begin
@@ -111,6 +147,7 @@ impl RecordCache {
     pub(super) fn into_continued(self) -> Continued {
         Continued {
             rows: self.regressors,
+            headings: self.headings,
             facts: self.facts,
         }
     }
@@ -130,15 +167,16 @@ impl RecordCache {
     /// as `budget` allows.
     pub(super) fn with_prefix(known: Continued, budget: &mut usize) -> Self {
         let mut prefix = Vec::new();
-        for (key, r) in known.rows {
+        for (key, r, resume) in known.rows {
             let bytes: usize = r.iter().map(RegressorRows::bytes).sum();
             if bytes <= *budget {
                 *budget -= bytes;
-                prefix.push((key, r));
+                prefix.push((key, r, resume));
             }
         }
         RecordCache {
             prefix,
+            prefix_headings: known.headings,
             facts: known.facts,
             ..RecordCache::default()
         }
@@ -188,7 +226,7 @@ impl RecordCache {
         if let Some(r) = kept.regressors {
             let bytes = r.iter().map(RegressorRows::bytes).sum();
             if fits(bytes) {
-                self.regressors.push((rows_key(plan, info), r));
+                self.regressors.push((rows_key(plan, info), r, kept.resume));
             }
         }
         if let Some(h) = kept.headings

@@ -7,13 +7,13 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
-use super::cache::{Continued, KEEP_BUDGET, Kept, RecordCache};
+use super::cache::{Continued, InstrumentsKey, KEEP_BUDGET, Kept, RecordCache, Resume, bits};
 use super::record::FactsState;
 use super::walk::Reuse;
 use super::*;
 use crate::data::Experiment;
 use crate::interp::TermPlan;
-use crate::moments::RegressorRows;
+use crate::moments::{PartialSums, RegressorRows};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -342,17 +342,62 @@ impl<'a> PassRunner<'a> {
             }
             _ => None,
         }
-        .filter(|p| {
+        .filter(|(p, _)| {
             p.len() == plan.cols.len()
                 && p.iter()
                     .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
         });
+        // A pass whose instruments do not depend on θ goes on from where the
+        // pass that kept the prefix's rows stood, if it had these instruments.
+        let instruments_key = (walker.instruments != Some(Instruments::Simulated)).then(|| {
+            let delayed_means = walker.instruments == Some(Instruments::Delayed)
+                && walker.delayed_mean
+                && reads_measured_disturbances(ir, plan.kind);
+            InstrumentsKey {
+                instruments: walker.instruments,
+                means: if delayed_means {
+                    bits(&info.measured_mean)
+                } else {
+                    Vec::new()
+                },
+            }
+        });
+        let (prefix, resume) = match prefix {
+            Some((rows, resume)) => {
+                let resume = resume.filter(|r| {
+                    instruments_key.as_ref() == Some(&r.instruments)
+                        && r.history.equations == rows[0].len()
+                        && r.history.samples == rows[0].len() + 2
+                        && r.sums.len() == rows.len()
+                        && r.sums.iter().zip(&rows).all(|(s, k)| s.continues(k))
+                });
+                (Some(rows), resume)
+            }
+            None => (None, None),
+        };
+        if let Some(r) = &resume {
+            // The heading rotations kept so far go on too, or none are kept.
+            new_headings = new_headings.and_then(|_| {
+                cache
+                    .as_deref_mut()
+                    .and_then(RecordCache::take_prefix_headings)
+                    .filter(|h| h.len() == r.history.samples)
+            });
+        }
         let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
         let reserve = cache.as_deref().map_or(0, |c| c.reserve);
         let kept = cache.as_deref();
         let kept_rows = kept.and_then(|c| c.regressors(plan, info));
         let rows = kept_rows.filter(|_| plan.instruments.is_some());
         let keep_rows = keeps && kept.is_some() && kept_rows.is_none();
+        // Where this pass stands at the end, for a pass over a longer record.
+        let mut history = None;
+        let keeps_history = keep_rows && instruments_key.is_some();
+        let resumed = resume.as_ref().map_or(0, |r| r.history.equations);
+        let (resume_history, resume_sums) = match resume {
+            Some(r) => (Some(r.history), Some(r.sums)),
+            None => (None, None),
+        };
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
@@ -363,20 +408,27 @@ impl<'a> PassRunner<'a> {
             },
             keep_trajectory: new_trajectory.as_mut(),
             measured_known,
+            resume: resume_history,
+            keep_history: keeps_history.then_some(&mut history),
         };
         // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
-        let mut k = 1usize;
+        let mut k = 1 + resumed;
         let mut bad = None;
         let mut prefix = prefix.map(Vec::into_iter);
+        let mut resume_sums = resume_sums.map(Vec::into_iter);
         let mut acc: Vec<MomentAccumulator> = plan
             .cols
             .iter()
             .map(|c| {
                 let mut a = MomentAccumulator::new(c.len(), c.len());
-                match prefix.as_mut().and_then(Iterator::next) {
-                    Some(known) => a.keep_rows_after(known, e.len()),
-                    None if keep_rows => a.keep_rows(e.len(), reserve),
-                    None => {}
+                match (
+                    prefix.as_mut().and_then(Iterator::next),
+                    resume_sums.as_mut().and_then(Iterator::next),
+                ) {
+                    (Some(known), Some(from)) => a.keep_rows_resuming(known, from, e.len()),
+                    (Some(known), None) => a.keep_rows_after(known, e.len()),
+                    (None, _) if keep_rows => a.keep_rows(e.len(), reserve),
+                    (None, _) => {}
                 }
                 a
             })
@@ -428,6 +480,7 @@ impl<'a> PassRunner<'a> {
         };
         match walked {
             Ok(change) => {
+                let mut partial: Option<Vec<PartialSums>> = None;
                 let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
                     match rows {
                         Some(rows) => acc
@@ -435,10 +488,12 @@ impl<'a> PassRunner<'a> {
                             .zip(rows)
                             .map(|(a, r)| (a.finish_with(r), None))
                             .unzip(),
-                        None => acc
-                            .into_iter()
-                            .map(MomentAccumulator::finish_keeping)
-                            .unzip(),
+                        None => {
+                            partial = acc.iter().map(MomentAccumulator::partial).collect();
+                            acc.into_iter()
+                                .map(MomentAccumulator::finish_keeping)
+                                .unzip()
+                        }
                     };
                 if let (Some(c), Some(budget)) = (cache, budget) {
                     let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
@@ -446,6 +501,18 @@ impl<'a> PassRunner<'a> {
                         plan,
                         info,
                         Kept {
+                            resume: match (instruments_key, history, partial) {
+                                (Some(instruments), Some(history), Some(sums))
+                                    if keeps_history && bad.is_none() =>
+                                {
+                                    Some(Resume {
+                                        instruments,
+                                        history,
+                                        sums,
+                                    })
+                                }
+                                _ => None,
+                            },
                             regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
                             headings: new_headings,
                             trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
@@ -812,4 +879,21 @@ pub(super) fn non_finite(
         }
     }
     None
+}
+
+/// Whether `kind`'s regressors read disturbance values: only terms
+/// evaluated pointwise at the measured disturbances do (`Φ2` of IV3).
+fn reads_measured_disturbances(ir: &Ir, kind: PredictorKind) -> bool {
+    use leeway_structure::ir::{Entry, Pointwise};
+    ir.predictors.get(kind).iter().any(|c| {
+        c.entries.iter().any(|e| {
+            matches!(
+                e,
+                Entry::Term {
+                    pointwise: Pointwise::Measured,
+                    ..
+                }
+            )
+        })
+    })
 }

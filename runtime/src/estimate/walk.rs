@@ -43,6 +43,35 @@ pub(super) struct Reuse<'a> {
     /// The sink knows the regressors and targets of this many first
     /// equations (kept over a shorter prefix of the record): skip them there.
     pub(super) measured_known: usize,
+    /// Go on from where a walk over the record's first samples stood
+    /// (walks that simulate nothing): only the samples after them are walked.
+    pub(super) resume: Option<History>,
+    /// Keep where this walk stood after the record's samples here.
+    pub(super) keep_history: Option<&'a mut Option<History>>,
+}
+
+/// Where a walk whose instruments do not depend on θ (least squares,
+/// delayed instruments) stood after a record's samples: the measured
+/// history one and two samples back, the heading rotation, and how many
+/// samples and equations it saw. A walk over a longer record that begins
+/// with these samples goes on from here, with the same bits as one from
+/// the start.
+#[derive(Clone, Debug)]
+pub(super) struct History {
+    y1: Vec<f64>,
+    y2: Vec<f64>,
+    u1: Vec<f64>,
+    rot1: Vec<f64>,
+    rot2: Vec<f64>,
+    d1: Vec<f64>,
+    d2: Vec<f64>,
+    rh1: [f64; 2],
+    rh2: [f64; 2],
+    headings: HeadingRotation,
+    /// Samples walked.
+    pub(super) samples: usize,
+    /// Equations given to the sink.
+    pub(super) equations: usize,
 }
 
 /// How far an instrument simulation moved from a reference one, per output:
@@ -117,7 +146,6 @@ impl EquationWalker<'_> {
         // targets and delayed instruments: none of them in a walk that
         // skips the measured side and simulates its instruments.
         let keeps_states = !(skip_measured && self.instruments == Some(Instruments::Simulated));
-        let mut equation = 0usize;
         let n_out = ir.states.len();
         // A kept reference simulation is used whole (one state per step) or not at all.
         let known_reference = reuse
@@ -143,13 +171,39 @@ impl EquationWalker<'_> {
         let mut phi = vec![0.0; len];
         let mut z = vec![0.0; len];
         let mut t = vec![0.0; n_out];
-        let (mut y1, mut u1, mut rot1, mut d1) = (
-            vec![0.0; n_out],
-            vec![0.0; n_in],
-            vec![0.0; n_rot],
-            vec![0.0; n_comp],
-        );
-        let (mut y2, mut rot2, mut d2) = (vec![0.0; n_out], vec![0.0; n_rot], vec![0.0; n_comp]);
+        // A walk that simulates goes on from nothing kept (its simulation's
+        // state is not part of a history), nor does a streamed record's.
+        let resume = reuse.resume.take().filter(|_| {
+            self.instruments != Some(Instruments::Simulated) && e.in_memory().is_some()
+        });
+        let start = resume.as_ref().map_or(0, |h| h.samples);
+        let History {
+            mut y1,
+            mut y2,
+            mut u1,
+            mut rot1,
+            mut rot2,
+            mut d1,
+            mut d2,
+            mut rh1,
+            mut rh2,
+            mut headings,
+            samples: _,
+            mut equations,
+        } = resume.unwrap_or_else(|| History {
+            y1: vec![0.0; n_out],
+            y2: vec![0.0; n_out],
+            u1: vec![0.0; n_in],
+            rot1: vec![0.0; n_rot],
+            rot2: vec![0.0; n_rot],
+            d1: vec![0.0; n_comp],
+            d2: vec![0.0; n_comp],
+            rh1: [1.0, 0.0],
+            rh2: [1.0, 0.0],
+            headings: HeadingRotation::default(),
+            samples: 0,
+            equations: 0,
+        });
         let mut x_sim = vec![0.0; n_out];
         let mut x_next = vec![0.0; n_out];
         let mut fbuf = vec![0.0; n_out];
@@ -162,7 +216,7 @@ impl EquationWalker<'_> {
             .iter()
             .map(|c| ir.disturbances[c.disturbance].measured)
             .collect();
-        let mut k = 0usize;
+        let mut k = start;
         let mut diverged = false;
         // The reference simulation (previous instruments), stepped in lockstep.
         let mut x_ref = vec![0.0; n_out];
@@ -179,10 +233,7 @@ impl EquationWalker<'_> {
             y_sum2: vec![0.0; n_out],
             y_n: 0,
         };
-        // Rotations of the measured headings one and two samples back, and
-        // buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
-        let (mut rh1, mut rh2) = ([1.0, 0.0], [1.0, 0.0]);
-        let mut headings = HeadingRotation::default();
+        // Buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
         let mut fix_acc = vec![0.0; n_out];
         let mut fix_set = vec![false; n_out];
         // Signs of the pointwise moduli, sample by sample where they change.
@@ -200,7 +251,7 @@ impl EquationWalker<'_> {
                 }
             } else {
                 if k >= 2 {
-                    let skip_measured = skip_measured || equation < measured_known;
+                    let skip_measured = skip_measured || equations < measured_known;
                     if !skip_measured {
                         let sig = Signals {
                             states: &y1,
@@ -274,7 +325,7 @@ impl EquationWalker<'_> {
                         let instruments = if self.instruments.is_some() { &z } else { &phi };
                         f(instruments, &phi, &t);
                     }
-                    equation += 1;
+                    equations += 1;
                 }
                 if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
                     // Advance the instrument simulation from k−1 to k.
@@ -368,8 +419,27 @@ impl EquationWalker<'_> {
         };
         // In-memory columns are walked by a loop the sample is inlined into.
         match e.in_memory() {
-            Some(x) => x.rows(&mut sample),
+            Some(x) => x.rows_from(start, &mut sample),
             None => e.visit(&mut sample),
+        }
+        if let Some(kept) = reuse.keep_history.as_deref_mut()
+            && !diverged
+            && self.instruments != Some(Instruments::Simulated)
+        {
+            *kept = Some(History {
+                y1,
+                y2,
+                u1,
+                rot1,
+                rot2,
+                d1,
+                d2,
+                rh1,
+                rh2,
+                headings,
+                samples: k,
+                equations,
+            });
         }
         if diverged { Err(Diverged) } else { Ok(change) }
     }
