@@ -236,6 +236,33 @@ impl EquationWalker<'_> {
         // Buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
         let mut fix_acc = vec![0.0; n_out];
         let mut fix_set = vec![false; n_out];
+        // Their distinct arguments (the same few across columns), each
+        // evaluated once a sample: `fixed_slots[column][term][factor]`.
+        let mut fixed_args: Vec<&crate::interp::ArgPlan> = Vec::new();
+        let fixed_slots: Vec<Vec<Vec<usize>>> = info
+            .fixed_sign_columns
+            .iter()
+            .map(|fixed| {
+                fixed
+                    .terms
+                    .iter()
+                    .map(|(term, _, _)| {
+                        self.terms[*term]
+                            .factors
+                            .iter()
+                            .map(|(arg, _)| match fixed_args.iter().position(|a| *a == arg) {
+                                Some(slot) => slot,
+                                None => {
+                                    fixed_args.push(arg);
+                                    fixed_args.len() - 1
+                                }
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut arg_values = vec![0.0; fixed_args.len()];
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
         let mut sample = |row: &crate::data::Row| {
@@ -276,13 +303,18 @@ impl EquationWalker<'_> {
                             set_pointwise_signs(&mut signs, &info.varying, &x_sim);
                             self.model
                                 .regressors_update(self.kind, &sig, &signs, &mut z);
-                            for fixed in &info.fixed_sign_columns {
+                            for (v, arg) in arg_values.iter_mut().zip(&fixed_args) {
+                                *v = arg.eval(&sig, true);
+                            }
+                            for (fixed, slots) in info.fixed_sign_columns.iter().zip(&fixed_slots) {
                                 fix_set.fill(false);
-                                for (term, o, signs) in &fixed.terms {
+                                for ((term, o, signs), slots) in fixed.terms.iter().zip(slots) {
                                     let plan = &self.terms[*term];
                                     let mut t = plan.coefficient;
-                                    for ((arg, modulus), s) in plan.factors.iter().zip(signs) {
-                                        let v = arg.eval(&sig, true);
+                                    for (((_, modulus), s), slot) in
+                                        plan.factors.iter().zip(signs).zip(slots)
+                                    {
+                                        let v = arg_values[*slot];
                                         t *= if *modulus { s * v } else { v };
                                     }
                                     fix_acc[*o] = if fix_set[*o] { fix_acc[*o] + t } else { t };
