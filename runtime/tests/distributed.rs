@@ -210,8 +210,9 @@ fn passes_that_keep_what_they_computed_change_no_bit() {
 /// where they stood after the prefix, in the middle of a block:
 /// every method's estimate must still be, bit for bit, the one computed
 /// from scratch — for prefixes short
-/// enough that a sign pattern differs, and when the rows were kept over
-/// other records (which must then go unused).
+/// enough that a sign pattern differs, when the rows were kept over
+/// other records (which must then go unused), and under budgets that keep
+/// only some of what the passes offer (rows of some plans, rotations or not).
 #[test]
 fn rows_kept_over_a_prefix_change_no_bit() {
     use leeway_runtime::estimate::LocalPasses;
@@ -224,9 +225,18 @@ fn rows_kept_over_a_prefix_change_no_bit() {
     };
     let fresh = from_scratch(&workers);
     // The rows of the prefixes, as the study keeps them: all four methods.
-    let rows_over = |records: &[Experiment]| {
+    fn budgeted(passes: LocalPasses<'_>, budget: Option<usize>) -> LocalPasses<'_> {
+        match budget {
+            Some(b) => passes.with_budget(b),
+            None => passes,
+        }
+    }
+    let rows_over = |records: &[Experiment], budget: Option<usize>| {
         let sources: Vec<&dyn Source> = records.iter().map(|e| e as &dyn Source).collect();
-        let passes = LocalPasses::new(&model, &sources).for_several_estimates();
+        let passes = budgeted(
+            LocalPasses::new(&model, &sources).for_several_estimates(),
+            budget,
+        );
         for m in Method::ALL {
             let _ = estimate_with(&model, &passes, &aggregated(m));
         }
@@ -238,12 +248,29 @@ fn rows_kept_over_a_prefix_change_no_bit() {
         let mut others = prefixes.clone();
         others.rotate_left(1);
         for (label, prefixes) in [("own", &prefixes), ("others", &others)] {
-            let passes = LocalPasses::new(&model, &sources)
-                .for_several_estimates()
-                .continuing(rows_over(prefixes));
-            for (m, fresh) in Method::ALL.iter().zip(&fresh) {
-                let kept = estimate_with(&model, &passes, &aggregated(*m)).expect("continued");
-                assert_eq!(&bits(&kept), fresh, "{m:?}, prefix {n} ({label})");
+            // 1.28 MB keeps the 300-sample prefixes' rows and the records'
+            // least-squares rows, but not their heading rotations: a bootstrap
+            // that read kept rotations over the prefix must not go on from it.
+            for budget in [
+                None,
+                Some(60_000),
+                Some(250_000),
+                Some(1_000_000),
+                Some(1_280_000),
+            ] {
+                let passes = budgeted(
+                    LocalPasses::new(&model, &sources).for_several_estimates(),
+                    budget,
+                )
+                .continuing(rows_over(prefixes, budget));
+                for (m, fresh) in Method::ALL.iter().zip(&fresh) {
+                    let kept = estimate_with(&model, &passes, &aggregated(*m)).expect("continued");
+                    assert_eq!(
+                        &bits(&kept),
+                        fresh,
+                        "{m:?}, prefix {n} ({label}), budget {budget:?}"
+                    );
+                }
             }
         }
     }

@@ -362,10 +362,15 @@ impl<'a> PassRunner<'a> {
                 },
             }
         });
+        let headings_known = cache
+            .as_deref()
+            .and_then(RecordCache::headings)
+            .is_some_and(|h| h.len() == e.len());
         let (prefix, resume) = match prefix {
             Some((rows, resume)) => {
                 let resume = resume.filter(|r| {
                     instruments_key.as_ref() == Some(&r.instruments)
+                        && (r.history.continues_headings() || headings_known)
                         && r.history.equations == rows[0].len()
                         && r.history.samples == rows[0].len() + 2
                         && r.sums.len() == rows.len()

@@ -67,7 +67,10 @@ pub(super) struct History {
     d2: Vec<f64>,
     rh1: [f64; 2],
     rh2: [f64; 2],
-    headings: HeadingRotation,
+    /// The heading rotation's state, if the walk advanced it over every
+    /// sample (`None` when it read kept rotations: a walk that goes on
+    /// from here must read them too).
+    headings: Option<HeadingRotation>,
     /// Samples walked.
     pub(super) samples: usize,
     /// Equations given to the sink.
@@ -88,6 +91,14 @@ pub(super) struct SimChange {
     pub(super) y_sum: Vec<f64>,
     pub(super) y_sum2: Vec<f64>,
     pub(super) y_n: usize,
+}
+
+impl History {
+    /// A walk can go on from here without kept heading rotations: it
+    /// advanced the rotation itself over every sample.
+    pub(super) fn continues_headings(&self) -> bool {
+        self.headings.is_some()
+    }
 }
 
 impl SimChange {
@@ -187,7 +198,7 @@ impl EquationWalker<'_> {
             mut d2,
             mut rh1,
             mut rh2,
-            mut headings,
+            headings,
             samples: _,
             mut equations,
         } = resume.unwrap_or_else(|| History {
@@ -200,10 +211,12 @@ impl EquationWalker<'_> {
             d2: vec![0.0; n_comp],
             rh1: [1.0, 0.0],
             rh2: [1.0, 0.0],
-            headings: HeadingRotation::default(),
+            headings: Some(HeadingRotation::default()),
             samples: 0,
             equations: 0,
         });
+        // Rotations read from a kept copy leave the running rotation behind.
+        let mut headings = headings.filter(|_| known_headings.is_none());
         let mut x_sim = vec![0.0; n_out];
         let mut x_next = vec![0.0; n_out];
         let mut fbuf = vec![0.0; n_out];
@@ -439,9 +452,12 @@ impl EquationWalker<'_> {
             }
             if planar.is_some() {
                 rh2 = rh1;
-                rh1 = match known_headings {
-                    Some(r) => r[k],
-                    None => headings.next(row.heading),
+                rh1 = match (known_headings, headings.as_mut()) {
+                    (Some(r), _) => r[k],
+                    (None, Some(h)) => h.next(row.heading),
+                    // A resumed walk without its rotation state is only
+                    // offered kept rotations (`History::continues_headings`).
+                    (None, None) => planar_rotation(row.heading),
                 };
                 if let Some(kept) = reuse.keep_headings.as_deref_mut() {
                     kept.push(rh1);
