@@ -248,9 +248,9 @@ fn rows_kept_over_a_prefix_change_no_bit() {
         let mut others = prefixes.clone();
         others.rotate_left(1);
         for (label, prefixes) in [("own", &prefixes), ("others", &others)] {
-            // 1.28 MB keeps the 300-sample prefixes' rows and the records'
-            // least-squares rows, but not their heading rotations: a bootstrap
-            // that read kept rotations over the prefix must not go on from it.
+            // Under 1.28 MB (found by a sweep), a bootstrap that read kept
+            // heading rotations over the prefix finds none kept over the
+            // record: it must not go on from the prefix.
             for budget in [
                 None,
                 Some(60_000),
