@@ -494,7 +494,10 @@ impl<'a> PassRunner<'a> {
                             .map(|(a, r)| (a.finish_with(r), None))
                             .unzip(),
                         None => {
-                            partial = acc.iter().map(MomentAccumulator::partial).collect();
+                            // Only a pass that can be gone on from keeps where it stood.
+                            if keeps_history {
+                                partial = acc.iter().map(MomentAccumulator::partial).collect();
+                            }
                             acc.into_iter()
                                 .map(MomentAccumulator::finish_keeping)
                                 .unzip()
@@ -507,9 +510,7 @@ impl<'a> PassRunner<'a> {
                         info,
                         Kept {
                             resume: match (instruments_key, history, partial) {
-                                (Some(instruments), Some(history), Some(sums))
-                                    if keeps_history && bad.is_none() =>
-                                {
+                                (Some(instruments), Some(history), Some(sums)) if bad.is_none() => {
                                     Some(Resume {
                                         instruments,
                                         history,
