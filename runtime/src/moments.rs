@@ -167,6 +167,10 @@ pub struct RegressorRows {
     /// Row-major `samples × wf`.
     rows: Vec<f64>,
     s_pp: Vec<f64>,
+    /// The sums of squares of the full blocks' rows only (padded width):
+    /// where an accumulation over these rows stood before its last, partial
+    /// block, which a resumed accumulation adds again.
+    s_pp_blocks: Vec<f64>,
 }
 
 impl RegressorRows {
@@ -214,6 +218,19 @@ impl PartialSums {
             && self.sums.len() == wz * rows.wf
             && self.s_zz.len() == wz
             && self.s_pp.len() == rows.wf
+            && self.zb.len() == self.filled * wz
+    }
+    /// Whether these sums are where an accumulation of as many instruments
+    /// against the first of `rows` stood (their shapes, and no more
+    /// samples than `rows` has).
+    pub fn continues_over(&self, rows: &RegressorRows) -> bool {
+        let wz = padded(rows.p + 1);
+        self.n <= rows.len()
+            && self.filled < BLOCK
+            && self.n % BLOCK == self.filled
+            && self.z0.len() == rows.p
+            && self.sums.len() == wz * rows.wf
+            && self.s_zz.len() == wz
             && self.zb.len() == self.filled * wz
     }
     /// Samples accumulated.
@@ -361,15 +378,48 @@ impl MomentAccumulator {
     /// one after them.
     pub fn keep_rows_resuming(&mut self, prefix: RegressorRows, from: PartialSums, samples: usize) {
         debug_assert!(self.n == 0 && self.m == self.p && from.continues(&prefix));
+        // The rows' own squares: `from` may come from an accumulation
+        // against kept rows, which sums none.
+        let s_pp = prefix.s_pp_blocks.clone();
         self.keep_rows_after(prefix, samples);
         self.n = from.n;
         self.z0 = from.z0;
         self.sums = from.sums;
         self.s_zz = from.s_zz;
-        self.s_pp = from.s_pp;
+        self.s_pp = s_pp;
         self.zb[..from.zb.len()].copy_from_slice(&from.zb);
         self.filled = from.filled;
         self.base = from.n - from.filled;
+    }
+
+    /// Where an accumulation by [`MomentAccumulator::push_instruments`]
+    /// stands (see [`PartialSums`]; the regressors' squares are the kept
+    /// rows' own).
+    pub fn partial_instruments(&self) -> PartialSums {
+        PartialSums {
+            n: self.n,
+            z0: self.z0.clone(),
+            sums: self.sums.clone(),
+            s_zz: self.s_zz.clone(),
+            s_pp: self.s_pp.clone(),
+            zb: self.zb[..self.filled * self.wz].to_vec(),
+            filled: self.filled,
+        }
+    }
+
+    /// Goes on from `from`, where an accumulation of as many instruments
+    /// against the first rows of `kept` stood
+    /// ([`PartialSums::continues_over`]): the next sample pushed by
+    /// [`MomentAccumulator::push_instruments`] is the one after them, and
+    /// the sums are those of pushing every sample.
+    pub fn resume_instruments(&mut self, from: PartialSums, kept: &RegressorRows) {
+        debug_assert!(self.n == 0 && self.m == kept.p && from.continues_over(kept));
+        self.n = from.n;
+        self.z0 = from.z0;
+        self.sums = from.sums;
+        self.s_zz = from.s_zz;
+        self.zb[..from.zb.len()].copy_from_slice(&from.zb);
+        self.filled = from.filled;
     }
 
     /// Adds one sample whose regressors and target are already in its kept
@@ -557,6 +607,7 @@ impl MomentAccumulator {
 
     /// The sums, and the regressor rows kept since [`MomentAccumulator::keep_rows`].
     pub fn finish_keeping(mut self) -> (CrossMoments, Option<RegressorRows>) {
+        let s_pp_blocks = self.s_pp.clone();
         self.flush();
         let rows = self.keeping.then(|| {
             let mut rows = std::mem::take(&mut self.fb);
@@ -568,6 +619,7 @@ impl MomentAccumulator {
                 t0: self.t0,
                 rows,
                 s_pp: self.s_pp[..self.p].to_vec(),
+                s_pp_blocks,
             }
         });
         (self.finish(), rows)

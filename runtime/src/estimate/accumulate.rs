@@ -24,6 +24,7 @@ impl Estimator<'_> {
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
         scan: bool,
+        prefix: Vec<Option<PrefixInstruments>>,
     ) -> Result<Accumulated, EstimateError> {
         let request = PassRequest {
             plan: self.pass_plan(),
@@ -32,6 +33,7 @@ impl Estimator<'_> {
                 mu: mu.to_vec(),
                 reference: reference.map(|(t, m)| (t.to_vec(), m.to_vec())),
                 scan,
+                prefix,
             },
             infos: self.infos.clone(),
         };

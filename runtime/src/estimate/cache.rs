@@ -1,6 +1,7 @@
 //! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation — values later passes would compute again bit for bit.
 
-use super::record::FactsState;
+use super::record::{FactsState, FixedSignColumn};
+use super::walk::SimWalk;
 use super::*;
 use crate::moments::{PartialSums, RegressorRows};
 
@@ -23,8 +24,15 @@ pub(super) struct RecordCache {
     /// The prefix's heading rotations, for a pass that goes on from it.
     prefix_headings: Option<Vec<[f64; 2]>>,
     headings: Option<Vec<[f64; 2]>>,
-    /// The states after each step of the simulation of `(θ, μ)` (their bits).
-    trajectory: Option<(Vec<u64>, Vec<u64>, Vec<f64>)>,
+    /// The states after each step of the simulation of `(θ, μ)` (their
+    /// bits), the last one of each plan's passes.
+    trajectories: Vec<(RowsKey, Vec<u64>, Vec<u64>, Vec<f64>)>,
+    /// Where the last pass of each plan that simulated its instruments stood.
+    simulations: Vec<SimResume>,
+    /// The same, kept over a shorter prefix of this record with the
+    /// simulation's states: for a warm start's first pass, which continues
+    /// those instruments.
+    prefix_simulations: Vec<(SimResume, Vec<f64>)>,
     /// The previous trajectory's storage, reused for the next one.
     spare: Vec<f64>,
     /// Samples of the longest record that will begin with this one: room
@@ -41,6 +49,33 @@ pub(super) struct Continued {
     rows: KeptRows,
     headings: Option<Vec<[f64; 2]>>,
     facts: Vec<(PredictorKind, FactsState)>,
+    simulations: Vec<(SimResume, Vec<f64>)>,
+}
+
+/// Where a pass that simulated its instruments stood after a record's
+/// samples, before its last partial block: a pass over a longer record
+/// that begins with these samples, with the same plan, sign pattern,
+/// simulation and instruments, goes on from here.
+#[derive(Clone, Debug)]
+pub(super) struct SimResume {
+    key: RowsKey,
+    fixed: Vec<FixedSignColumn>,
+    theta: Vec<u64>,
+    mu: Vec<u64>,
+    /// The measured disturbance means its instruments took (empty for a
+    /// predictor that reads none).
+    means: Vec<u64>,
+    pub(super) walk: SimWalk,
+    /// Per output.
+    pub(super) sums: Vec<PartialSums>,
+}
+
+/// What a pass's simulated instruments are: its θ and μ, and the measured
+/// means they take (empty where the predictor reads none).
+pub(super) struct SimulationKey<'a> {
+    pub(super) theta: &'a [f64],
+    pub(super) mu: &'a [f64],
+    pub(super) means: Vec<u64>,
 }
 
 /// Where the scanning pass that kept a plan's rows stood after them, if
@@ -104,6 +139,8 @@ pub(super) struct Kept<'a> {
     pub(super) headings: Option<Vec<[f64; 2]>>,
     /// The simulated `(θ, μ)` and its states after each step.
     pub(super) trajectory: Option<(&'a [f64], &'a [f64], Vec<f64>)>,
+    /// Where a pass that simulated its instruments stood.
+    pub(super) simulation: Option<(SimulationKey<'a>, SimWalk, Vec<PartialSums>)>,
 }
 
 impl RecordCache {
@@ -142,13 +179,55 @@ impl RecordCache {
         self.prefix_headings.take()
     }
 
-    /// Every regressor row kept and where the facts visits stood, to begin
-    /// the cache of a longer record.
+    /// Where a pass over the prefix stood that simulated `key`'s
+    /// instruments over its `samples` samples with `plan` and `info`'s sign
+    /// pattern, and that simulation's states (taken).
+    pub(super) fn take_prefix_simulation(
+        &mut self,
+        plan: &PassPlan,
+        info: &ExperimentInfo,
+        key: &SimulationKey,
+        samples: usize,
+        budget: &mut usize,
+    ) -> Option<(SimResume, Vec<f64>)> {
+        let rows = rows_key(plan, info);
+        let (theta, mu) = (bits(key.theta), bits(key.mu));
+        let at = self.prefix_simulations.iter().position(|(s, _)| {
+            s.key == rows
+                && s.fixed == info.fixed_sign_columns
+                && s.theta == theta
+                && s.mu == mu
+                && s.means == key.means
+                && s.walk.samples == samples
+        })?;
+        let (resume, states) = self.prefix_simulations.swap_remove(at);
+        *budget += std::mem::size_of_val(states.as_slice());
+        Some((resume, states))
+    }
+
+    /// Every regressor row kept, where the facts visits and the last
+    /// simulated pass of each plan stood, to begin the cache of a longer
+    /// record.
     pub(super) fn into_continued(self) -> Continued {
+        let trajectories = self.trajectories;
+        let simulations = self
+            .simulations
+            .into_iter()
+            .filter_map(|s| {
+                let states = trajectories
+                    .iter()
+                    .find(|(_, t, m, x)| {
+                        *t == s.theta && *m == s.mu && x.len() == s.walk.trajectory_len()
+                    })
+                    .map(|(_, _, _, x)| x.clone())?;
+                Some((s, states))
+            })
+            .collect();
         Continued {
             rows: self.regressors,
             headings: self.headings,
             facts: self.facts,
+            simulations,
         }
     }
 
@@ -174,10 +253,19 @@ impl RecordCache {
                 prefix.push((key, r, resume));
             }
         }
+        let mut prefix_simulations = Vec::new();
+        for (s, states) in known.simulations {
+            let bytes = std::mem::size_of_val(states.as_slice());
+            if bytes <= *budget {
+                *budget -= bytes;
+                prefix_simulations.push((s, states));
+            }
+        }
         RecordCache {
             prefix,
             prefix_headings: known.headings,
             facts: known.facts,
+            prefix_simulations,
             ..RecordCache::default()
         }
     }
@@ -189,10 +277,11 @@ impl RecordCache {
 
     /// The states of the simulation of exactly `(θ, μ)`, if kept.
     pub(super) fn trajectory_of(&self, theta: &[f64], mu: &[f64]) -> Option<&[f64]> {
-        match &self.trajectory {
-            Some((t, m, states)) if *t == bits(theta) && *m == bits(mu) => Some(states),
-            _ => None,
-        }
+        let (theta, mu) = (bits(theta), bits(mu));
+        self.trajectories
+            .iter()
+            .find(|(_, t, m, _)| *t == theta && *m == mu)
+            .map(|(_, _, _, states)| states.as_slice())
     }
 
     /// Storage for the next trajectory.
@@ -234,22 +323,36 @@ impl RecordCache {
         {
             self.headings = Some(h);
         }
+        let key = rows_key(plan, info);
         if let Some((theta, mu, states)) = kept.trajectory {
-            // The kept trajectory is replaced: only the new one's growth counts.
-            let old = self
-                .trajectory
-                .as_ref()
-                .map_or(0, |(_, _, s)| std::mem::size_of_val(s.as_slice()));
+            // The plan's kept trajectory is replaced: only the new one's growth counts.
+            let at = self.trajectories.iter().position(|(k, ..)| *k == key);
+            let old = at.map_or(0, |i| {
+                std::mem::size_of_val(self.trajectories[i].3.as_slice())
+            });
             let new = std::mem::size_of_val(states.as_slice());
             if new <= old || fits(new - old) {
                 *budget += old.saturating_sub(new);
-                if let Some((_, _, old)) = self.trajectory.replace((bits(theta), bits(mu), states))
-                {
-                    self.spare = old;
+                let entry = (key.clone(), bits(theta), bits(mu), states);
+                match at {
+                    Some(i) => self.spare = std::mem::replace(&mut self.trajectories[i], entry).3,
+                    None => self.trajectories.push(entry),
                 }
             } else {
                 self.spare = states;
             }
+        }
+        if let Some((sim, walk, sums)) = kept.simulation {
+            self.simulations.retain(|s| s.key != key);
+            self.simulations.push(SimResume {
+                key,
+                fixed: info.fixed_sign_columns.clone(),
+                theta: bits(sim.theta),
+                mu: bits(sim.mu),
+                means: sim.means,
+                walk,
+                sums,
+            });
         }
     }
 }

@@ -153,6 +153,13 @@ pub struct Start {
     /// Means of the disturbance components (by global index) in the
     /// simulation; measured components are simulated as recorded.
     pub means: Vec<f64>,
+    /// The simulation that gave the start's own instruments (a settled
+    /// refined IV estimate on records the new ones begin with): the first
+    /// instruments are then that simulation's, continued over the new
+    /// samples, instead of a simulation of `theta` — the same fixed point
+    /// within the refinement's tolerance, and the sums over the shorter
+    /// records need not be made again.
+    pub instruments: Option<super::InstrumentSimulation>,
 }
 
 impl Start {
@@ -173,6 +180,7 @@ impl Start {
         Start {
             theta: estimate.theta.clone(),
             means,
+            instruments: estimate.instrument_simulation.clone(),
         }
     }
 }

@@ -102,6 +102,27 @@ pub struct Estimate {
     /// Notes: facts about the data worth knowing that need no action (e.g.
     /// where a pointwise modulus of a noisy state crosses zero).
     pub notes: Vec<String>,
+    /// The simulation whose instruments gave a refined IV estimate that
+    /// settled (`None` otherwise): what a warm start on longer records that
+    /// begin with these experiments continues ([`super::Start::from_estimate`]).
+    #[serde(skip)]
+    pub instrument_simulation: Option<InstrumentSimulation>,
+}
+
+/// The instrument simulation of a settled refined IV estimate: the θ and
+/// disturbance means simulated, and per experiment its samples and the
+/// measured disturbance means its instruments took. A warm start that
+/// carries it begins on a longer record with these very instruments over
+/// the first samples (the simulation continued over the new ones), so a
+/// pass over that record can go on from the sums of the shorter one's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InstrumentSimulation {
+    /// θ simulated.
+    pub theta: Vec<f64>,
+    /// Disturbance-component means simulated (by global index).
+    pub means: Vec<f64>,
+    /// Per experiment: `(samples, measured disturbance means)`.
+    pub experiments: Vec<(usize, Vec<f64>)>,
 }
 
 impl Estimate {

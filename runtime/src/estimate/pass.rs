@@ -7,7 +7,9 @@
 //! order whoever computed them, so local and distributed estimates agree bit
 //! for bit.
 
-use super::cache::{Continued, InstrumentsKey, KEEP_BUDGET, Kept, RecordCache, Resume, bits};
+use super::cache::{
+    Continued, InstrumentsKey, KEEP_BUDGET, Kept, RecordCache, Resume, SimulationKey, bits,
+};
 use super::record::FactsState;
 use super::walk::Reuse;
 use super::*;
@@ -80,6 +82,9 @@ pub(super) enum Pass {
         mu: Vec<f64>,
         reference: Option<(Vec<f64>, Vec<f64>)>,
         scan: bool,
+        /// Per experiment (empty: none), the warm start's instruments: the
+        /// measured means they take, and the samples they settled on.
+        prefix: Vec<Option<PrefixInstruments>>,
     },
     /// Long-run sums of the moment residuals `ζ` (the covariance).
     LongRun(LongRunPass),
@@ -102,6 +107,16 @@ pub(super) struct LongRunPass {
     /// and the mean residual.
     pub(super) centres: Vec<Vec<Vec<f64>>>,
     pub(super) mean_res: Vec<Vec<f64>>,
+}
+
+/// The instruments a warm start settled on over the first `samples`
+/// samples of an experiment (a shorter record this one begins with; see
+/// [`super::Start::instruments`]): simulated instruments take the measured
+/// disturbances at `means`, that record's, over the whole experiment.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct PrefixInstruments {
+    pub(super) samples: usize,
+    pub(super) means: Vec<f64>,
 }
 
 /// What one experiment contributed to a pass.
@@ -147,6 +162,7 @@ struct MomentPass<'a> {
     mu: &'a [f64],
     reference: Option<(&'a [f64], &'a [f64])>,
     scan: bool,
+    prefix: Option<&'a PrefixInstruments>,
 }
 
 /// A model ready to run passes over experiments (its term plans built once).
@@ -244,6 +260,7 @@ impl<'a> PassRunner<'a> {
             instruments,
             delayed_mean: plan.delayed_mean,
             n_cols: plan.n_cols,
+            instrument_means: None,
         }
     }
 
@@ -269,6 +286,7 @@ impl<'a> PassRunner<'a> {
                 mu,
                 reference,
                 scan,
+                prefix,
             } => {
                 let reference = reference
                     .as_ref()
@@ -282,6 +300,7 @@ impl<'a> PassRunner<'a> {
                         mu,
                         reference,
                         scan: *scan,
+                        prefix: prefix.get(index).and_then(Option::as_ref),
                     },
                     cache,
                 )
@@ -309,14 +328,18 @@ impl<'a> PassRunner<'a> {
             mu,
             reference,
             scan,
+            prefix: prefix_instruments,
         } = pass;
         let ir = self.model.ir();
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
-        let walker = if theta_sim.is_empty() {
+        let mut walker = if theta_sim.is_empty() {
             self.walker(plan, Some(Instruments::Delayed))
         } else {
             self.walker(plan, plan.instruments)
         };
+        walker.instrument_means = prefix_instruments.map(|p| p.means.as_slice());
+        // The measured means the instruments take.
+        let instrument_means = prefix_instruments.map_or(&info.measured_mean, |p| &p.means);
         let simulates = walker.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
         let n = plan.n_cols;
         // What this pass keeps for later ones.
@@ -380,6 +403,58 @@ impl<'a> PassRunner<'a> {
             }
             None => (None, None),
         };
+        // A warm start's first pass goes on from where the pass over the
+        // shorter record that simulated the same instruments stood.
+        let reads_means = reads_measured_disturbances(ir, plan.kind);
+        let means_key = |m: &[f64]| if reads_means { bits(m) } else { Vec::new() };
+        let mut sim_resume = match (
+            prefix_instruments,
+            cache.as_deref_mut(),
+            budget.as_deref_mut(),
+        ) {
+            (Some(p), Some(c), Some(b))
+                if simulates && reference.is_none() && resume.is_none() && headings_known =>
+            {
+                let key = SimulationKey {
+                    theta: theta_sim,
+                    mu,
+                    means: means_key(&p.means),
+                };
+                c.take_prefix_simulation(plan, info, &key, p.samples, b)
+            }
+            _ => None,
+        };
+        // It needs the regressor rows of its first samples: the prefix's, or
+        // the whole record's kept by another pass.
+        sim_resume = sim_resume.filter(|(s, _)| match &prefix {
+            Some(rows) => {
+                rows[0].len() == s.walk.equations
+                    && s.sums.len() == rows.len()
+                    && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
+            }
+            None => cache.as_deref().is_some_and(|c| {
+                plan.instruments.is_some()
+                    && c.regressors(plan, info).is_some_and(|r| {
+                        r.len() == s.sums.len()
+                            && r.iter().zip(&s.sums).all(|(r, p)| {
+                                r.len() == equations
+                                    && p.len() == s.walk.equations
+                                    && p.continues_over(r)
+                            })
+                    })
+            }),
+        });
+        let (sim_walk, sim_sums) = match sim_resume {
+            Some((s, states)) => {
+                if let Some(spare) = new_trajectory.replace(states)
+                    && let Some(c) = cache.as_deref_mut()
+                {
+                    c.return_spare(spare);
+                }
+                (Some(s.walk), Some(s.sums))
+            }
+            None => (None, None),
+        };
         if let Some(r) = &resume {
             // The heading rotations kept so far go on too, or none are kept.
             new_headings = new_headings.and_then(|_| {
@@ -398,11 +473,25 @@ impl<'a> PassRunner<'a> {
         // Where this pass stands at the end, for a pass over a longer record.
         let mut history = None;
         let keeps_history = keep_rows && instruments_key.is_some();
-        let resumed = resume.as_ref().map_or(0, |r| r.history.equations);
+        let resumed = resume
+            .as_ref()
+            .map(|r| r.history.equations)
+            .or(sim_walk.as_ref().map(|s| s.equations))
+            .unwrap_or(0);
         let (resume_history, resume_sums) = match resume {
             Some(r) => (Some(r.history), Some(r.sums)),
             None => (None, None),
         };
+        // A simulation resumed over kept rows of the whole record goes on
+        // from its instruments' sums; one over the prefix's rows, as a
+        // θ-free pass does, from its rows' too.
+        let (resume_sums, sums_over_kept) = match (resume_sums, sim_sums) {
+            (Some(s), _) => (Some(s), None),
+            (None, Some(s)) if prefix.is_some() => (Some(s), None),
+            (None, s) => (None, s),
+        };
+        let mut sim_kept = None;
+        let keeps_simulation = simulates && cache.is_some() && e.in_memory().is_some();
         let mut reuse = Reuse {
             headings: kept.and_then(RecordCache::headings),
             keep_headings: new_headings.as_mut(),
@@ -415,6 +504,8 @@ impl<'a> PassRunner<'a> {
             measured_known,
             resume: resume_history,
             keep_history: keeps_history.then_some(&mut history),
+            resume_simulation: sim_walk,
+            keep_simulation: keeps_simulation.then_some(&mut sim_kept),
         };
         // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
         let mut k = 1 + resumed;
@@ -438,6 +529,11 @@ impl<'a> PassRunner<'a> {
                 a
             })
             .collect();
+        if let (Some(sums), Some(rows)) = (sums_over_kept, rows) {
+            for ((a, s), r) in acc.iter_mut().zip(sums).zip(rows) {
+                a.resume_instruments(s, r);
+            }
+        }
         let walked = walker.walk(
             e,
             info,
@@ -485,6 +581,29 @@ impl<'a> PassRunner<'a> {
         };
         match walked {
             Ok(change) => {
+                // Where the simulation's sums stood, for a warm start's pass
+                // over a longer record.
+                let simulation = sim_kept
+                    .and_then(|walk| {
+                        let sums = match rows {
+                            Some(_) => Some(
+                                acc.iter()
+                                    .map(MomentAccumulator::partial_instruments)
+                                    .collect(),
+                            ),
+                            None => acc.iter().map(MomentAccumulator::partial).collect(),
+                        };
+                        sums.map(|s: Vec<PartialSums>| (walk, s))
+                    })
+                    .filter(|_| bad.is_none())
+                    .map(|(walk, sums)| {
+                        let key = SimulationKey {
+                            theta: theta_sim,
+                            mu,
+                            means: means_key(instrument_means),
+                        };
+                        (key, walk, sums)
+                    });
                 let mut partial: Option<Vec<PartialSums>> = None;
                 let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
                     match rows {
@@ -522,6 +641,7 @@ impl<'a> PassRunner<'a> {
                             regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
                             headings: new_headings,
                             trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
+                            simulation,
                         },
                         budget,
                     );

@@ -5,7 +5,7 @@ use super::*;
 /// A measured-medium (`Φ2`) column whose modulus arguments keep their sign
 /// in the data: its instrument is the noise-free `s·a_sim·…` rather than a
 /// pointwise `|a_sim|` of a possibly crude simulation.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(super) struct FixedSignColumn {
     pub(super) column: usize,
     /// `(term, output, sign of each factor's modulus argument)`.

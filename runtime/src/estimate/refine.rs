@@ -41,9 +41,33 @@ impl Estimator<'_> {
         let mut refinements = 0usize;
         let mut converged = !refine;
         let mut stopped = false;
+        // A warm start that carries the simulation its own instruments came
+        // from begins with those instruments over the samples it settled on
+        // (continued over the new ones): the same fixed point within the
+        // tolerance, and the passes there need not be summed again.
+        let mut prefix = Vec::new();
         if let (true, Some(start)) = (refine, &self.options.start) {
             theta_sim.clone_from(&start.theta);
             mu.clone_from(&start.means);
+            if let Some(sim) = &start.instruments
+                && sim.theta.len() == start.theta.len()
+                && sim.means.len() == start.means.len()
+                && sim.experiments.len() == self.facts.len()
+            {
+                theta_sim.clone_from(&sim.theta);
+                mu.clone_from(&sim.means);
+                prefix = sim
+                    .experiments
+                    .iter()
+                    .zip(&self.facts)
+                    .map(|((samples, means), f)| {
+                        (*samples <= f.len && means.len() == n_comp).then(|| PrefixInstruments {
+                            samples: *samples,
+                            means: means.clone(),
+                        })
+                    })
+                    .collect();
+            }
         }
         let bootstrap =
             refine && self.options.start.is_none() && self.options.initial == Initial::Delayed;
@@ -52,7 +76,7 @@ impl Estimator<'_> {
         } else {
             theta_sim.clone()
         };
-        let moments = match self.accumulate(&first, &mu, None, true)? {
+        let moments = match self.accumulate(&first, &mu, None, true, prefix)? {
             Accumulated::Done(m, _, _) => m,
             Accumulated::Bad(i, bad) => return Err(self.non_finite_error(i, &bad)),
             Accumulated::Diverged => {
@@ -103,9 +127,13 @@ impl Estimator<'_> {
                     .zip(&new_mu)
                     .map(|(a, b)| a + step * (b - a))
                     .collect();
-                if let Accumulated::Done(m, change, fit) =
-                    self.accumulate(&trial, &trial_mu, Some((&theta_sim, &mu)), false)?
-                {
+                if let Accumulated::Done(m, change, fit) = self.accumulate(
+                    &trial,
+                    &trial_mu,
+                    Some((&theta_sim, &mu)),
+                    false,
+                    Vec::new(),
+                )? {
                     accepted = Some((trial, trial_mu, (m, change, fit)));
                     break;
                 }
@@ -220,7 +248,7 @@ impl Estimator<'_> {
         } else {
             None
         };
-        self.finish(
+        let mut estimate = self.finish(
             sign_patterns,
             &sol,
             values,
@@ -228,6 +256,21 @@ impl Estimator<'_> {
             cov,
             refinements,
             converged,
-        )
+        )?;
+        // The instruments of a settled refinement, for a warm start that
+        // continues them on longer records.
+        if refine && converged && !theta_sim.is_empty() {
+            estimate.instrument_simulation = Some(InstrumentSimulation {
+                theta: theta_sim,
+                means: mu,
+                experiments: self
+                    .facts
+                    .iter()
+                    .zip(&self.infos)
+                    .map(|(f, i)| (f.len, i.measured_mean.clone()))
+                    .collect(),
+            });
+        }
+        Ok(estimate)
     }
 }

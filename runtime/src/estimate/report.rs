@@ -188,6 +188,7 @@ impl Estimator<'_> {
             },
             warnings: self.warnings.clone(),
             notes: Vec::new(),
+            instrument_simulation: None,
         })
     }
 }

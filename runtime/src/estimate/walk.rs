@@ -14,6 +14,10 @@ pub(super) struct EquationWalker<'a> {
     /// mean (bootstrap of the refined IV) instead of one sample earlier.
     pub(super) delayed_mean: bool,
     pub(super) n_cols: usize,
+    /// Simulated instruments take measured disturbances at these means
+    /// (a warm start's instruments: those of the shorter record it settled
+    /// on) instead of the experiment's own.
+    pub(super) instrument_means: Option<&'a [f64]>,
 }
 
 #[derive(Debug)]
@@ -48,6 +52,31 @@ pub(super) struct Reuse<'a> {
     pub(super) resume: Option<History>,
     /// Keep where this walk stood after the record's samples here.
     pub(super) keep_history: Option<&'a mut Option<History>>,
+    /// Go on from where a walk that simulated the same instruments over the
+    /// record's first samples stood (in-memory records with kept heading
+    /// rotations; the measured history is read again from the record).
+    pub(super) resume_simulation: Option<SimWalk>,
+    /// Keep where this walk's simulation stood after the record's samples here.
+    pub(super) keep_simulation: Option<&'a mut Option<SimWalk>>,
+}
+
+/// Where a walk that simulates its instruments (and has no reference
+/// simulation) stood after a record's samples: the simulation's state, the
+/// anchored heading's rotation and the sums of its fit to the data. A walk
+/// of the same simulation over a longer record that begins with these
+/// samples goes on from here, with the same bits as one from the start.
+#[derive(Clone, Debug)]
+pub(super) struct SimWalk {
+    /// Samples walked.
+    pub(super) samples: usize,
+    /// Equations given to the sink.
+    pub(super) equations: usize,
+    x_sim: Vec<f64>,
+    rz: [f64; 2],
+    err2: Vec<f64>,
+    y_sum: Vec<f64>,
+    y_sum2: Vec<f64>,
+    y_n: usize,
 }
 
 /// Where a walk whose instruments do not depend on θ (least squares,
@@ -91,6 +120,13 @@ pub(super) struct SimChange {
     pub(super) y_sum: Vec<f64>,
     pub(super) y_sum2: Vec<f64>,
     pub(super) y_n: usize,
+}
+
+impl SimWalk {
+    /// Entries of the simulation's states after each step over these samples.
+    pub(super) fn trajectory_len(&self) -> usize {
+        self.samples.saturating_sub(1) * self.x_sim.len()
+    }
 }
 
 impl History {
@@ -187,7 +223,24 @@ impl EquationWalker<'_> {
         let resume = reuse.resume.take().filter(|_| {
             self.instruments != Some(Instruments::Simulated) && e.in_memory().is_some()
         });
-        let start = resume.as_ref().map_or(0, |h| h.samples);
+        // A simulation goes on from its state; the two samples before it are
+        // walked again for the measured history only (their heading rotations kept).
+        let resume_sim = reuse.resume_simulation.take().filter(|s| {
+            resume.is_none()
+                && self.instruments == Some(Instruments::Simulated)
+                && !theta_sim.is_empty()
+                && reference.is_none()
+                && e.in_memory().is_some()
+                && known_headings.is_some()
+                && s.samples >= 3
+                && s.samples <= e.len()
+                && s.equations + 2 == s.samples
+                && s.x_sim.len() == n_out
+        });
+        let replay_until = resume_sim.as_ref().map_or(0, |s| s.samples);
+        let start = resume
+            .as_ref()
+            .map_or(replay_until.saturating_sub(2), |h| h.samples);
         let History {
             mut y1,
             mut y2,
@@ -219,10 +272,14 @@ impl EquationWalker<'_> {
         let mut headings = headings.filter(|_| known_headings.is_none());
         let mut x_sim = vec![0.0; n_out];
         let mut x_next = vec![0.0; n_out];
+        if let Some(s) = &resume_sim {
+            x_sim.copy_from_slice(&s.x_sim);
+            equations = s.equations;
+        }
         let mut fbuf = vec![0.0; n_out];
         // The anchored heading's rotation `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`,
         // rotated from the measured one by the small simulated step.
-        let mut rz = [1.0, 0.0];
+        let mut rz = resume_sim.as_ref().map_or([1.0, 0.0], |s| s.rz);
         let mut sim_dist = vec![0.0; n_comp];
         let measured: Vec<bool> = ir
             .components
@@ -246,6 +303,12 @@ impl EquationWalker<'_> {
             y_sum2: vec![0.0; n_out],
             y_n: 0,
         };
+        if let Some(s) = resume_sim {
+            change.err2 = s.err2;
+            change.y_sum = s.y_sum;
+            change.y_sum2 = s.y_sum2;
+            change.y_n = s.y_n;
+        }
         // Buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
         let mut fix_acc = vec![0.0; n_out];
         let mut fix_set = vec![false; n_out];
@@ -282,7 +345,9 @@ impl EquationWalker<'_> {
             if diverged {
                 return;
             }
-            if k == 0 {
+            if k < replay_until {
+                // Walked again for the history only.
+            } else if k == 0 {
                 x_sim.copy_from_slice(row.states);
                 x_ref.copy_from_slice(row.states);
                 if planar.is_some() {
@@ -307,11 +372,12 @@ impl EquationWalker<'_> {
                         // Least squares: the regressors are their own instruments.
                         None => {}
                         Some(Instruments::Simulated) => {
+                            let means = self.instrument_means.unwrap_or(&info.measured_mean);
                             let sig = Signals {
                                 states: &x_sim,
                                 inputs: &u1,
                                 rotation: if planar.is_some() { &rz } else { &rot2 },
-                                disturbances: &info.measured_mean,
+                                disturbances: means,
                             };
                             set_pointwise_signs(&mut signs, &info.varying, &x_sim);
                             self.model
@@ -487,6 +553,21 @@ impl EquationWalker<'_> {
                 headings,
                 samples: k,
                 equations,
+            });
+        } else if let Some(kept) = reuse.keep_simulation.as_deref_mut()
+            && !diverged
+            && self.instruments == Some(Instruments::Simulated)
+            && !theta_sim.is_empty()
+        {
+            *kept = Some(SimWalk {
+                samples: k,
+                equations,
+                x_sim,
+                rz,
+                err2: change.err2.clone(),
+                y_sum: change.y_sum.clone(),
+                y_sum2: change.y_sum2.clone(),
+                y_n: change.y_n,
             });
         }
         if diverged { Err(Diverged) } else { Ok(change) }
