@@ -230,6 +230,22 @@ impl Estimator<'_> {
             }
             let kj: Vec<usize> = sel.kept.clone();
             let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
+            // A refinement's iterate needs only ϑ: the columns kept are
+            // independent, so a QR factorisation solves it; the recorded
+            // solve (the estimate reported, its covariance map and
+            // conditioning) takes the SVD.
+            if !record && let Some(values) = solve_independent(&mk, &g) {
+                out.push(BlockSolution {
+                    kept,
+                    held,
+                    values: values.iter().copied().collect(),
+                    b: Vec::new(),
+                    rows: Vec::new(),
+                    condition: f64::NAN,
+                    weak: Vec::new(),
+                });
+                continue;
+            }
             let (values, mut pinv, condition) = solve_equilibrated(&mk, &g);
             // The map from the unscaled moment sums to ϑ includes the row scaling.
             for (c, d) in row_scale.iter().enumerate() {
@@ -431,6 +447,28 @@ pub(super) fn weakest_direction(m: &DMatrix<f64>) -> Vec<usize> {
     let v = vt.row(weakest);
     let top = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     (0..cols).filter(|j| v[*j].abs() >= 0.3 * top).collect()
+}
+
+/// Least-squares solution of `M x = g` for independent columns, with
+/// column equilibration, by Householder QR; `None` when the triangular
+/// factor is singular or the solution not finite (then only the SVD of
+/// [`solve_equilibrated`] answers).
+pub(crate) fn solve_independent(m: &DMatrix<f64>, g: &DVector<f64>) -> Option<DVector<f64>> {
+    let cols = m.ncols();
+    if cols == 0 || m.nrows() < cols {
+        return None;
+    }
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let qr = scaled.qr();
+    let mut rhs = g.clone();
+    qr.q_tr_mul(&mut rhs);
+    let r = qr.r();
+    let x = r.solve_upper_triangular(&rhs.rows(0, cols).into_owned())?;
+    let x = DVector::from_iterator(cols, x.iter().zip(&d).map(|(v, s)| v / s));
+    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 /// Least-squares solution of `M x = g` with column equilibration; returns
