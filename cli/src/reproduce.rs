@@ -214,7 +214,7 @@ pub fn run(args: &ReproduceArgs) -> Status {
     let model = ship::Ship;
     let report = pool.install(|| execute(&model, &config));
     out(&text::render(&report, args));
-    let problems = write_outputs(&model, &report, &args.out);
+    let problems = pool.install(|| write_outputs(&model, &report, &args.out));
     let mut written = Vec::new();
     for item in &problems {
         match item {
@@ -344,15 +344,21 @@ fn write_outputs(model: &dyn Model, report: &Report, dir: &Path) -> Vec<Result<P
         .at(dir.display().to_string())
         .help("choose another directory with --out DIR"))];
     }
+    use rayon::prelude::*;
     let mut results = vec![write_json(report, &dir.join("results.json"))];
-    for (name, figure) in figures::all(model, report) {
-        for ext in ["svg", "png"] {
-            let path = dir.join(format!("{name}.{ext}"));
-            results.push(figure.save(&path).map(|()| path.clone()).map_err(|e| {
-                Problem::error("io", format!("cannot draw `{}`: {e}", path.display()))
-            }));
-        }
-    }
+    // Every file drawn on its own worker, listed in the same order.
+    let figures = figures::all(model, report);
+    let files: Vec<(PathBuf, &figures::AnyFigure)> = figures
+        .iter()
+        .flat_map(|(name, figure)| {
+            ["svg", "png"].map(|ext| (dir.join(format!("{name}.{ext}")), figure))
+        })
+        .collect();
+    results.par_extend(files.par_iter().map(|(path, figure)| {
+        figure.save(path).map(|()| path.clone()).map_err(|e| {
+            Problem::error("io", format!("cannot draw `{}`: {e}", path.display()))
+        })
+    }));
     results
 }
 

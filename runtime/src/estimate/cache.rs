@@ -209,18 +209,15 @@ impl RecordCache {
     /// simulated pass of each plan stood, to begin the cache of a longer
     /// record.
     pub(super) fn into_continued(self) -> Continued {
-        let trajectories = self.trajectories;
+        let mut trajectories = self.trajectories;
         let simulations = self
             .simulations
             .into_iter()
             .filter_map(|s| {
-                let states = trajectories
-                    .iter()
-                    .find(|(_, t, m, x)| {
-                        *t == s.theta && *m == s.mu && x.len() == s.walk.trajectory_len()
-                    })
-                    .map(|(_, _, _, x)| x.clone())?;
-                Some((s, states))
+                let at = trajectories.iter().position(|(_, t, m, x)| {
+                    *t == s.theta && *m == s.mu && x.len() == s.walk.trajectory_len()
+                })?;
+                Some((s, trajectories.swap_remove(at).3))
             })
             .collect();
         Continued {

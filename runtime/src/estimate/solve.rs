@@ -234,15 +234,30 @@ impl Estimator<'_> {
             // independent, so a QR factorisation solves it; the recorded
             // solve (the estimate reported, its covariance map and
             // conditioning) takes the SVD.
-            if !record && let Some(values) = solve_independent(&mk, &g) {
+            // Without a covariance, the recorded solve needs only the
+            // singular values besides ϑ (the conditioning of the summed,
+            // equilibrated system), not the pseudo-inverse.
+            let values_only = !record || (summed && !self.options.covariance);
+            if values_only && let Some(values) = solve_independent(&mk, &g) {
+                let (condition, weak) = if record {
+                    let condition = condition_number(&mk);
+                    let weak = if condition > CONDITION_WARNING {
+                        weakest_direction(&mk).into_iter().map(|k| kept[k]).collect()
+                    } else {
+                        Vec::new()
+                    };
+                    (condition, weak)
+                } else {
+                    (f64::NAN, Vec::new())
+                };
                 out.push(BlockSolution {
                     kept,
                     held,
                     values: values.iter().copied().collect(),
                     b: Vec::new(),
                     rows: Vec::new(),
-                    condition: f64::NAN,
-                    weak: Vec::new(),
+                    condition,
+                    weak,
                 });
                 continue;
             }
@@ -469,6 +484,22 @@ pub(crate) fn solve_independent(m: &DMatrix<f64>, g: &DVector<f64>) -> Option<DV
     let x = r.solve_upper_triangular(&rhs.rows(0, cols).into_owned())?;
     let x = DVector::from_iterator(cols, x.iter().zip(&d).map(|(v, s)| v / s));
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The condition number of the column-equilibrated `m`, as
+/// [`solve_equilibrated`] reports it, from its singular values alone.
+pub(crate) fn condition_number(m: &DMatrix<f64>) -> f64 {
+    let cols = m.ncols();
+    if cols == 0 || m.nrows() == 0 {
+        return 1.0;
+    }
+    let d: Vec<f64> = (0..cols)
+        .map(|j| m.column(j).norm().max(f64::MIN_POSITIVE))
+        .collect();
+    let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
+    let s = scaled.singular_values();
+    let (smax, smin) = (s.max(), s.min());
+    if smin > 0.0 { smax / smin } else { f64::INFINITY }
 }
 
 /// Least-squares solution of `M x = g` with column equilibration; returns
