@@ -355,9 +355,10 @@ fn write_outputs(model: &dyn Model, report: &Report, dir: &Path) -> Vec<Result<P
         })
         .collect();
     results.par_extend(files.par_iter().map(|(path, figure)| {
-        figure.save(path).map(|()| path.clone()).map_err(|e| {
-            Problem::error("io", format!("cannot draw `{}`: {e}", path.display()))
-        })
+        figure
+            .save(path)
+            .map(|()| path.clone())
+            .map_err(|e| Problem::error("io", format!("cannot draw `{}`: {e}", path.display())))
     }));
     results
 }

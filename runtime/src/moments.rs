@@ -1055,6 +1055,54 @@ mod tests {
             assert_eq!(format!("{:?}", a.rows), format!("{:?}", b.rows));
             assert_eq!(format!("{:?}", a.s_pp), format!("{:?}", b.s_pp));
         }
+        // Against kept rows: instruments summed over the first samples go on
+        // over the rest of the record's rows (a refinement's simulation
+        // continued), in a keeping accumulation or against the kept rows.
+        let mut rows_all = MomentAccumulator::new(5, 5);
+        rows_all.keep_rows(200, 0);
+        for k in 0..200 {
+            rows_all.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+        }
+        let (_, rows_all) = rows_all.finish_keeping();
+        let rows_all = rows_all.expect("rows kept");
+        let z = |k: usize| dense(k + 7);
+        let mut whole = MomentAccumulator::new(5, 5);
+        for k in 0..200 {
+            whole.push_instruments(&z(k), &cols, &rows_all);
+        }
+        let whole = whole.finish_with(&rows_all);
+        for prefix in [5, 32, 77] {
+            let mut first = MomentAccumulator::new(5, 5);
+            first.keep_rows(prefix, 0);
+            for k in 0..prefix {
+                first.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+            }
+            let (_, prefix_rows) = first.finish_keeping();
+            let prefix_rows = prefix_rows.expect("rows kept");
+            let mut over_kept = MomentAccumulator::new(5, 5);
+            for k in 0..prefix {
+                over_kept.push_instruments(&z(k), &cols, &prefix_rows);
+            }
+            let from = over_kept.partial_instruments();
+            assert!(from.continues_over(&rows_all) && from.continues(&prefix_rows));
+            let mut resumed = MomentAccumulator::new(5, 5);
+            resumed.resume_instruments(from.clone(), &rows_all);
+            for k in prefix..200 {
+                resumed.push_instruments(&z(k), &cols, &rows_all);
+            }
+            assert_eq!(
+                bits(&whole),
+                bits(&resumed.finish_with(&rows_all)),
+                "prefix {prefix}"
+            );
+            let mut scanning = MomentAccumulator::new(5, 5);
+            scanning.keep_rows_resuming(prefix_rows, from, 200);
+            for k in prefix..200 {
+                scanning.push_columns(&z(k), &dense(k + 1), &cols, target(k));
+            }
+            let (scanned, _) = scanning.finish_keeping();
+            assert_eq!(bits(&whole), bits(&scanned), "prefix {prefix}, scanning");
+        }
         // Sums of other rows, or of an accumulation that keeps none, do not continue.
         let mut other = MomentAccumulator::new(5, 5);
         other.keep_rows(10, 0);

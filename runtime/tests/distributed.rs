@@ -275,3 +275,156 @@ fn rows_kept_over_a_prefix_change_no_bit() {
         }
     }
 }
+
+/// The estimates of every method on the first `n` samples of each record,
+/// through one `LocalPasses` as the study runs them: the warm starts of the
+/// methods that settled (with the instruments they settled on) and what
+/// the passes kept, for the passes over the whole records.
+fn settled_on_prefixes(
+    model: &Interpreter,
+    data: &[Experiment],
+    n: usize,
+    budget: Option<usize>,
+) -> (
+    Vec<Option<leeway_runtime::estimate::Start>>,
+    leeway_runtime::estimate::PrefixRows,
+) {
+    use leeway_runtime::estimate::{LocalPasses, Start};
+    let prefixes: Vec<Experiment> = data.iter().map(|e| e.truncated(n)).collect();
+    let sources: Vec<&dyn Source> = prefixes.iter().map(|e| e as &dyn Source).collect();
+    let mut passes = LocalPasses::new(model, &sources).for_several_estimates();
+    if let Some(b) = budget {
+        passes = passes.with_budget(b);
+    }
+    let starts = Method::ALL
+        .iter()
+        .map(|m| {
+            let e = estimate_with(model, &passes, &aggregated(*m)).ok()?;
+            e.diagnostics
+                .converged
+                .then(|| Start::from_estimate(model.ir(), &e))
+        })
+        .collect();
+    (starts, passes.into_prefix_rows())
+}
+
+/// A warm start that carries the instruments it settled on over shorter
+/// records begins on the longer ones with those instruments; the passes
+/// that kept them over the prefix go on from their sums, simulation and
+/// trajectory mid-record (mid-block too): every estimate must be, bit for
+/// bit, the one workers that keep nothing compute with the same start —
+/// where the prefix's sign pattern differs (nothing to go on from), and
+/// under budgets that keep only part of what the passes offer.
+#[test]
+fn warm_starts_that_continue_the_prefix_instruments_change_no_bit() {
+    use leeway_runtime::estimate::LocalPasses;
+    let model = ship();
+    let design = InputDesign::default();
+    // Records long enough for IV2 and IV3 to settle on their prefixes, and
+    // prefixes that end inside a block of the moment sums.
+    for (records, n) in [
+        (vec![(10.0, 3000, 2), (10.0, 2800, 3)], 2500),
+        (vec![(10.0, 4000, 1)], 3000),
+    ] {
+        let data: Vec<Experiment> = records
+            .iter()
+            .map(|&(wind, len, seed)| {
+                study::estimation_experiment(&model, &design, wind, len, seed).0
+            })
+            .collect();
+        let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+        let workers = Workers {
+            model: &model,
+            experiments: &data,
+        };
+        for budget in [None, Some(250_000), Some(0)] {
+            let (starts, rows) = settled_on_prefixes(&model, &data, n, budget);
+            // Least squares (index 0) settles trivially and simulates nothing.
+            let refined = &starts[1..];
+            assert!(
+                refined[1..].iter().all(Option::is_some),
+                "IV2 and IV3 settle on {n} samples"
+            );
+            assert!(
+                refined.iter().flatten().all(|s| s
+                    .instruments
+                    .as_ref()
+                    .is_some_and(|i| i.experiments.iter().all(|(samples, _)| *samples == n))),
+                "a settled refinement carries its instruments"
+            );
+            assert!(starts[0].as_ref().is_none_or(|s| s.instruments.is_none()));
+            let mut passes = LocalPasses::new(&model, &sources).for_several_estimates();
+            if let Some(b) = budget {
+                passes = passes.with_budget(b);
+            }
+            let passes = passes.continuing(rows);
+            for (m, start) in Method::ALL.iter().zip(&starts) {
+                let options = EstimateOptions {
+                    start: start.clone(),
+                    ..aggregated(*m)
+                };
+                let kept = estimate_with(&model, &passes, &options).expect("continued");
+                let fresh = estimate_with(&model, &workers, &options).expect("fresh");
+                assert_eq!(
+                    bits(&kept),
+                    bits(&fresh),
+                    "{m:?}, prefix {n}, budget {budget:?}"
+                );
+            }
+        }
+    }
+}
+
+/// Beginning with the instruments a warm start settled on, rather than a
+/// simulation of its θ, is a statistical no-op: the refinement reaches the
+/// same fixed point within its tolerance. On one long record, IV2's and
+/// IV3's estimates either way differ by a small fraction of their standard
+/// errors.
+#[test]
+fn continued_instruments_reach_the_same_fixed_point() {
+    use leeway_runtime::estimate::Start;
+    let model = ship();
+    let design = InputDesign::default();
+    let (record, _) = study::estimation_experiment(&model, &design, 10.0, 4000, 1);
+    let prefix = record.truncated(3000);
+    for method in [Method::Iv2, Method::Iv3] {
+        let settled = estimate(&model, &[&prefix as &dyn Source], &aggregated(method))
+            .expect("prefix estimate");
+        assert!(settled.diagnostics.converged, "{method:?} settles");
+        let start = Start::from_estimate(model.ir(), &settled);
+        assert!(
+            start.instruments.is_some(),
+            "{method:?} carries its instruments"
+        );
+        let with = |start: Start| {
+            estimate(
+                &model,
+                &[&record as &dyn Source],
+                &EstimateOptions {
+                    start: Some(start),
+                    ..aggregated(method)
+                },
+            )
+            .expect("warm estimate")
+        };
+        let continued = with(start.clone());
+        let simulated = with(Start {
+            instruments: None,
+            ..start
+        });
+        assert!(continued.diagnostics.converged && simulated.diagnostics.converged);
+        for ((a, b), se) in continued
+            .theta
+            .iter()
+            .zip(&simulated.theta)
+            .zip(&continued.std_errors)
+        {
+            if let Some(se) = se {
+                assert!(
+                    (a - b).abs() <= 0.05 * se,
+                    "{method:?}: {a} vs {b}, standard error {se}"
+                );
+            }
+        }
+    }
+}

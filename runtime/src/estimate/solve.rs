@@ -242,7 +242,10 @@ impl Estimator<'_> {
                 let (condition, weak) = if record {
                     let condition = condition_number(&mk);
                     let weak = if condition > CONDITION_WARNING {
-                        weakest_direction(&mk).into_iter().map(|k| kept[k]).collect()
+                        weakest_direction(&mk)
+                            .into_iter()
+                            .map(|k| kept[k])
+                            .collect()
                     } else {
                         Vec::new()
                     };
@@ -499,7 +502,11 @@ pub(crate) fn condition_number(m: &DMatrix<f64>) -> f64 {
     let scaled = DMatrix::from_fn(m.nrows(), cols, |r, c| m[(r, c)] / d[c]);
     let s = scaled.singular_values();
     let (smax, smin) = (s.max(), s.min());
-    if smin > 0.0 { smax / smin } else { f64::INFINITY }
+    if smin > 0.0 {
+        smax / smin
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// Least-squares solution of `M x = g` with column equilibration; returns
