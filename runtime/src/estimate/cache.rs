@@ -26,7 +26,7 @@ pub(super) struct RecordCache {
     headings: Option<Vec<[f64; 2]>>,
     /// The states after each step of the simulation of `(θ, μ)` (their
     /// bits), the last one of each plan's passes.
-    trajectories: Vec<(RowsKey, Vec<u64>, Vec<u64>, Vec<f64>)>,
+    trajectories: Vec<KeptTrajectory>,
     /// Where the last pass of each plan that simulated its instruments stood.
     simulations: Vec<SimResume>,
     /// The same, kept over a shorter prefix of this record with the
@@ -42,6 +42,10 @@ pub(super) struct RecordCache {
     /// record's samples (or a prefix's), to go on from.
     facts: Vec<(PredictorKind, FactsState)>,
 }
+
+/// The states after each step of one plan's last simulation, with the
+/// bits of the `(θ, μ)` simulated.
+type KeptTrajectory = (RowsKey, Vec<u64>, Vec<u64>, Vec<f64>);
 
 /// What a record's cache hands to the passes over a longer record that
 /// begins with it: its regressor rows and where its facts visits stood.

@@ -53,6 +53,7 @@ pub use pass::{
     ExperimentFacts, FactsRequest, LocalPasses, PassRequest, PassRunner, PassSummary, Passes,
     PrefixRows, decode, encode,
 };
+pub use plan::{PlanKey, StructuralPlan};
 use record::*;
 use solve::*;
 pub use walk::REGRESSOR_LIMIT;

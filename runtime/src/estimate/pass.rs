@@ -154,7 +154,19 @@ pub trait Passes {
     /// Every experiment's summary of one pass. A moment pass may stop at the
     /// first experiment whose simulation diverged.
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError>;
+    /// The plan the structural analysis fixed for `key` in an earlier
+    /// estimate through these passes, if kept (runners that serve several
+    /// estimates keep them; none by default).
+    fn known_plan(&self, _key: &PlanKey) -> Option<std::sync::Arc<StructuralPlan>> {
+        None
+    }
+    /// Keeps the plan fixed for `key`, for later estimates through these
+    /// passes (nothing by default).
+    fn keep_plan(&self, _key: PlanKey, _plan: std::sync::Arc<StructuralPlan>) {}
 }
+
+/// Structural plans by their keys, kept for later estimates.
+type KeptPlans = Vec<(PlanKey, std::sync::Arc<StructuralPlan>)>;
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
 struct MomentPass<'a> {
@@ -751,6 +763,7 @@ pub struct LocalPasses<'a> {
 /// passes over longer records that begin with it ([`LocalPasses::continuing`]).
 pub struct PrefixRows {
     records: Vec<Option<(Experiment, Continued)>>,
+    plans: KeptPlans,
 }
 
 /// What [`LocalPasses`] keeps: facts per request, each experiment's cache
@@ -758,6 +771,9 @@ pub struct PrefixRows {
 struct KeptPasses {
     facts: Vec<((PredictorKind, u64), Vec<ExperimentFacts>)>,
     records: Vec<Option<RecordCache>>,
+    /// The structural plans of the estimates made (their sign patterns
+    /// are those of records that may be continued: the key says them).
+    plans: KeptPlans,
     budget: usize,
     /// Serving several estimates: least squares keeps its rows too.
     for_others: bool,
@@ -775,6 +791,7 @@ impl<'a> LocalPasses<'a> {
                     .iter()
                     .map(|e| e.in_memory().is_some().then(RecordCache::default))
                     .collect(),
+                plans: Vec::new(),
                 budget: KEEP_BUDGET,
                 for_others: false,
             }),
@@ -819,6 +836,7 @@ impl<'a> LocalPasses<'a> {
                     _ => None,
                 })
                 .collect(),
+            plans: kept.plans,
         }
     }
 
@@ -831,6 +849,7 @@ impl<'a> LocalPasses<'a> {
     pub fn continuing(self, prefix: PrefixRows) -> LocalPasses<'a> {
         let experiments = self.experiments;
         self.adjusted(|k| {
+            k.plans = prefix.plans;
             for ((e, cache), known) in experiments
                 .iter()
                 .zip(k.records.iter_mut())
@@ -930,6 +949,21 @@ impl Passes for LocalPasses<'_> {
             }
         }
         Ok(out)
+    }
+
+    fn known_plan(&self, key: &PlanKey) -> Option<std::sync::Arc<StructuralPlan>> {
+        let kept = self.kept();
+        kept.plans
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, p)| p.clone())
+    }
+
+    fn keep_plan(&self, key: PlanKey, plan: std::sync::Arc<StructuralPlan>) {
+        let mut kept = self.kept();
+        if !kept.plans.iter().any(|(k, _)| *k == key) {
+            kept.plans.push((key, plan));
+        }
     }
 }
 

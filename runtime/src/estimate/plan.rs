@@ -2,6 +2,35 @@
 
 use super::*;
 
+/// What an estimate's structural analysis depends on: the predictor, the
+/// centring, whether unidentifiable parameters are aggregated (and the
+/// nominal values they are then held at), and each experiment's sign
+/// pattern, sign-changing arguments and frozen rotation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanKey {
+    kind: PredictorKind,
+    centring: Centring,
+    aggregate: bool,
+    nominal: Vec<u64>,
+    experiments: Vec<ExperimentStructure>,
+}
+
+/// What the structural analysis fixed for an estimate (see [`PlanKey`]):
+/// the blocks of outputs and their structurally kept columns, the columns
+/// held and what the kept ones estimate. The same key gives the same plan,
+/// so runners that serve several estimates keep it
+/// ([`Passes::known_plan`]).
+#[derive(Clone, Debug)]
+pub struct StructuralPlan {
+    constant_cols: Vec<bool>,
+    blocks: Vec<Block>,
+    block_of_output: Vec<usize>,
+    held: Vec<(usize, f64)>,
+    preference: Vec<usize>,
+    meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    aggregates: Vec<String>,
+}
+
 /// Fewest equations per column of the largest block (a bare minimum for the
 /// moment matrices to have full rank with some margin).
 pub(super) const MIN_EQUATIONS_PER_COLUMN: usize = 3;
@@ -23,12 +52,7 @@ impl<'a> Estimator<'a> {
         let centring = options
             .centring
             .unwrap_or_else(|| Centring::for_model(ir, kind));
-        let columns = ir.predictors.get(kind);
-        let n_cols = columns.len();
-        let analysis = Analysis::with_centring(ir, kind, centring);
-        let constant_cols: Vec<bool> = (0..n_cols)
-            .map(|c| !columns[c].kind.is_nuisance() && analysis.structural.is_constant(c))
-            .collect();
+        let n_cols = ir.predictors.get(kind).len();
         let exps: Vec<ExperimentStructure> = signs
             .iter()
             .zip(&infos)
@@ -47,7 +71,104 @@ impl<'a> Estimator<'a> {
                 }),
             })
             .collect();
-        let red = analysis.reduce(Patterns::Experiments(&exps));
+        let key = PlanKey {
+            kind,
+            centring,
+            aggregate: options.aggregate,
+            nominal: nominal.iter().map(|v| v.to_bits()).collect(),
+            experiments: exps,
+        };
+        let plan = match passes.known_plan(&key) {
+            Some(plan) => plan,
+            None => {
+                let plan = std::sync::Arc::new(StructuralPlan::new(
+                    ir, options, kind, centring, &nominal, &infos, signs, &key,
+                )?);
+                passes.keep_plan(key, plan.clone());
+                plan
+            }
+        };
+        let StructuralPlan {
+            constant_cols,
+            blocks,
+            block_of_output,
+            held,
+            preference,
+            meaning,
+            aggregates,
+        } = (*plan).clone();
+        Ok(Estimator {
+            ir,
+            options,
+            kind,
+            centring,
+            constant_cols,
+            n_cols,
+            blocks,
+            block_of_output,
+            held,
+            preference,
+            nominal,
+            infos,
+            meaning,
+            warnings,
+            unexcited: Vec::new(),
+            aggregates,
+            passes,
+            facts,
+        })
+    }
+
+    pub(super) fn combine(&self) -> Combine {
+        self.options.combine
+    }
+
+    /// Refuses records too short for the number of columns estimated together.
+    pub(super) fn check_length(&self) -> Result<(), EstimateError> {
+        let equations: usize = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
+        if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
+            let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
+            if equations < needed {
+                let outputs: Vec<&str> = block
+                    .outputs
+                    .iter()
+                    .map(|o| self.ir.states[*o].as_str())
+                    .collect();
+                return Err(err(
+                    "too-few-samples",
+                    format!(
+                        "{equations} equations for {} columns estimated together (outputs {}): at least {needed} are needed",
+                        block.cols.len(),
+                        outputs.join(", ")
+                    ),
+                    "record longer experiments (hundreds of samples per parameter give useful standard errors)",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl StructuralPlan {
+    /// Runs the structural analysis for `key` (see [`PlanKey`]).
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        ir: &Ir,
+        options: &EstimateOptions,
+        kind: PredictorKind,
+        centring: Centring,
+        nominal: &[f64],
+        infos: &[ExperimentInfo],
+        signs: &[ExperimentSigns],
+        key: &PlanKey,
+    ) -> Result<StructuralPlan, EstimateError> {
+        let columns = ir.predictors.get(kind);
+        let n_cols = columns.len();
+        let analysis = Analysis::with_centring(ir, kind, centring);
+        let constant_cols: Vec<bool> = (0..n_cols)
+            .map(|c| !columns[c].kind.is_nuisance() && analysis.structural.is_constant(c))
+            .collect();
+        let red = analysis.reduce(Patterns::Experiments(&key.experiments));
         let v = verdict(&analysis.names, &red);
         let mut held = Vec::new();
         let mut aggregates = Vec::new();
@@ -170,54 +291,14 @@ impl<'a> Estimator<'a> {
         for (rank, c) in analysis.order.iter().enumerate() {
             preference[*c] = rank;
         }
-        Ok(Estimator {
-            ir,
-            options,
-            kind,
-            centring,
+        Ok(StructuralPlan {
             constant_cols,
-            n_cols,
             blocks,
             block_of_output,
             held,
             preference,
-            nominal,
-            infos,
             meaning,
-            warnings,
-            unexcited: Vec::new(),
             aggregates,
-            passes,
-            facts,
         })
-    }
-
-    pub(super) fn combine(&self) -> Combine {
-        self.options.combine
-    }
-
-    /// Refuses records too short for the number of columns estimated together.
-    pub(super) fn check_length(&self) -> Result<(), EstimateError> {
-        let equations: usize = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
-        if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
-            let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
-            if equations < needed {
-                let outputs: Vec<&str> = block
-                    .outputs
-                    .iter()
-                    .map(|o| self.ir.states[*o].as_str())
-                    .collect();
-                return Err(err(
-                    "too-few-samples",
-                    format!(
-                        "{equations} equations for {} columns estimated together (outputs {}): at least {needed} are needed",
-                        block.cols.len(),
-                        outputs.join(", ")
-                    ),
-                    "record longer experiments (hundreds of samples per parameter give useful standard errors)",
-                ));
-            }
-        }
-        Ok(())
     }
 }
