@@ -3,7 +3,7 @@
 //! `leeway.validate` report).
 
 use crate::data::{Experiment, Source};
-use crate::model::{Model, Signals, next_heading, planar_rotation};
+use crate::model::{HeadingRotation, Model, Signals, next_heading};
 use leeway_structure::ir::Rotation;
 
 /// A simulated trajectory.
@@ -48,6 +48,8 @@ pub fn simulate(
     let mut next = vec![0.0; n_out];
     let mut f = vec![0.0; n_out];
     let mut psi = 0.0;
+    // The integrated heading's rotation, by small steps (re-anchored).
+    let mut headings = HeadingRotation::default();
     let mut dist = vec![0.0; n_comp];
     let mut k = 0usize;
     let mut diverged = false;
@@ -74,7 +76,7 @@ pub fn simulate(
         }
         let rot_buf;
         let rotation: &[f64] = if planar {
-            rot_buf = planar_rotation(psi);
+            rot_buf = headings.next(psi);
             &rot_buf
         } else {
             row.rotation
