@@ -462,7 +462,7 @@ impl EquationWalker<'_> {
                     }
                     std::mem::swap(&mut x_sim, &mut x_next);
                     if let Some(kept) = reuse.keep_trajectory.as_deref_mut() {
-                        kept.extend_from_slice(&x_sim);
+                        extend_few(kept, &x_sim);
                     }
                     for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
                         change.err2[o] += (y - x) * (y - x);
@@ -505,16 +505,16 @@ impl EquationWalker<'_> {
             // cost a `memcpy` call each.)
             if keeps_states {
                 std::mem::swap(&mut y2, &mut y1);
-                y1.copy_from_slice(row.states);
+                copy_few(&mut y1, row.states);
             }
-            u1.copy_from_slice(row.inputs);
+            copy_few(&mut u1, row.inputs);
             if n_rot > 0 {
                 std::mem::swap(&mut rot2, &mut rot1);
-                rot1.copy_from_slice(row.rotation);
+                copy_few(&mut rot1, row.rotation);
             }
             if n_comp > 0 {
                 std::mem::swap(&mut d2, &mut d1);
-                d1.copy_from_slice(row.disturbances);
+                copy_few(&mut d1, row.disturbances);
             }
             if planar.is_some() {
                 rh2 = rh1;
@@ -571,6 +571,33 @@ impl EquationWalker<'_> {
             });
         }
         if diverged { Err(Diverged) } else { Ok(change) }
+    }
+}
+
+/// `dst.copy_from_slice(src)` for the few values of one sample: copies of
+/// up to four values are inlined rather than a `memcpy` call each (a
+/// call costs more than the copy, and the walk makes several a sample).
+#[inline(always)]
+fn copy_few(dst: &mut [f64], src: &[f64]) {
+    match (dst, src) {
+        ([a], [x]) => *a = *x,
+        ([a, b], [x, y]) => (*a, *b) = (*x, *y),
+        ([a, b, c], [x, y, z]) => (*a, *b, *c) = (*x, *y, *z),
+        ([a, b, c, d], [x, y, z, w]) => (*a, *b, *c, *d) = (*x, *y, *z, *w),
+        (dst, src) => dst.copy_from_slice(src),
+    }
+}
+
+/// `v.extend_from_slice(src)` for the few values of one sample, inlined
+/// as [`copy_few`] is.
+#[inline(always)]
+fn extend_few(v: &mut Vec<f64>, src: &[f64]) {
+    if src.len() <= 4 {
+        for x in src {
+            v.push(*x);
+        }
+    } else {
+        v.extend_from_slice(src);
     }
 }
 
