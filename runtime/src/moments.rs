@@ -361,15 +361,18 @@ impl MomentAccumulator {
     /// Where this accumulation stands (see [`PartialSums`]); `None` unless
     /// it keeps its regressor rows, which a resumed accumulation needs.
     pub fn partial(&self) -> Option<PartialSums> {
-        self.keeping.then(|| PartialSums {
-            n: self.n,
-            z0: self.z0.clone(),
-            sums: self.sums.clone(),
-            s_zz: self.s_zz.clone(),
-            s_pp: self.s_pp.clone(),
-            zb: self.zb[..self.filled * self.wz].to_vec(),
-            filled: self.filled,
-        })
+        self.keeping.then(|| self.partial_instruments())
+    }
+
+    /// Goes on from `from` (its samples already accumulated), except the
+    /// regressors' squares.
+    fn go_on_from(&mut self, from: PartialSums) {
+        self.n = from.n;
+        self.z0 = from.z0;
+        self.sums = from.sums;
+        self.s_zz = from.s_zz;
+        self.zb[..from.zb.len()].copy_from_slice(&from.zb);
+        self.filled = from.filled;
     }
 
     /// Keeps every regressor row, as [`MomentAccumulator::keep_rows_after`],
@@ -382,14 +385,9 @@ impl MomentAccumulator {
         // against kept rows, which sums none.
         let s_pp = prefix.s_pp_blocks.clone();
         self.keep_rows_after(prefix, samples);
-        self.n = from.n;
-        self.z0 = from.z0;
-        self.sums = from.sums;
-        self.s_zz = from.s_zz;
-        self.s_pp = s_pp;
-        self.zb[..from.zb.len()].copy_from_slice(&from.zb);
-        self.filled = from.filled;
         self.base = from.n - from.filled;
+        self.go_on_from(from);
+        self.s_pp = s_pp;
     }
 
     /// Where an accumulation by [`MomentAccumulator::push_instruments`]
@@ -414,12 +412,7 @@ impl MomentAccumulator {
     /// the sums are those of pushing every sample.
     pub fn resume_instruments(&mut self, from: PartialSums, kept: &RegressorRows) {
         debug_assert!(self.n == 0 && self.m == kept.p && from.continues_over(kept));
-        self.n = from.n;
-        self.z0 = from.z0;
-        self.sums = from.sums;
-        self.s_zz = from.s_zz;
-        self.zb[..from.zb.len()].copy_from_slice(&from.zb);
-        self.filled = from.filled;
+        self.go_on_from(from);
     }
 
     /// Adds one sample whose regressors and target are already in its kept
