@@ -438,24 +438,26 @@ impl<'a> PassRunner<'a> {
         };
         // It needs the regressor rows of its first samples: the prefix's, or
         // the whole record's kept by another pass.
-        sim_resume = sim_resume.filter(|(s, _)| match &prefix {
-            Some(rows) => {
-                rows[0].len() == s.walk.equations
-                    && s.sums.len() == rows.len()
-                    && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
-            }
-            None => cache.as_deref().is_some_and(|c| {
-                plan.instruments.is_some()
-                    && c.regressors(plan, info).is_some_and(|r| {
-                        r.len() == s.sums.len()
-                            && r.iter().zip(&s.sums).all(|(r, p)| {
-                                r.len() == equations
-                                    && p.len() == s.walk.equations
-                                    && p.continues_over(r)
-                            })
-                    })
-            }),
-        });
+        sim_resume = sim_resume
+            .filter(|(s, _)| s.walk.fits(e.len(), ir.states.len()))
+            .filter(|(s, _)| match &prefix {
+                Some(rows) => {
+                    rows[0].len() == s.walk.equations
+                        && s.sums.len() == rows.len()
+                        && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
+                }
+                None => cache.as_deref().is_some_and(|c| {
+                    plan.instruments.is_some()
+                        && c.regressors(plan, info).is_some_and(|r| {
+                            r.len() == s.sums.len()
+                                && r.iter().zip(&s.sums).all(|(r, p)| {
+                                    r.len() == equations
+                                        && p.len() == s.walk.equations
+                                        && p.continues_over(r)
+                                })
+                        })
+                }),
+            });
         let (sim_walk, sim_sums) = match sim_resume {
             Some((s, states)) => {
                 if let Some(spare) = new_trajectory.replace(states)

@@ -123,6 +123,16 @@ pub(super) struct SimChange {
 }
 
 impl SimWalk {
+    /// Whether a walk over a record of `samples` samples and `n_out`
+    /// states can go on from here (its caller sums from here too: the
+    /// same check on both sides).
+    pub(super) fn fits(&self, samples: usize, n_out: usize) -> bool {
+        self.samples >= 3
+            && self.samples <= samples
+            && self.equations + 2 == self.samples
+            && self.x_sim.len() == n_out
+    }
+
     /// Entries of the simulation's states after each step over these samples.
     pub(super) fn trajectory_len(&self) -> usize {
         self.samples.saturating_sub(1) * self.x_sim.len()
@@ -232,10 +242,7 @@ impl EquationWalker<'_> {
                 && reference.is_none()
                 && e.in_memory().is_some()
                 && known_headings.is_some()
-                && s.samples >= 3
-                && s.samples <= e.len()
-                && s.equations + 2 == s.samples
-                && s.x_sim.len() == n_out
+                && s.fits(e.len(), n_out)
         });
         let replay_until = resume_sim.as_ref().map_or(0, |s| s.samples);
         let start = resume
