@@ -348,6 +348,7 @@ impl EquationWalker<'_> {
         let mut arg_values = vec![0.0; fixed_args.len()];
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
+        let simulates = self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
         let mut sample = |row: &crate::data::Row| {
             if diverged {
                 return;
@@ -362,6 +363,17 @@ impl EquationWalker<'_> {
                     rref = rz;
                 }
             } else {
+                if simulates {
+                    // Written well before the step reads them: a value
+                    // stored just before it is read as a vector stalls on
+                    // store forwarding.
+                    simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
+                    if let Some((_, mu_ref)) = reference
+                        && known_reference.is_none()
+                    {
+                        simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
+                    }
+                }
                 if k >= 2 {
                     let skip_measured = skip_measured || equations < measured_known;
                     if !skip_measured {
@@ -445,10 +457,9 @@ impl EquationWalker<'_> {
                     }
                     equations += 1;
                 }
-                if self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty() {
-                    // Advance the instrument simulation from k−1 to k.
-
-                    simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
+                if simulates {
+                    // Advance the instrument simulation from k−1 to k
+                    // (its disturbances set at the sample's start).
                     let sig = Signals {
                         states: &x_sim,
                         inputs: &u1,
@@ -477,12 +488,11 @@ impl EquationWalker<'_> {
                         change.y_sum2[o] += y * y;
                     }
                     change.y_n += 1;
-                    if let Some((theta_ref, mu_ref)) = reference {
+                    if let Some((theta_ref, _)) = reference {
                         let stepped = change.y_n - 1;
                         let x_ref: &[f64] = if let Some(known) = known_reference {
                             &known[stepped * n_out..(stepped + 1) * n_out]
                         } else {
-                            simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
                             let sig = Signals {
                                 states: &x_ref,
                                 inputs: &u1,
