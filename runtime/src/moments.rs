@@ -918,6 +918,56 @@ mod tests {
         assert!((ct - exact_t).abs().max() < 1e-6);
     }
 
+    /// The block kernel gives the same bits on every instruction set this
+    /// CPU has (pulp dispatches to the widest): each entry is summed in
+    /// row order with unfused multiplies and adds, whatever the lanes.
+    #[test]
+    fn block_kernel_bits_do_not_depend_on_the_instruction_set() {
+        let (m, p) = (13, 12);
+        let (wz, wf) = (padded(m + 1), padded(p + 2));
+        let rows = BLOCK - 3;
+        // Values over many orders of magnitude, so any reassociation shows.
+        let value = |k: usize| {
+            let x = ((k * 7919) % 104_729) as f64 / 104_729.0 - 0.5;
+            const SCALES: [f64; 13] = [
+                1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6,
+            ];
+            x * SCALES[k % 13]
+        };
+        let zb: Vec<f64> = (0..BLOCK * wz).map(value).collect();
+        let fb: Vec<f64> = (0..BLOCK * wf).map(|k| value(k + 31)).collect();
+        let run = |arch: &dyn Fn(BlockKernel<'_>)| {
+            let mut sums: Vec<f64> = (0..wz * wf).map(|k| value(k + 7)).collect();
+            let mut zz = vec![0.25; wz];
+            let mut pp = vec![0.5; wf];
+            arch(BlockKernel {
+                sums: &mut sums,
+                zz: &mut zz,
+                pp: &mut pp,
+                zb: &zb,
+                fb: &fb,
+                rows,
+                wz,
+                used_z: m + 1,
+                wf,
+                squares_known: false,
+            });
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            (bits(&sums), bits(&zz), bits(&pp))
+        };
+        let scalar = run(&|k| pulp::Simd::vectorize(pulp::Scalar::new(), k));
+        assert_eq!(run(&|k| pulp::Arch::new().dispatch(k)), scalar);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if let Some(simd) = pulp::x86::V3::try_new() {
+                assert_eq!(run(&|k| pulp::Simd::vectorize(simd, k)), scalar);
+            }
+            if let Some(simd) = pulp::x86::V4::try_new() {
+                assert_eq!(run(&|k| pulp::Simd::vectorize(simd, k)), scalar);
+            }
+        }
+    }
+
     #[test]
     fn long_run_of_white_noise_is_its_covariance_sum() {
         let mut lr = LongRun::new(1, 1);

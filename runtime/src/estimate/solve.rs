@@ -399,26 +399,34 @@ pub(crate) fn select_columns(
     explain: bool,
 ) -> Selection {
     let rows = m.nrows();
-    let mut basis: Vec<DVector<f64>> = Vec::new();
+    // Modified Gram–Schmidt, twice, into one preallocated basis (a solve
+    // makes this selection on every refinement: no allocation per column).
+    let mut basis = DMatrix::<f64>::zeros(rows, rows.min(order.len()));
+    let mut found = 0;
+    let mut v = DVector::<f64>::zeros(rows);
     let mut kept = Vec::new();
     let mut dropped_idx = Vec::new();
     for &j in order {
-        let col = m.column(j).into_owned();
+        let col = m.column(j);
         let norm = col.norm();
         if norm == 0.0 || !norm.is_finite() {
             dropped_idx.push(j);
             continue;
         }
-        let mut v = col / norm;
+        v.copy_from(&col);
+        v /= norm;
         for _ in 0..2 {
-            for q in &basis {
+            for q in basis.columns(0, found).column_iter() {
                 let d = q.dot(&v);
-                v.axpy(-d, q, 1.0);
+                v.axpy(-d, &q, 1.0);
             }
         }
         let r = v.norm();
-        if r > tol.max(1e-300) && basis.len() < rows {
-            basis.push(v / r);
+        if r > tol.max(1e-300) && found < rows {
+            for (b, x) in basis.column_mut(found).iter_mut().zip(v.iter()) {
+                *b = x / r;
+            }
+            found += 1;
             kept.push(j);
         } else {
             dropped_idx.push(j);
