@@ -87,6 +87,8 @@ struct Estimator<'a> {
     infos: Vec<ExperimentInfo>,
     /// What each kept column estimates, as (column, coefficient) in predictor columns.
     meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    /// What each predictor column estimates, as the report states it.
+    column_texts: std::sync::Arc<[String]>,
     warnings: Vec<String>,
     unexcited: Vec<String>,
     aggregates: Vec<String>,

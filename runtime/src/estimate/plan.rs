@@ -28,6 +28,8 @@ pub struct StructuralPlan {
     held: Vec<(usize, f64)>,
     preference: Vec<usize>,
     meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    /// What each predictor column estimates, as the report states it.
+    column_texts: std::sync::Arc<[String]>,
     aggregates: Vec<String>,
 }
 
@@ -95,6 +97,7 @@ impl<'a> Estimator<'a> {
             held,
             preference,
             meaning,
+            column_texts,
             aggregates,
         } = (*plan).clone();
         Ok(Estimator {
@@ -111,6 +114,7 @@ impl<'a> Estimator<'a> {
             nominal,
             infos,
             meaning,
+            column_texts,
             warnings,
             unexcited: Vec::new(),
             aggregates,
@@ -291,6 +295,7 @@ impl StructuralPlan {
         for (rank, c) in analysis.order.iter().enumerate() {
             preference[*c] = rank;
         }
+        let column_texts = column_texts(ir, columns, centring, &meaning);
         Ok(StructuralPlan {
             constant_cols,
             blocks,
@@ -298,7 +303,36 @@ impl StructuralPlan {
             held,
             preference,
             meaning,
+            column_texts,
             aggregates,
         })
     }
+}
+
+/// What each column estimates, as the report states it: a kept column's
+/// combination of moments, any other column's own moment. Exact rationals
+/// formatted per column: worth doing once per plan, not per estimate.
+fn column_texts(
+    ir: &Ir,
+    columns: &[leeway_structure::ir::Column],
+    centring: Centring,
+    meaning: &BTreeMap<usize, Vec<(usize, f64)>>,
+) -> std::sync::Arc<[String]> {
+    let names = leeway_structure::identify::Names {
+        ir,
+        columns,
+        centring,
+    };
+    (0..columns.len())
+        .map(|c| match meaning.get(&c) {
+            Some(items) => {
+                let q: Vec<(String, Q)> = items
+                    .iter()
+                    .map(|(d, v)| (names.moment(*d), Q::from_float(*v).unwrap_or_default()))
+                    .collect();
+                linear_text(&q)
+            }
+            None => names.moment(c),
+        })
+        .collect()
 }

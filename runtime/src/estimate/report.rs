@@ -24,11 +24,6 @@ impl Estimator<'_> {
         let numeric_held: BTreeMap<usize, f64> =
             sol.iter().flat_map(|s| s.held.iter().copied()).collect();
         let structural_held: BTreeMap<usize, f64> = self.held.iter().copied().collect();
-        let names = leeway_structure::identify::Names {
-            ir: self.ir,
-            columns: cols,
-            centring: self.centring,
-        };
         let columns: Vec<ColumnEstimate> = cols
             .iter()
             .enumerate()
@@ -38,13 +33,6 @@ impl Estimator<'_> {
                     ColumnKind::Rho { .. } => "rho",
                     ColumnKind::Lambda { .. } => "lambda",
                 };
-                let meaning = self.meaning.get(&c).map(|items| {
-                    let q: Vec<(String, Q)> = items
-                        .iter()
-                        .map(|(d, v)| (names.moment(*d), Q::from_float(*v).unwrap_or_default()))
-                        .collect();
-                    linear_text(&q)
-                });
                 let (value, status) = if estimated.contains(&c) {
                     (values.get(&c).copied(), "estimated".to_string())
                 } else if let Some(v) = structural_held.get(&c) {
@@ -73,7 +61,7 @@ impl Estimator<'_> {
                     value,
                     std_error: if estimated.contains(&c) { se(c) } else { None },
                     status,
-                    estimates: meaning.unwrap_or_else(|| names.moment(c)),
+                    estimates: self.column_texts[c].clone(),
                 }
             })
             .collect();
