@@ -34,13 +34,29 @@ fn add_outer_products(
     wb: usize,
 ) {
     debug_assert!(used <= wa);
-    let mut i0 = 0;
-    while i0 + TILE <= used {
-        add_tile_rows::<TILE>(s, a, b, rows, (wa, wb), i0);
-        i0 += TILE;
+    // Tiles of four rows; the rows beyond a multiple of four are shared out
+    // among the first tiles (five or six rows) rather than left to a tile
+    // of one to three, whose few accumulators would wait on the latency of
+    // their additions. Each entry's sum is the same whatever the tile.
+    let tiles = used / TILE;
+    let mut extra = used % TILE;
+    if tiles == 1 && extra == 3 {
+        // Seven rows in one tile would overflow the AVX registers.
+        add_tile_rows::<4>(s, a, b, rows, (wa, wb), 0);
+        add_tile_rows::<3>(s, a, b, rows, (wa, wb), 4);
+        return;
     }
-    // The last rows short of a tile: a narrower tile rather than products
-    // with the padding (each entry's sum is the same either way).
+    let mut i0 = 0;
+    for t in 0..tiles {
+        let r = TILE + extra.div_ceil(tiles - t);
+        extra -= r - TILE;
+        match r {
+            4 => add_tile_rows::<4>(s, a, b, rows, (wa, wb), i0),
+            5 => add_tile_rows::<5>(s, a, b, rows, (wa, wb), i0),
+            _ => add_tile_rows::<6>(s, a, b, rows, (wa, wb), i0),
+        }
+        i0 += r;
+    }
     match used - i0 {
         1 => add_tile_rows::<1>(s, a, b, rows, (wa, wb), i0),
         2 => add_tile_rows::<2>(s, a, b, rows, (wa, wb), i0),
