@@ -984,6 +984,50 @@ mod tests {
         }
     }
 
+    /// Whatever the tiles the rows in use are cut into, every entry is its
+    /// rows' products summed in row order from zero, then added once.
+    #[test]
+    fn block_products_are_each_entry_summed_in_row_order() {
+        let value = |k: usize| {
+            let x = ((k * 7919) % 104_729) as f64 / 104_729.0 - 0.5;
+            x * [1e-3, 1.0, 1e3, 1e-1, 1e2][k % 5]
+        };
+        for used in 1..=17 {
+            let (wa, wb) = (padded(used), 12);
+            let rows = 29;
+            let a: Vec<f64> = (0..rows * wa).map(value).collect();
+            let b: Vec<f64> = (0..rows * wb).map(|k| value(k + 3)).collect();
+            let start: Vec<f64> = (0..wa * wb).map(|k| value(k + 11)).collect();
+            let mut got = start.clone();
+            pulp::Arch::new().dispatch(BlockKernel {
+                sums: &mut got,
+                zz: &mut vec![0.0; wa],
+                pp: &mut [],
+                zb: &a,
+                fb: &b,
+                rows,
+                wz: wa,
+                used_z: used,
+                wf: wb,
+                squares_known: true,
+            });
+            for i in 0..used {
+                for j in 0..wb {
+                    let mut sum = 0.0;
+                    for r in 0..rows {
+                        sum += a[r * wa + i] * b[r * wb + j];
+                    }
+                    let want = start[i * wb + j] + sum;
+                    assert_eq!(
+                        got[i * wb + j].to_bits(),
+                        want.to_bits(),
+                        "{used} rows: ({i}, {j})"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn long_run_of_white_noise_is_its_covariance_sum() {
         let mut lr = LongRun::new(1, 1);
