@@ -150,24 +150,28 @@ impl Estimator<'_> {
             for (j, combo) in &sel.dropped {
                 let c = cols[*j];
                 let col = &self.ir.predictors.get(self.kind)[c];
-                let text = if combo.is_empty() {
-                    format!(
-                        "{} is not excited by these data (its moments vanish)",
-                        col.name
-                    )
-                } else {
-                    let mut items: Vec<(String, Q)> = vec![];
-                    for (k, a) in combo {
-                        items.push((
-                            self.ir.predictors.get(self.kind)[cols[*k]].name.clone(),
-                            Q::from_float(round_sig(*a)).unwrap_or_default(),
-                        ));
+                // Formatted only where it is reported (a recorded solve,
+                // or an error): exact rationals are not cheap.
+                let text = || {
+                    if combo.is_empty() {
+                        format!(
+                            "{} is not excited by these data (its moments vanish)",
+                            col.name
+                        )
+                    } else {
+                        let mut items: Vec<(String, Q)> = vec![];
+                        for (k, a) in combo {
+                            items.push((
+                                self.ir.predictors.get(self.kind)[cols[*k]].name.clone(),
+                                Q::from_float(round_sig(*a)).unwrap_or_default(),
+                            ));
+                        }
+                        format!(
+                            "{} is not separately excited: its column equals {}",
+                            col.name,
+                            linear_text_f(&items)
+                        )
                     }
-                    format!(
-                        "{} is not separately excited: its column equals {}",
-                        col.name,
-                        linear_text_f(&items)
-                    )
                 };
                 match col.kind {
                     ColumnKind::Theta { parameter } => {
@@ -175,15 +179,17 @@ impl Estimator<'_> {
                         let value = self.nominal[parameter];
                         if p.measured && self.kind == PredictorKind::Measured {
                             if record {
+                                let text = text();
                                 self.warnings.push(format!(
-                                    "{text}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+                                    "{}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+                                    text,
                                     self.ir.disturbances[p.medium.unwrap_or(0)].name,
                                     p.name,
                                     self.ir.disturbances[p.medium.unwrap_or(0)].name,
                                     p.name,
                                     value
                                 ));
-                                self.unexcited.push(text.clone());
+                                self.unexcited.push(text);
                                 for (k, a) in combo {
                                     let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
                                     let held = if value == 0.0 {
@@ -202,19 +208,21 @@ impl Estimator<'_> {
                             held.push((c, value));
                         } else if self.options.aggregate {
                             if record {
+                                let text = text();
                                 self.warnings.push(format!(
                                     "{text}; held at its nominal value {value} (--aggregate)"
                                 ));
-                                self.unexcited.push(text.clone());
+                                self.unexcited.push(text);
                             }
                             held.push((c, value));
                         } else {
-                            errors.push(text);
+                            errors.push(text());
                         }
                     }
                     _ => {
                         if record {
-                            self.unexcited.push(format!("{text} (nuisance; held at 0)"));
+                            self.unexcited
+                                .push(format!("{} (nuisance; held at 0)", text()));
                         }
                         held.push((c, 0.0));
                     }
@@ -392,6 +400,38 @@ pub(crate) struct Selection {
     pub(crate) dropped: Vec<(usize, Vec<(usize, f64)>)>,
 }
 
+/// `Σ aᵢ bᵢ` in nalgebra's order for dynamic vectors (eight partial sums
+/// over blocks of eight, joined as `(0+4) (1+5) (2+6) (3+7)`, then the
+/// rest): the column selection computes on slices what it computed with
+/// nalgebra, and must keep its bits.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let mut acc = [0.0f64; 8];
+    let mut i = 0;
+    while n - i >= 8 {
+        for (k, s) in acc.iter_mut().enumerate() {
+            *s += a[i + k] * b[i + k];
+        }
+        i += 8;
+    }
+    let mut res = 0.0;
+    res += acc[0] + acc[4];
+    res += acc[1] + acc[5];
+    res += acc[2] + acc[6];
+    res += acc[3] + acc[7];
+    for k in i..n {
+        res += a[k] * b[k];
+    }
+    res
+}
+
+/// nalgebra's `norm` of a vector: `√(0 + dot(a, a))`.
+fn norm(a: &[f64]) -> f64 {
+    let mut squares = 0.0;
+    squares += dot(a, a);
+    squares.sqrt()
+}
+
 pub(crate) fn select_columns(
     m: &DMatrix<f64>,
     order: &[usize],
@@ -399,34 +439,35 @@ pub(crate) fn select_columns(
     explain: bool,
 ) -> Selection {
     let rows = m.nrows();
-    // Modified Gram–Schmidt, twice, into one preallocated basis (a solve
-    // makes this selection on every refinement: no allocation per column).
-    let mut basis = DMatrix::<f64>::zeros(rows, rows.min(order.len()));
-    let mut found = 0;
-    let mut v = DVector::<f64>::zeros(rows);
+    // Modified Gram–Schmidt, twice, on plain slices into one preallocated
+    // basis (a solve makes this selection on every refinement), with
+    // nalgebra's order of operations (see `dot`): the same selection.
+    let mut basis: Vec<f64> = Vec::with_capacity(rows * rows.min(order.len()));
+    let mut v = vec![0.0; rows];
     let mut kept = Vec::new();
     let mut dropped_idx = Vec::new();
     for &j in order {
-        let col = m.column(j);
-        let norm = col.norm();
-        if norm == 0.0 || !norm.is_finite() {
+        let col = &m.as_slice()[j * rows..(j + 1) * rows];
+        let length = norm(col);
+        if length == 0.0 || !length.is_finite() {
             dropped_idx.push(j);
             continue;
         }
-        v.copy_from(&col);
-        v /= norm;
+        for (x, c) in v.iter_mut().zip(col) {
+            *x = c / length;
+        }
         for _ in 0..2 {
-            for q in basis.columns(0, found).column_iter() {
-                let d = q.dot(&v);
-                v.axpy(-d, &q, 1.0);
+            for q in basis.chunks_exact(rows) {
+                let d = dot(q, &v);
+                // nalgebra's `axpy(−d, q, 1)`: `(−d·q)·1 + 1·v`, that is `−d·q + v`.
+                for (x, b) in v.iter_mut().zip(q) {
+                    *x += -d * b;
+                }
             }
         }
-        let r = v.norm();
-        if r > tol.max(1e-300) && found < rows {
-            for (b, x) in basis.column_mut(found).iter_mut().zip(v.iter()) {
-                *b = x / r;
-            }
-            found += 1;
+        let r = norm(&v);
+        if r > tol.max(1e-300) && basis.len() < rows * rows {
+            basis.extend(v.iter().map(|x| x / r));
             kept.push(j);
         } else {
             dropped_idx.push(j);
