@@ -369,7 +369,7 @@ impl EquationWalker<'_> {
                     // The step's disturbances and rotation, written well
                     // before it reads them: values stored one by one just
                     // before they are read as a vector stall on store
-                    // forwarding (measured: 5 % of a study run).
+                    // forwarding (measured: about 5 % of one study run).
                     simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
                     rz_step.copy_from_slice(&rz);
                     if let Some((_, mu_ref)) = reference
