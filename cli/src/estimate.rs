@@ -305,10 +305,7 @@ fn located(mut e: leeway_runtime::EstimateError, data: &DataSet) -> leeway_runti
             .sources()
             .iter()
             .zip(data.files())
-            .map(|(s, f)| match f {
-                Some(f) => format!("`{}` in {f}: {} samples", s.name(), s.len()),
-                None => format!("`{}`: {} samples", s.name(), s.len()),
-            })
+            .map(|(s, f)| format!("`{}` in {f}: {} samples", s.name(), s.len()))
             .collect();
         e.message = format!("{} (experiments: {})", e.message, list.join("; "));
     }

@@ -195,12 +195,24 @@ pub fn load_data(
     files: &[PathBuf],
     options: &LoadOptions,
 ) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
+    load_files(ir, files, options).map(|(e, _, n)| (e, n))
+}
+
+/// [`load_data`], with each experiment's file as messages name it.
+fn load_files(
+    ir: &Ir,
+    files: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(Vec<Experiment>, Vec<String>, Vec<FileNotes>), Failure> {
     let mut experiments = Vec::new();
+    let mut names = Vec::new();
     let mut notes = Vec::new();
     let mut problems = Vec::new();
     for path in files {
         match load_file_noted(path, ir, options) {
             Ok(f) => {
+                let name = path.display().to_string();
+                names.extend(f.experiments.iter().map(|_| name.clone()));
                 experiments.extend(f.experiments);
                 notes.push(f.notes);
             }
@@ -208,7 +220,7 @@ pub fn load_data(
         }
     }
     if problems.is_empty() {
-        Ok((experiments, notes))
+        Ok((experiments, names, notes))
     } else {
         Err(Failure::Problems(problems))
     }
@@ -220,8 +232,8 @@ pub fn load_data(
 pub enum DataSet {
     /// Read per pass from the validated copy.
     Streamed(Vec<FileSource>),
-    /// Loaded (resampled).
-    Held(Vec<Experiment>),
+    /// Loaded (resampled), with each experiment's file.
+    Held(Vec<Experiment>, Vec<String>),
 }
 
 impl DataSet {
@@ -229,14 +241,14 @@ impl DataSet {
     pub fn sources(&self) -> Vec<&dyn Source> {
         match self {
             DataSet::Streamed(v) => v.iter().map(|e| e as &dyn Source).collect(),
-            DataSet::Held(v) => v.iter().map(|e| e as &dyn Source).collect(),
+            DataSet::Held(v, _) => v.iter().map(|e| e as &dyn Source).collect(),
         }
     }
-    /// Each experiment's file, as named in messages (`None` in memory).
-    pub fn files(&self) -> Vec<Option<&str>> {
+    /// Each experiment's file, as named in messages.
+    pub fn files(&self) -> Vec<&str> {
         match self {
-            DataSet::Streamed(v) => v.iter().map(|e| Some(e.file())).collect(),
-            DataSet::Held(v) => v.iter().map(|_| None).collect(),
+            DataSet::Streamed(v) => v.iter().map(FileSource::file).collect(),
+            DataSet::Held(_, files) => files.iter().map(String::as_str).collect(),
         }
     }
     /// A problem met by a later pass (the validated copy could not be read).
@@ -246,7 +258,7 @@ impl DataSet {
                 .iter()
                 .find_map(FileSource::failure)
                 .map(|e| Problem::data(&e)),
-            DataSet::Held(_) => None,
+            DataSet::Held(..) => None,
         }
     }
 }
@@ -258,7 +270,7 @@ pub fn open_data(
     options: &LoadOptions,
 ) -> Result<(DataSet, Vec<FileNotes>), Failure> {
     if options.resample.is_some() {
-        return load_data(ir, files, options).map(|(e, n)| (DataSet::Held(e), n));
+        return load_files(ir, files, options).map(|(e, f, n)| (DataSet::Held(e, f), n));
     }
     let mut sources = Vec::new();
     let mut notes = Vec::new();

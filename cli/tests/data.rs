@@ -808,3 +808,102 @@ fn every_numeric_option_is_bounded_with_an_error_naming_it() {
     ]);
     assert_eq!(code(&o), 2, "{}", stderr(&o));
 }
+
+#[test]
+fn too_few_samples_after_resampling_still_names_the_file() {
+    // Issue 22: under --resample the experiments are held in memory, and
+    // the error named them without their file.
+    let dir = Scratch::new("few-resampled");
+    let text = estimation_csv(400, 1.0, 5);
+    let short: String = text.lines().take(13).map(|l| format!("{l}\n")).collect();
+    let data = dir.write("short.csv", &short);
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--resample", "1"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stdout(&o));
+    assert!(
+        stderr(&o).contains(&format!("`short` in {data}: 12 samples")),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn a_file_with_carriage_return_line_ends_reads_as_with_line_feeds() {
+    // Issue 22: files written with lone CRs (classic Mac OS tools) were
+    // one long line, refused as "missing column".
+    let (dir, other) = (Scratch::new("cr-only"), Scratch::new("lf-only"));
+    let text = estimation_csv(1500, 1.0, 9);
+    // The same file name: the experiment is named after it.
+    let lf = other.write("log.csv", &format!("# a logger's comment\n{text}"));
+    let cr = dir.write(
+        "log.csv",
+        &format!("# a logger's comment\n{text}").replace('\n', "\r"),
+    );
+    let a = leeway(&["estimate", SHIP, "--data", &lf, "--json"]);
+    let b = leeway(&["estimate", SHIP, "--data", &cr, "--json"]);
+    assert_eq!(code(&a), 0, "{}", stderr(&a));
+    assert_eq!(code(&b), 0, "{}", stderr(&b));
+    assert_eq!(stdout(&b).replace(&cr, &lf), stdout(&a));
+    // Rows are still named by their physical line.
+    let mut broken = format!("# a logger's comment\n{text}").replace('\n', "\r");
+    let at = broken.match_indices('\r').nth(40).map_or(0, |(i, _)| i + 1);
+    broken.insert_str(at, "oops");
+    let bad = dir.write("bad.csv", &broken);
+    let o = leeway(&["estimate", SHIP, "--data", &bad]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!("{bad}:42:1 (time)")),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn an_overflowing_nominal_value_is_a_located_error_not_a_panic() {
+    // Issue 22: one nominal value of 1e305 panicked in nalgebra's SVD.
+    let dir = Scratch::new("nominal-overflow");
+    let data = dir.write("log.csv", &estimation_csv(1500, 1.0, 5));
+    for value in ["1e305", "5e307", "1.7e308", "-1e200"] {
+        let nominal = dir.write(
+            "nominal.json",
+            &true_params().replace("\"X_u\": -0.05", &format!("\"X_u\": {value}")),
+        );
+        for initial in ["delayed", "nominal"] {
+            let o = leeway(&[
+                "estimate",
+                SHIP,
+                "--data",
+                &data,
+                "--nominal",
+                &nominal,
+                "--initial",
+                initial,
+                "--json",
+            ]);
+            no_panic(&o);
+            assert_eq!(code(&o), 2, "{value}: {}", stdout(&o));
+            let v = json(&o);
+            assert_eq!(v["errors"][0]["code"], "invalid-nominal", "{v}");
+            assert!(
+                v["errors"][0]["message"]
+                    .as_str()
+                    .is_some_and(|m| m.contains("`X_u`")),
+                "{v}"
+            );
+        }
+    }
+    // The same from the model's own nominal { } block.
+    let source = std::fs::read_to_string(root().join(SHIP)).unwrap_or_else(|e| panic!("{e}"));
+    let model = source.replacen("N_r = -0.15", "N_r = 1e305", 1);
+    assert_ne!(model, source, "the ship has a nominal block");
+    let model = dir.write("ship.som", &model);
+    let o = leeway(&["estimate", &model, "--data", &data]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("`N_r`") && stderr(&o).contains("nominal { }"),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -25,6 +25,8 @@ enum Data {
     Int64(Vec<Option<i64>>),
     /// INT64 TIMESTAMP(NANOS): what pandas writes for `datetime64[ns]`.
     Stamps(Vec<Option<i64>>),
+    /// INT64 with a logical type written after the name (`(INTEGER(64,false))`).
+    Int64As(&'static str, Vec<Option<i64>>),
     Text(Vec<Option<String>>),
 }
 
@@ -34,12 +36,13 @@ impl Data {
             Data::Double(_) => "double",
             Data::Float(_) => "float",
             Data::Int32(_) => "int32",
-            Data::Int64(_) | Data::Stamps(_) => "int64",
+            Data::Int64(_) | Data::Stamps(_) | Data::Int64As(..) => "int64",
             Data::Text(_) => "binary",
         };
         let logical = match self {
             Data::Text(_) => " (UTF8)",
             Data::Stamps(_) => " (TIMESTAMP(NANOS,true))",
+            Data::Int64As(logical, _) => logical,
             _ => "",
         };
         format!("optional {t} {name}{logical};")
@@ -49,7 +52,7 @@ impl Data {
             Data::Double(v) => v.len(),
             Data::Float(v) => v.len(),
             Data::Int32(v) => v.len(),
-            Data::Int64(v) | Data::Stamps(v) => v.len(),
+            Data::Int64(v) | Data::Stamps(v) | Data::Int64As(_, v) => v.len(),
             Data::Text(v) => v.len(),
         }
     }
@@ -102,7 +105,9 @@ fn write_parquet(
                 Data::Double(v) => put::<DoubleType>(&mut col, &v[rows]),
                 Data::Float(v) => put::<FloatType>(&mut col, &v[rows]),
                 Data::Int32(v) => put::<Int32Type>(&mut col, &v[rows]),
-                Data::Int64(v) | Data::Stamps(v) => put::<Int64Type>(&mut col, &v[rows]),
+                Data::Int64(v) | Data::Stamps(v) | Data::Int64As(_, v) => {
+                    put::<Int64Type>(&mut col, &v[rows])
+                }
                 Data::Text(v) => {
                     let bytes: Vec<Option<ByteArray>> = v[rows]
                         .iter()
@@ -475,5 +480,81 @@ fn simulate_reads_a_parquet_input_as_the_csv_of_the_same_values() {
         )),
         "{}",
         stderr(&o)
+    );
+}
+
+#[test]
+fn logical_types_are_read_as_what_they_mean_or_refused() {
+    // Issue 22: unsigned integers were read signed, decimals without their
+    // scale, and a date or timestamp in a signal's column as a count.
+    let dir = Scratch::new("parquet-logical");
+    let text = estimation_csv(1500, 1.0, 7);
+    let csv = dir.write("log.csv", &text);
+    let cols = columns_of(&text);
+    let expected = leeway(&["estimate", SHIP, "--data", &csv, "--json"]);
+    assert_eq!(code(&expected), 0, "{}", stderr(&expected));
+    // The time as UINT64 seconds and as DECIMAL(18, 3) seconds: the CSV's
+    // estimate, bit for bit.
+    for (name, logical, scale) in [
+        ("uint", " (INTEGER(64,false))", 1.0),
+        ("decimal", " (DECIMAL(18,3))", 1e3),
+    ] {
+        let columns: Vec<(&str, Data)> = cols
+            .iter()
+            .map(|(n, v)| {
+                let d = if n == "time" {
+                    Data::Int64As(
+                        logical,
+                        v.iter().map(|t| Some((t * scale) as i64)).collect(),
+                    )
+                } else {
+                    doubles(v)
+                };
+                (n.as_str(), d)
+            })
+            .collect();
+        // Named as the CSV file: the experiment is named after it.
+        let sub = Scratch::new(&format!("parquet-logical-{name}"));
+        let path = sub.path("log.parquet");
+        write_parquet(&path, &columns, 500, Compression::SNAPPY);
+        let data = path.display().to_string();
+        let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+        assert_eq!(code(&o), 0, "{name}: {}", stderr(&o));
+        assert_eq!(stdout(&o).replace(&data, &csv), stdout(&expected), "{name}");
+    }
+    // A timestamp or a date in a signal's column is refused at the schema.
+    let origin = 1_795_392_000_000_000_000i64;
+    for (name, data) in [
+        (
+            "stamp",
+            Data::Stamps((0..1500).map(|k| Some(origin + k)).collect()),
+        ),
+        (
+            "date",
+            Data::Int64As(" (TIMESTAMP(MILLIS,false))", vec![Some(0); 1500]),
+        ),
+    ] {
+        let (e, f) = error_of(name, &borrowed(&with(&cols, "u", data)));
+        assert!(
+            e.contains(&format!("{f}: schema, column `u`")) && e.contains("dates or times"),
+            "{e}"
+        );
+    }
+    // An unsigned value beyond 2⁵³ is refused by row, never wrapped.
+    let mut big: Vec<Option<i64>> = cols[0].1.iter().map(|t| Some(*t as i64)).collect();
+    big[234] = Some(-40); // 2⁶⁴ − 40 as UINT64
+    let (e, f) = error_of(
+        "uint-big",
+        &borrowed(&with(
+            &cols,
+            "time",
+            Data::Int64As(" (INTEGER(64,false))", big),
+        )),
+    );
+    assert!(
+        e.contains(&format!(
+            "{f}: row 234 (row group 2, row 34), column `time`"
+        )) && e.contains("18446744073709551576"),
+        "{e}"
     );
 }

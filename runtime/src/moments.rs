@@ -892,6 +892,11 @@ impl LongRun {
         let sym = DMatrix::from_fn(m, m, |i, j| {
             0.5 * (self.sums[i * w + j] + self.sums[j * w + i])
         });
+        // Unbounded iterations on a NaN: a non-finite sum is returned as it
+        // is (the covariance then reports it as not finite).
+        if !sym.iter().all(|v| v.is_finite()) {
+            return sym;
+        }
         let eig = sym.clone().symmetric_eigen();
         if eig.eigenvalues.iter().all(|v| *v >= 0.0) {
             return sym;

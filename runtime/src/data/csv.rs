@@ -111,7 +111,7 @@ impl<R: std::io::BufRead> Filter<R> {
         loop {
             self.line.clear();
             self.pos = 0;
-            let n = self.inner.read_until(b'\n', &mut self.line)?;
+            let n = read_line(&mut self.inner, &mut self.line)?;
             if n == 0 {
                 return Ok(false);
             }
@@ -147,11 +147,52 @@ impl<R: std::io::BufRead> Filter<R> {
             // CRLF outside quotes becomes " \n" (same length, so byte offsets
             // hold; the space is trimmed): the csv reader then ends records
             // at `\n` only and its positions count lines as an editor does.
+            // A lone CR (classic Mac OS line ends) becomes `\n` likewise.
             let len = self.line.len();
             if !self.in_quotes && self.line.ends_with(b"\r\n") {
                 self.line[len - 2] = b' ';
+            } else if !self.in_quotes && self.line.ends_with(b"\r") {
+                self.line[len - 1] = b'\n';
             }
             return Ok(true);
+        }
+    }
+}
+
+/// Appends one physical line to `line`, with its end: `\n`, `\r\n` or a
+/// lone `\r` (files from classic Mac OS tools); returns the bytes read.
+fn read_line<R: std::io::BufRead>(inner: &mut R, line: &mut Vec<u8>) -> std::io::Result<usize> {
+    let mut n = 0;
+    loop {
+        let buf = match inner.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if buf.is_empty() {
+            return Ok(n);
+        }
+        match buf.iter().position(|b| *b == b'\n' || *b == b'\r') {
+            Some(i) => {
+                let cr = buf[i] == b'\r';
+                line.extend_from_slice(&buf[..=i]);
+                inner.consume(i + 1);
+                n += i + 1;
+                // A CR followed by LF is one line end (the LF may be in the
+                // next buffer).
+                if cr && inner.fill_buf()?.first() == Some(&b'\n') {
+                    line.push(b'\n');
+                    inner.consume(1);
+                    n += 1;
+                }
+                return Ok(n);
+            }
+            None => {
+                let len = buf.len();
+                line.extend_from_slice(buf);
+                inner.consume(len);
+                n += len;
+            }
         }
     }
 }

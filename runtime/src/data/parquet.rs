@@ -7,14 +7,22 @@
 //! (all from 0) and the column: `run.parquet: row 1234 (row group 1, row
 //! 210), column `u``.
 //!
-//! Columns of physical type DOUBLE, FLOAT, INT32 and INT64 are read as
-//! `f64` (an INT64 beyond ±2⁵³, which `f64` cannot hold exactly, is an
-//! error). An INT64 TIMESTAMP column (milli-, micro- or nanoseconds, what
-//! pandas writes for `datetime64`) is read as seconds since the file's first
-//! stamp: the difference is taken in integers, then divided once, so the
-//! times carry no rounding from large epoch values; a null is an error, as an empty CSV cell is; the experiment
-//! column may be of any type (text, or numbers printed as text). Pages
-//! compressed with Snappy, Zstandard, LZ4 or gzip are read.
+//! A number is read as what its logical type says it is, or refused; it is
+//! never read as another number ([`Reading`]): DOUBLE and FLOAT as they are;
+//! signed integers (INT32, INT64) and unsigned ones (`UINT_8` … `UINT_64`,
+//! stored in the same bits) as their value, an integer beyond ±2⁵³, which
+//! `f64` cannot hold exactly, an error; a DECIMAL (stored as INT32, INT64 or
+//! bytes) as its unscaled integer divided by `10^scale` — one correctly
+//! rounded division, so the same bits as the decimal text in a CSV file —
+//! with an unscaled value beyond ±2⁵³ an error. Dates and times (TIMESTAMP,
+//! DATE, TIME) are read only as the time column, as seconds since the file's
+//! first stamp: the difference is taken in integers, then divided once, so
+//! the times carry no rounding from large epoch values. Other logical types
+//! (INTERVAL, FLOAT16, UUID, JSON, …) and INT96 are refused by name. A null
+//! is an error, as an empty CSV cell is; the experiment column may be of any
+//! type (text, or numbers printed as text). Pages compressed with Snappy,
+//! Zstandard, LZ4 or gzip are read, and a page's CRC-32, where the writer
+//! stored one, is verified: a flipped bit is an error, not a changed number.
 
 use super::validate::{Places, Table, finite, missing, not_a_number};
 use super::{DataError, open_path};
@@ -48,19 +56,51 @@ pub fn is_parquet(path: &Path) -> bool {
         && &magic == b"PAR1"
 }
 
+/// How a column's stored values are read as numbers, from its physical
+/// and logical types: never as another number.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Reading {
+    /// DOUBLE, FLOAT or a signed integer: the value.
+    Plain,
+    /// An unsigned integer stored in the bits of an INT32 or INT64.
+    Unsigned,
+    /// A DECIMAL: the unscaled integer over `10^scale`.
+    Decimal { scale: i32 },
+    /// Dates and times, as seconds since the column's first stamp.
+    Stamp(StampUnit),
+    /// A logical type that is not a number leeway reads, by name.
+    Refused(&'static str),
+}
+
+/// What one stored unit of a date or time column is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum StampUnit {
+    /// This many units a second (milli-, micro-, nanoseconds).
+    PerSecond(i64),
+    /// A day (DATE).
+    Day,
+}
+
+/// Exact powers of ten: every one up to 10²² is an `f64` exactly.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
 /// One decoded cell.
 #[derive(Clone, Copy, Debug)]
 enum Cell {
-    /// A number (DOUBLE, FLOAT, INT32, INT64 within ±2⁵³).
+    /// A number read exactly (or correctly rounded, as text would be).
     Num(f64),
-    /// An INT64 beyond ±2⁵³.
-    Big(i64),
+    /// An integer beyond ±2⁵³ (an unscaled value and its scale), or a stamp
+    /// too far from the first.
+    Big(i128),
     /// Text (BYTE_ARRAY, FIXED_LEN_BYTE_ARRAY): a range of the batch's text.
     Text(usize, usize),
     /// A BOOLEAN.
     Bool(bool),
-    /// An INT96 (a legacy timestamp).
-    Int96,
+    /// An INT96 (a legacy timestamp), or a decimal wider than 128 bits.
+    Unreadable,
     /// A null.
     Null,
 }
@@ -87,9 +127,11 @@ pub struct ParquetFile {
     /// Rows of the current group not yet decoded.
     remaining: u64,
     batches: Vec<Batch>,
-    /// Per column: units per second of an INT64 TIMESTAMP column, and the
-    /// file's first stamp once read (what its seconds count from).
-    stamps: Vec<Option<(f64, Option<i64>)>>,
+    /// Per column: how its values are read.
+    readings: Vec<Reading>,
+    /// Per column: the first stamp of a date or time column once read (what
+    /// its seconds count from).
+    origins: Vec<Option<i64>>,
     /// Rows in the current batch, and the current row's index in it.
     rows: usize,
     index: usize,
@@ -134,8 +176,16 @@ impl ParquetFile {
             })?;
         let metadata = reader.metadata();
         let schema = metadata.file_metadata().schema_descr();
+        // A list's values sit in a leaf `name.list.element`: it is named by
+        // its field, so that reading it says it is a list, not missing.
         let headers: Vec<String> = (0..schema.num_columns())
-            .map(|i| schema.column(i).path().string())
+            .map(|i| {
+                let column = schema.column(i);
+                match column.path().parts().first() {
+                    Some(field) if column.max_rep_level() > 0 => field.clone(),
+                    _ => column.path().string(),
+                }
+            })
             .collect();
         let mut starts = Vec::with_capacity(metadata.num_row_groups());
         let mut start = 0u64;
@@ -143,13 +193,14 @@ impl ParquetFile {
             starts.push(start);
             start += u64::try_from(g.num_rows()).unwrap_or(0);
         }
-        let stamps = (0..schema.num_columns())
-            .map(|i| stamp_units(&schema.column(i)).map(|per_second| (per_second, None)))
+        let readings = (0..schema.num_columns())
+            .map(|i| reading(&schema.column(i)))
             .collect();
         let table = ParquetFile {
             file,
             headers,
-            stamps,
+            readings,
+            origins: vec![None; schema.num_columns()],
             places: Places::Groups(Arc::from(starts)),
             selected: vec![true; schema.num_columns()],
             group: 0,
@@ -229,8 +280,8 @@ impl ParquetFile {
             }
             let max_def = column.max_def_level();
             let batch = &mut self.batches[i];
-            let stamp = self.stamps[i].as_mut();
-            let read = guarded(|| fill(reader, max_def, want, batch, stamp))
+            let (reading, origin) = (self.readings[i], &mut self.origins[i]);
+            let read = guarded(|| fill(reader, max_def, want, batch, reading, origin))
                 .and_then(|r| r.map_err(|e| reason(&e)));
             match read {
                 Ok(n) if n == want => {}
@@ -283,10 +334,44 @@ impl ParquetFile {
             .unwrap_or(Cell::Null)
     }
 
-    /// The physical type of column `i`, for messages.
+    /// A value beyond ±2⁵³ as written: a decimal's unscaled integer with
+    /// its point put back.
+    fn big_text(&self, i: usize, v: i128) -> String {
+        match self.readings[i] {
+            Reading::Decimal { scale } if scale > 0 => {
+                let digits = v.unsigned_abs().to_string();
+                let scale = usize::try_from(scale).unwrap_or(0);
+                let digits = format!("{digits:0>width$}", width = scale + 1);
+                let (whole, fraction) = digits.split_at(digits.len() - scale);
+                let sign = if v < 0 { "-" } else { "" };
+                format!("{sign}{whole}.{fraction}")
+            }
+            _ => v.to_string(),
+        }
+    }
+
+    /// The type of column `i`, for messages: its logical type where it has
+    /// one, with its physical type (`DECIMAL(18, 6) (INT64)`).
     fn type_name(&self, i: usize) -> String {
+        use parquet::basic::{ConvertedType, LogicalType as L};
         let schema = self.reader.metadata().file_metadata().schema_descr();
-        schema.column(i).physical_type().to_string()
+        let column = schema.column(i);
+        let physical = column.physical_type();
+        let logical = match column.logical_type_ref() {
+            Some(L::Timestamp(t)) => format!("TIMESTAMP({:?})", t.unit),
+            Some(L::Time(t)) => format!("TIME({:?})", t.unit),
+            Some(L::Date) => "DATE".to_string(),
+            Some(L::Decimal(d)) => format!("DECIMAL({}, {})", d.precision, d.scale),
+            Some(L::Integer(i)) => {
+                format!("{}INT{}", if i.is_signed { "" } else { "U" }, i.bit_width)
+            }
+            Some(l) => format!("{l:?}").to_uppercase(),
+            None if column.converted_type() != ConvertedType::NONE => {
+                column.converted_type().to_string()
+            }
+            None => return physical.to_string(),
+        };
+        format!("{logical} ({physical})")
     }
 }
 
@@ -308,81 +393,150 @@ fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     })
 }
 
-/// Units per second of an INT64 TIMESTAMP column (the logical type, or the
-/// legacy converted types); `None` for any other column.
-fn stamp_units(column: &parquet::schema::types::ColumnDescriptor) -> Option<f64> {
-    use parquet::basic::{ConvertedType, LogicalType, TimeUnit, Type};
-    if column.physical_type() != Type::INT64 {
-        return None;
-    }
-    match column.logical_type_ref() {
-        Some(LogicalType::Timestamp(t)) => Some(match t.unit {
-            TimeUnit::MILLIS => 1e3,
-            TimeUnit::MICROS => 1e6,
-            TimeUnit::NANOS => 1e9,
-        }),
-        _ => match column.converted_type() {
-            ConvertedType::TIMESTAMP_MILLIS => Some(1e3),
-            ConvertedType::TIMESTAMP_MICROS => Some(1e6),
-            _ => None,
+/// How a column's values are read, from its logical type (or the legacy
+/// converted type of older writers).
+fn reading(column: &parquet::schema::types::ColumnDescriptor) -> Reading {
+    use parquet::basic::{ConvertedType as C, LogicalType as L, TimeUnit, Type};
+    let per_second = |unit: &TimeUnit| {
+        StampUnit::PerSecond(match unit {
+            TimeUnit::MILLIS => 1_000,
+            TimeUnit::MICROS => 1_000_000,
+            TimeUnit::NANOS => 1_000_000_000,
+        })
+    };
+    match (column.logical_type_ref(), column.converted_type()) {
+        (Some(L::Timestamp(t) | L::Time(t)), _) => Reading::Stamp(per_second(&t.unit)),
+        (Some(L::Date), _) | (_, C::DATE) => Reading::Stamp(StampUnit::Day),
+        (_, C::TIMESTAMP_MILLIS | C::TIME_MILLIS) => Reading::Stamp(StampUnit::PerSecond(1_000)),
+        (_, C::TIMESTAMP_MICROS | C::TIME_MICROS) => {
+            Reading::Stamp(StampUnit::PerSecond(1_000_000))
+        }
+        (Some(L::Decimal(d)), _) => Reading::Decimal { scale: d.scale },
+        (_, C::DECIMAL) => Reading::Decimal {
+            scale: column.type_scale(),
         },
+        (Some(L::Integer(i)), _) if !i.is_signed => Reading::Unsigned,
+        (_, C::UINT_8 | C::UINT_16 | C::UINT_32 | C::UINT_64) => Reading::Unsigned,
+        (Some(L::Float16), _) => Reading::Refused("FLOAT16 (half-precision) values"),
+        (_, C::INTERVAL) => Reading::Refused("INTERVAL values"),
+        (Some(L::Uuid), _) => Reading::Refused("UUIDs"),
+        (Some(L::Json | L::Bson | L::Variant(_)), _) => Reading::Refused("documents"),
+        (Some(L::Unknown), _) => Reading::Refused("nulls only (the null type)"),
+        _ if column.physical_type() == Type::INT96 => {
+            Reading::Refused("INT96 values (a legacy timestamp)")
+        }
+        _ => Reading::Plain,
     }
 }
 
-/// Decodes `n` rows of a column into `out`.
+/// An integer as a cell: exact within ±2⁵³, else [`Cell::Big`].
+fn integer(v: i128) -> Cell {
+    if (-i128::from(EXACT)..=i128::from(EXACT)).contains(&v) {
+        // Exact: |v| ≤ 2⁵³.
+        #[allow(clippy::cast_precision_loss)]
+        Cell::Num(v as f64)
+    } else {
+        Cell::Big(v)
+    }
+}
+
+/// A decimal's value: its unscaled integer over `10^scale`, correctly
+/// rounded — the same bits as its decimal text read from a CSV file. An
+/// unscaled integer and a power of ten that are both exact take one
+/// division; any other is read from its text (`unscaled`e`-scale`), which
+/// Rust's parser rounds correctly too. An unscaled integer beyond ±2⁵³ is
+/// refused as an integer is (the digits beyond a float's are dropped
+/// otherwise).
+fn decimal(unscaled: i128, scale: i32) -> Cell {
+    match integer(unscaled) {
+        Cell::Num(v) => match usize::try_from(scale).ok().and_then(|s| POW10.get(s)) {
+            Some(p) => Cell::Num(v / p),
+            None => format!("{unscaled}e{}", -i64::from(scale))
+                .parse()
+                .map_or(Cell::Unreadable, Cell::Num),
+        },
+        other => other,
+    }
+}
+
+/// A decimal stored as bytes: a big-endian two's complement integer (at
+/// most 16 bytes: wider ones are [`Cell::Unreadable`]).
+fn decimal_bytes(bytes: &[u8], scale: i32) -> Cell {
+    if bytes.is_empty() || bytes.len() > 16 {
+        return Cell::Unreadable;
+    }
+    let fill = if bytes[0] & 0x80 != 0 { 0xff } else { 0 };
+    let mut wide = [fill; 16];
+    wide[16 - bytes.len()..].copy_from_slice(bytes);
+    decimal(i128::from_be_bytes(wide), scale)
+}
+
+/// A date or time as seconds since the column's first stamp `origin` (set
+/// by the first): the difference in integers first, then one division, so
+/// large epoch values add no rounding.
+fn stamp(v: i64, unit: StampUnit, origin: &mut Option<i64>) -> Cell {
+    let first = *origin.get_or_insert(v);
+    let Some(d) = v.checked_sub(first) else {
+        return Cell::Big(i128::from(v));
+    };
+    #[allow(clippy::cast_precision_loss)]
+    match unit {
+        StampUnit::PerSecond(n) => Cell::Num(d as f64 / n as f64),
+        // |d| < 2³² days: d·86400 < 2⁴⁹, exact.
+        StampUnit::Day => Cell::Num(d as f64 * 86_400.0),
+    }
+}
+
+/// Decodes `n` rows of a column into `out`, each read as `reading` says
+/// (`origin`: a date or time column's first stamp).
 fn fill(
     reader: &mut ColumnReader,
     max_def: i16,
     n: usize,
     out: &mut Batch,
-    stamp: Option<&mut (f64, Option<i64>)>,
+    reading: Reading,
+    origin: &mut Option<i64>,
 ) -> parquet::errors::Result<usize> {
     out.cells.clear();
     out.text.clear();
+    // An UINT's value is its stored bits read unsigned: the casts below.
+    #[allow(clippy::cast_sign_loss)]
     match reader {
         ColumnReader::DoubleColumnReader(r) => typed(r, max_def, n, out, |v, _| Cell::Num(*v)),
         ColumnReader::FloatColumnReader(r) => {
             typed(r, max_def, n, out, |v, _| Cell::Num(f64::from(*v)))
         }
-        ColumnReader::Int32ColumnReader(r) => {
-            typed(r, max_def, n, out, |v, _| Cell::Num(f64::from(*v)))
-        }
-        ColumnReader::Int64ColumnReader(r) if stamp.is_some() => {
-            let Some((per_second, origin)) = stamp else {
-                unreachable!("guarded by the match arm")
-            };
-            typed(r, max_def, n, out, |v, _| {
-                let first = *origin.get_or_insert(*v);
-                // In integers first: no rounding from the epoch's magnitude.
-                match v.checked_sub(first) {
-                    #[allow(clippy::cast_precision_loss)]
-                    Some(d) => Cell::Num(d as f64 / *per_second),
-                    None => Cell::Big(*v),
-                }
-            })
-        }
-        ColumnReader::Int64ColumnReader(r) => typed(r, max_def, n, out, |v, _| {
-            if (-EXACT..=EXACT).contains(v) {
-                // Exact: |v| ≤ 2⁵³.
-                #[allow(clippy::cast_precision_loss)]
-                Cell::Num(*v as f64)
-            } else {
-                Cell::Big(*v)
-            }
+        ColumnReader::Int32ColumnReader(r) => typed(r, max_def, n, out, |v, _| match reading {
+            Reading::Stamp(unit) => stamp(i64::from(*v), unit, origin),
+            Reading::Unsigned => Cell::Num(f64::from(*v as u32)),
+            Reading::Decimal { scale } => decimal(i128::from(*v), scale),
+            Reading::Plain | Reading::Refused(_) => Cell::Num(f64::from(*v)),
+        }),
+        ColumnReader::Int64ColumnReader(r) => typed(r, max_def, n, out, |v, _| match reading {
+            Reading::Stamp(unit) => stamp(*v, unit, origin),
+            Reading::Unsigned => integer(i128::from(*v as u64)),
+            Reading::Decimal { scale } => decimal(i128::from(*v), scale),
+            Reading::Plain | Reading::Refused(_) => integer(i128::from(*v)),
         }),
         ColumnReader::BoolColumnReader(r) => typed(r, max_def, n, out, |v, _| Cell::Bool(*v)),
-        ColumnReader::Int96ColumnReader(r) => typed(r, max_def, n, out, |_, _| Cell::Int96),
-        ColumnReader::ByteArrayColumnReader(r) => typed(r, max_def, n, out, |v, text| {
-            let start = text.len();
-            text.extend_from_slice(v.data());
-            Cell::Text(start, text.len())
-        }),
-        ColumnReader::FixedLenByteArrayColumnReader(r) => typed(r, max_def, n, out, |v, text| {
-            let start = text.len();
-            text.extend_from_slice(v.data());
-            Cell::Text(start, text.len())
-        }),
+        ColumnReader::Int96ColumnReader(r) => typed(r, max_def, n, out, |_, _| Cell::Unreadable),
+        ColumnReader::ByteArrayColumnReader(r) => {
+            typed(r, max_def, n, out, |v, text| bytes(v.data(), reading, text))
+        }
+        ColumnReader::FixedLenByteArrayColumnReader(r) => {
+            typed(r, max_def, n, out, |v, text| bytes(v.data(), reading, text))
+        }
     }
+}
+
+/// A cell stored as bytes: a decimal's value, else text.
+fn bytes(data: &[u8], reading: Reading, text: &mut Vec<u8>) -> Cell {
+    if let Reading::Decimal { scale } = reading {
+        return decimal_bytes(data, scale);
+    }
+    let start = text.len();
+    text.extend_from_slice(data);
+    Cell::Text(start, text.len())
 }
 
 /// Decodes `n` rows of a typed column: nulls (definition level below the
@@ -466,16 +620,27 @@ impl Table for ParquetFile {
         let at = || self.at(self.position(), Some((i, name)));
         let text_hint = || {
             format!(
-                "the column holds {} values; leeway reads numbers from DOUBLE, FLOAT, INT32 and INT64 columns: write it as numbers",
+                "the column holds {} values; leeway reads numbers from DOUBLE, FLOAT, integer and DECIMAL columns: write it as numbers",
                 self.type_name(i)
             )
         };
+        if let Reading::Refused(what) = self.readings[i] {
+            return Err(DataError::new(
+                at(),
+                format!(
+                    "column `{name}` holds {what} ({}), not numbers leeway reads",
+                    self.type_name(i)
+                ),
+                "write the column as DOUBLE (pandas: df[c].astype(\"float64\")); leeway does not convert other types",
+            ));
+        }
         match self.cell(i) {
             Cell::Num(v) => finite(v, at),
             Cell::Big(v) => Err(DataError::new(
                 at(),
                 format!(
-                    "{v} is beyond ±2⁵³ (9007199254740992): a 64-bit float cannot hold it exactly"
+                    "{} is beyond ±2⁵³ (9007199254740992): a 64-bit float cannot hold it exactly",
+                    self.big_text(i, v)
                 ),
                 "leeway reads every value as a 64-bit float and will not round one silently: store the column as DOUBLE, or in a unit that keeps it within ±2⁵³",
             )),
@@ -486,19 +651,22 @@ impl Table for ParquetFile {
                 &text_hint(),
             )),
             Cell::Bool(v) => Err(not_a_number(at(), &v.to_string(), &text_hint())),
-            Cell::Int96 => Err(not_a_number(at(), "INT96", &text_hint())),
+            Cell::Unreadable => Err(not_a_number(at(), &self.type_name(i), &text_hint())),
         }
+    }
+    fn stamps(&self, i: usize) -> Option<String> {
+        matches!(self.readings.get(i), Some(Reading::Stamp(_))).then(|| self.type_name(i))
     }
     fn label(&self, i: usize) -> Result<Cow<'_, [u8]>, DataError> {
         Ok(match self.cell(i) {
             Cell::Num(v) => Cow::Owned(v.to_string().into_bytes()),
-            Cell::Big(v) => Cow::Owned(v.to_string().into_bytes()),
+            Cell::Big(v) => Cow::Owned(self.big_text(i, v).into_bytes()),
             Cell::Text(a, b) => Cow::Borrowed(&self.batches[i].text[a..b]),
             Cell::Bool(v) => Cow::Owned(v.to_string().into_bytes()),
-            Cell::Int96 => {
+            Cell::Unreadable => {
                 return Err(not_a_number(
                     self.at(self.position(), Some((i, &self.headers[i]))),
-                    "INT96",
+                    &self.type_name(i),
                     "name experiments by text or integers",
                 ));
             }
@@ -509,5 +677,275 @@ impl Table for ParquetFile {
                 ));
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! Every logical type read as what it means, or refused with a located
+    //! error (issue 22): files written here with the crate's own writer.
+    use super::*;
+    use parquet::data_type::{ByteArray, FixedLenByteArray, Int32Type, Int64Type};
+    use parquet::file::properties::WriterProperties;
+    use parquet::file::writer::SerializedFileWriter;
+    use parquet::schema::parser::parse_message_type;
+
+    /// One column: its schema line (`required int32 x (DATE)`) and values.
+    enum Values {
+        I32(Vec<i32>),
+        I64(Vec<i64>),
+        Fixed(Vec<Vec<u8>>),
+        Bytes(Vec<Vec<u8>>),
+    }
+
+    fn write(path: &Path, columns: &[(&str, Values)]) {
+        let fields: Vec<&str> = columns.iter().map(|(f, _)| *f).collect();
+        let schema = Arc::new(
+            parse_message_type(&format!("message t {{ {} }}", fields.join(" ")))
+                .unwrap_or_else(|e| panic!("{e}")),
+        );
+        let props = WriterProperties::builder().build();
+        let file = std::fs::File::create(path).unwrap_or_else(|e| panic!("{e}"));
+        let mut writer = SerializedFileWriter::new(file, schema, Arc::new(props))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let mut group = writer.next_row_group().unwrap_or_else(|e| panic!("{e}"));
+        for (_, values) in columns {
+            let mut col = group
+                .next_column()
+                .unwrap_or_else(|e| panic!("{e}"))
+                .unwrap_or_else(|| panic!("a column"));
+            let written = match values {
+                Values::I32(v) => col.typed::<Int32Type>().write_batch(v, None, None),
+                Values::I64(v) => col.typed::<Int64Type>().write_batch(v, None, None),
+                Values::Fixed(v) => {
+                    let v: Vec<FixedLenByteArray> = v
+                        .iter()
+                        .map(|b| FixedLenByteArray::from(ByteArray::from(b.clone())))
+                        .collect();
+                    col.typed::<parquet::data_type::FixedLenByteArrayType>()
+                        .write_batch(&v, None, None)
+                }
+                Values::Bytes(v) => {
+                    let v: Vec<ByteArray> = v.iter().map(|b| ByteArray::from(b.clone())).collect();
+                    col.typed::<parquet::data_type::ByteArrayType>()
+                        .write_batch(&v, None, None)
+                }
+            };
+            written.unwrap_or_else(|e| panic!("{e}"));
+            col.close().unwrap_or_else(|e| panic!("{e}"));
+        }
+        group.close().unwrap_or_else(|e| panic!("{e}"));
+        writer.close().unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// Every row of column `i` read as a number (or the first error).
+    fn numbers(path: &Path, i: usize) -> Result<Vec<f64>, DataError> {
+        let mut t = ParquetFile::open(path)?;
+        let name = t.headers()[i].clone();
+        let mut out = Vec::new();
+        while t.next_row()? {
+            out.push(t.number(i, &name)?);
+        }
+        Ok(out)
+    }
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("leeway-parquet-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
+        dir.join(name)
+    }
+
+    #[test]
+    fn unsigned_integers_are_read_unsigned() {
+        let path = scratch("unsigned.parquet");
+        // 3000000037 stored in an INT32's bits; 2⁵³ and 2⁶⁴−40 in an INT64's.
+        #[allow(clippy::cast_possible_wrap)]
+        let u32s = vec![3_000_000_037u32 as i32, 7];
+        #[allow(clippy::cast_possible_wrap)]
+        let u64s = vec![1i64 << 53, (u64::MAX - 39) as i64];
+        write(
+            &path,
+            &[
+                ("required int32 a (INTEGER(32,false));", Values::I32(u32s)),
+                ("required int64 b (INTEGER(64,false));", Values::I64(u64s)),
+            ],
+        );
+        assert_eq!(numbers(&path, 0).ok(), Some(vec![3_000_000_037.0, 7.0]));
+        let e = numbers(&path, 1)
+            .err()
+            .unwrap_or_else(|| panic!("2⁶⁴−40 accepted"));
+        assert!(e.to_string().contains("18446744073709551576"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("row 1 (row group 0, row 1), column `b`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn decimals_are_read_with_their_scale_as_their_text_would_be() {
+        let path = scratch("decimal.parquet");
+        let texts = ["37.382572", "-0.000001", "0.020100", "123456789.123456"];
+        let unscaled: Vec<i64> = texts
+            .iter()
+            .map(|t| t.replace('.', "").parse().unwrap_or_else(|e| panic!("{e}")))
+            .collect();
+        let as_i32: Vec<i32> = unscaled[..3].iter().map(|v| *v as i32).collect();
+        // FIXED_LEN_BYTE_ARRAY(9) and BYTE_ARRAY: big-endian two's complement.
+        let fixed: Vec<Vec<u8>> = unscaled
+            .iter()
+            .map(|v| {
+                let mut nine = vec![if *v < 0 { 0xff } else { 0 }];
+                nine.extend(v.to_be_bytes());
+                nine
+            })
+            .collect();
+        let minimal: Vec<Vec<u8>> = unscaled
+            .iter()
+            .map(|v| {
+                let b = v.to_be_bytes();
+                // The shortest two's complement form, as writers store it.
+                let skip = (0..7)
+                    .take_while(|&k| {
+                        (b[k] == 0 && b[k + 1] & 0x80 == 0)
+                            || (b[k] == 0xff && b[k + 1] & 0x80 != 0)
+                    })
+                    .count();
+                b[skip..].to_vec()
+            })
+            .collect();
+        write(
+            &path,
+            &[
+                (
+                    "required int64 a (DECIMAL(18,6));",
+                    Values::I64(unscaled.clone()),
+                ),
+                (
+                    "required fixed_len_byte_array(9) b (DECIMAL(20,6));",
+                    Values::Fixed(fixed),
+                ),
+                ("required binary c (DECIMAL(20,6));", Values::Bytes(minimal)),
+            ],
+        );
+        let expected: Vec<f64> = texts
+            .iter()
+            .map(|t| t.parse().unwrap_or_else(|e| panic!("{e}")))
+            .collect();
+        for i in 0..3 {
+            let got = numbers(&path, i).unwrap_or_else(|e| panic!("{e}"));
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got), bits(&expected), "column {i}: {got:?}");
+        }
+        let small = scratch("decimal32.parquet");
+        write(
+            &small,
+            &[("required int32 a (DECIMAL(9,6));", Values::I32(as_i32))],
+        );
+        assert_eq!(numbers(&small, 0).ok(), Some(expected[..3].to_vec()));
+        // An unscaled value beyond 2⁵³ is refused, shown as the decimal it is.
+        let wide = scratch("decimal-wide.parquet");
+        write(
+            &wide,
+            &[(
+                "required int64 a (DECIMAL(18,2));",
+                Values::I64(vec![123_456_789_012_345_678]),
+            )],
+        );
+        let e = numbers(&wide, 0)
+            .err()
+            .unwrap_or_else(|| panic!("accepted"));
+        assert!(e.to_string().contains("1234567890123456.78"), "{e}");
+    }
+
+    #[test]
+    fn dates_and_times_are_seconds_since_the_first() {
+        let path = scratch("dates.parquet");
+        write(
+            &path,
+            &[
+                (
+                    "required int32 d (DATE);",
+                    Values::I32(vec![20_000, 20_001, 20_003]),
+                ),
+                (
+                    "required int32 t (TIME(MILLIS,false));",
+                    Values::I32(vec![1_000, 1_250, 1_500]),
+                ),
+                (
+                    "required int64 s (TIMESTAMP(MICROS,true));",
+                    Values::I64(vec![
+                        1_795_392_000_000_000,
+                        1_795_392_000_100_000,
+                        1_795_392_000_200_000,
+                    ]),
+                ),
+            ],
+        );
+        assert_eq!(numbers(&path, 0).ok(), Some(vec![0.0, 86_400.0, 259_200.0]));
+        assert_eq!(numbers(&path, 1).ok(), Some(vec![0.0, 0.25, 0.5]));
+        assert_eq!(numbers(&path, 2).ok(), Some(vec![0.0, 0.1, 0.2]));
+        let t = ParquetFile::open(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert!((0..3).all(|i| t.stamps(i).is_some()));
+    }
+
+    #[test]
+    fn other_logical_types_are_refused_by_name() {
+        let path = scratch("refused.parquet");
+        write(
+            &path,
+            &[
+                (
+                    "required fixed_len_byte_array(2) h (FLOAT16);",
+                    Values::Fixed(vec![vec![0, 60]]),
+                ),
+                (
+                    "required fixed_len_byte_array(16) u (UUID);",
+                    Values::Fixed(vec![vec![1; 16]]),
+                ),
+            ],
+        );
+        for (i, what) in [(0, "FLOAT16"), (1, "UUID")] {
+            let e = numbers(&path, i)
+                .err()
+                .unwrap_or_else(|| panic!("{what} accepted"));
+            assert!(
+                e.to_string().contains(what) && e.to_string().contains("row 0"),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_flipped_bit_in_a_checksummed_page_is_an_error() {
+        // Written by pyarrow with `write_page_checksum=True` (the crate's
+        // writer stores no CRC): 2000 INT64 values k·7919, one row group.
+        let good = std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/checksummed.parquet"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let path = scratch("crc.parquet");
+        std::fs::write(&path, &good).unwrap_or_else(|e| panic!("{e}"));
+        let values: Vec<f64> = (0..2000).map(|k| f64::from(k * 7919)).collect();
+        assert_eq!(numbers(&path, 0).ok(), Some(values.clone()));
+        // One bit flipped at a time all over the pages (past the magic,
+        // before the footer): an error each time, never a changed number.
+        let tail = &good[good.len() - 8..good.len() - 4];
+        let footer = u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]) as usize;
+        let (mut changed, mut refused) = (0, 0);
+        for at in (4..good.len() - 8 - footer).step_by(61) {
+            let mut bad = good.clone();
+            bad[at] ^= 0x10;
+            std::fs::write(&path, &bad).unwrap_or_else(|e| panic!("{e}"));
+            match numbers(&path, 0) {
+                Ok(read) => changed += usize::from(read != values),
+                Err(_) => refused += 1,
+            }
+        }
+        assert_eq!(
+            changed, 0,
+            "flipped bits read as other numbers ({refused} refused)"
+        );
+        assert!(refused > 100, "{refused}");
     }
 }

@@ -44,6 +44,9 @@ impl Places {
                 };
             }
             Places::Rows => format!("{file}: row {position}"),
+            Places::Groups(starts) if starts.is_empty() => {
+                format!("{file}: row {position} (the file has no row groups)")
+            }
             Places::Groups(starts) => {
                 let g = starts.partition_point(|s| *s <= position).saturating_sub(1);
                 let first = starts.get(g).copied().unwrap_or(0);
@@ -89,6 +92,11 @@ pub trait Table {
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError>;
     /// Cell `i` of the current row as a label (an experiment's name).
     fn label(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>, DataError>;
+    /// The type of column `i` when it holds dates or times (read as
+    /// seconds since its first stamp, which only a time column may be).
+    fn stamps(&self, _i: usize) -> Option<String> {
+        None
+    }
     /// Only these columns will be read (a columnar format may skip the
     /// others); called once, before the first row.
     fn select(&mut self, _columns: &[usize]) {}
@@ -198,12 +206,41 @@ impl Layout {
                 }
             }
         }
-        Ok(Layout {
+        let layout = Layout {
             cols,
             time_col: find(&column_name(ir, "time")),
             time_factor: unit_factor(ir, "time"),
             exp_col: find(&column_name(ir, "experiment")),
-        })
+        };
+        layout.check_stamps(table)?;
+        Ok(layout)
+    }
+
+    /// Dates and times are read as seconds since their first stamp: right
+    /// for the time column (in seconds), never for a signal's value.
+    fn check_stamps(&self, table: &dyn Table) -> Result<(), DataError> {
+        for (_, i, name, _) in &self.cols {
+            if let Some(kind) = table.stamps(*i) {
+                return Err(DataError::new(
+                    table.header_at(Some(*i)),
+                    format!("column `{name}` holds dates or times ({kind}), not a signal's values"),
+                    "only the time column may hold dates or times; store the signal as numbers (DOUBLE)",
+                ));
+            }
+        }
+        if let Some(i) = self.time_col
+            && let Some(kind) = table.stamps(i)
+            && self.time_factor != 1.0
+        {
+            return Err(DataError::new(
+                table.header_at(Some(i)),
+                format!(
+                    "the time column holds dates or times ({kind}), which are read in seconds, but the model declares another unit for it"
+                ),
+                "drop the time unit from the model's data { } block, or store the time as numbers in that unit",
+            ));
+        }
+        Ok(())
     }
 
     /// Reads the current row's signals into `buf` (declared units converted

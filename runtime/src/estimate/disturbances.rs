@@ -62,6 +62,10 @@ impl Estimator<'_> {
                 eqs.len(),
                 eqs.iter().map(|(k, _)| vals.get(k).copied().unwrap_or(0.0)),
             );
+            // An SVD panics on a NaN: an overflowed product has no mean.
+            if !a.iter().chain(y.iter()).all(|v| v.is_finite()) {
+                return None;
+            }
             let svd = a.svd(true, true);
             let smax = svd.singular_values.max();
             if svd.singular_values.min() <= 1e-10 * smax || smax == 0.0 {

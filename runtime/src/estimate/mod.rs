@@ -98,6 +98,38 @@ struct Estimator<'a> {
     facts: Vec<ExperimentFacts>,
 }
 
+/// The largest nominal value accepted: with a regressor within
+/// [`REGRESSOR_LIMIT`] their product stays far inside `f64`'s range, so a
+/// first simulation cannot overflow from θ alone.
+pub const NOMINAL_LIMIT: f64 = 1e145;
+
+/// Every nominal value finite and within ±[`NOMINAL_LIMIT`], the first one
+/// that is not named (`given`: from the options, else the model's
+/// `nominal { }`): such a θ only overflows the instrument simulation.
+fn check_nominal(ir: &Ir, nominal: &[f64], given: bool) -> Result<(), EstimateError> {
+    let wrong = ir
+        .parameters
+        .iter()
+        .zip(nominal)
+        .find(|(_, v)| !(v.abs() <= NOMINAL_LIMIT));
+    let Some((p, v)) = wrong else {
+        return Ok(());
+    };
+    let source = if given {
+        "the nominal values given (--nominal)"
+    } else {
+        "the model's `nominal { }` block"
+    };
+    Err(err(
+        "invalid-nominal",
+        format!(
+            "the nominal value of `{}` is {v:e} in {source}: nominal values must be finite and within ±1e145",
+            p.name
+        ),
+        "give a physically plausible nominal θ (a rough guess of each parameter's size is enough)",
+    ))
+}
+
 /// Estimates θ (and nuisance parameters) of `model` from the experiments.
 pub fn estimate(
     model: &dyn Model,
@@ -134,6 +166,7 @@ pub fn estimate_with(
         }
         None => ir.parameters.iter().map(|p| p.nominal).collect(),
     };
+    check_nominal(ir, &nominal, options.nominal.is_some())?;
     if let Some(start) = &options.start
         && (start.theta.len() != ir.parameters.len() || start.means.len() != ir.components.len())
     {

@@ -29,6 +29,24 @@ pub(super) struct BlockSolution {
 }
 
 impl Estimator<'_> {
+    /// The error for a block whose moment sums are not finite.
+    fn non_finite_moments(&self, b: usize) -> EstimateError {
+        let outputs: Vec<&str> = self.blocks[b]
+            .outputs
+            .iter()
+            .filter_map(|o| self.ir.states.get(*o).map(String::as_str))
+            .collect();
+        err(
+            "non-finite-moments",
+            format!(
+                "the moment sums of output{} {} are not finite: the instruments' simulation or a sum overflowed",
+                if outputs.len() == 1 { "" } else { "s" },
+                outputs.join(", ")
+            ),
+            "check the nominal values (--nominal, the model's nominal { }) and the data's units; --initial delayed or --instruments delayed start from the data instead of the nominal model",
+        )
+    }
+
     /// Solves every block; collects numeric rank findings.
     pub(super) fn solve(
         &mut self,
@@ -90,6 +108,11 @@ impl Estimator<'_> {
                 }
                 (a, g, scales, bound)
             };
+            // A simulation that overflowed (or a sum that did) leaves a
+            // non-finite moment: no decomposition may see it.
+            if !(mat.iter().chain(rhs.iter()).chain(&bound)).all(|v| v.is_finite()) {
+                return Err(self.non_finite_moments(b));
+            }
             // Scale-aware residue test over the whole system: a column whose
             // moments are at the rounding level of its own scale carries no
             // information, whatever the units (equilibration would otherwise
