@@ -62,13 +62,14 @@ impl Problem {
 
     /// An estimate that could not be computed. Exit 1 when the data cannot
     /// support the model (`unidentifiable`, `rank-deficient`,
-    /// `sign-violation`); exit 2 for everything the user must fix in the
-    /// command (options, nominal values).
+    /// `sign-violation`, and under `--strict` an estimate whose own
+    /// simulation fails, `own-simulation`); exit 2 for everything the user
+    /// must fix in the command (options, nominal values).
     pub fn estimate(e: &EstimateError) -> Problem {
         let mut p = Problem::error(e.code, &e.message).help(&e.hint);
         if matches!(
             e.code,
-            "unidentifiable" | "rank-deficient" | "sign-violation"
+            "unidentifiable" | "rank-deficient" | "sign-violation" | "own-simulation"
         ) {
             p.status = Status::Unsupported;
         }

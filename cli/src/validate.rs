@@ -288,6 +288,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
                     e.name
                 ));
             }
+            warnings.extend(v.below_mean(&outputs, &format!("{name}, experiment `{}`", e.name)));
             for (o, panel) in panels.iter_mut().enumerate() {
                 let simulated = if o < ir.states.len() {
                     sim.states.get(o).cloned().unwrap_or_default()

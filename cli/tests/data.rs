@@ -907,3 +907,29 @@ fn an_overflowing_nominal_value_is_a_located_error_not_a_panic() {
         stderr(&o)
     );
 }
+
+#[test]
+fn validate_calls_a_fit_below_zero_what_it_is() {
+    // Issue 22: a model whose simulation fits at −299 % was reported
+    // without a word.
+    let dir = Scratch::new("below-mean");
+    let data = dir.write("log.csv", &estimation_csv(1500, 1.0, 5));
+    let wrong = dir.write(
+        "wrong.json",
+        &true_params().replace("\"N_tau\": 0.0003", "\"N_tau\": -0.0003"),
+    );
+    let o = leeway(&[
+        "validate", SHIP, "--data", &data, "--params", &wrong, "--json",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let fit = v["mean"]["r"].as_f64().unwrap_or(f64::NAN);
+    assert!(fit < 0.0, "{v}");
+    assert!(
+        v["warnings"].as_array().is_some_and(|w| w.iter().any(|w| w
+            .as_str()
+            .is_some_and(|w| w.contains("`r` at") && w.contains("worse than the data's mean")))),
+        "{v}"
+    );
+}

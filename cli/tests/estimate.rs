@@ -101,6 +101,15 @@ fn estimate_prints_the_json_contract() {
     );
     let gain = d["heading_gains"]["run"].as_f64().unwrap_or(f64::NAN);
     assert!((gain - 1.0).abs() < 0.05, "heading gain {gain}");
+    // The estimate's own simulation on its data: a fit per state, none diverged.
+    let own = &d["own_simulation"];
+    let states: Vec<&str> = own["fits"]
+        .as_array()
+        .map(|a| a.iter().filter_map(|f| f["state"].as_str()).collect())
+        .unwrap_or_default();
+    assert_eq!(states, ["u", "v", "r"], "{own}");
+    assert!(own["mean_fit"].as_f64().is_some_and(|f| f > 0.0), "{own}");
+    assert_eq!(own["diverged"], serde_json::json!([]), "{own}");
     let nuisance = v["nuisance"].as_array().cloned().unwrap_or_default();
     assert!(
         nuisance

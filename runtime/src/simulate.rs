@@ -2,7 +2,7 @@
 //! the fits of one θ on a recorded experiment (what `leeway validate` and
 //! `leeway.validate` report).
 
-use crate::data::{Experiment, Source};
+use crate::data::{Experiment, Row, Source};
 use crate::model::{HeadingRotation, Model, Signals, next_heading};
 use leeway_structure::ir::Rotation;
 
@@ -38,12 +38,40 @@ pub fn simulate(
     disturbances: Disturbances,
 ) -> Trajectory {
     let ir = model.ir();
+    let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    let mut states = vec![Vec::with_capacity(data.len()); ir.states.len()];
+    let mut heading = Vec::new();
+    let diverged = simulate_each(model, theta, data, disturbances, &mut |_, x, psi| {
+        for (s, v) in states.iter_mut().zip(x) {
+            s.push(*v);
+        }
+        if planar {
+            heading.push(psi);
+        }
+    });
+    Trajectory {
+        states,
+        heading,
+        diverged,
+    }
+}
+
+/// Simulates as [`simulate`] does, handing `each` every sample's row with
+/// the simulated states and heading at that sample (NaN once diverged)
+/// instead of keeping them: memory flat in the samples, for a simulation
+/// over a streamed record. Returns whether the simulation diverged.
+pub fn simulate_each(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &dyn Source,
+    disturbances: Disturbances,
+    each: &mut dyn FnMut(&Row, &[f64], f64),
+) -> bool {
+    let ir = model.ir();
     let n_out = ir.states.len();
     let n_comp = ir.components.len();
     let h = data.step();
     let planar = matches!(ir.rotation, Rotation::Planar { .. });
-    let mut states = vec![Vec::with_capacity(data.len()); n_out];
-    let mut heading = Vec::new();
     let mut x = vec![0.0; n_out];
     let mut next = vec![0.0; n_out];
     let mut f = vec![0.0; n_out];
@@ -58,12 +86,7 @@ pub fn simulate(
             x.copy_from_slice(row.states);
             psi = row.heading;
         }
-        for (o, s) in states.iter_mut().enumerate() {
-            s.push(x[o]);
-        }
-        if planar {
-            heading.push(psi);
-        }
+        each(row, &x, psi);
         for (c, value) in dist.iter_mut().enumerate() {
             *value = if ir.disturbances[ir.components[c].disturbance].measured {
                 row.disturbances[c]
@@ -98,11 +121,7 @@ pub fn simulate(
         }
         k += 1;
     });
-    Trajectory {
-        states,
-        heading,
-        diverged,
-    }
+    diverged
 }
 
 /// The normalised fit `100·(1 − ‖y − ŷ‖ / ‖y − ȳ‖)` (100 is perfect; may be
@@ -209,14 +228,39 @@ pub fn validate(
         .into_iter()
         .map(|f| f.is_finite().then_some(f))
         .collect();
+    // A diverged simulation has no fit, its integrated heading included
+    // (the heading stays finite for a while after the states run away).
     let heading_fit = matches!(model.ir().rotation, Rotation::Planar { .. }).then(|| {
         let f = heading_fit(data, &trajectory);
-        f.is_finite().then_some(f)
+        (f.is_finite() && !trajectory.diverged).then_some(f)
     });
     Validation {
         trajectory,
         fits,
         heading_fit,
+    }
+}
+
+impl Validation {
+    /// A warning when the simulation fits an output worse than the
+    /// measurement's own mean would (a fit below 0 %): such a model does not
+    /// describe the data, whatever else it fits. `names`: the outputs (the
+    /// states, then the heading), `what`: the θ and experiment, for the text.
+    pub fn below_mean(&self, names: &[String], what: &str) -> Option<String> {
+        if self.diverged() {
+            return None; // said as a divergence
+        }
+        let below: Vec<String> = names
+            .iter()
+            .zip(self.outputs())
+            .filter_map(|(n, f)| f.filter(|f| *f < 0.0).map(|f| format!("`{n}` at {f:.1} %")))
+            .collect();
+        (!below.is_empty()).then(|| {
+            format!(
+                "{what}: the simulation fits {} — worse than the data's mean, a constant, would: the model does not describe these data",
+                leeway_structure::grammar::and_list(below)
+            )
+        })
     }
 }
 

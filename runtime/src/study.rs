@@ -319,7 +319,8 @@ pub fn keyed_seed(seed: u64, name: &str, run: usize) -> u64 {
 /// The estimator options the study uses for a method: the refined IV as in
 /// [`crate::estimate::EstimateOptions::default`], aggregated where the structure
 /// requires it (IV1, IV2; IV3 at low wind holds the unexcited wind
-/// parameters), no standard errors (only fits are compared).
+/// parameters), no standard errors and no own simulation (only fits are
+/// compared, each estimate validated on its own validation record).
 pub fn study_options(
     method: crate::estimate::Method,
     max_refinements: usize,
@@ -336,6 +337,7 @@ pub fn study_options(
             crate::estimate::Initial::Delayed
         },
         runaway_guard: !paper_iv,
+        own_simulation: false,
         ..Default::default()
     }
 }

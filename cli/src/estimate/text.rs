@@ -186,6 +186,7 @@ pub fn render(o: &Outcome) -> String {
                 }
             ),
         ],
+        vec!["own simulation".to_string(), own_simulation(d)],
         vec!["instruments".to_string(), d.instruments.clone()],
         vec!["centring".to_string(), d.centring.clone()],
         vec![
@@ -224,4 +225,28 @@ pub fn render(o: &Outcome) -> String {
     }
     s.push_str(&table(&rows));
     s
+}
+
+/// The estimate's own simulation on its data, in a line: the mean fit and
+/// each state's, or where it diverged.
+fn own_simulation(d: &leeway_runtime::estimate::Diagnostics) -> String {
+    let Some(own) = &d.own_simulation else {
+        return "not run".to_string();
+    };
+    if !own.diverged.is_empty() {
+        return format!(
+            "diverges on {}",
+            leeway_structure::grammar::join_capped(&own.diverged, ", ")
+        );
+    }
+    let fit = |f: Option<f64>| f.map_or("-".to_string(), |v| format!("{v:.1} %"));
+    let states = own
+        .fits
+        .iter()
+        .map(|s| format!("{} {}", s.state, fit(s.fit)));
+    format!(
+        "fit {} ({})",
+        fit(own.mean_fit),
+        leeway_structure::grammar::join_capped(states, ", ")
+    )
 }

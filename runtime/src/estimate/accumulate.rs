@@ -59,7 +59,7 @@ impl Estimator<'_> {
                     all.push(moments);
                 }
                 Summary::Diverged { .. } => return Ok(Accumulated::Diverged),
-                Summary::LongRun { .. } => return Err(mismatched()),
+                Summary::LongRun { .. } | Summary::FreeRun(_) => return Err(mismatched()),
             }
         }
         if all.len() != count {

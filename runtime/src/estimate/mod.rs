@@ -37,6 +37,7 @@ mod covariance;
 mod disturbances;
 mod options;
 mod outcome;
+mod own;
 mod pass;
 mod plan;
 mod record;

@@ -143,6 +143,12 @@ pub struct EstimateOptions {
     /// disturbance means instead of `initial` (e.g. the estimate from a
     /// shorter record of the same experiment).
     pub start: Option<Start>,
+    /// Simulate the reported estimate on its own data (one more pass) and
+    /// report its fit; an estimate whose simulation diverges or fits worse
+    /// than the data's mean is then never reported as converged (a warning,
+    /// or an error under `strict`). The Monte Carlo study, which validates
+    /// its estimates itself, turns it off.
+    pub own_simulation: bool,
 }
 
 /// The θ and disturbance-component means of a first instrument simulation.
@@ -204,6 +210,7 @@ impl Default for EstimateOptions {
             covariance: true,
             runaway_guard: true,
             start: None,
+            own_simulation: true,
         }
     }
 }

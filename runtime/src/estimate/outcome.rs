@@ -67,6 +67,34 @@ pub struct Diagnostics {
     pub unexcited: Vec<String>,
     /// What kept parameters estimate when others were held.
     pub aggregates: Vec<String>,
+    /// The estimate's own simulation on its data (`None` when not asked:
+    /// [`EstimateOptions::own_simulation`](super::EstimateOptions::own_simulation)).
+    pub own_simulation: Option<OwnSimulation>,
+}
+
+/// The reported θ simulated on its own data (a free run from each
+/// experiment's first sample, with its inputs and measured disturbances,
+/// the unmeasured ones at the means the estimate implies), fitted as
+/// `validate` fits: the check that the estimate describes the data.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OwnSimulation {
+    /// Per state, the mean over experiments of its fit (%), `None` where
+    /// undefined or when a simulation diverged.
+    pub fits: Vec<StateFit>,
+    /// The mean of the states' fits.
+    pub mean_fit: Option<f64>,
+    /// The experiments on which the simulation diverged (the model is
+    /// unstable on their inputs).
+    pub diverged: Vec<String>,
+}
+
+/// One state's fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StateFit {
+    /// The state.
+    pub state: String,
+    /// Its fit (%).
+    pub fit: Option<f64>,
 }
 
 /// The result of an estimation.

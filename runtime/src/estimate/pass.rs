@@ -88,6 +88,9 @@ pub(super) enum Pass {
     },
     /// Long-run sums of the moment residuals `ζ` (the covariance).
     LongRun(LongRunPass),
+    /// The reported θ simulated on the data (unmeasured disturbances at
+    /// `means`), fitted: the estimate's own simulation.
+    FreeRun { theta: Vec<f64>, means: Vec<f64> },
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -134,6 +137,8 @@ pub(super) enum Summary {
     Diverged { bad: Option<BadValue> },
     /// `ζ`'s long-run sum, row-major `dim × dim`; `None` if the simulation diverged.
     LongRun { dim: usize, sums: Option<Vec<f64>> },
+    /// A free run's fit sums.
+    FreeRun(super::own::FreeRunSums),
 }
 
 /// A non-finite or overflowing measured value: where, and what.
@@ -319,6 +324,9 @@ impl<'a> PassRunner<'a> {
             }
             Pass::LongRun(lr) => {
                 self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
+            }
+            Pass::FreeRun { theta, means } => {
+                Summary::FreeRun(super::own::FreeRunSums::of(self.model, theta, means, e))
             }
         })
     }

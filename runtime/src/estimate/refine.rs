@@ -248,6 +248,25 @@ impl Estimator<'_> {
         } else {
             None
         };
+        // The reported θ simulated on its own data: an estimate that does
+        // not reproduce its data is never called converged.
+        let own = if self.options.own_simulation {
+            let means = self.mean_vector(&values, &theta);
+            Some(self.own_simulation(&theta, &means)?)
+        } else {
+            None
+        };
+        let mut converged = converged;
+        if let Some(problem) = own
+            .as_ref()
+            .and_then(|o| self.own_simulation_problem(o, stopped))
+        {
+            if self.options.strict {
+                return Err(problem);
+            }
+            self.warnings.push(problem.message);
+            converged = false;
+        }
         let mut estimate = self.finish(
             sign_patterns,
             &sol,
@@ -257,6 +276,7 @@ impl Estimator<'_> {
             refinements,
             converged,
         )?;
+        estimate.diagnostics.own_simulation = own;
         // The instruments of a settled refinement, for a warm start that
         // continues them on longer records.
         if refine && converged && !theta_sim.is_empty() {

@@ -173,6 +173,7 @@ impl Estimator<'_> {
                 lags: self.options.lags,
                 unexcited: self.unexcited.clone(),
                 aggregates: self.aggregates.clone(),
+                own_simulation: None,
             },
             warnings: self.warnings.clone(),
             notes: Vec::new(),
