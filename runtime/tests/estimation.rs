@@ -415,3 +415,31 @@ fn an_estimate_whose_own_simulation_diverges_is_never_called_converged() {
         est.warnings
     );
 }
+
+#[test]
+fn an_interrupt_stops_the_estimate_between_passes() {
+    // Issue 22: Ctrl-C from Python; the interrupt is asked around every pass.
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let model = ship();
+    let (e, _) = study::estimation_experiment(&model, &InputDesign::default(), 10.0, 1500, 3);
+    let asked = Arc::new(AtomicUsize::new(0));
+    let counter = asked.clone();
+    let options = EstimateOptions {
+        interrupt: Some(leeway_runtime::estimate::Interrupt::new(move || {
+            counter.fetch_add(1, Ordering::SeqCst) >= 3
+        })),
+        ..EstimateOptions::default()
+    };
+    let result = estimate(&model, &[&e as &dyn Source], &options);
+    assert_eq!(result.err().map(|e| e.code), Some("interrupted"));
+    assert_eq!(asked.load(Ordering::SeqCst), 4, "stopped at the first yes");
+    // Never asked to stop: the same estimate as without an interrupt.
+    let never = EstimateOptions {
+        interrupt: Some(leeway_runtime::estimate::Interrupt::new(|| false)),
+        ..EstimateOptions::default()
+    };
+    let a = estimate(&model, &[&e as &dyn Source], &never).map(|e| e.theta);
+    let b = estimate(&model, &[&e as &dyn Source], &EstimateOptions::default()).map(|e| e.theta);
+    assert_eq!(a, b);
+}

@@ -37,7 +37,7 @@ impl Estimator<'_> {
             },
             infos: self.infos.clone(),
         };
-        let summaries = self.passes.pass(&request)?;
+        let summaries = self.pass(&request)?;
         // The first bad value in experiment order is a data error, whatever diverged.
         for (i, s) in summaries.iter().enumerate() {
             if let Summary::Moments { bad: Some(b), .. } | Summary::Diverged { bad: Some(b) } = &s.0

@@ -84,7 +84,7 @@ impl Estimator<'_> {
             }),
             infos: self.infos.clone(),
         };
-        let summaries = self.passes.pass(&request)?;
+        let summaries = self.pass(&request)?;
         if summaries.len() != self.facts.len() {
             return Err(mismatched());
         }

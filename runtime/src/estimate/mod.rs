@@ -131,6 +131,28 @@ fn check_nominal(ir: &Ir, nominal: &[f64], given: bool) -> Result<(), EstimateEr
     ))
 }
 
+/// The error `interrupted` when the options' interrupt asks to stop.
+fn stop_if_interrupted(options: &EstimateOptions) -> Result<(), EstimateError> {
+    match &options.interrupt {
+        Some(i) if i.requested() => Err(err(
+            "interrupted",
+            "the estimate was interrupted",
+            "run it again to the end for a result",
+        )),
+        _ => Ok(()),
+    }
+}
+
+impl Estimator<'_> {
+    /// One pass over the data, the interrupt asked before and after it.
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        stop_if_interrupted(self.options)?;
+        let summaries = self.passes.pass(request)?;
+        stop_if_interrupted(self.options)?;
+        Ok(summaries)
+    }
+}
+
 /// Estimates θ (and nuisance parameters) of `model` from the experiments.
 pub fn estimate(
     model: &dyn Model,
@@ -183,6 +205,7 @@ pub fn estimate_with(
             "build the start from an estimate of the same model (Start::from_estimate)",
         ));
     }
+    stop_if_interrupted(options)?;
     let facts = passes.facts(&FactsRequest::new(options))?;
     if facts.is_empty() {
         return Err(err(

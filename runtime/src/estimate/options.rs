@@ -149,6 +149,32 @@ pub struct EstimateOptions {
     /// or an error under `strict`). The Monte Carlo study, which validates
     /// its estimates itself, turns it off.
     pub own_simulation: bool,
+    /// Asked before and after every pass over the data: `true` stops the
+    /// estimate with the error `interrupted` (Ctrl-C in Python, whose
+    /// handler runs only when asked while native code runs).
+    pub interrupt: Option<Interrupt>,
+}
+
+/// A question the estimator asks between passes: should it stop?
+#[derive(Clone)]
+pub struct Interrupt(std::sync::Arc<dyn Fn() -> bool + Send + Sync>);
+
+impl Interrupt {
+    /// An interrupt that asks `requested`.
+    pub fn new(requested: impl Fn() -> bool + Send + Sync + 'static) -> Interrupt {
+        Interrupt(std::sync::Arc::new(requested))
+    }
+
+    /// Whether the estimate should stop now.
+    pub fn requested(&self) -> bool {
+        (self.0)()
+    }
+}
+
+impl std::fmt::Debug for Interrupt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Interrupt")
+    }
 }
 
 /// The θ and disturbance-component means of a first instrument simulation.
@@ -211,6 +237,7 @@ impl Default for EstimateOptions {
             runaway_guard: true,
             start: None,
             own_simulation: true,
+            interrupt: None,
         }
     }
 }
