@@ -5,6 +5,7 @@
 
 use super::validate::{Table, finite, load_table};
 use super::{DataError, LoadOptions, LoadedFile, Places, column_name};
+use super::{StreamedFile, open_table};
 use leeway_structure::ir::Ir;
 use std::borrow::Cow;
 
@@ -151,4 +152,24 @@ pub fn load_columns(
         experiment.map(|l| (label_column.as_str(), l)),
     )?;
     load_table(&mut table, ir, options)
+}
+
+/// Opens columns for streaming as [`open_file`](super::open_file) opens a
+/// file: the same validating pass as [`load_columns`], whose validated
+/// samples go to a temporary spill file that every pass reads back; memory
+/// then stays flat in the rows (a copy of a large frame would double it).
+pub fn open_columns(
+    name: &str,
+    columns: &[(&str, &[f64])],
+    experiment: Option<&[String]>,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<StreamedFile, DataError> {
+    let label_column = column_name(ir, "experiment");
+    let mut table = Columns::new(
+        name,
+        columns,
+        experiment.map(|l| (label_column.as_str(), l)),
+    )?;
+    open_table(&mut table, ir, options)
 }

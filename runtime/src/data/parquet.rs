@@ -227,18 +227,19 @@ impl ParquetFile {
         let g = self.group;
         self.group += 1;
         let at = self.batch_start + self.rows as u64;
-        let group = self
-            .reader
-            .get_row_group(g)
-            .map_err(|e| self.damaged(at, None, &reason(&e)))?;
+        // A damaged footer can make the crate panic here (a negative
+        // offset is an assertion): a damaged file is an error, not a crash.
+        let group = guarded(|| self.reader.get_row_group(g))
+            .and_then(|r| r.map_err(|e| reason(&e)))
+            .map_err(|e| self.damaged(at, None, &e))?;
         self.remaining = u64::try_from(group.metadata().num_rows()).unwrap_or(0);
         let mut readers = Vec::with_capacity(self.headers.len());
         for (i, wanted) in self.selected.iter().enumerate() {
             readers.push(if *wanted {
                 Some(
-                    group
-                        .get_column_reader(i)
-                        .map_err(|e| self.damaged(at, Some(i), &reason(&e)))?,
+                    guarded(|| group.get_column_reader(i))
+                        .and_then(|r| r.map_err(|e| reason(&e)))
+                        .map_err(|e| self.damaged(at, Some(i), &e))?,
                 )
             } else {
                 None
@@ -382,10 +383,29 @@ fn reason(e: &parquet::errors::ParquetError) -> String {
         .map_or(text.clone(), str::to_string)
 }
 
+std::thread_local! {
+    /// Set while [`guarded`] runs a call: its panic is an error, not news.
+    static GUARDED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
 /// Runs a call into the parquet crate, turning a panic on a malformed file
-/// into an error: a damaged file must never crash leeway.
+/// into an error: a damaged file must never crash leeway, nor print a
+/// panic message beside its one clear error (the panic hook, wrapped once,
+/// stays quiet for a guarded call and speaks for every other panic).
 fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, String> {
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|p| {
+    static QUIET_HOOK: std::sync::Once = std::sync::Once::new();
+    QUIET_HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !GUARDED.with(std::cell::Cell::get) {
+                previous(info);
+            }
+        }));
+    });
+    let outer = GUARDED.with(|g| g.replace(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    GUARDED.with(|g| g.set(outer));
+    result.map_err(|p| {
         p.downcast_ref::<String>()
             .cloned()
             .or_else(|| p.downcast_ref::<&str>().map(|s| (*s).to_string()))
@@ -947,5 +967,81 @@ mod tests {
             "flipped bits read as other numbers ({refused} refused)"
         );
         assert!(refused > 100, "{refused}");
+    }
+
+    /// Seeded mutations of the checksummed file: flipped bits, overwritten
+    /// runs and duplicated ranges anywhere before the footer, cuts, and
+    /// flipped bits in the footer. `LEEWAY_FUZZ_PARQUET=N` runs N cases (the
+    /// default is CI's short budget).
+    #[test]
+    fn mutated_files_are_an_error_or_the_same_numbers_never_a_panic_or_a_hang() {
+        use rand::{RngExt, SeedableRng};
+        let cases: usize = std::env::var("LEEWAY_FUZZ_PARQUET")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(300);
+        let good = std::fs::read(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/checksummed.parquet"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let values: Vec<f64> = (0..2000).map(|k| f64::from(k * 7919)).collect();
+        let tail = &good[good.len() - 8..good.len() - 4];
+        let footer =
+            good.len() - 8 - u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]) as usize;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(22);
+        let path = scratch("fuzz.parquet");
+        // (errors, same numbers, other numbers) for pages, and for footers.
+        let (mut pages, mut footers) = ([0usize; 3], [0usize; 3]);
+        let mut slowest = std::time::Duration::ZERO;
+        for case in 0..cases {
+            let mut bad = good.clone();
+            let in_footer = case % 5 == 4;
+            match case % 5 {
+                0 => {
+                    for _ in 0..rng.random_range(1..=4) {
+                        let at = rng.random_range(4..footer);
+                        bad[at] ^= 1 << rng.random_range(0..8);
+                    }
+                }
+                1 => {
+                    let at = rng.random_range(4..footer - 16);
+                    for b in &mut bad[at..at + rng.random_range(1..=16)] {
+                        *b = rng.random();
+                    }
+                }
+                2 => {
+                    let from = rng.random_range(4..footer - 64);
+                    let to = rng.random_range(4..footer - 64);
+                    let len = rng.random_range(1..=64);
+                    let copy = bad[from..from + len].to_vec();
+                    bad[to..to + len].copy_from_slice(&copy);
+                }
+                3 => bad.truncate(rng.random_range(0..good.len())),
+                _ => {
+                    let at = rng.random_range(footer..good.len());
+                    bad[at] ^= 1 << rng.random_range(0..8);
+                }
+            }
+            std::fs::write(&path, &bad).unwrap_or_else(|e| panic!("{e}"));
+            let started = std::time::Instant::now();
+            let read = std::panic::catch_unwind(|| numbers(&path, 0));
+            slowest = slowest.max(started.elapsed());
+            let outcome = match read {
+                Err(_) => panic!("case {case}: a panic escaped the reader"),
+                Ok(Err(_)) => 0,
+                Ok(Ok(v)) if v == values => 1,
+                Ok(Ok(_)) => 2,
+            };
+            let counts = if in_footer { &mut footers } else { &mut pages };
+            counts[outcome] += 1;
+        }
+        eprintln!(
+            "{cases} mutations: pages (error, same, changed) {pages:?}, footer {footers:?}, slowest read {slowest:?}"
+        );
+        // Pages carry their CRC: no mutation there may change a number. The
+        // footer has no checksum in the format (a changed scale or type
+        // there is a valid, different file), so it is only counted.
+        assert_eq!(pages[2], 0, "page mutations read as other numbers");
+        assert!(slowest < std::time::Duration::from_secs(5), "{slowest:?}");
     }
 }
