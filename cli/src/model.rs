@@ -195,15 +195,21 @@ pub fn load_data(
     files: &[PathBuf],
     options: &LoadOptions,
 ) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
-    load_files(ir, files, options).map(|(e, _, n)| (e, n))
+    load_files(ir, files, options).map(|(e, n)| (e.experiments, n))
 }
 
-/// [`load_data`], with each experiment's file as messages name it.
+/// Experiments held in memory, each with its file as messages name it.
+struct Held {
+    experiments: Vec<Experiment>,
+    files: Vec<String>,
+}
+
+/// [`load_data`], with each experiment's file.
 fn load_files(
     ir: &Ir,
     files: &[PathBuf],
     options: &LoadOptions,
-) -> Result<(Vec<Experiment>, Vec<String>, Vec<FileNotes>), Failure> {
+) -> Result<(Held, Vec<FileNotes>), Failure> {
     let mut experiments = Vec::new();
     let mut names = Vec::new();
     let mut notes = Vec::new();
@@ -220,7 +226,11 @@ fn load_files(
         }
     }
     if problems.is_empty() {
-        Ok((experiments, names, notes))
+        let held = Held {
+            experiments,
+            files: names,
+        };
+        Ok((held, notes))
     } else {
         Err(Failure::Problems(problems))
     }
@@ -270,7 +280,8 @@ pub fn open_data(
     options: &LoadOptions,
 ) -> Result<(DataSet, Vec<FileNotes>), Failure> {
     if options.resample.is_some() {
-        return load_files(ir, files, options).map(|(e, f, n)| (DataSet::Held(e, f), n));
+        return load_files(ir, files, options)
+            .map(|(h, n)| (DataSet::Held(h.experiments, h.files), n));
     }
     let mut sources = Vec::new();
     let mut notes = Vec::new();

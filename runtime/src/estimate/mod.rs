@@ -112,7 +112,7 @@ fn check_nominal(ir: &Ir, nominal: &[f64], given: bool) -> Result<(), EstimateEr
         .parameters
         .iter()
         .zip(nominal)
-        .find(|(_, v)| !(v.abs() <= NOMINAL_LIMIT));
+        .find(|(_, v)| !v.is_finite() || v.abs() > NOMINAL_LIMIT);
     let Some((p, v)) = wrong else {
         return Ok(());
     };

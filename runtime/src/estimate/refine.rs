@@ -256,7 +256,6 @@ impl Estimator<'_> {
         } else {
             None
         };
-        let mut converged = converged;
         if let Some(problem) = own
             .as_ref()
             .and_then(|o| self.own_simulation_problem(o, stopped))
