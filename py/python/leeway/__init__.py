@@ -398,7 +398,8 @@ def _stamps(name: str, series: pd.Series, column: str) -> np.ndarray:
     lo, hi, first = int(ticks.min()), int(ticks.max()), int(ticks[0])
     if max(hi - first, first - lo) >= 1 << 63:
         raise _refuse(name, column, f"time stamps spanning {hi - lo} {unit}", "the span does not fit 64-bit integers")
-    return (ticks - ticks[0]).astype(np.float64) / float(_PER_SECOND[unit])
+    seconds: np.ndarray = (ticks - ticks[0]).astype(np.float64) / float(_PER_SECOND[unit])
+    return seconds
 
 
 def _integers(name: str, values: np.ndarray, column: str) -> np.ndarray:

@@ -42,7 +42,7 @@ from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import Estimate, Model, _leeway, _native
+from . import Estimate, Model, _flag, _integer, _leeway, _native, _number, _text
 from . import mapreduce
 from .errors import DataError, EstimateError, LeewayError, OptionError
 
@@ -271,7 +271,7 @@ def _mapped(client: Any, what: str, f: Callable[..., Answer], timeout: float | N
         try:
             futures = client.map(f, *args, pure=False, retries=2)
             start = time.monotonic()
-            wait(futures, timeout=timeout)
+            wait(futures, timeout=timeout)  # type: ignore[no-untyped-call]
             left = None if timeout is None else max(1.0, timeout - (time.monotonic() - start))
             answers = _gather(client, futures, left)
         except LeewayError:
@@ -373,7 +373,7 @@ def estimate(
     estimate raises ``DataError`` (``data-changed``)."""
     client = _client(client)
     if timeout is not None:
-        timeout = mapreduce._number("timeout", timeout)
+        timeout = _number("timeout", timeout)
         if timeout <= 0:
             raise OptionError(f"timeout={timeout} is not positive", code="invalid-option", hint="seconds a pass may take, or None")
     paths = _paths(experiments)
@@ -418,8 +418,8 @@ def estimate(
         _clear(client, token)
 
 
-def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes:
-    return _leeway.study_run(model._core, config, case, run)
+def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> Answer:
+    return _answer(lambda: _native(_leeway.study_run, model._core, config, case, run))
 
 
 def study(
@@ -438,25 +438,29 @@ def study(
     record from its own seed. Returns the study's figures per case and
     estimator and its claims (``cases``, ``claims``), the same as
     ``reproduce``'s ``results.json`` for the same options."""
-    from distributed import get_client
-
-    client = client if client is not None else get_client()
+    client = _client(client)
+    if isinstance(n, (str, bytes)) or not isinstance(n, Sequence):
+        raise OptionError(f"n={n!r} is not a list of record lengths", code="invalid-option", hint="n=[1000, 2000]")
+    if isinstance(cases, (str, bytes)) or not isinstance(cases, Sequence):
+        raise OptionError(f"cases={cases!r} is not a list of names", code="invalid-option", hint='cases=["low", "high"]')
     config = {
-        "runs": runs,
-        "n": list(n),
-        "cases": list(cases),
-        "seed": seed,
-        "paper_iv": paper_iv,
+        "runs": _integer("runs", runs, 1, 1 << 32),
+        "n": [_integer("n", v, 1, 1 << 40) for v in n],
+        "cases": [_text("cases", c) for c in cases],
+        "seed": _integer("seed", seed, 0, (1 << 64) - 1),
+        "paper_iv": _flag("paper_iv", paper_iv),
     }
-    tasks = _leeway.study_tasks(config)
+    tasks = _native(_leeway.study_tasks, config)
     k = len(tasks)
-    futures = client.map(
+    runs_done = _mapped(
+        client,
+        "study",
         _study_run,
+        None,  # a study's runs take what they take; a lost worker is retried
         [model] * k,
         [config] * k,
         [c for c, _ in tasks],
         [r for _, r in tasks],
-        pure=False,
     )
-    result: dict[str, Any] = json.loads(_leeway.study_summary(config, client.gather(futures)))
+    result: dict[str, Any] = json.loads(_native(_leeway.study_summary, config, runs_done))
     return result
