@@ -276,6 +276,48 @@ def test_a_worker_killed_at_any_moment_gives_the_estimate_or_an_error(
     assert os.path.exists(tmp_path / "killed"), "no worker was killed"
 
 
+class KillAlways(WorkerPlugin):
+    """Kills its worker whenever a task whose key starts with `prefix` starts."""
+
+    def __init__(self, prefix: str) -> None:
+        self.prefix = prefix
+
+    def transition(self, key, start, finish, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        if finish == "executing" and str(key).startswith(self.prefix):
+            os._exit(1)
+
+
+class Stall(WorkerPlugin):
+    """Stalls its worker for `seconds` when a moment task starts."""
+
+    def __init__(self, seconds: float) -> None:
+        self.seconds = seconds
+
+    def transition(self, key, start, finish, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        if finish == "executing" and str(key).startswith("_run"):
+            time.sleep(self.seconds)
+
+
+@pytest.mark.parametrize("fault", ["killed-every-time", "stalled"])
+def test_a_pass_that_cannot_finish_is_a_worker_lost_error(
+    ship: leeway.Model, versions: dict[str, list[Path]], tmp_path: Path, fault: str
+) -> None:
+    files = place(versions["old"], tmp_path / "data")
+    with cluster() as c, Client(c) as client:
+        plugin = KillAlways("_facts") if fault == "killed-every-time" else Stall(6.0)
+        client.register_plugin(plugin)
+        start = time.monotonic()
+        with pytest.raises(leeway.EstimateError) as e:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", leeway.LeewayWarning)
+                leeway.dask.estimate(ship, files, client, timeout=2.0 if fault == "stalled" else PASS_TIMEOUT)
+        assert time.monotonic() - start < BOUND
+    assert e.value.code == "worker-lost", e.value
+    assert "failed twice" in e.value.message and e.value.hint
+    if fault == "stalled":
+        assert "timed out" in e.value.message
+
+
 @pytest.mark.skipif(not os.environ.get("LEEWAY_DASK_CAMPAIGN"), reason="set LEEWAY_DASK_CAMPAIGN=N for the campaign")
 def test_campaign(ship: leeway.Model, tmp_path_factory: pytest.TempPathFactory, tmp_path: Path) -> None:
     """Files long enough (`LEEWAY_DASK_CAMPAIGN_ROWS`, 20000 by default)
