@@ -487,7 +487,14 @@ def _handover(model: Model, data: Data) -> list[tuple[str, list[tuple[str, np.nd
     out = []
     experiment_column = model._core.experiment_column
     time_column = model.columns[0]
-    for name, raw in _frames(data):
+    frames = _frames(data)
+    if not frames:
+        raise DataError(
+            f"no experiment given (an empty {type(data).__name__})",
+            code="no-data",
+            hint="pass a DataFrame, or a list or dict of them",
+        )
+    for name, raw in frames:
         frame = _to_pandas(raw, name)
         if not frame.columns.is_unique:
             twice = sorted({str(c) for c in frame.columns[frame.columns.duplicated()]})
