@@ -360,7 +360,7 @@ def _row(name: str, row: int, column: str) -> str:
 
 def _refuse(name: str, column: str, what: str, hint: str) -> DataError:
     return DataError(
-        f"column `{column}` is {what}; leeway reads numbers only and converts nothing silently",
+        f"column `{column}` is not numeric: {what}; leeway reads numbers only and converts nothing silently",
         code="data",
         location=f"{name}: column `{column}`",
         hint=hint,
@@ -397,7 +397,7 @@ def _stamps(name: str, series: pd.Series, column: str) -> np.ndarray:
         return np.zeros(0)
     lo, hi, first = int(ticks.min()), int(ticks.max()), int(ticks[0])
     if max(hi - first, first - lo) >= 1 << 63:
-        raise _refuse(name, column, f"time stamps spanning {hi - lo} {unit}", "the span does not fit 64-bit integers")
+        raise _refuse(name, column, f"time stamps spanning {hi - lo} {unit}, beyond 64-bit integers", "split the record")
     seconds: np.ndarray = (ticks - ticks[0]).astype(np.float64) / float(_PER_SECOND[unit])
     return seconds
 
@@ -456,8 +456,8 @@ def _column(name: str, series: pd.Series, column: str, is_time: bool) -> np.ndar
     if types.is_string_dtype(dtype) or dtype == object:
         what = "text" if types.is_string_dtype(dtype) and dtype != object else "Python objects"
         return_hint = f"convert it to numbers yourself, e.g. pd.to_numeric(df[{column!r}])"
-        raise _refuse(name, column, f"{what} ({dtype}), not numbers", return_hint)
-    raise _refuse(name, column, f"not numeric ({dtype})", f"convert it to float64 yourself, e.g. pd.to_numeric(df[{column!r}])")
+        raise _refuse(name, column, f"{what} ({dtype})", return_hint)
+    raise _refuse(name, column, f"{dtype}", f"convert it to float64 yourself, e.g. pd.to_numeric(df[{column!r}])")
 
 
 def _labels(name: str, frame: pd.DataFrame, column: str) -> list[str]:

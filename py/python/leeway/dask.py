@@ -167,7 +167,14 @@ def _dataset(
         before = None  # the loader says why, located, as for any file
     if expected is not None and before is not None and (why := _differs(expected, before)) is not None:
         raise _changed(path, why)
-    dataset = mapreduce.open_file(model, path, options)
+    try:
+        dataset = mapreduce.open_file(model, path, options)
+    except LeewayError:
+        # A file found broken because it changed while it was read is a
+        # changed file (run again), not a broken one.
+        if before is not None:
+            _check(path, before)
+        raise
     if before is None:  # opened although it could not be read a moment ago
         raise _changed(path, "it appeared while being opened")
     _check(path, before)  # not rewritten while it was validated
