@@ -213,3 +213,21 @@ def test_a_datetime_time_column_simulates_from_zero(ship, ship_frame) -> None:  
         b = leeway.simulate(ship, theta, stamped)
     assert b["time"].iloc[0] == 0.0
     assert (a.drop(columns="time").to_numpy() == b.drop(columns="time").to_numpy()).all()
+
+
+@pytest.mark.parametrize("unit", ["ms", "us", "ns"])
+def test_a_datetime_time_column_is_read_as_the_parquet_reader_reads_it(ship, ship_frame, tmp_path, unit) -> None:  # type: ignore[no-untyped-def]
+    from conftest import run_leeway
+
+    stamps = (pd.Timestamp("2024-06-30 23:59:58.123", tz="UTC")
+              + pd.to_timedelta(ship_frame["time"], unit="s")).astype(f"datetime64[{unit}, UTC]")
+    frame = ship_frame.assign(time=stamps)
+    path = tmp_path / "stamped.parquet"
+    frame.to_parquet(path)
+    o = run_leeway("estimate", str(SHIP), "--data", str(path), "--json")
+    cli = json.loads(o.stdout)
+    assert cli["errors"] == [], o.stdout
+    ours = json.loads(quiet_estimate(ship, {"stamped": frame}).to_json())
+    drop = ("file", "data", "data_files")
+    assert json.dumps({k: v for k, v in ours.items() if k not in drop}) == json.dumps(
+        {k: v for k, v in cli.items() if k not in drop})

@@ -591,7 +591,7 @@ def _text(what: str, v: Any, optional: bool = False) -> str | None:
             hint=f'give {what} as one of its names, e.g. {what}="{_EXAMPLES.get(what, "…")}"'
             + (" (or None)" if optional else ""),
         )
-    return v
+    return str(v)
 
 
 def _seconds(what: str, v: Any, optional: bool = True) -> float | None:

@@ -105,6 +105,7 @@ def _identity(path: str) -> Identity:
 
 def _differs(a: Identity, b: Identity) -> str | None:
     """What differs between two identities, said for a person (or ``None``)."""
+    a, b = tuple(a), tuple(b)  # whatever container a serializer made of them
     if a[3:5] != b[3:5]:
         return "it was replaced by another file"
     if a[0] != b[0]:
