@@ -103,9 +103,9 @@ def _identity(path: str) -> Identity:
     return (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev, h.hexdigest())
 
 
-def _differs(a: Identity, b: Identity) -> str | None:
+def _differs(first: Sequence[Any], second: Sequence[Any]) -> str | None:
     """What differs between two identities, said for a person (or ``None``)."""
-    a, b = tuple(a), tuple(b)  # whatever container a serializer made of them
+    a, b = tuple(first), tuple(second)  # whatever container a serializer made of them
     if a[3:5] != b[3:5]:
         return "it was replaced by another file"
     if a[0] != b[0]:
