@@ -19,11 +19,12 @@ fits ``leeway validate`` prints, bit for bit.
 from __future__ import annotations
 
 import json
+import numbers
 import os
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any, TypeVar, Union
 
 import numpy as np
 import pandas as pd
@@ -40,6 +41,8 @@ from .errors import (
     SignViolation,
     Unidentifiable,
 )
+
+T = TypeVar("T")
 
 __all__ = [
     "Model",
@@ -286,19 +289,52 @@ Data = Union[Frame, Sequence[Frame], Mapping[str, Frame]]
 
 def _to_pandas(frame: Any, name: str) -> pd.DataFrame:
     if isinstance(frame, pd.DataFrame):
-        return frame
-    if hasattr(frame, "to_pandas"):  # pyarrow.Table, polars.DataFrame
-        return frame.to_pandas()
-    if hasattr(frame, "__arrow_c_stream__"):
-        import pyarrow as pa
+        result = frame
+    elif isinstance(frame, pd.Series):
+        raise DataError(
+            f"a pandas Series (`{frame.name}`) is not a DataFrame",
+            code="data",
+            location=name,
+            hint="pass a DataFrame with a column per signal: series.to_frame(), or pd.DataFrame({...})",
+        )
+    elif hasattr(frame, "to_pandas") or hasattr(frame, "__arrow_c_stream__"):  # pyarrow, polars
+        try:
+            if hasattr(frame, "to_pandas"):
+                result = frame.to_pandas()
+            else:
+                import pyarrow as pa
 
-        return pa.table(frame).to_pandas()
-    raise DataError(
-        f"{type(frame).__name__} is not a DataFrame",
-        code="data",
-        location=name,
-        hint="pass a pandas DataFrame, a list or dict of them, or an Arrow/polars table",
-    )
+                result = pa.table(frame).to_pandas()
+        except Exception as e:  # whatever the library raises, located here
+            raise DataError(
+                f"the {type(frame).__name__} could not be converted to a DataFrame: {type(e).__name__}: {e}",
+                code="data",
+                location=name,
+                hint="pass a pandas DataFrame of numeric columns",
+            ) from None
+        if not isinstance(result, pd.DataFrame):
+            raise DataError(
+                f"{type(frame).__name__}.to_pandas() gave a {type(result).__name__}, not a DataFrame",
+                code="data",
+                location=name,
+                hint="pass a pandas DataFrame, a list or dict of them, or an Arrow/polars table",
+            )
+    else:
+        raise DataError(
+            f"{type(frame).__name__} is not a DataFrame",
+            code="data",
+            location=name,
+            hint="pass a pandas DataFrame, a list or dict of them, or an Arrow/polars table",
+        )
+    if isinstance(result.columns, pd.MultiIndex):
+        raise DataError(
+            f"the columns are a MultiIndex of {result.columns.nlevels} levels",
+            code="data",
+            location=name,
+            hint="give the frame one level of column names, e.g. "
+            "df.columns = ['_'.join(map(str, c)) for c in df.columns], or select a level",
+        )
+    return result
 
 
 def _frames(data: Data) -> list[tuple[str, Any]]:
@@ -309,13 +345,156 @@ def _frames(data: Data) -> list[tuple[str, Any]]:
     return [("data", data)]
 
 
+# The largest integer every smaller one of which a float64 holds exactly
+# (2⁵³): a larger integer is refused, as the Parquet reader refuses it.
+_EXACT = 1 << 53
+
+# Units per second of numpy's datetime64/timedelta64 resolutions.
+_PER_SECOND = {"s": 1, "ms": 1_000, "us": 1_000_000, "ns": 1_000_000_000}
+
+
+def _row(name: str, row: int, column: str) -> str:
+    """A location as the runtime writes it (positional row, from 0, as ``iloc``)."""
+    return f"{name}: row {row}, column `{column}`"
+
+
+def _refuse(name: str, column: str, what: str, hint: str) -> DataError:
+    return DataError(
+        f"column `{column}` is not numeric: {what}; leeway reads numbers only and converts nothing silently",
+        code="data",
+        location=f"{name}: column `{column}`",
+        hint=hint,
+    )
+
+
+def _missing(name: str, series: pd.Series, column: str) -> None:
+    """A missing value (``pd.NA``, ``None``, ``NaT``) is an error at its row."""
+    na = np.asarray(series.isna(), dtype=bool)
+    if na.any():
+        row = int(np.flatnonzero(na)[0])
+        raise DataError(
+            f"missing value ({series.iloc[row]!r}) in column `{column}`",
+            code="data",
+            location=_row(name, row, column),
+            hint="leeway does not drop or fill samples: repair or remove the row (every column of every row must hold a number)",
+        )
+
+
+def _stamps(name: str, series: pd.Series, column: str) -> np.ndarray:
+    """A datetime64 (naive or tz-aware) or timedelta64 time column as float
+    seconds since its first stamp: the differences taken in integers of the
+    column's own unit, then divided once by its units per second (the rule
+    of the Parquet reader for TIMESTAMP columns), so large epoch values carry
+    no rounding into the times."""
+    _missing(name, series, column)
+    if pd.api.types.is_timedelta64_dtype(series.dtype):
+        index: pd.Index = pd.TimedeltaIndex(series)
+    else:
+        index = pd.DatetimeIndex(series)  # tz-aware: the UTC instants
+    unit = str(index.unit)
+    ticks = np.asarray(index.asi8, dtype=np.int64)
+    if len(ticks) == 0:
+        return np.zeros(0)
+    lo, hi, first = int(ticks.min()), int(ticks.max()), int(ticks[0])
+    if max(hi - first, first - lo) >= 1 << 63:
+        raise _refuse(name, column, f"time stamps spanning {hi - lo} {unit}, beyond 64-bit integers", "split the record")
+    seconds: np.ndarray = (ticks - ticks[0]).astype(np.float64) / float(_PER_SECOND[unit])
+    return seconds
+
+
+def _integers(name: str, values: np.ndarray, column: str) -> np.ndarray:
+    """Integers as float64, refused beyond ±2⁵³ (where a float64 would round them)."""
+    if values.dtype.itemsize >= 8 and len(values):
+        if values.dtype.kind == "u":
+            beyond = values > np.uint64(_EXACT)
+        else:
+            beyond = (values > _EXACT) | (values < -_EXACT)
+        if beyond.any():
+            row = int(np.flatnonzero(beyond)[0])
+            raise DataError(
+                f"{values[row]} is beyond ±2⁵³ (9007199254740992): a 64-bit float cannot hold it exactly",
+                code="data",
+                location=_row(name, row, column),
+                hint="leeway reads every value as a 64-bit float and will not round one silently: "
+                "convert the column to float yourself, or to a unit that keeps it within ±2⁵³",
+            )
+    return values.astype(np.float64)
+
+
+def _column(name: str, series: pd.Series, column: str, is_time: bool) -> np.ndarray:
+    """One model column as float64: floats as they are (a view where the
+    column already is contiguous float64), integers within ±2⁵³, a time
+    column of datetimes or durations as seconds since its first stamp;
+    anything else refused, located, with how to convert it."""
+    dtype = series.dtype
+    types = pd.api.types
+    if isinstance(dtype, pd.CategoricalDtype):
+        raise _refuse(name, column, "categorical", f"convert it to numbers yourself, e.g. df[{column!r}].astype(float)")
+    if types.is_bool_dtype(dtype):
+        raise _refuse(name, column, f"boolean ({dtype})", f"convert it to numbers yourself: df[{column!r}].astype(float)")
+    if types.is_datetime64_any_dtype(dtype) or types.is_timedelta64_dtype(dtype):
+        if is_time:
+            return _stamps(name, series, column)
+        kind = "durations" if types.is_timedelta64_dtype(dtype) else "date-times"
+        hint = (
+            f"convert to seconds as float: df[{column!r}].dt.total_seconds()"
+            if kind == "durations"
+            else f"convert to seconds as float: (t - t.iloc[0]).dt.total_seconds() with t = df[{column!r}]"
+        )
+        raise _refuse(name, column, f"{kind} ({dtype})", hint)
+    if types.is_complex_dtype(dtype):
+        raise _refuse(name, column, f"complex ({dtype})", f"choose the real number you mean: df[{column!r}].to_numpy().real, or np.abs(...)")
+    if types.is_integer_dtype(dtype):
+        if isinstance(dtype, np.dtype):
+            return _integers(name, series.to_numpy(), column)
+        _missing(name, series, column)
+        return _integers(name, series.to_numpy(dtype=dtype.numpy_dtype), column)
+    if types.is_float_dtype(dtype):
+        if not isinstance(dtype, np.dtype):
+            _missing(name, series, column)
+        return np.ascontiguousarray(series.to_numpy(dtype=np.float64, copy=False))
+    if types.is_string_dtype(dtype) or dtype == object:
+        what = "text" if types.is_string_dtype(dtype) and dtype != object else "Python objects"
+        return_hint = f"convert it to numbers yourself, e.g. pd.to_numeric(df[{column!r}])"
+        raise _refuse(name, column, f"{what} ({dtype})", return_hint)
+    raise _refuse(name, column, f"{dtype}", f"convert it to float64 yourself, e.g. pd.to_numeric(df[{column!r}])")
+
+
+def _labels(name: str, frame: pd.DataFrame, column: str) -> list[str]:
+    """The experiment labels as text; a missing label is an error at its row."""
+    series = frame[column]
+    if isinstance(series, pd.DataFrame):  # a repeated name is refused before
+        raise DataError(f"column `{column}` appears more than once", code="data", location=name)
+    na = np.asarray(series.isna(), dtype=bool)
+    if na.any():
+        row = int(np.flatnonzero(na)[0])
+        raise DataError(
+            f"missing experiment label ({series.iloc[row]!r})",
+            code="data",
+            location=_row(name, row, column),
+            hint=f"give every row the label of its experiment in `{column}`",
+        )
+    return [str(v) for v in series.tolist()]
+
+
 def _handover(model: Model, data: Data) -> list[tuple[str, list[tuple[str, np.ndarray]], list[str] | None]]:
     """The model's columns of every frame as contiguous float64 arrays (a
     view, not a copy, where the column already is one) and the experiment
-    labels as text."""
+    labels as text. Nothing is coerced silently: a column that is not of
+    numbers (dates, durations, booleans, complex numbers, text, categories)
+    is refused, except the time column's date-times and durations, read as
+    seconds since the first stamp."""
     out = []
     experiment_column = model._core.experiment_column
-    for name, raw in _frames(data):
+    time_column = model.columns[0]
+    frames = _frames(data)
+    if not frames:
+        raise DataError(
+            f"no experiment given (an empty {type(data).__name__})",
+            code="no-data",
+            hint="pass a DataFrame, or a list or dict of them",
+        )
+    for name, raw in frames:
         frame = _to_pandas(raw, name)
         if not frame.columns.is_unique:
             twice = sorted({str(c) for c in frame.columns[frame.columns.duplicated()]})
@@ -325,41 +504,157 @@ def _handover(model: Model, data: Data) -> list[tuple[str, list[tuple[str, np.nd
                 location=name,
                 hint="give every column one name",
             )
+        index = frame.index
+        if time_column not in frame.columns and (
+            index.name == time_column or isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex))
+        ):
+            raise DataError(
+                f"the time stamps are the frame's index ({index.name or type(index).__name__}), "
+                f"not a column `{time_column}`; leeway reads columns only",
+                code="data",
+                location=name,
+                hint=f"make the index a column: df.rename_axis({time_column!r}).reset_index()",
+            )
         columns = []
         for column in model.columns:
             if column not in frame.columns:
                 continue  # the loader names what is missing, as for a file
-            try:
-                values = frame[column].to_numpy(dtype=np.float64, copy=False)
-            except (TypeError, ValueError) as e:
-                raise DataError(
-                    f"column `{column}` is not numeric ({frame[column].dtype}): {e}",
-                    code="data",
-                    location=f"{name}: column `{column}`",
-                    hint="convert the column to numbers, e.g. with pd.to_numeric",
-                ) from None
-            columns.append((column, np.ascontiguousarray(values)))
+            values = _column(name, frame[column], column, column == time_column)
+            columns.append((column, values))
         labels = None
         if experiment_column in frame.columns:
-            labels = frame[experiment_column].astype(str).tolist()
+            labels = _labels(name, frame, experiment_column)
         out.append((name, columns, labels))
+    return out
+
+
+def _is_bool(v: Any) -> bool:
+    return isinstance(v, (bool, np.bool_))
+
+
+def _number(what: str, v: Any, *, code: str = "invalid-option", hint: str | None = None) -> float:
+    """A finite real number (a Python or numpy int or float; never a bool,
+    text or a complex number), as float."""
+    if _is_bool(v) or not isinstance(v, numbers.Real):
+        raise OptionError(
+            f"{what} = {v!r} is a {type(v).__name__}, not a number",
+            code=code,
+            hint=hint or f"give {what} as a number",
+        )
+    try:
+        value = float(v)
+    except (TypeError, ValueError, OverflowError) as e:
+        raise OptionError(f"{what} = {v!r}: {e}", code=code, hint=hint) from None
+    if not np.isfinite(value):
+        raise OptionError(
+            f"{what} = {value} is not a finite number",
+            code=code,
+            hint=hint or f"give {what} as a finite number",
+        )
+    return value
+
+
+def _integer(what: str, v: Any, lo: int, hi: int) -> int:
+    if _is_bool(v) or not isinstance(v, numbers.Integral):
+        raise OptionError(
+            f"{what}={v!r} is a {type(v).__name__}, not an integer",
+            code="invalid-option",
+            hint=f"give {what} as an integer in {lo}..={hi}, e.g. {what}={lo + 1 if lo + 1 <= hi else lo}",
+        )
+    value = int(v)
+    if not lo <= value <= hi:
+        raise OptionError(
+            f"{what}={value} is not in {lo}..={hi}",
+            code="invalid-option",
+            hint=f"give {what} as an integer in {lo}..={hi}",
+        )
+    return value
+
+
+def _flag(what: str, v: Any) -> bool:
+    if not _is_bool(v):
+        raise OptionError(
+            f"{what}={v!r} is a {type(v).__name__}, not a bool",
+            code="invalid-option",
+            hint=f"give {what}=True or {what}=False",
+        )
+    return bool(v)
+
+
+def _text(what: str, v: Any, optional: bool = False) -> str | None:
+    if v is None and optional:
+        return None
+    if not isinstance(v, str):
+        raise OptionError(
+            f"{what}={v!r} is a {type(v).__name__}, not a string",
+            code="invalid-option",
+            hint=f'give {what} as one of its names, e.g. {what}="{_EXAMPLES.get(what, "…")}"'
+            + (" (or None)" if optional else ""),
+        )
+    return str(v)
+
+
+def _seconds(what: str, v: Any, optional: bool = True) -> float | None:
+    if v is None and optional:
+        return None
+    if isinstance(v, str):
+        raise OptionError(
+            f"{what}={v!r} is text, not a number of seconds",
+            code="invalid-option",
+            hint=f"give {what} as a number, e.g. {what}=0.1" + (" (or None)" if optional else ""),
+        )
+    return _number(what, v, hint=f"give {what} as a finite number" + (" (or None)" if optional else ""))
+
+
+_EXAMPLES = {"method": "iv3", "instruments": "simulated", "initial": "delayed", "centring": "experiment", "combine": "summed"}
+
+# The CLI's bounds (cli/src/estimate.rs, py/src/lib.rs), checked here too so
+# that an integer too large for the native half is the same OptionError.
+_MAX_LAGS = 1000
+_MAX_REFINEMENTS = 100
+
+
+def _checked_options(options: dict[str, Any]) -> dict[str, Any]:
+    """The estimate options type-checked (bools are not numbers, numbers
+    not text) and converted to plain Python values (numpy scalars
+    accepted), so the native half sees exactly what it declares."""
+    out = dict(options)
+    for key in ("method", "instruments", "initial", "combine"):
+        out[key] = _text(key, options[key])
+    out["centring"] = _text("centring", options["centring"], optional=True)
+    for key in ("aggregate", "strict", "runaway_guard"):
+        out[key] = _flag(key, options[key])
+    out["lags"] = _integer("lags", options["lags"], 1, _MAX_LAGS)
+    out["max_refinements"] = _integer("max_refinements", options["max_refinements"], 0, _MAX_REFINEMENTS)
+    out["step"] = _seconds("step", options["step"])
+    out["resample"] = _seconds("resample", options["resample"])
+    out["time_tolerance"] = _seconds("time_tolerance", options["time_tolerance"], optional=False)
     return out
 
 
 def _nominal(model: Model, nominal: Mapping[str, float] | None) -> list[float] | None:
     if nominal is None:
         return None
-    unknown = [k for k in nominal if k not in model.parameters]
+    if not isinstance(nominal, Mapping):
+        raise OptionError(
+            f"nominal is a {type(nominal).__name__}, not a mapping",
+            code="invalid-nominal",
+            hint="pass nominal={name: value} with every parameter of the model",
+        )
+    unknown = [str(k) for k in nominal if k not in model.parameters]
     missing = [p for p in model.parameters if p not in nominal]
     if unknown or missing:
         raise OptionError(
             "nominal must give every parameter of the model once"
             + (f"; unknown: {', '.join(unknown)}" if unknown else "")
             + (f"; missing: {', '.join(missing)}" if missing else ""),
-            code="invalid-option",
+            code="invalid-nominal",
             hint=f"the parameters are {', '.join(model.parameters)}",
         )
-    return [float(nominal[p]) for p in model.parameters]
+    return [
+        _number(f"nominal[{p!r}]", nominal[p], code="invalid-nominal", hint="nominal values are finite numbers")
+        for p in model.parameters
+    ]
 
 
 def estimate(
@@ -404,7 +699,7 @@ def estimate(
         time_tolerance=time_tolerance,
         resample=resample,
     )
-    result = Estimate(_leeway.estimate_json(model._core, _handover(model, data), options))
+    result = Estimate(_native(_leeway.estimate_json, model._core, _handover(model, data), options))
     _warn(result)
     return result
 
@@ -412,8 +707,25 @@ def estimate(
 def _estimate_options(
     model: Model, *, nominal: Mapping[str, float] | None, **options: Any
 ) -> dict[str, Any]:
-    """The options as the native half takes them (the CLI's flags)."""
-    return {**options, "nominal": _nominal(model, nominal)}
+    """The options as the native half takes them (the CLI's flags), checked."""
+    return {**_checked_options(options), "nominal": _nominal(model, nominal)}
+
+
+def _native(f: Callable[..., T], *args: Any) -> T:
+    """Calls the native half. A Rust panic is a bug of leeway, never an
+    answer: it reaches the caller as an ``EstimateError`` (``internal-error``)
+    rather than as ``pyo3_runtime.PanicException`` (a ``BaseException``
+    that ``except Exception`` would not catch)."""
+    try:
+        return f(*args)
+    except BaseException as e:
+        if type(e).__name__ != "PanicException":
+            raise
+        raise EstimateError(
+            f"internal error (a panic in leeway's native code): {e}",
+            code="internal-error",
+            hint="this is a bug of leeway: please report it with the model, the data and the options",
+        ) from None
 
 
 def _warn(result: Estimate) -> None:
@@ -452,14 +764,11 @@ def _theta(model: Model, theta: Any, what: str = "theta") -> list[float]:
         )
     else:
         values = list(theta)
-    try:
-        return [float(v) for v in values]
-    except (TypeError, ValueError) as e:
-        raise OptionError(
-            f"{what} holds a value that is not a number: {e}",
-            code="invalid-params",
-            hint="θ values are numbers",
-        ) from None
+    names = [*model.parameters, *(f"#{i}" for i in range(len(model.parameters), len(values)))]
+    return [
+        _number(f"{what}[{n!r}]", v, code="invalid-params", hint="θ values are finite numbers")
+        for n, v in zip(names, values)
+    ]
 
 
 def _named_values(values: Mapping[str, float] | None, what: str) -> list[tuple[str, float]]:
@@ -471,10 +780,16 @@ def _named_values(values: Mapping[str, float] | None, what: str) -> list[tuple[s
             code="invalid-option",
             hint=f"pass {what}={{name: value}}",
         )
-    try:
-        return [(str(k), float(v)) for k, v in values.items()]
-    except (TypeError, ValueError) as e:
-        raise OptionError(f"{what}: {e}", code="invalid-option") from None
+    out = []
+    for k, v in values.items():
+        if not isinstance(k, str):
+            raise OptionError(
+                f"{what} has the key {k!r}, a {type(k).__name__}",
+                code="invalid-option",
+                hint=f"name the entries of {what} by text, e.g. {what}={{\"u\": 5.0}}",
+            )
+        out.append((k, _number(f"{what}[{k!r}]", v, hint=f"{what} values are finite numbers (base units)")))
+    return out
 
 
 def simulate(
@@ -500,14 +815,19 @@ def simulate(
     unmeasured components constant (others are zero). When the simulation
     diverges, a ``LeewayWarning`` says where, and the rows before are
     returned (``frame.attrs["diverged"]`` is then true)."""
+    checked_theta = _theta(model, theta)
+    checked_x0 = _named_values(x0, "x0")
+    checked_disturbances = _named_values(disturbances, "disturbances")
+    checked_step = _seconds("step", step)
     (name, columns, labels), = _handover(model, {"inputs": inputs})
-    values, diverged = _leeway.simulate_columns(
+    values, diverged = _native(
+        _leeway.simulate_columns,
         model._core,
         (name, columns, labels),
-        _theta(model, theta),
-        _named_values(x0, "x0"),
-        _named_values(disturbances, "disturbances"),
-        step,
+        checked_theta,
+        checked_x0,
+        checked_disturbances,
+        checked_step,
     )
     frame = pd.DataFrame(dict(values))
     frame.attrs["diverged"] = diverged is not None
@@ -564,15 +884,20 @@ def validate(
     ``mean``. A fit is NaN when undefined (constant measurement, or the
     simulation diverged). Warnings are issued as ``LeewayWarning``."""
     named = _thetas(model, thetas)
-    outputs, rows, means, issued = _leeway.validate_fits(
+    checked_disturbances = _named_values(disturbances, "disturbances")
+    checked_step = _seconds("step", step)
+    checked_tolerance = _seconds("time_tolerance", time_tolerance, optional=False)
+    checked_resample = _seconds("resample", resample)
+    outputs, rows, means, issued = _native(
+        _leeway.validate_fits,
         model._core,
         _handover(model, data),
         [t for _, t in named],
         [n for n, _ in named],
-        _named_values(disturbances, "disturbances"),
-        step,
-        time_tolerance,
-        resample,
+        checked_disturbances,
+        checked_step,
+        checked_tolerance,
+        checked_resample,
     )
     records = []
     for m, (name, _) in enumerate(named):

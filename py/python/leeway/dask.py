@@ -6,7 +6,7 @@ one for the standard errors). :func:`estimate` maps each pass over the data
 files on the workers of a Dask cluster — every task opens its own file, so
 the data never pass through the driver — and the driver combines the
 experiments' small summaries (moment sums, independent of the experiments'
-lengths) in experiment order, solves, and broadcasts the next θ. The result
+lengths) in experiment order, solves, and sends the next θ. The result
 is the same, bit for bit, as :func:`leeway.estimate` on the same files, on
 any number of workers, and when a worker dies mid-pass (Dask re-runs its
 tasks elsewhere; every task is a pure function of its file and request)::
@@ -19,30 +19,120 @@ tasks elsewhere; every task is a pure function of its file and request)::
     est = leeway.dask.estimate(model, ["run1.csv", "run2.csv"], client, method="iv3")
 
 Workers keep each file they opened (validated once, then streamed from a
-binary copy: memory does not grow with the file) for the passes that follow.
+binary copy: memory does not grow with the file) for the passes of one
+estimate, and only while the file is the one they opened: every task checks
+the file's identity (size, modification and change times, inode and a hash of its first
+and last 64 KiB) against the identity its first opening reported to the
+driver, and a file that changed during the estimate is a located
+``DataError`` (``data-changed``), never an estimate of old or mixed content.
+The cache is bounded (``LEEWAY_DASK_CACHE_SIZE`` datasets a worker, 256 by
+default, least recently used dropped first) and cleared when the estimate
+ends.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import threading
-from collections.abc import Sequence
+import time
+import uuid
+from collections import OrderedDict
+from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import Estimate, Model, _leeway
+from . import Estimate, Model, _flag, _integer, _leeway, _native, _number, _text
 from . import mapreduce
-from .errors import DataError
+from .errors import DataError, EstimateError, LeewayError, OptionError
 
 __all__ = ["estimate", "study"]
 
-# Files opened on this worker, by model, path and load options.
-_opened: dict[tuple[Any, ...], _leeway.Dataset] = {}
+# What a file was when a task opened it: size, modification and change
+# times (ns), inode, device, and a hash of its size and first and last
+# 64 KiB. The change time cannot be set back (as `touch -d` sets the
+# modification time), so a rewrite that keeps size and modification time
+# is seen too.
+Identity = tuple[int, int, int, int, int, str]
+
+_FINGERPRINT = 64 * 1024
+
+
+class _Opened:
+    __slots__ = ("dataset", "identity")
+
+    def __init__(self, dataset: _leeway.Dataset, identity: Identity) -> None:
+        self.dataset = dataset
+        self.identity = identity
+
+
+def _cache_size() -> int:
+    try:
+        return max(1, int(os.environ.get("LEEWAY_DASK_CACHE_SIZE", "256")))
+    except ValueError:
+        return 256
+
+
+# Files opened on this worker, by estimate, model, path and load options,
+# least recently used first.
+_opened: OrderedDict[tuple[Any, ...], _Opened] = OrderedDict()
 _lock = threading.Lock()
 
 
-def _dataset(model: Model, path: str, options: dict[str, Any]) -> _leeway.Dataset:
-    key = (
+def _changed(path: str, why: str) -> DataError:
+    return DataError(
+        f"the file changed during the estimate ({why}); no estimate is made from old or mixed content",
+        code="data-changed",
+        location=path,
+        hint="the file changed during the estimate; run the estimate again once it is written",
+    )
+
+
+def _identity(path: str) -> Identity:
+    """The file's identity now: size, modification and change times, inode,
+    device and a fingerprint of its size and its first and last 64 KiB
+    (cheap enough for every task). Raises ``OSError`` when it cannot be read."""
+    with open(path, "rb") as f:
+        st = os.fstat(f.fileno())
+        h = hashlib.blake2b(digest_size=16)
+        h.update(st.st_size.to_bytes(8, "little"))
+        h.update(f.read(_FINGERPRINT))
+        if st.st_size > _FINGERPRINT:
+            f.seek(max(_FINGERPRINT, st.st_size - _FINGERPRINT))
+            h.update(f.read(_FINGERPRINT))
+    return (st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev, h.hexdigest())
+
+
+def _differs(first: Sequence[Any], second: Sequence[Any]) -> str | None:
+    """What differs between two identities, said for a person (or ``None``)."""
+    a, b = tuple(first), tuple(second)  # whatever container a serializer made of them
+    if a[3:5] != b[3:5]:
+        return "it was replaced by another file"
+    if a[0] != b[0]:
+        return f"its size went from {a[0]} to {b[0]} bytes"
+    if a[5] != b[5]:
+        return "its content changed"
+    if a[1] != b[1]:
+        return "its modification time changed"
+    if a[2] != b[2]:
+        return "it was written to, or its status changed"
+    return None
+
+
+def _check(path: str, expected: Identity) -> None:
+    """Raises ``data-changed`` unless the file still has ``expected``'s identity."""
+    try:
+        now = _identity(path)
+    except OSError as e:
+        raise _changed(path, f"it can no longer be read: {e.strerror or e}") from None
+    why = _differs(expected, now)
+    if why is not None:
+        raise _changed(path, why)
+
+
+def _key(model: Model, path: str, options: dict[str, Any], token: str) -> tuple[Any, ...]:
+    return (
+        token,
         model.source,
         model.file,
         options["aggregate"],
@@ -51,43 +141,250 @@ def _dataset(model: Model, path: str, options: dict[str, Any]) -> _leeway.Datase
         options["time_tolerance"],
         options["resample"],
     )
+
+
+def _dataset(
+    model: Model, path: str, options: dict[str, Any], token: str, expected: Identity | None
+) -> _Opened:
+    """This estimate's dataset of ``path`` on this worker, opened now or
+    before, and checked: the file is the one it was opened from, and (for
+    every task after the first opening) the one the driver was told of."""
+    key = _key(model, path, options, token)
     with _lock:
         found = _opened.get(key)
-    if found is None:
-        found = mapreduce.open_file(model, path, options)
-        with _lock:
-            found = _opened.setdefault(key, found)
-    return found
+        if found is not None:
+            _opened.move_to_end(key)
+    if found is not None:
+        if expected is not None and (why := _differs(expected, found.identity)) is not None:
+            raise _changed(path, why)
+        _check(path, found.identity)
+        return found
+    before: Identity | None
+    try:
+        before = _identity(path)
+    except OSError:
+        if expected is not None:
+            raise _changed(path, "it can no longer be read") from None
+        before = None  # the loader says why, located, as for any file
+    if expected is not None and before is not None and (why := _differs(expected, before)) is not None:
+        raise _changed(path, why)
+    try:
+        dataset = mapreduce.open_file(model, path, options)
+    except LeewayError:
+        # A file found broken because it changed while it was read is a
+        # changed file (run again), not a broken one.
+        if before is not None:
+            _check(path, before)
+        raise
+    if before is None:  # opened although it could not be read a moment ago
+        raise _changed(path, "it appeared while being opened")
+    _check(path, before)  # not rewritten while it was validated
+    opened = _Opened(dataset, before)
+    with _lock:
+        opened = _opened.setdefault(key, opened)
+        _opened.move_to_end(key)
+        size = _cache_size()
+        while len(_opened) > size:
+            _opened.popitem(last=False)
+    return opened
 
 
-def _open(model: Model, path: str, options: dict[str, Any]) -> tuple[bytes, int]:
-    d = _dataset(model, path, options)
-    return d.summary(), len(d)
+def _forget(token: str) -> int:
+    """Drops an estimate's datasets from this worker's cache (how many)."""
+    with _lock:
+        keys = [k for k in _opened if k[0] == token]
+        for k in keys:
+            del _opened[k]
+    return len(keys)
 
 
-def _facts(model: Model, path: str, options: dict[str, Any], request: bytes) -> list[bytes]:
-    return _dataset(model, path, options).facts(request)
+# A task answers ("ok", value) or ("error", LeewayError): a located error of
+# the data is an answer, not a failure Dask should retry; `retries=` is
+# left to what a lost worker or connection causes.
+Answer = tuple[str, Any]
 
 
-def _run(model: Model, path: str, options: dict[str, Any], offset: int, request: bytes) -> list[bytes]:
-    return _dataset(model, path, options).run(offset, request)
+def _answer(f: Callable[[], Any]) -> Answer:
+    try:
+        return ("ok", f())
+    except LeewayError as e:
+        return ("error", e)
+
+
+def _open(model: Model, path: str, options: dict[str, Any], token: str) -> Answer:
+    def opened() -> tuple[bytes, int, Identity]:
+        o = _dataset(model, path, options, token, None)
+        return o.dataset.summary(), len(o.dataset), o.identity
+
+    return _answer(opened)
+
+
+def _facts(
+    model: Model, path: str, options: dict[str, Any], token: str, identity: Identity, request: bytes
+) -> Answer:
+    def answered() -> list[bytes]:
+        o = _dataset(model, path, options, token, identity)
+        out = _native(o.dataset.facts, request)
+        _check(path, identity)  # not rewritten while it was read
+        return out
+
+    return _answer(answered)
+
+
+def _verify(path: str, identity: Identity) -> Answer:
+    return _answer(lambda: _check(path, identity))
+
+
+def _run(
+    model: Model,
+    path: str,
+    options: dict[str, Any],
+    token: str,
+    identity: Identity,
+    offset: int,
+    request: bytes,
+) -> Answer:
+    def answered() -> list[bytes]:
+        o = _dataset(model, path, options, token, identity)
+        out = _native(o.dataset.run, offset, request)
+        _check(path, identity)
+        return out
+
+    return _answer(answered)
+
+
+def _lost_types() -> tuple[type[BaseException], ...]:
+    """What a lost worker, connection or stalled cluster raises in the client."""
+    from asyncio import CancelledError as AsyncCancelled
+    from concurrent.futures import CancelledError
+
+    from distributed.comm.core import CommClosedError
+    from distributed.scheduler import KilledWorker
+
+    return (CommClosedError, KilledWorker, TimeoutError, OSError, CancelledError, AsyncCancelled)
+
+
+def _mapped(client: Any, what: str, f: Callable[..., Answer], timeout: float | None, *args: list[Any]) -> list[Any]:
+    """``f`` mapped over ``args`` on the cluster (each task retried twice by
+    Dask), waited for at most ``timeout`` seconds; a lost worker or
+    connection, or a timeout, costs one more attempt of the whole pass and
+    then ends in ``EstimateError`` (``worker-lost``), never a hang. A task's
+    ``LeewayError`` is raised as it is."""
+    from distributed import wait
+
+    lost = _lost_types()
+    last: BaseException | None = None
+    for _ in range(2):
+        futures: list[Any] = []
+        try:
+            futures = client.map(f, *args, pure=False, retries=2)
+            start = time.monotonic()
+            wait(futures, timeout=timeout)  # type: ignore[no-untyped-call]
+            left = None if timeout is None else max(1.0, timeout - (time.monotonic() - start))
+            answers = _gather(client, futures, left)
+        except LeewayError:
+            raise
+        except lost as e:
+            last = e
+            _cancel(client, futures)
+            continue
+        for status, value in answers:
+            if status == "error":
+                raise value
+        return [value for _, value in answers]
+    reason = "timed out" if isinstance(last, TimeoutError) else f"{type(last).__name__}: {last}"
+    raise EstimateError(
+        f"the {what} pass failed twice: a worker or the connection to the cluster was lost ({reason})",
+        code="worker-lost",
+        hint="check the cluster (client.scheduler_info(), the workers' logs) and run the estimate again; "
+        "pass timeout= (seconds a pass may take) if passes are legitimately slow",
+    )
+
+
+def _gather(client: Any, futures: list[Any], timeout: float | None) -> list[Answer]:
+    gather = getattr(client, "_gather", None)
+    if gather is None or timeout is None:
+        answers: list[Answer] = client.gather(futures)
+        return answers
+    result: list[Answer] = client.sync(gather, futures, callback_timeout=timeout)
+    return result
+
+
+def _cancel(client: Any, futures: list[Any]) -> None:
+    try:
+        if futures:
+            client.cancel(futures)
+    except Exception:  # a cluster already gone: nothing left to cancel
+        pass
+
+
+def _clear(client: Any, token: str) -> None:
+    """Drops the estimate's datasets on every worker; a worker already gone,
+    or a cluster that does not answer within 30 s, is left as it is (the
+    bounded cache drops them in time)."""
+    try:
+        client.sync(client._run, _forget, token, on_error="ignore", callback_timeout=30)
+    except Exception:
+        pass
+
+
+def _client(client: Any) -> Any:
+    if client is None:
+        from distributed import get_client
+
+        try:
+            return get_client()
+        except ValueError as e:
+            raise OptionError(
+                f"no Dask client: {e}",
+                code="invalid-option",
+                hint="pass client=Client(...) (dask.distributed), or create one first",
+            ) from None
+    if not all(hasattr(client, a) for a in ("map", "gather", "sync")):
+        raise OptionError(
+            f"client is a {type(client).__name__}, not a dask.distributed.Client",
+            code="invalid-option",
+            hint="pass client=Client(...) (dask.distributed)",
+        )
+    return client
+
+
+def _paths(experiments: Any) -> list[str]:
+    if isinstance(experiments, (str, bytes, os.PathLike)):
+        experiments = [experiments]
+    if not isinstance(experiments, Sequence):
+        raise OptionError(
+            f"experiments is a {type(experiments).__name__}, not a list of paths",
+            code="invalid-option",
+            hint="pass the data files as a list of str or pathlib.Path",
+        )
+    return [mapreduce._path(p) for p in experiments]
 
 
 def estimate(
     model: Model,
     experiments: Sequence[str | os.PathLike[str]],
     client: Any = None,
+    *,
+    timeout: float | None = 3600.0,
     **options: Any,
 ) -> Estimate:
     """Estimates like :func:`leeway.estimate` (the same keyword options and
     defaults: ``method="iv3"``, …) from data files (CSV or Parquet, as
     ``leeway estimate --data`` reads them; a file with an ``experiment``
     column holds several experiments), each pass mapped over the files on the workers of
-    ``client`` (a ``dask.distributed.Client``; the current one if ``None``)."""
-    from distributed import get_client
+    ``client`` (a ``dask.distributed.Client``; the current one if ``None``).
 
-    client = client if client is not None else get_client()
-    paths = [os.fspath(p) for p in experiments]
+    Each task is retried twice by Dask and a failed pass once more; a pass
+    that does not end within ``timeout`` seconds, or fails again, raises
+    ``EstimateError`` (``worker-lost``). A file that changes during the
+    estimate raises ``DataError`` (``data-changed``)."""
+    client = _client(client)
+    if timeout is not None:
+        timeout = _number("timeout", timeout)
+        if timeout <= 0:
+            raise OptionError(f"timeout={timeout} is not positive", code="invalid-option", hint="seconds a pass may take, or None")
+    paths = _paths(experiments)
     if not paths:
         raise DataError(
             "no experiment given",
@@ -97,28 +394,40 @@ def estimate(
     chosen = mapreduce.options(model, **options)
     n = len(paths)
     models, settings = [model] * n, [chosen] * n
-    opened = client.gather(client.map(_open, models, paths, settings, pure=False))
-    offsets = []
-    total = 0
-    for _, count in opened:
-        offsets.append(total)
-        total += count
+    token = uuid.uuid4().hex
+    tokens = [token] * n
+    try:
+        opened = _mapped(client, "open", _open, timeout, models, paths, settings, tokens)
+        identities = [identity for _, _, identity in opened]
+        offsets = []
+        total = 0
+        for _, count, _ in opened:
+            offsets.append(total)
+            total += count
 
-    def facts(request: bytes) -> list[bytes]:
-        shared = [client.scatter(request, broadcast=True)] * n
-        parts = client.gather(client.map(_facts, models, paths, settings, shared, pure=False))
-        return [b for part in parts for b in part]
+        # The request (θ and the plan, a few kB) travels in each task's
+        # arguments: no scatter, whose broadcast can wedge on a lost worker.
+        def facts(request: bytes) -> list[bytes]:
+            parts = _mapped(client, "facts", _facts, timeout, models, paths, settings, tokens, identities, [request] * n)
+            return [b for part in parts for b in part]
 
-    def run(request: bytes) -> list[bytes]:
-        shared = [client.scatter(request, broadcast=True)] * n
-        parts = client.gather(client.map(_run, models, paths, settings, offsets, shared, pure=False))
-        return [b for part in parts for b in part]
+        def run(request: bytes) -> list[bytes]:
+            parts = _mapped(
+                client, "moment", _run, timeout, models, paths, settings, tokens, identities, offsets, [request] * n
+            )
+            return [b for part in parts for b in part]
 
-    return mapreduce.estimate(model, paths, [s for s, _ in opened], facts, run, chosen)
+        result = mapreduce.estimate(model, paths, [s for s, _, _ in opened], facts, run, chosen)
+        # Every file is still the one the estimate read (a change after its
+        # last pass would otherwise go unseen): one light task per file.
+        _mapped(client, "final", _verify, timeout, paths, identities)
+        return result
+    finally:
+        _clear(client, token)
 
 
-def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> bytes:
-    return _leeway.study_run(model._core, config, case, run)
+def _study_run(model: Model, config: dict[str, Any], case: int, run: int) -> Answer:
+    return _answer(lambda: _native(_leeway.study_run, model._core, config, case, run))
 
 
 def study(
@@ -137,25 +446,29 @@ def study(
     record from its own seed. Returns the study's figures per case and
     estimator and its claims (``cases``, ``claims``), the same as
     ``reproduce``'s ``results.json`` for the same options."""
-    from distributed import get_client
-
-    client = client if client is not None else get_client()
+    client = _client(client)
+    if isinstance(n, (str, bytes)) or not isinstance(n, Sequence):
+        raise OptionError(f"n={n!r} is not a list of record lengths", code="invalid-option", hint="n=[1000, 2000]")
+    if isinstance(cases, (str, bytes)) or not isinstance(cases, Sequence):
+        raise OptionError(f"cases={cases!r} is not a list of names", code="invalid-option", hint='cases=["low", "high"]')
     config = {
-        "runs": runs,
-        "n": list(n),
-        "cases": list(cases),
-        "seed": seed,
-        "paper_iv": paper_iv,
+        "runs": _integer("runs", runs, 1, 1 << 32),
+        "n": [_integer("n", v, 1, 1 << 40) for v in n],
+        "cases": [_text("cases", c) for c in cases],
+        "seed": _integer("seed", seed, 0, (1 << 64) - 1),
+        "paper_iv": _flag("paper_iv", paper_iv),
     }
-    tasks = _leeway.study_tasks(config)
+    tasks = _native(_leeway.study_tasks, config)
     k = len(tasks)
-    futures = client.map(
+    runs_done = _mapped(
+        client,
+        "study",
         _study_run,
+        None,  # a study's runs take what they take; a lost worker is retried
         [model] * k,
         [config] * k,
         [c for c, _ in tasks],
         [r for _, r in tasks],
-        pure=False,
     )
-    result: dict[str, Any] = json.loads(_leeway.study_summary(config, client.gather(futures)))
+    result: dict[str, Any] = json.loads(_native(_leeway.study_summary, config, runs_done))
     return result

@@ -20,7 +20,18 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import Data, Estimate, Model, _estimate_options, _handover, _leeway, _warn
+from . import (
+    Data,
+    Estimate,
+    Model,
+    _checked_options,
+    _estimate_options,
+    _handover,
+    _leeway,
+    _native,
+    _number,
+    _warn,
+)
 from .errors import OptionError
 
 __all__ = ["Dataset", "options", "open_file", "open_frame", "estimate"]
@@ -60,16 +71,52 @@ def options(model: Model, **given: Any) -> dict[str, Any]:
     return _estimate_options(model, **chosen)
 
 
+def _checked(options: Any) -> dict[str, Any]:
+    """Options as :func:`options` made them, checked again (a dict may have
+    been edited or built by hand on its way to a worker)."""
+    if not isinstance(options, dict) or set(options) != set(_DEFAULTS):
+        raise OptionError(
+            f"options is not what leeway.mapreduce.options returns ({type(options).__name__})",
+            code="invalid-option",
+            hint="build the options with leeway.mapreduce.options(model, ...)",
+        )
+    nominal = options["nominal"]
+    if nominal is not None:
+        if isinstance(nominal, (str, bytes)) or not isinstance(nominal, (list, tuple)):
+            raise OptionError(
+                f"options['nominal'] is a {type(nominal).__name__}",
+                code="invalid-nominal",
+                hint="build the options with leeway.mapreduce.options(model, nominal={...})",
+            )
+        nominal = [_number(f"nominal[{i}]", v, code="invalid-nominal") for i, v in enumerate(nominal)]
+    return {**_checked_options(options), "nominal": nominal}
+
+
+def _path(path: Any) -> str:
+    try:
+        text = os.fspath(path)
+    except TypeError:
+        text = None
+    if not isinstance(text, str):
+        raise OptionError(
+            f"{path!r} is a {type(path).__name__}, not a path",
+            code="invalid-option",
+            hint="name data files by str or pathlib.Path",
+        )
+    return text
+
+
 def open_file(model: Model, path: str | os.PathLike[str], options: dict[str, Any]) -> Dataset:
     """A data file's experiments (CSV or Parquet, as ``leeway estimate
     --data`` reads it), validated once and streamed on every pass."""
-    return _leeway.Dataset.open(model._core, os.fspath(path), options)
+    return _native(_leeway.Dataset.open, model._core, _path(path), _checked(options))
 
 
 def open_frame(model: Model, data: Data, options: dict[str, Any]) -> Dataset:
     """The experiments of ``data`` (anything :func:`leeway.estimate` takes),
     validated as files are and held in memory."""
-    return _leeway.Dataset.from_frames(model._core, _handover(model, data), options)
+    checked = _checked(options)
+    return _native(_leeway.Dataset.from_frames, model._core, _handover(model, data), checked)
 
 
 def estimate(
@@ -87,8 +134,14 @@ def estimate(
     returns ``[d.run(offset_d, request) for d in datasets]`` flattened, where
     ``offset_d`` is the number of experiments in the datasets before ``d``.
     An exception raised by ``facts`` or ``run`` is raised from here."""
-    document = _leeway.estimate_mapped(
-        model._core, list(names), list(summaries), options, facts, run
+    document = _native(
+        _leeway.estimate_mapped,
+        model._core,
+        [str(n) for n in names],
+        [bytes(b) for b in summaries],
+        _checked(options),
+        facts,
+        run,
     )
     result = Estimate(document)
     _warn(result)
