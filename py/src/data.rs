@@ -10,7 +10,8 @@
 
 use crate::failure::Failure;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{FileNotes, LoadOptions, load_columns};
+use leeway_runtime::data::{FileNotes, FileSource, LoadOptions, load_columns, open_columns};
+use leeway_runtime::Source;
 use leeway_structure::ir::Ir;
 
 /// One frame: its name (the "file" of messages and of the experiment name
@@ -47,4 +48,53 @@ pub fn load(
         notes.push(loaded.notes);
     }
     Ok((experiments, notes))
+}
+
+/// Frames up to this size (rows × the model's columns × 8 bytes) are held
+/// in memory, where an estimate's passes keep what they compute (faster
+/// refinements); larger ones are streamed, so memory stays flat in the rows.
+pub const HELD_BYTES: usize = 64 << 20;
+
+/// Frames as an estimate reads them: held, or streamed through a spill file.
+pub enum Loaded {
+    /// In memory (small frames, or `resample`, which needs the whole record).
+    Held(Vec<Experiment>),
+    /// Validated once, then read back from a temporary binary copy on every
+    /// pass, as the CLI streams its data files.
+    Streamed(Vec<FileSource>),
+}
+
+impl Loaded {
+    /// Every experiment, in frame order.
+    pub fn sources(&self) -> Vec<&dyn Source> {
+        match self {
+            Loaded::Held(v) => v.iter().map(|e| e as &dyn Source).collect(),
+            Loaded::Streamed(v) => v.iter().map(|e| e as &dyn Source).collect(),
+        }
+    }
+}
+
+/// Every frame's experiments for an estimate: held when small or resampled,
+/// else streamed (the same validation, the same values bit for bit).
+pub fn load_for_estimate(
+    ir: &leeway_structure::ir::Ir,
+    frames: &[Frame<'_>],
+    options: &LoadOptions,
+) -> Result<(Loaded, Vec<FileNotes>), Failure> {
+    let bytes: usize = frames
+        .iter()
+        .map(|f| 8 * f.columns.len() * f.columns.first().map_or(0, |(_, c)| c.len()))
+        .sum();
+    if options.resample.is_some() || bytes <= HELD_BYTES {
+        return load(ir, frames, options).map(|(e, n)| (Loaded::Held(e), n));
+    }
+    let mut sources = Vec::new();
+    let mut notes = Vec::new();
+    for frame in frames {
+        let opened = open_columns(frame.name, &frame.columns, frame.experiment, ir, options)
+            .map_err(|e| Failure::data(&e))?;
+        sources.extend(opened.sources);
+        notes.push(opened.notes);
+    }
+    Ok((Loaded::Streamed(sources), notes))
 }

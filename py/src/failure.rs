@@ -148,6 +148,11 @@ impl Failure {
 
     fn exception(&self, py: Python<'_>) -> PyResult<PyErr> {
         let f = &self.0;
+        // Ctrl-C stopped the estimate: Python's own exception, as after any
+        // interrupted call.
+        if f.code == "interrupted" {
+            return Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message.clone()));
+        }
         let errors = py.import("leeway.errors")?;
         let class = errors.getattr(f.class)?;
         let kwargs = PyDict::new(py);

@@ -24,7 +24,7 @@ use failure::Failure;
 use leeway_runtime::data::LoadOptions;
 use leeway_runtime::estimate::{Centring, Combine, Initial, Instruments, Method};
 use leeway_runtime::report::{Estimated, estimate_report, heading_gains, heading_warnings};
-use leeway_runtime::{Interpreter, Source, estimate};
+use leeway_runtime::{Interpreter, estimate};
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::identify::parse_pattern;
 use leeway_structure::ir::Ir;
@@ -161,6 +161,11 @@ impl Model {
     fn columns(&self) -> Vec<String> {
         data::model_columns(&self.ir)
     }
+    /// The unit the model's `data { }` declares for the time column, if any.
+    #[getter]
+    fn time_unit(&self) -> Option<String> {
+        self.ir.data_units.get("time").cloned()
+    }
     /// The column that splits a frame into experiments.
     #[getter]
     fn experiment_column(&self) -> String {
@@ -233,6 +238,15 @@ fn choice<T: Copy>(what: &str, given: &str, table: &[(&str, T)]) -> Result<T, Fa
                 Some(format!("{what} is one of {}", names.join(", "))),
             )
         })
+}
+
+/// Ctrl-C during an estimate: Python runs its SIGINT handler only when
+/// asked while native code holds the thread, so the estimator asks between
+/// passes (from the calling thread, the main one for an interactive user);
+/// the handler's `KeyboardInterrupt` is raised when the estimate has stopped
+/// (`interrupted`, see `failure.rs`).
+fn python_interrupt() -> leeway_runtime::estimate::Interrupt {
+    leeway_runtime::estimate::Interrupt::new(|| Python::attach(|py| py.check_signals().is_err()))
 }
 
 /// The CLI's bounds on the options (cli/src/estimate.rs), so a script and a
@@ -310,6 +324,7 @@ impl EstimateOptions {
             strict: self.strict,
             lags: self.lags,
             runaway_guard: self.runaway_guard,
+            interrupt: Some(python_interrupt()),
             ..leeway_runtime::EstimateOptions::default()
         })
     }
@@ -435,8 +450,8 @@ fn run_estimate(
     options: &leeway_runtime::EstimateOptions,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
-    let (experiments, notes) = data::load(ir, frames, load_options)?;
-    let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
+    let (loaded, notes) = data::load_for_estimate(ir, frames, load_options)?;
+    let sources = loaded.sources();
     let mut warnings = model.warnings.clone();
     warnings.extend(leeway_runtime::report::unit_warnings(ir, &sources));
     let gains = heading_gains(ir, &sources);

@@ -359,10 +359,5 @@ def test_other_seeds(seed: int) -> None:
     run_campaign(max(50, CASES // 6), seed)
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="issue 22 item 2: finite nominal values near 1e308 overflow into the SVD, whose panic "
-    "(now an EstimateError `internal-error`, never a PanicException) the runtime must turn into a located error",
-)
 def test_extreme_nominal_values_are_located_errors() -> None:
     run_campaign(max(100, CASES // 3), SEED + 7, extreme=True)

@@ -421,6 +421,19 @@ def _integers(name: str, values: np.ndarray, column: str) -> np.ndarray:
     return values.astype(np.float64)
 
 
+def _no_stamps_in_unit(name: str, series: pd.Series, column: str, unit: str) -> None:
+    """Date-times and durations are read in seconds: a time column the model
+    declares in another unit must hold numbers in that unit."""
+    types = pd.api.types
+    if types.is_datetime64_any_dtype(series.dtype) or types.is_timedelta64_dtype(series.dtype):
+        raise _refuse(
+            name,
+            column,
+            f"date-times or durations ({series.dtype}), read in seconds, while the model declares `time` in {unit}",
+            "drop the time unit from the model's data { } block, or give the time as numbers in that unit",
+        )
+
+
 def _column(name: str, series: pd.Series, column: str, is_time: bool) -> np.ndarray:
     """One model column as float64: floats as they are (a view where the
     column already is contiguous float64), integers within ±2⁵³, a time
@@ -519,7 +532,10 @@ def _handover(model: Model, data: Data) -> list[tuple[str, list[tuple[str, np.nd
         for column in model.columns:
             if column not in frame.columns:
                 continue  # the loader names what is missing, as for a file
-            values = _column(name, frame[column], column, column == time_column)
+            is_time = column == time_column
+            if is_time and model._core.time_unit not in (None, "s"):
+                _no_stamps_in_unit(name, frame[column], column, model._core.time_unit)
+            values = _column(name, frame[column], column, is_time)
             columns.append((column, values))
         labels = None
         if experiment_column in frame.columns:

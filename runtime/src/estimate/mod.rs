@@ -159,7 +159,8 @@ pub fn estimate(
     experiments: &[&dyn Source],
     options: &EstimateOptions,
 ) -> Result<Estimate, EstimateError> {
-    estimate_with(model, &LocalPasses::new(model, experiments), options)
+    let passes = LocalPasses::new(model, experiments).interruptible(options.interrupt.clone());
+    estimate_with(model, &passes, options)
 }
 
 /// Estimates like [`estimate`], with every pass over the data run by

@@ -140,11 +140,17 @@ impl Estimator<'_> {
         let mut causes = vec![
             "the input depends on the measurements (a closed loop such as an autopilot or dynamic positioning: the estimators assume open loop, paper A1)".to_string(),
         ];
+        if self.options.method == Method::Ls {
+            causes.push("least squares' bias where the measurements are noisy or disturbed (the instrumental-variable methods, --method iv3, are consistent there)".into());
+        }
         if !self.unexcited.is_empty() {
             causes.push("columns the data hardly excite (see the warnings on excitation)".into());
         }
         if ran_away {
             causes.push("a refinement that ran away".into());
+        }
+        if own.diverged.is_empty() {
+            causes.push("states that barely vary in the record (a small steady offset then fits worse than their mean)".into());
         }
         Some(err(
             "own-simulation",

@@ -186,6 +186,8 @@ struct MomentPass<'a> {
 pub struct PassRunner<'a> {
     model: &'a dyn Model,
     terms: Vec<TermPlan>,
+    /// Asked during the data walks (see [`LocalPasses::interruptible`]).
+    interrupt: Option<Interrupt>,
 }
 
 impl<'a> PassRunner<'a> {
@@ -194,6 +196,7 @@ impl<'a> PassRunner<'a> {
         PassRunner {
             model,
             terms: crate::interp::term_plans(model.ir()),
+            interrupt: None,
         }
     }
 
@@ -278,6 +281,7 @@ impl<'a> PassRunner<'a> {
             delayed_mean: plan.delayed_mean,
             n_cols: plan.n_cols,
             instrument_means: None,
+            interrupt: self.interrupt.as_ref(),
         }
     }
 
@@ -790,6 +794,15 @@ struct KeptPasses {
 }
 
 impl<'a> LocalPasses<'a> {
+    /// These passes, their data walks asking `interrupt` every few thousand
+    /// samples and skipping the rest of a pass once it says stop: for one
+    /// estimate only ([`estimate`] makes them), whose driver then stops with
+    /// `interrupted` — what a stopped pass kept must not serve another.
+    pub(super) fn interruptible(mut self, interrupt: Option<Interrupt>) -> LocalPasses<'a> {
+        self.runner.interrupt = interrupt;
+        self
+    }
+
     /// Passes of `model` over `experiments`.
     pub fn new(model: &'a dyn Model, experiments: &'a [&'a dyn Source]) -> LocalPasses<'a> {
         LocalPasses {

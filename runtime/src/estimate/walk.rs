@@ -18,7 +18,14 @@ pub(super) struct EquationWalker<'a> {
     /// (a warm start's instruments: those of the shorter record it settled
     /// on) instead of the experiment's own.
     pub(super) instrument_means: Option<&'a [f64]>,
+    /// Asked every [`INTERRUPT_EVERY`] samples: once it says stop, the rest
+    /// of the walk is skipped (the driver, asking after the pass, then
+    /// discards it).
+    pub(super) interrupt: Option<&'a Interrupt>,
 }
+
+/// Samples between two questions to the interrupt (a few milliseconds).
+const INTERRUPT_EVERY: usize = 1 << 15;
 
 #[derive(Debug)]
 pub(super) struct Diverged;
@@ -351,8 +358,16 @@ impl EquationWalker<'_> {
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
         let simulates = self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
+        let mut interrupted = false;
         let mut sample = |row: &crate::data::Row| {
-            if diverged {
+            if diverged || interrupted {
+                return;
+            }
+            if k % INTERRUPT_EVERY == 0
+                && let Some(i) = self.interrupt
+                && i.requested()
+            {
+                interrupted = true;
                 return;
             }
             if k < replay_until {
