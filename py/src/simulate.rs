@@ -267,6 +267,7 @@ pub fn validate_fits(
                         e.name
                     ));
                 }
+                warnings.extend(v.below_mean(&outputs, &format!("{name}, experiment `{}`", e.name)));
                 rows.push((m, e.name.clone(), e.len(), v.diverged(), v.outputs()));
                 validations.push(v);
             }
