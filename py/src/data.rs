@@ -10,8 +10,10 @@
 
 use crate::failure::Failure;
 use leeway_runtime::Experiment;
-use leeway_runtime::data::{FileNotes, FileSource, LoadOptions, load_columns, open_columns};
 use leeway_runtime::Source;
+use leeway_runtime::data::{
+    FileNotes, FileSource, Labels, LoadOptions, load_columns, open_columns,
+};
 use leeway_structure::ir::Ir;
 
 /// One frame: its name (the "file" of messages and of the experiment name
@@ -21,8 +23,8 @@ pub struct Frame<'a> {
     pub name: &'a str,
     /// The model's columns the frame has, by data column name.
     pub columns: Vec<(&'a str, &'a [f64])>,
-    /// The experiment column, as text.
-    pub experiment: Option<&'a [String]>,
+    /// The experiment column's labels.
+    pub experiment: Option<Labels<'a>>,
 }
 
 /// The data columns a model reads (after `data { }` mapping), time first:

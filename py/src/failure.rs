@@ -151,7 +151,9 @@ impl Failure {
         // Ctrl-C stopped the estimate: Python's own exception, as after any
         // interrupted call.
         if f.code == "interrupted" {
-            return Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(f.message.clone()));
+            return Ok(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                f.message.clone(),
+            ));
         }
         let errors = py.import("leeway.errors")?;
         let class = errors.getattr(f.class)?;

@@ -384,11 +384,12 @@ fn load_options(
     })
 }
 
-/// A frame as `leeway` hands it over: name, float64 columns, experiment labels.
+/// A frame as `leeway` hands it over: name, float64 columns, and the
+/// experiment labels coded (`pandas.factorize`: a code per row, the names).
 type FrameArg<'py> = (
     String,
     Vec<(String, PyReadonlyArray1<'py, f64>)>,
-    Option<Vec<String>>,
+    Option<(PyReadonlyArray1<'py, i64>, Vec<String>)>,
 );
 
 /// The frames' columns borrowed in place (`leeway` hands over contiguous
@@ -408,10 +409,22 @@ fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<data::Frame<'a>>,
                     })
                 })
                 .collect::<Result<Vec<_>, _>>()?;
+            let experiment = match experiment {
+                Some((codes, names)) => Some(leeway_runtime::data::Labels::Coded {
+                    codes: codes.as_slice().map_err(|_| {
+                        Failure::data_plain(
+                            name,
+                            "the experiment codes are not a contiguous int64 array".into(),
+                        )
+                    })?,
+                    names,
+                }),
+                None => None,
+            };
             Ok(data::Frame {
                 name,
                 columns,
-                experiment: experiment.as_deref(),
+                experiment,
             })
         })
         .collect()

@@ -473,8 +473,10 @@ def _column(name: str, series: pd.Series, column: str, is_time: bool) -> np.ndar
     raise _refuse(name, column, f"{dtype}", f"convert it to float64 yourself, e.g. pd.to_numeric(df[{column!r}])")
 
 
-def _labels(name: str, frame: pd.DataFrame, column: str) -> list[str]:
-    """The experiment labels as text; a missing label is an error at its row."""
+def _labels(name: str, frame: pd.DataFrame, column: str) -> tuple[np.ndarray, list[str]]:
+    """The experiment labels coded, as ``pandas.factorize`` codes them (an
+    int64 per row and the distinct labels as text: no string per row); a
+    missing label is an error at its row."""
     series = frame[column]
     if isinstance(series, pd.DataFrame):  # a repeated name is refused before
         raise DataError(f"column `{column}` appears more than once", code="data", location=name)
@@ -487,13 +489,16 @@ def _labels(name: str, frame: pd.DataFrame, column: str) -> list[str]:
             location=_row(name, row, column),
             hint=f"give every row the label of its experiment in `{column}`",
         )
-    return [str(v) for v in series.tolist()]
+    codes, uniques = pd.factorize(series, sort=False)
+    return np.ascontiguousarray(codes, dtype=np.int64), [str(v) for v in uniques.tolist()]
 
 
-def _handover(model: Model, data: Data) -> list[tuple[str, list[tuple[str, np.ndarray]], list[str] | None]]:
+def _handover(
+    model: Model, data: Data
+) -> list[tuple[str, list[tuple[str, np.ndarray]], tuple[np.ndarray, list[str]] | None]]:
     """The model's columns of every frame as contiguous float64 arrays (a
     view, not a copy, where the column already is one) and the experiment
-    labels as text. Nothing is coerced silently: a column that is not of
+    labels coded (an int64 per row, the distinct labels as text). Nothing is coerced silently: a column that is not of
     numbers (dates, durations, booleans, complex numbers, text, categories)
     is refused, except the time column's date-times and durations, read as
     seconds since the first stamp."""

@@ -53,7 +53,7 @@ class Model:
 
 def estimate_json(
     model: Model,
-    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
     options: dict[str, Any],
 ) -> str: ...
 
@@ -64,7 +64,7 @@ class Dataset:
     @staticmethod
     def from_frames(
         model: Model,
-        frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
+        frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
         options: dict[str, Any],
     ) -> Dataset: ...
     def summary(self) -> bytes: ...
@@ -86,7 +86,7 @@ def study_run(model: Model, config: dict[str, Any], case: int, run: int) -> byte
 def study_summary(config: dict[str, Any], runs: list[bytes]) -> str: ...
 def simulate_columns(
     model: Model,
-    frame: tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None],
+    frame: tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None],
     theta: list[float],
     x0: list[tuple[str, float]],
     disturbances: list[tuple[str, float]],
@@ -94,7 +94,7 @@ def simulate_columns(
 ) -> tuple[list[tuple[str, npt.NDArray[np.float64]]], str | None]: ...
 def validate_fits(
     model: Model,
-    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], list[str] | None]],
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
     thetas: list[list[float]],
     names: list[str],
     disturbances: list[tuple[str, float]],

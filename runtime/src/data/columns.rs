@@ -9,6 +9,42 @@ use super::{StreamedFile, open_table};
 use leeway_structure::ir::Ir;
 use std::borrow::Cow;
 
+/// The experiment labels of a frame's rows.
+#[derive(Clone, Copy, Debug)]
+pub enum Labels<'a> {
+    /// One label per row.
+    PerRow(&'a [String]),
+    /// Per row an index into `names` (what `pandas.factorize` gives): the
+    /// labels then take memory per experiment, not per row. A code outside
+    /// `names` (factorize's −1 for a missing label) is a located error.
+    Coded {
+        /// One per row.
+        codes: &'a [i64],
+        /// The distinct labels.
+        names: &'a [String],
+    },
+}
+
+impl Labels<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Labels::PerRow(l) => l.len(),
+            Labels::Coded { codes, .. } => codes.len(),
+        }
+    }
+    /// Row `k`'s label, `None` where it has none.
+    fn get(&self, k: usize) -> Option<&str> {
+        match self {
+            Labels::PerRow(l) => l.get(k).map(String::as_str),
+            Labels::Coded { codes, names } => codes
+                .get(k)
+                .and_then(|c| usize::try_from(*c).ok())
+                .and_then(|c| names.get(c))
+                .map(String::as_str),
+        }
+    }
+}
+
 /// Named float columns of equal length, with optional experiment labels per
 /// row, read row by row.
 #[derive(Clone, Debug)]
@@ -16,7 +52,7 @@ pub struct Columns<'a> {
     name: String,
     headers: Vec<String>,
     columns: Vec<&'a [f64]>,
-    labels: Option<&'a [String]>,
+    labels: Option<Labels<'a>>,
     rows: usize,
     /// The current row, `None` before the first.
     row: Option<usize>,
@@ -29,7 +65,7 @@ impl<'a> Columns<'a> {
     pub fn new(
         name: &str,
         columns: &[(&str, &'a [f64])],
-        labels: Option<(&str, &'a [String])>,
+        labels: Option<(&str, Labels<'a>)>,
     ) -> Result<Columns<'a>, DataError> {
         let rows = columns
             .first()
@@ -111,7 +147,14 @@ impl Table for Columns<'_> {
         let k = self.k();
         Ok(match self.columns.get(i) {
             Some(c) => Cow::Owned(c[k].to_string().into_bytes()),
-            None => Cow::Borrowed(self.labels.map_or(&b""[..], |l| l[k].as_bytes())),
+            None => match self.labels.as_ref().map(|l| l.get(k)) {
+                Some(Some(label)) => Cow::Borrowed(label.as_bytes()),
+                Some(None) => {
+                    let at = self.at(k as u64, Some((i, &self.headers[i])));
+                    return Err(super::validate::missing(at, "missing experiment label"));
+                }
+                None => Cow::Borrowed(&b""[..]),
+            },
         })
     }
 }
@@ -131,6 +174,22 @@ pub fn model_columns(ir: &Ir) -> Vec<String> {
     columns
 }
 
+/// The table of a frame: its columns and, as the column
+/// `column_name(ir, "experiment")`, its labels.
+fn frame<'a>(
+    name: &str,
+    columns: &[(&str, &'a [f64])],
+    experiment: Option<Labels<'a>>,
+    ir: &Ir,
+) -> Result<Columns<'a>, DataError> {
+    let label_column = column_name(ir, "experiment");
+    Columns::new(
+        name,
+        columns,
+        experiment.map(|l| (label_column.as_str(), l)),
+    )
+}
+
 /// Loads columns in memory exactly as [`load_csv_noted`](super::load_csv_noted)
 /// loads a file of the same values: the model's columns found by name
 /// (`data { }` mapping, [`column_name`]), declared units, time steps,
@@ -141,17 +200,11 @@ pub fn model_columns(ir: &Ir) -> Vec<String> {
 pub fn load_columns(
     name: &str,
     columns: &[(&str, &[f64])],
-    experiment: Option<&[String]>,
+    experiment: Option<Labels<'_>>,
     ir: &Ir,
     options: &LoadOptions,
 ) -> Result<LoadedFile, DataError> {
-    let label_column = column_name(ir, "experiment");
-    let mut table = Columns::new(
-        name,
-        columns,
-        experiment.map(|l| (label_column.as_str(), l)),
-    )?;
-    load_table(&mut table, ir, options)
+    load_table(&mut frame(name, columns, experiment, ir)?, ir, options)
 }
 
 /// Opens columns for streaming as [`open_file`](super::open_file) opens a
@@ -161,15 +214,9 @@ pub fn load_columns(
 pub fn open_columns(
     name: &str,
     columns: &[(&str, &[f64])],
-    experiment: Option<&[String]>,
+    experiment: Option<Labels<'_>>,
     ir: &Ir,
     options: &LoadOptions,
 ) -> Result<StreamedFile, DataError> {
-    let label_column = column_name(ir, "experiment");
-    let mut table = Columns::new(
-        name,
-        columns,
-        experiment.map(|l| (label_column.as_str(), l)),
-    )?;
-    open_table(&mut table, ir, options)
+    open_table(&mut frame(name, columns, experiment, ir)?, ir, options)
 }

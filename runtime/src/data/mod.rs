@@ -31,7 +31,7 @@ pub mod parquet;
 mod spill;
 pub mod validate;
 
-pub use columns::{Columns, load_columns, open_columns};
+pub use columns::{Columns, Labels, load_columns, open_columns};
 pub use csv::{Records, load_csv, load_csv_noted, open_csv, parse_csv, parse_csv_noted};
 pub use experiment::{Experiment, Row, Source};
 pub use spill::{CsvSource, FileSource, StreamedFile, open_table};

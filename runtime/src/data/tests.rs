@@ -416,11 +416,22 @@ fn columns_of(text: &str) -> Frame {
 fn load_columns_of(text: &str, ir: &Ir, options: &LoadOptions) -> Result<LoadedFile, DataError> {
     let (cols, labels) = columns_of(text);
     let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();
-    load_columns("run", &borrowed, labels.as_deref(), ir, options)
+    load_columns(
+        "run",
+        &borrowed,
+        labels.as_deref().map(Labels::PerRow),
+        ir,
+        options,
+    )
 }
 
 fn bits(e: &Experiment) -> Vec<u64> {
-    let mut out = vec![e.h.to_bits()];
+    source_bits(e)
+}
+
+/// Every value a visit gives, as bits, after the step.
+fn source_bits(e: &dyn Source) -> Vec<u64> {
+    let mut out = vec![e.step().to_bits()];
     e.visit(&mut |r| {
         out.extend(
             r.states
@@ -577,32 +588,49 @@ fn streamed_columns_visit_bit_for_bit_as_loaded_ones() {
     let (cols, labels) = columns_of(&log_text());
     let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();
     let options = LoadOptions::default();
-    let held = load_columns("run", &borrowed, labels.as_deref(), &ir, &options)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let streamed = super::open_columns("run", &borrowed, labels.as_deref(), &ir, &options)
+    let labels = labels.unwrap_or_default();
+    // Labels handed over coded, as pandas.factorize gives them.
+    let names: Vec<String> = vec!["east".into(), "west".into()];
+    let codes: Vec<i64> = labels.iter().map(|l| i64::from(l == "west")).collect();
+    let coded = Labels::Coded {
+        codes: &codes,
+        names: &names,
+    };
+    let held = load_columns(
+        "run",
+        &borrowed,
+        Some(Labels::PerRow(&labels)),
+        &ir,
+        &options,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let streamed = super::open_columns("run", &borrowed, Some(coded), &ir, &options)
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(held.notes, streamed.notes);
     assert_eq!(held.experiments.len(), streamed.sources.len());
     for (e, s) in held.experiments.iter().zip(&streamed.sources) {
         let held_source: &dyn Source = e;
-        let stream_bits = |s: &dyn Source| {
-            let mut out = vec![s.step().to_bits()];
-            s.visit(&mut |r| {
-                out.extend(
-                    r.states
-                        .iter()
-                        .chain(r.inputs)
-                        .chain(r.rotation)
-                        .chain(r.disturbances)
-                        .chain([&r.heading])
-                        .map(|v| v.to_bits()),
-                );
-            });
-            out
-        };
         assert_eq!((s.name(), s.len()), (held_source.name(), held_source.len()));
-        assert_eq!(stream_bits(s), stream_bits(held_source), "{}", e.name);
-        assert_eq!(stream_bits(s), bits(e));
+        assert_eq!(source_bits(s), bits(e), "{}", e.name);
         assert!(s.locate(3).starts_with("run: row"), "{}", s.locate(3));
     }
+}
+
+#[test]
+fn a_code_without_a_label_is_a_located_error() {
+    let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
+    let (cols, _) = columns_of(&log_text());
+    let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();
+    let names = vec!["east".to_string()];
+    let mut codes = vec![0i64; cols[0].1.len()];
+    codes[7] = -1; // pandas.factorize's code of a missing label
+    let coded = Labels::Coded {
+        codes: &codes,
+        names: &names,
+    };
+    let e = load_columns("run", &borrowed, Some(coded), &ir, &LoadOptions::default())
+        .err()
+        .unwrap_or_else(|| panic!("a code without a label accepted"));
+    assert!(e.location.starts_with("run: row 7"), "{e}");
+    assert!(e.message.contains("missing experiment label"), "{e}");
 }
