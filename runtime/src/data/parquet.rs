@@ -1044,4 +1044,32 @@ mod tests {
         assert_eq!(pages[2], 0, "page mutations read as other numbers");
         assert!(slowest < std::time::Duration::from_secs(5), "{slowest:?}");
     }
+
+    /// A fixture written by pyarrow (tests/data).
+    fn fixture(name: &str) -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data")
+            .join(name)
+    }
+
+    #[test]
+    fn a_list_column_is_named_by_its_field_and_refused_as_a_list() {
+        // Issue 22: `a` (a list of doubles) was reported as a missing column.
+        let path = fixture("list.parquet");
+        let t = ParquetFile::open(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(t.headers(), ["time", "a"]);
+        let e = numbers(&path, 1)
+            .err()
+            .unwrap_or_else(|| panic!("a list read"));
+        assert!(e.to_string().contains("column `a` is a list"), "{e}");
+    }
+
+    #[test]
+    fn a_file_without_row_groups_is_located_as_such() {
+        // Issue 22: located at "row group 0", which the file does not have.
+        let t =
+            ParquetFile::open(&fixture("no-row-groups.parquet")).unwrap_or_else(|e| panic!("{e}"));
+        let at = t.at(t.first_position(), None);
+        assert!(at.ends_with("row 0 (the file has no row groups)"), "{at}");
+    }
 }
