@@ -8,7 +8,7 @@
 //! 210), column `u``.
 //!
 //! A number is read as what its logical type says it is, or refused; it is
-//! never read as another number ([`Reading`]): DOUBLE and FLOAT as they are;
+//! never read as another number (`Reading`): DOUBLE and FLOAT as they are;
 //! signed integers (INT32, INT64) and unsigned ones (`UINT_8` … `UINT_64`,
 //! stored in the same bits) as their value, an integer beyond ±2⁵³, which
 //! `f64` cannot hold exactly, an error; a DECIMAL (stored as INT32, INT64 or
