@@ -363,7 +363,7 @@ impl EquationWalker<'_> {
             if diverged || interrupted {
                 return;
             }
-            if k % INTERRUPT_EVERY == 0
+            if k.is_multiple_of(INTERRUPT_EVERY)
                 && let Some(i) = self.interrupt
                 && i.requested()
             {
