@@ -75,6 +75,8 @@ struct Filter<R> {
     comments: usize,
     blanks: usize,
     error: Option<std::io::Error>,
+    /// How the file ends its lines, once its first line end is read.
+    ends: Option<LineEnds>,
 }
 
 impl<R: std::io::BufRead> Filter<R> {
@@ -93,6 +95,7 @@ impl<R: std::io::BufRead> Filter<R> {
             comments: 0,
             blanks: 0,
             error: None,
+            ends: None,
         }
     }
     /// The physical line (from 1) of a kept line (from 1).
@@ -111,7 +114,7 @@ impl<R: std::io::BufRead> Filter<R> {
         loop {
             self.line.clear();
             self.pos = 0;
-            let n = read_line(&mut self.inner, &mut self.line)?;
+            let n = read_line(&mut self.inner, &mut self.line, &mut self.ends)?;
             if n == 0 {
                 return Ok(false);
             }
@@ -151,7 +154,10 @@ impl<R: std::io::BufRead> Filter<R> {
             let len = self.line.len();
             if !self.in_quotes && self.line.ends_with(b"\r\n") {
                 self.line[len - 2] = b' ';
-            } else if !self.in_quotes && self.line.ends_with(b"\r") {
+            } else if !self.in_quotes
+                && self.ends == Some(LineEnds::Return)
+                && self.line.ends_with(b"\r")
+            {
                 self.line[len - 1] = b'\n';
             }
             return Ok(true);
@@ -159,41 +165,40 @@ impl<R: std::io::BufRead> Filter<R> {
     }
 }
 
-/// Appends one physical line to `line`, with its end: `\n`, `\r\n` or a
-/// lone `\r` (files from classic Mac OS tools); returns the bytes read.
-fn read_line<R: std::io::BufRead>(inner: &mut R, line: &mut Vec<u8>) -> std::io::Result<usize> {
-    let mut n = 0;
-    loop {
-        let buf = match inner.fill_buf() {
-            Ok(b) => b,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(e),
-        };
-        if buf.is_empty() {
-            return Ok(n);
+/// How a file ends its lines, decided by its first line end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LineEnds {
+    /// `\n` or `\r\n` (a CR elsewhere is part of the line, as before).
+    Feed,
+    /// A lone `\r`: files from classic Mac OS tools.
+    Return,
+}
+
+/// Appends one physical line to `line`, with its end, and returns the bytes
+/// read. How the file ends its lines (`ends`) is decided from its first
+/// buffer: a CR without any LF there is a file of returns; anything else
+/// ends lines at LF (a CR then is part of a line, as it always was).
+fn read_line<R: std::io::BufRead>(
+    inner: &mut R,
+    line: &mut Vec<u8>,
+    ends: &mut Option<LineEnds>,
+) -> std::io::Result<usize> {
+    let ends = match *ends {
+        Some(e) => e,
+        None => {
+            let first = inner.fill_buf()?;
+            let decided = if !first.contains(&b'\n') && first.contains(&b'\r') {
+                LineEnds::Return
+            } else {
+                LineEnds::Feed
+            };
+            *ends = Some(decided);
+            decided
         }
-        match buf.iter().position(|b| *b == b'\n' || *b == b'\r') {
-            Some(i) => {
-                let cr = buf[i] == b'\r';
-                line.extend_from_slice(&buf[..=i]);
-                inner.consume(i + 1);
-                n += i + 1;
-                // A CR followed by LF is one line end (the LF may be in the
-                // next buffer).
-                if cr && inner.fill_buf()?.first() == Some(&b'\n') {
-                    line.push(b'\n');
-                    inner.consume(1);
-                    n += 1;
-                }
-                return Ok(n);
-            }
-            None => {
-                let len = buf.len();
-                line.extend_from_slice(buf);
-                inner.consume(len);
-                n += len;
-            }
-        }
+    };
+    match ends {
+        LineEnds::Feed => inner.read_until(b'\n', line),
+        LineEnds::Return => inner.read_until(b'\r', line),
     }
 }
 
