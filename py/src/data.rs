@@ -1,5 +1,5 @@
-//! Frames handed over from Python, read by the runtime's column loader
-//! (`leeway_runtime::data::load_columns`), which feeds the same validating
+//! Frames handed over from Python, read by the runtime's column table
+//! (`leeway_runtime::data::Columns`), which feeds the same validating
 //! pass as `leeway estimate --data`: the same header matching, units,
 //! time-step checks, experiment splitting, outlier rules and errors, located
 //! by positional row (`frame: row R, column `c``, R from 0 as `iloc`).
@@ -12,8 +12,10 @@ use crate::failure::Failure;
 use leeway_runtime::Experiment;
 use leeway_runtime::Source;
 use leeway_runtime::data::{
-    FileNotes, FileSource, Labels, LoadOptions, load_columns, open_columns,
+    Columns, DataError, FileNotes, FileSource, Labels, LoadOptions, columns, load_table, open_table,
 };
+use leeway_runtime::estimate::EstimateError;
+use leeway_runtime::interrupt::Interrupt;
 use leeway_structure::ir::Ir;
 
 /// One frame: its name (the "file" of messages and of the experiment name
@@ -41,11 +43,42 @@ pub fn load(
     frames: &[Frame<'_>],
     options: &LoadOptions,
 ) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
+    load_asking(ir, frames, options, None)
+}
+
+/// A frame's validating pass, `interrupt` asked as it reads (`None`: never).
+fn read<'a, T>(
+    ir: &Ir,
+    frame: &Frame<'a>,
+    interrupt: Option<&Interrupt>,
+    pass: impl FnOnce(&mut Columns<'a>) -> Result<T, DataError>,
+) -> Result<T, Failure> {
+    let stopped = |e: DataError| match interrupt {
+        // Ctrl-C, raised as Python's KeyboardInterrupt (failure.rs).
+        Some(i) if i.requested() => Failure::estimate(&EstimateError {
+            code: "interrupted",
+            message: e.message,
+            hint: e.hint,
+        }),
+        _ => Failure::data(&e),
+    };
+    let mut table = columns::frame(frame.name, &frame.columns, frame.experiment, ir)
+        .map_err(|e| Failure::data(&e))?
+        .interruptible(interrupt.cloned());
+    pass(&mut table).map_err(stopped)
+}
+
+/// [`load`], asking `interrupt` while reading.
+fn load_asking(
+    ir: &Ir,
+    frames: &[Frame<'_>],
+    options: &LoadOptions,
+    interrupt: Option<&Interrupt>,
+) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
     let mut experiments = Vec::new();
     let mut notes = Vec::new();
     for frame in frames {
-        let loaded = load_columns(frame.name, &frame.columns, frame.experiment, ir, options)
-            .map_err(|e| Failure::data(&e))?;
+        let loaded = read(ir, frame, interrupt, |t| load_table(t, ir, options))?;
         experiments.extend(loaded.experiments);
         notes.push(loaded.notes);
     }
@@ -79,22 +112,22 @@ impl Loaded {
 /// Every frame's experiments for an estimate: held when small or resampled,
 /// else streamed (the same validation, the same values bit for bit).
 pub fn load_for_estimate(
-    ir: &leeway_structure::ir::Ir,
+    ir: &Ir,
     frames: &[Frame<'_>],
     options: &LoadOptions,
+    interrupt: Option<&Interrupt>,
 ) -> Result<(Loaded, Vec<FileNotes>), Failure> {
     let bytes: usize = frames
         .iter()
         .map(|f| 8 * f.columns.len() * f.columns.first().map_or(0, |(_, c)| c.len()))
         .sum();
     if options.resample.is_some() || bytes <= HELD_BYTES {
-        return load(ir, frames, options).map(|(e, n)| (Loaded::Held(e), n));
+        return load_asking(ir, frames, options, interrupt).map(|(e, n)| (Loaded::Held(e), n));
     }
     let mut sources = Vec::new();
     let mut notes = Vec::new();
     for frame in frames {
-        let opened = open_columns(frame.name, &frame.columns, frame.experiment, ir, options)
-            .map_err(|e| Failure::data(&e))?;
+        let opened = read(ir, frame, interrupt, |t| open_table(t, ir, options))?;
         sources.extend(opened.sources);
         notes.push(opened.notes);
     }

@@ -463,7 +463,8 @@ fn run_estimate(
     options: &leeway_runtime::EstimateOptions,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
-    let (loaded, notes) = data::load_for_estimate(ir, frames, load_options)?;
+    let (loaded, notes) =
+        data::load_for_estimate(ir, frames, load_options, options.interrupt.as_ref())?;
     let sources = loaded.sources();
     let mut warnings = model.warnings.clone();
     warnings.extend(leeway_runtime::report::unit_warnings(ir, &sources));

@@ -24,6 +24,7 @@ pub mod data;
 pub mod design;
 pub mod estimate;
 pub mod input;
+pub mod interrupt;
 pub mod moments;
 pub mod report;
 pub mod resample;

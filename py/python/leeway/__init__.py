@@ -367,16 +367,22 @@ def _refuse(name: str, column: str, what: str, hint: str) -> DataError:
     )
 
 
-def _missing(name: str, series: pd.Series, column: str) -> None:
+def _missing(
+    name: str,
+    series: pd.Series,
+    column: str,
+    what: str = "missing value",
+    hint: str = "leeway does not drop or fill samples: repair or remove the row (every column of every row must hold a number)",
+) -> None:
     """A missing value (``pd.NA``, ``None``, ``NaT``) is an error at its row."""
     na = np.asarray(series.isna(), dtype=bool)
     if na.any():
         row = int(np.flatnonzero(na)[0])
         raise DataError(
-            f"missing value ({series.iloc[row]!r}) in column `{column}`",
+            f"{what} ({series.iloc[row]!r}) in column `{column}`",
             code="data",
             location=_row(name, row, column),
-            hint="leeway does not drop or fill samples: repair or remove the row (every column of every row must hold a number)",
+            hint=hint,
         )
 
 
@@ -480,15 +486,7 @@ def _labels(name: str, frame: pd.DataFrame, column: str) -> tuple[np.ndarray, li
     series = frame[column]
     if isinstance(series, pd.DataFrame):  # a repeated name is refused before
         raise DataError(f"column `{column}` appears more than once", code="data", location=name)
-    na = np.asarray(series.isna(), dtype=bool)
-    if na.any():
-        row = int(np.flatnonzero(na)[0])
-        raise DataError(
-            f"missing experiment label ({series.iloc[row]!r})",
-            code="data",
-            location=_row(name, row, column),
-            hint=f"give every row the label of its experiment in `{column}`",
-        )
+    _missing(name, series, column, "missing experiment label", f"give every row the label of its experiment in `{column}`")
     codes, uniques = pd.factorize(series, sort=False)
     return np.ascontiguousarray(codes, dtype=np.int64), [str(v) for v in uniques.tolist()]
 

@@ -9,6 +9,12 @@ use super::{StreamedFile, open_table};
 use leeway_structure::ir::Ir;
 use std::borrow::Cow;
 
+/// Rows between two questions to an interrupt.
+const INTERRUPT_ROWS: usize = 1 << 15;
+
+/// The message of a validation stopped by its interrupt.
+pub const INTERRUPTED: &str = "reading the frame was interrupted";
+
 /// The experiment labels of a frame's rows.
 #[derive(Clone, Copy, Debug)]
 pub enum Labels<'a> {
@@ -53,6 +59,8 @@ pub struct Columns<'a> {
     headers: Vec<String>,
     columns: Vec<&'a [f64]>,
     labels: Option<Labels<'a>>,
+    /// Asked every [`INTERRUPT_ROWS`] rows of the validating pass.
+    interrupt: Option<crate::interrupt::Interrupt>,
     rows: usize,
     /// The current row, `None` before the first.
     row: Option<usize>,
@@ -92,11 +100,19 @@ impl<'a> Columns<'a> {
             headers,
             columns: columns.iter().map(|(_, c)| *c).collect(),
             labels: labels.map(|(_, l)| l),
+            interrupt: None,
             rows,
             row: None,
         };
         super::validate::unique_headers(&table.headers, |i| table.header_at(Some(i)))?;
         Ok(table)
+    }
+    /// These columns, their reading stopped by `interrupt` (a large frame's
+    /// validation takes seconds): the row after it says stop is the error
+    /// [`INTERRUPTED`].
+    pub fn interruptible(mut self, interrupt: Option<crate::interrupt::Interrupt>) -> Self {
+        self.interrupt = interrupt;
+        self
     }
     /// The current row (0 before the first).
     fn k(&self) -> usize {
@@ -125,6 +141,15 @@ impl Table for Columns<'_> {
     }
     fn next_row(&mut self) -> Result<bool, DataError> {
         let next = self.row.map_or(0, |k| k + 1);
+        if next.is_multiple_of(INTERRUPT_ROWS)
+            && self.interrupt.as_ref().is_some_and(|i| i.requested())
+        {
+            return Err(DataError::new(
+                &self.name,
+                INTERRUPTED,
+                "run it again to the end",
+            ));
+        }
         self.row = Some(next.min(self.rows));
         Ok(next < self.rows)
     }
@@ -176,7 +201,7 @@ pub fn model_columns(ir: &Ir) -> Vec<String> {
 
 /// The table of a frame: its columns and, as the column
 /// `column_name(ir, "experiment")`, its labels.
-fn frame<'a>(
+pub fn frame<'a>(
     name: &str,
     columns: &[(&str, &'a [f64])],
     experiment: Option<Labels<'a>>,

@@ -634,3 +634,25 @@ fn a_code_without_a_label_is_a_located_error() {
     assert!(e.location.starts_with("run: row 7"), "{e}");
     assert!(e.message.contains("missing experiment label"), "{e}");
 }
+
+#[test]
+fn reading_a_frame_stops_when_its_interrupt_says_so() {
+    // Issue 22: Ctrl-C while a large frame is validated.
+    let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
+    let (cols, labels) = columns_of(&log_text());
+    let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();
+    let labels = labels.as_deref().map(Labels::PerRow);
+    let stop = crate::interrupt::Interrupt::new(|| true);
+    let mut table = super::columns::frame("run", &borrowed, labels, &ir)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .interruptible(Some(stop));
+    let e = load_table(&mut table, &ir, &LoadOptions::default())
+        .err()
+        .unwrap_or_else(|| panic!("read to the end"));
+    assert_eq!(e.message, super::columns::INTERRUPTED);
+    // Never asked to stop: read as without an interrupt.
+    let mut table = super::columns::frame("run", &borrowed, labels, &ir)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .interruptible(Some(crate::interrupt::Interrupt::new(|| false)));
+    assert!(load_table(&mut table, &ir, &LoadOptions::default()).is_ok());
+}

@@ -208,6 +208,7 @@ pub fn estimate_with(
     }
     stop_if_interrupted(options)?;
     let facts = passes.facts(&FactsRequest::new(options))?;
+    stop_if_interrupted(options)?;
     if facts.is_empty() {
         return Err(err(
             "no-data",

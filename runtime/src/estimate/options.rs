@@ -155,43 +155,7 @@ pub struct EstimateOptions {
     pub interrupt: Option<Interrupt>,
 }
 
-/// A question the estimator asks around its passes and during its data
-/// walks: should it stop? Once answered yes, it stays yes (a signal handler
-/// answers only once).
-#[derive(Clone)]
-pub struct Interrupt {
-    ask: std::sync::Arc<dyn Fn() -> bool + Send + Sync>,
-    stopped: std::sync::Arc<std::sync::atomic::AtomicBool>,
-}
-
-impl Interrupt {
-    /// An interrupt that asks `requested`.
-    pub fn new(requested: impl Fn() -> bool + Send + Sync + 'static) -> Interrupt {
-        Interrupt {
-            ask: std::sync::Arc::new(requested),
-            stopped: std::sync::Arc::default(),
-        }
-    }
-
-    /// Whether the estimate should stop now.
-    pub fn requested(&self) -> bool {
-        use std::sync::atomic::Ordering;
-        if self.stopped.load(Ordering::Relaxed) {
-            return true;
-        }
-        let stop = (self.ask)();
-        if stop {
-            self.stopped.store(true, Ordering::Relaxed);
-        }
-        stop
-    }
-}
-
-impl std::fmt::Debug for Interrupt {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("Interrupt")
-    }
-}
+pub use crate::interrupt::Interrupt;
 
 /// The θ and disturbance-component means of a first instrument simulation.
 #[derive(Clone, Debug, PartialEq)]

@@ -170,6 +170,33 @@ pub trait Passes {
     fn keep_plan(&self, _key: PlanKey, _plan: std::sync::Arc<StructuralPlan>) {}
 }
 
+/// Asks an interrupt every [`INTERRUPT_EVERY`] samples of a visit and
+/// remembers its yes.
+pub(super) struct Stopper<'a> {
+    interrupt: Option<&'a Interrupt>,
+    seen: usize,
+    stopped: bool,
+}
+
+impl<'a> Stopper<'a> {
+    pub(super) fn new(interrupt: Option<&'a Interrupt>) -> Stopper<'a> {
+        Stopper {
+            interrupt,
+            seen: 0,
+            stopped: false,
+        }
+    }
+
+    /// Whether this sample and the rest are to be skipped.
+    pub(super) fn now(&mut self) -> bool {
+        if !self.stopped && self.seen.is_multiple_of(INTERRUPT_EVERY) {
+            self.stopped = self.interrupt.is_some_and(Interrupt::requested);
+        }
+        self.seen += 1;
+        self.stopped
+    }
+}
+
 /// Structural plans by their keys, kept for later estimates.
 type KeptPlans = Vec<(PlanKey, std::sync::Arc<StructuralPlan>)>;
 
@@ -237,7 +264,13 @@ impl<'a> PassRunner<'a> {
                 headings,
                 ..
             } = &mut state;
+            // Ctrl-C: the rest of the visit is skipped once asked for (the
+            // driver asks too, and discards these facts).
+            let mut stop = Stopper::new(self.interrupt.as_ref());
             let mut sample = |row: &crate::data::Row| {
+                if stop.now() {
+                    return;
+                }
                 let rot = headings.next(row.heading);
                 counter.sample(&Signals {
                     states: row.states,

@@ -25,7 +25,7 @@ pub(super) struct EquationWalker<'a> {
 }
 
 /// Samples between two questions to the interrupt (a few milliseconds).
-const INTERRUPT_EVERY: usize = 1 << 15;
+pub(super) const INTERRUPT_EVERY: usize = 1 << 15;
 
 #[derive(Debug)]
 pub(super) struct Diverged;
@@ -358,16 +358,9 @@ impl EquationWalker<'_> {
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
         let simulates = self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
-        let mut interrupted = false;
+        let mut stop = super::pass::Stopper::new(self.interrupt);
         let mut sample = |row: &crate::data::Row| {
-            if diverged || interrupted {
-                return;
-            }
-            if k.is_multiple_of(INTERRUPT_EVERY)
-                && let Some(i) = self.interrupt
-                && i.requested()
-            {
-                interrupted = true;
+            if diverged || stop.now() {
                 return;
             }
             if k < replay_until {
