@@ -100,6 +100,18 @@ pub enum Loaded {
 }
 
 impl Loaded {
+    /// A problem a later pass met reading a streamed frame's spill back (it
+    /// then stopped short): whatever was computed from it is void.
+    pub fn failure(&self) -> Option<Failure> {
+        match self {
+            Loaded::Held(_) => None,
+            Loaded::Streamed(v) => v
+                .iter()
+                .find_map(FileSource::failure)
+                .map(|e| Failure::data(&e)),
+        }
+    }
+
     /// Every experiment, in frame order.
     pub fn sources(&self) -> Vec<&dyn Source> {
         match self {

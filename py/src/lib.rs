@@ -471,7 +471,12 @@ fn run_estimate(
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
     let interpreter = Interpreter::new(ir.clone());
-    let est = estimate(&interpreter, &sources, options).map_err(|mut e| {
+    let result = estimate(&interpreter, &sources, options);
+    // A spill file that could not be read back voids whatever was computed.
+    if let Some(f) = loaded.failure() {
+        return Err(f);
+    }
+    let est = result.map_err(|mut e| {
         if e.code == "too-few-samples" {
             let list: Vec<String> = sources
                 .iter()

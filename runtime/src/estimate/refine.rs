@@ -243,13 +243,9 @@ impl Estimator<'_> {
             ));
         }
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
-        let cov = if self.options.covariance {
-            self.covariance(&moments, &sol, &theta_sim, &mu)?
-        } else {
-            None
-        };
         // The reported θ simulated on its own data: an estimate that does
-        // not reproduce its data is never called converged.
+        // not reproduce its data is never called converged (before the
+        // covariance pass, which `strict` then spares).
         let own = if self.options.own_simulation {
             let means = self.mean_vector(&values, &theta);
             Some(self.own_simulation(&theta, &means)?)
@@ -266,6 +262,11 @@ impl Estimator<'_> {
             self.warnings.push(problem.message);
             converged = false;
         }
+        let cov = if self.options.covariance {
+            self.covariance(&moments, &sol, &theta_sim, &mu)?
+        } else {
+            None
+        };
         let mut estimate = self.finish(
             sign_patterns,
             &sol,
