@@ -60,7 +60,7 @@ fn main() {
             .sign_args
             .iter()
             .map(|a| {
-                let plan = leeway::runtime::interp::arg_plan(model.ir(), &a.arg);
+                let plan = leeway::model::interp::arg_plan(model.ir(), &a.arg);
                 if plan.eval(&sig, true) < 0.0 {
                     -1.0
                 } else {

@@ -182,13 +182,14 @@
 //! ([`LoadOptions`]) reads a CSV file whose header names the model's signals (or the columns
 //! mapped in its `data { }` block), with an optional `time` column and an
 //! `experiment` column that splits one file into several; every problem is
-//! a [`DataError`] located at `file:row:column`. [`runtime::data::open_csv`]
-//! streams a file too large to hold, and [`runtime::synth`] simulates a
+//! a [`DataError`] located at `file:row:column`. [`data::open_csv`]
+//! streams a file too large to hold, and `leeway_scenarios::synth` simulates a
 //! seeded "true system" to make test data, as here — the paper's ship under
 //! a 0.2 m/s current (unmeasured) and a 10 m/s wind (measured):
 //!
 //! ```
-//! use leeway::runtime::study::{self, InputDesign};
+//! use leeway_scenarios::study;
+//! use leeway_scenarios::study::InputDesign;
 //! use leeway::{LoadOptions, Model, load_csv, write_csv};
 //!
 //! leeway::include_model!("../examples/models/ship.som");
@@ -223,7 +224,8 @@
 //! unmeasured disturbances (paper Corollary 1) and the diagnostics.
 //!
 //! ```
-//! use leeway::runtime::study::{self, InputDesign};
+//! use leeway_scenarios::study;
+//! use leeway_scenarios::study::InputDesign;
 //! use leeway::{EstimateOptions, Method, Source, estimate};
 //!
 //! leeway::include_model!("../examples/models/ship.som");
@@ -282,7 +284,8 @@
 //! (MATLAB's `compare`), [`heading_fit`] that of the integrated heading.
 //!
 //! ```
-//! use leeway::runtime::study::{self, InputDesign};
+//! use leeway_scenarios::study;
+//! use leeway_scenarios::study::InputDesign;
 //! use leeway::{Disturbances, EstimateOptions, Source, estimate, fits, heading_fit, simulate};
 //!
 //! leeway::include_model!("../examples/models/ship.som");
@@ -306,50 +309,61 @@
 //!
 //! # Where things are
 //!
-//! The items above are re-exported here; everything else lives in [`runtime`]
-//! (the `leeway-runtime` crate): [`runtime::data`] (loading, streaming,
-//! the [`Source`] trait), [`runtime::estimate`](mod@runtime::estimate) (the estimator, one module
-//! per phase), [`runtime::simulate`], [`runtime::synth`] (seeded true
-//! systems), [`runtime::study`] (the paper's Monte Carlo study),
-//! [`runtime::zigzag`] (a tanker zigzag campaign), [`runtime::design`]
-//! (checks of an input design), [`runtime::report`] (the JSON documents of
-//! `check --json` and `estimate --json`), and [`runtime::structure`] — the
-//! structure compiler behind [`compile`], with its grammar and diagnostics.
+//! The items above are re-exported here; the rest lives in the crates they
+//! come from, re-exported as modules: [`model`] (the [`Model`] trait, the
+//! interpreter, experiments as estimators read them, sign detection,
+//! simulation), [`data`] (loading and streaming CSV, Parquet and columns,
+//! resampling, writing), [`mod@estimate`] (the estimators, one module per
+//! phase), [`report`] (the JSON documents of `check --json` and `estimate
+//! --json`) and [`structure`] — the structure compiler behind [`compile`],
+//! with its grammar and diagnostics. Synthetic data (seeded true systems,
+//! the paper's Monte Carlo study, a tanker zigzag campaign, input-design
+//! checks) is the separate crate `leeway-scenarios`, the one with random
+//! numbers and threads, so that a model compiled with [`include_model!`]
+//! builds neither.
 //!
 //! Past one machine, the estimator's passes over the data are its map half:
-//! [`runtime::estimate::PassRunner`] computes what one experiment
+//! [`estimate::PassRunner`] computes what one experiment
 //! contributes to a pass (a small summary that serialises exactly,
-//! [`runtime::estimate::encode`]), and [`runtime::estimate::estimate_with`]
-//! drives an estimate whose passes a [`runtime::estimate::Passes`]
+//! [`estimate::encode`]), and [`estimate::estimate_with`]
+//! drives an estimate whose passes a [`estimate::Passes`]
 //! implementation runs wherever the data are, combining the summaries in
-//! experiment order: the same bits as [`estimate`]. The Python package's
+//! experiment order: the same bits as [`estimate()`]. The Python package's
 //! `leeway.dask` is this on Dask (`docs/distributed.md`).
 
 pub use leeway_macros::{include_model, inline_model};
 
 // Models: compile-time, run-time, and what both share.
-pub use leeway_runtime::{Interpreter, Model, Signals, next_heading, planar_rotation};
+pub use leeway_model::{Interpreter, Model, Signals, next_heading, planar_rotation};
 pub use leeway_structure::ir;
 pub use leeway_structure::{Compilation, CompileOptions, compile};
 
 // Data.
-pub use leeway_runtime::data::LoadOptions;
-pub use leeway_runtime::{DataError, Experiment, Row, Source, load_csv, write_csv};
+pub use leeway_data::{DataError, LoadOptions, load_csv, write_csv};
+pub use leeway_model::{Experiment, Row, Source};
 
 // Estimating.
-pub use leeway_runtime::estimate::{
+pub use leeway_estimate::{
     Centring, ColumnEstimate, Combine, Diagnostics, DisturbanceMoment, Estimate, EstimateError,
     EstimateOptions, Initial, Instruments, Method, Start, estimate,
 };
 
 // Simulating and validating.
-pub use leeway_runtime::simulate::{
+pub use leeway_model::simulate::{
     Disturbances, Trajectory, fit, fits, heading_fit, simulate, unwrap_heading,
 };
 
-// Everything else (the `leeway-runtime` crate, documented by its own crate docs).
+// The crates behind the items above, each documented by its own crate docs.
 #[doc(inline)]
-pub use leeway_runtime as runtime;
+pub use leeway_data as data;
+#[doc(inline)]
+pub use leeway_estimate as estimate;
+#[doc(inline)]
+pub use leeway_model as model;
+#[doc(inline)]
+pub use leeway_report as report;
+#[doc(inline)]
+pub use leeway_structure as structure;
 
 /// Diagnostics as data — code, severity, message, labelled spans, help —
 /// and their one renderer (rustc-like, plain or coloured), as
@@ -367,7 +381,8 @@ pub mod language {
 #[doc(hidden)]
 pub mod __private {
     pub use core::array::TryFromSliceError;
-    pub use leeway_runtime::{Model, Signals};
+    pub use leeway_model::Model;
+    pub use leeway_model::Signals;
     pub use leeway_structure::ir::{Ir, PredictorKind};
     pub use std::sync::LazyLock;
 

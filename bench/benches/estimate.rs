@@ -12,11 +12,13 @@
 //! filter such as `-- iv3` runs one method).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leeway::runtime::Source;
-use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
-use leeway::runtime::study;
+use leeway::estimate::EstimateOptions;
+use leeway::estimate::Method;
+use leeway::estimate::estimate;
+use leeway::model::Source;
 use leeway::{Interpreter, Model};
 use leeway_bench::{flop_line, kept_columns, moment_flops};
+use leeway_scenarios::study;
 use std::cell::RefCell;
 use std::hint::black_box;
 use std::time::{Duration, Instant};

@@ -19,11 +19,15 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use leeway::Model;
-use leeway::runtime::Source;
-use leeway::runtime::estimate::{Method, estimate};
-use leeway::runtime::simulate::{Disturbances, fits, simulate};
-use leeway::runtime::study::{self, StudyConfig};
+use leeway::estimate::Method;
+use leeway::estimate::estimate;
+use leeway::model::Source;
+use leeway::model::simulate::Disturbances;
+use leeway::model::simulate::fits;
+use leeway::model::simulate::simulate;
 use leeway_bench::{kept_columns, moment_flops, rate};
+use leeway_scenarios::study;
+use leeway_scenarios::study::StudyConfig;
 use std::cell::RefCell;
 use std::hint::black_box;
 use std::time::{Duration, Instant};

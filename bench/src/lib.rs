@@ -13,9 +13,11 @@
 pub mod models;
 
 use leeway::ir::{Ir, PredictorKind};
-use leeway::runtime::Source;
-use leeway::runtime::signs;
-use leeway::runtime::structure::identify::{Analysis, ExperimentStructure, Patterns};
+use leeway::model::Source;
+use leeway::model::signs;
+use leeway::structure::identify::Analysis;
+use leeway::structure::identify::ExperimentStructure;
+use leeway::structure::identify::Patterns;
 
 /// Peak double-precision rate of one core of the machine the benches were
 /// written on, GFLOP/s (issue 11's figure: two 8-wide FMA ports at the
@@ -187,7 +189,7 @@ mod tests {
     #[test]
     fn iv3_on_the_paper_ship() {
         let model = leeway::Interpreter::new(ship());
-        let (data, _) = leeway::runtime::study::estimation_experiment(
+        let (data, _) = leeway_scenarios::study::estimation_experiment(
             &model,
             &Default::default(),
             10.0,

@@ -3,7 +3,7 @@
 //! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
 
 // The document is built in the runtime, which the Python package shares.
-pub use leeway_runtime::report::check as json;
+pub use leeway_report::check as json;
 
 use crate::output::{Status, err, out, print_json, stderr_style};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};

@@ -14,10 +14,15 @@ use crate::model::{
 };
 use crate::output::{Status, err, headline, out, print_json, stderr_style};
 use crate::problem::{Failure, Problem};
-use leeway_runtime::{
-    Centring, Combine, Estimate, EstimateOptions, Initial, Instruments, Interpreter, Method,
-    estimate,
-};
+use leeway_estimate::Centring;
+use leeway_estimate::Combine;
+use leeway_estimate::Estimate;
+use leeway_estimate::EstimateOptions;
+use leeway_estimate::Initial;
+use leeway_estimate::Instruments;
+use leeway_estimate::Method;
+use leeway_estimate::estimate;
+use leeway_model::Interpreter;
 use std::path::PathBuf;
 
 /// Arguments of `leeway estimate`.
@@ -216,7 +221,7 @@ pub struct Outcome {
     /// The heading's unit check per experiment (planar heading only).
     pub heading_gains: Vec<(String, Option<f64>)>,
     /// What reading each data file noted (comment lines, jitter, resampling).
-    pub data_notes: Vec<leeway_runtime::data::FileNotes>,
+    pub data_notes: Vec<leeway_data::FileNotes>,
     /// The declared units, one line each (`delta: column rudder in deg, converted to rad`).
     pub units: Vec<String>,
     /// The declared units by signal, as written.
@@ -299,7 +304,10 @@ fn execute(
 
 /// An estimator's error with the data's places: `too-few-samples` names every
 /// experiment with its file and sample count.
-fn located(mut e: leeway_runtime::EstimateError, data: &DataSet) -> leeway_runtime::EstimateError {
+fn located(
+    mut e: leeway_estimate::EstimateError,
+    data: &DataSet,
+) -> leeway_estimate::EstimateError {
     if e.code == "too-few-samples" {
         let list: Vec<String> = data
             .sources()

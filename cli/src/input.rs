@@ -1,7 +1,7 @@
 //! The input file of `leeway simulate`: a CSV file with a header row, or a
-//! Parquet file, one experiment, read by `leeway_runtime::input` (the reader
+//! Parquet file, one experiment, read by `leeway_data::input` (the reader
 //! `leeway.simulate` shares in Python) through the data files' readers
-//! (`leeway_runtime::data::with_table`: for CSV comment and blank lines
+//! (`leeway_data::with_table`: for CSV comment and blank lines
 //! skipped, CRLF, quoted cells) and located the same way (`file:row:column
 //! (name)`, the physical line; row, row group and column for Parquet). What
 //! is left here is the command line's own: `--x0`.
@@ -16,12 +16,14 @@
 //! either is an error; nothing is assumed to be zero.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::data::{LoadOptions, with_table};
-use leeway_runtime::input::{OptionNames, read_input};
+use leeway_data::LoadOptions;
+use leeway_data::input::OptionNames;
+use leeway_data::input::read_input;
+use leeway_data::with_table;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
-pub use leeway_runtime::input::Input;
+pub use leeway_data::input::Input;
 
 /// The options of `leeway simulate` as hints name them.
 const NAMES: OptionNames = OptionNames {
@@ -120,7 +122,7 @@ pub fn parse_input(
     x0: &[(String, f64)],
 ) -> Result<Input, Problem> {
     let mut records =
-        leeway_runtime::data::Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
+        leeway_data::Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
     read_input(&mut records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e))
 }
 

@@ -2,8 +2,13 @@
 //! the model, its data files and parameter files, with every problem located.
 
 use crate::problem::{Failure, Problem};
-use leeway_runtime::data::{FileNotes, FileSource, LoadOptions, load_file_noted, open_file};
-use leeway_runtime::{Experiment, Source};
+use leeway_data::FileNotes;
+use leeway_data::FileSource;
+use leeway_data::LoadOptions;
+use leeway_data::load_file_noted;
+use leeway_data::open_file;
+use leeway_model::Experiment;
+use leeway_model::Source;
 use leeway_structure::grammar::source::Refused;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::ir::Ir;
@@ -12,9 +17,11 @@ use std::path::{Path, PathBuf};
 
 // The data checks and the JSON of the loading notes live in the runtime, so
 // that the Python package reports exactly what the CLI does.
-pub use leeway_runtime::report::{
-    DataFileJson, data_files_json, heading_gains, heading_warnings, unit_warnings,
-};
+pub use leeway_report::DataFileJson;
+pub use leeway_report::data_files_json;
+pub use leeway_report::heading_gains;
+pub use leeway_report::heading_warnings;
+pub use leeway_report::unit_warnings;
 
 /// Largest magnitude of a value given on the command line (`--x0`,
 /// `--disturbance`): squares of larger values approach f64's range inside
@@ -128,7 +135,7 @@ pub struct TimeArgs {
     /// Largest relative deviation of a time step from the nominal (mean) step,
     /// as a fraction in (0, 0.5): 0.05 accepts ±5 % logger jitter and still
     /// rejects a dropped sample (a 100 % step).
-    #[arg(long, value_name = "TOL", default_value_t = leeway_runtime::data::DEFAULT_TIME_TOLERANCE, value_parser = tolerance)]
+    #[arg(long, value_name = "TOL", default_value_t = leeway_data::DEFAULT_TIME_TOLERANCE, value_parser = tolerance)]
     pub time_tolerance: f64,
     /// Interpolate every experiment linearly onto a uniform grid of H seconds
     /// from its first time stamp (needs a time column; the heading along the short arc).
@@ -357,7 +364,7 @@ pub fn unit_lines(ir: &Ir) -> Vec<String> {
     ir.data_units
         .iter()
         .map(|(signal, unit)| {
-            let column = leeway_runtime::data::column_name(ir, signal);
+            let column = leeway_model::experiment::column_name(ir, signal);
             let base = leeway_structure::units::unit(unit).map_or("?", |(k, _)| k.base());
             if base == unit {
                 format!("{signal}: column {column} in {unit}, read as is")

@@ -136,7 +136,7 @@ pub fn table(rows: &[Vec<String>]) -> String {
 }
 
 /// Objects keyed in the model's order (shared with the Python package).
-pub use leeway_runtime::report::Ordered;
+pub use leeway_report::Ordered;
 
 #[cfg(test)]
 mod tests {

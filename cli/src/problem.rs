@@ -5,7 +5,8 @@
 
 use crate::check::json::{JsonDiagnostic, diagnostic};
 use crate::output::{Status, headline};
-use leeway_runtime::{DataError, EstimateError};
+use leeway_data::DataError;
+use leeway_estimate::EstimateError;
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use serde::Serialize;
 

@@ -1,7 +1,7 @@
 //! `leeway reproduce [--runs M] [--n LIST] [--case low|high|both] [--seed S]
 //! [--out DIR] [--threads T] [--paper-iv]`: the paper's simulation study
 //! (§V, SPEC §6) on the ship compiled into this binary. Runs the Monte Carlo
-//! study of the runtime (`leeway_runtime::study`), checks the input design
+//! study of the runtime (`leeway_scenarios::study`), checks the input design
 //! on the true trajectories, prints a table per case, the design margins and
 //! the paper's four claims with their verdicts, and writes `DIR/results.json`
 //! (the contract of the README) and the figures (SVG and PNG). Exit 0 when
@@ -15,8 +15,11 @@ mod text;
 
 use crate::output::{Status, err, out, stderr_style};
 use crate::problem::Problem;
-use leeway_runtime::Model;
-use leeway_runtime::study::{self, Case, StudyConfig, StudyOutcomes};
+use leeway_model::Model;
+use leeway_scenarios::study;
+use leeway_scenarios::study::Case;
+use leeway_scenarios::study::StudyConfig;
+use leeway_scenarios::study::StudyOutcomes;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

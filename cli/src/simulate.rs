@@ -8,8 +8,11 @@ use crate::input::{initial_values, load_input};
 use crate::model::{disturbance_values, load, load_options};
 use crate::output::{Status, err, headline, out, stderr_style};
 use crate::problem::{Failure, Problem};
-use leeway_runtime::simulate::{Disturbances, simulate};
-use leeway_runtime::{Experiment, Interpreter, write_csv};
+use leeway_data::write_csv;
+use leeway_model::Experiment;
+use leeway_model::Interpreter;
+use leeway_model::simulate::Disturbances;
+use leeway_model::simulate::simulate;
 use std::path::PathBuf;
 
 /// Arguments of `leeway simulate`.

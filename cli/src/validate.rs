@@ -15,8 +15,12 @@ use crate::model::{
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
-use leeway_runtime::simulate::{Disturbances, mean_fits, unwrap_heading, validate};
-use leeway_runtime::{Interpreter, Source};
+use leeway_model::Interpreter;
+use leeway_model::Source;
+use leeway_model::simulate::Disturbances;
+use leeway_model::simulate::mean_fits;
+use leeway_model::simulate::unwrap_heading;
+use leeway_model::simulate::validate;
 use leeway_structure::ir::Rotation;
 use serde::Serialize;
 use std::fmt::Write;
@@ -113,7 +117,7 @@ struct Outcome {
     /// The outputs in table order: the states, then the heading when integrated.
     outputs: Vec<String>,
     models: Vec<ModelFits>,
-    notes: Vec<leeway_runtime::data::FileNotes>,
+    notes: Vec<leeway_data::FileNotes>,
     units: Vec<String>,
     data_units: Vec<(String, String)>,
     plot: Option<PathBuf>,
@@ -225,9 +229,9 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     }
     let dist = disturbance_values(&ir, &args.disturbances)?;
     let (experiments, notes) = load_data(&ir, &args.data, &options)?;
-    let sources: Vec<&dyn leeway_runtime::Source> = experiments
+    let sources: Vec<&dyn leeway_model::Source> = experiments
         .iter()
-        .map(|e| e as &dyn leeway_runtime::Source)
+        .map(|e| e as &dyn leeway_model::Source)
         .collect();
     warnings.extend(unit_warnings(&ir, &sources));
     warnings.extend(heading_warnings(&ir, &heading_gains(&ir, &sources)));

@@ -3,7 +3,8 @@
 //! `data { }`, the aggregate rows of the `estimate` table, and `validate` with
 //! several parameter files (the binary on synthetic ship data).
 
-use leeway_runtime::{Interpreter, study};
+use leeway_model::Interpreter;
+use leeway_scenarios::study;
 use serde_json::Value;
 
 mod common;
@@ -386,17 +387,17 @@ fn tanker_log(dir: &Scratch, noisy: bool) -> (String, Vec<String>, Vec<String>) 
             "    data { delta in deg }\n\n    nominal {",
         );
     let model_path = dir.write("tanker-raw.som", &source);
-    let c = leeway_runtime::structure::compile(&source, &Default::default());
+    let c = leeway_structure::compile(&source, &Default::default());
     let model = Interpreter::new(c.ir.expect("the tanker compiles"));
-    let campaign = leeway_runtime::zigzag::campaign(&leeway_runtime::zigzag::CampaignOptions {
-        noise: noisy.then(leeway_runtime::zigzag::Noise::default),
+    let campaign = leeway_scenarios::zigzag::campaign(&leeway_scenarios::zigzag::CampaignOptions {
+        noise: noisy.then(leeway_scenarios::zigzag::Noise::default),
         ..Default::default()
     });
-    let write = |runs: &[leeway_runtime::zigzag::Run]| -> Vec<String> {
+    let write = |runs: &[leeway_scenarios::zigzag::Run]| -> Vec<String> {
         runs.iter()
             .map(|run| {
                 let mut e = run
-                    .experiment(leeway_runtime::Model::ir(&model))
+                    .experiment(leeway_model::Model::ir(&model))
                     .expect("run");
                 for d in &mut e.inputs[0] {
                     *d = d.to_degrees();

@@ -4,7 +4,7 @@
 //! location and exit code 2, the JSON contract of the README, the parameter
 //! file round trip and the heading's unit check.
 
-use leeway_runtime::study;
+use leeway_scenarios::study;
 use serde_json::Value;
 
 mod common;

@@ -529,7 +529,9 @@ fn a_study_where_every_estimate_fails_writes_null_figures() {
 /// data, so a loss of a few points is resolved with a few dozen runs.
 #[test]
 fn high_wind_degrades_iv2_most_in_surge_on_paired_runs() {
-    use leeway::runtime::study::{self, Case, StudyConfig};
+    use leeway_scenarios::study;
+    use leeway_scenarios::study::Case;
+    use leeway_scenarios::study::StudyConfig;
     leeway::include_model!("../../examples/models/ship.som");
     let config = StudyConfig {
         runs: 100,

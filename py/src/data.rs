@@ -1,5 +1,5 @@
 //! Frames handed over from Python, read by the runtime's column table
-//! (`leeway_runtime::data::Columns`), which feeds the same validating
+//! (`leeway_data::Columns`), which feeds the same validating
 //! pass as `leeway estimate --data`: the same header matching, units,
 //! time-step checks, experiment splitting, outlier rules and errors, located
 //! by positional row (`frame: row R, column `c``, R from 0 as `iloc`).
@@ -9,13 +9,19 @@
 //! same numbers would give.
 
 use crate::failure::Failure;
-use leeway_runtime::Experiment;
-use leeway_runtime::Source;
-use leeway_runtime::data::{
-    Columns, DataError, FileNotes, FileSource, Labels, LoadOptions, columns, load_table, open_table,
-};
-use leeway_runtime::estimate::EstimateError;
-use leeway_runtime::interrupt::Interrupt;
+use leeway_data::Columns;
+use leeway_data::DataError;
+use leeway_data::FileNotes;
+use leeway_data::FileSource;
+use leeway_data::Labels;
+use leeway_data::LoadOptions;
+use leeway_data::columns;
+use leeway_data::load_table;
+use leeway_data::open_table;
+use leeway_estimate::EstimateError;
+use leeway_model::Experiment;
+use leeway_model::Source;
+use leeway_model::interrupt::Interrupt;
 use leeway_structure::ir::Ir;
 
 /// One frame: its name (the "file" of messages and of the experiment name
@@ -33,7 +39,7 @@ pub struct Frame<'a> {
 /// only these are handed over, so other columns of a frame (notes, labels)
 /// are ignored as the CSV loader ignores them.
 pub fn model_columns(ir: &Ir) -> Vec<String> {
-    leeway_runtime::data::columns::model_columns(ir)
+    leeway_data::columns::model_columns(ir)
 }
 
 /// Every frame's experiments, in order, with what loading noted; the first

@@ -8,15 +8,27 @@
 
 use crate::failure::Failure;
 use crate::{EstimateOptions, FrameArg, Model, borrow_frames, estimate_document};
-use leeway_runtime::data::{FileNotes, LoadOptions, load_file_noted, open_file};
-use leeway_runtime::estimate::{
-    EstimateError, ExperimentFacts, FactsRequest, PassRequest, PassRunner, PassSummary, Passes,
-    decode, encode, estimate_with,
-};
-use leeway_runtime::report::{
-    heading_gains, heading_warnings, input_peaks, unit_warnings_from_peaks,
-};
-use leeway_runtime::{Experiment, Interpreter, Source};
+use leeway_data::FileNotes;
+use leeway_data::LoadOptions;
+use leeway_data::load_file_noted;
+use leeway_data::open_file;
+use leeway_estimate::EstimateError;
+use leeway_estimate::ExperimentFacts;
+use leeway_estimate::FactsRequest;
+use leeway_estimate::PassRequest;
+use leeway_estimate::PassRunner;
+use leeway_estimate::PassSummary;
+use leeway_estimate::Passes;
+use leeway_estimate::decode;
+use leeway_estimate::encode;
+use leeway_estimate::estimate_with;
+use leeway_model::Experiment;
+use leeway_model::Interpreter;
+use leeway_model::Source;
+use leeway_report::heading_gains;
+use leeway_report::heading_warnings;
+use leeway_report::input_peaks;
+use leeway_report::unit_warnings_from_peaks;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use serde::{Deserialize, Serialize};
@@ -27,7 +39,7 @@ use std::sync::Mutex;
 /// when resampled (resampling interpolates over a whole experiment), as the
 /// CLI opens them.
 enum Experiments {
-    Streamed(Vec<leeway_runtime::data::CsvSource>),
+    Streamed(Vec<leeway_data::CsvSource>),
     Held(Vec<Experiment>),
 }
 

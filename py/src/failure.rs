@@ -2,8 +2,9 @@
 //! of `leeway.errors` (defined in Python, so the hierarchy — `DataError` is
 //! also a `ValueError` — is declared once, where users read it).
 
-use leeway_runtime::report::check;
-use leeway_runtime::{DataError, EstimateError};
+use leeway_data::DataError;
+use leeway_estimate::EstimateError;
+use leeway_report::check;
 use leeway_structure::Compilation;
 use leeway_structure::grammar::Diagnostic;
 use pyo3::prelude::*;

@@ -2,7 +2,7 @@
 //! models, checks them and estimates from columns handed over by
 //! `python/leeway` (numpy float64 arrays, read in place), and answers with the
 //! same JSON documents as `leeway check --json` and `leeway estimate --json`,
-//! built by the same code ([`leeway_runtime::report`]); it simulates and
+//! built by the same code ([`leeway_report`]); it simulates and
 //! validates with the runtime functions `leeway simulate` and `leeway
 //! validate` call (`simulate.rs`), answering with columns and fits. The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
@@ -21,10 +21,18 @@ mod simulate;
 mod study;
 
 use failure::Failure;
-use leeway_runtime::data::LoadOptions;
-use leeway_runtime::estimate::{Centring, Combine, Initial, Instruments, Method};
-use leeway_runtime::report::{Estimated, estimate_report, heading_gains, heading_warnings};
-use leeway_runtime::{Interpreter, estimate};
+use leeway_data::LoadOptions;
+use leeway_estimate::Centring;
+use leeway_estimate::Combine;
+use leeway_estimate::Initial;
+use leeway_estimate::Instruments;
+use leeway_estimate::Method;
+use leeway_estimate::estimate;
+use leeway_model::Interpreter;
+use leeway_report::Estimated;
+use leeway_report::estimate_report;
+use leeway_report::heading_gains;
+use leeway_report::heading_warnings;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::identify::parse_pattern;
 use leeway_structure::ir::Ir;
@@ -169,7 +177,7 @@ impl Model {
     /// The column that splits a frame into experiments.
     #[getter]
     fn experiment_column(&self) -> String {
-        leeway_runtime::data::column_name(&self.ir, "experiment")
+        leeway_model::experiment::column_name(&self.ir, "experiment")
     }
     #[getter]
     fn warnings(&self) -> Vec<String> {
@@ -194,12 +202,8 @@ impl Model {
             }
         };
         let compilation = compile(&self.source, &options(self.aggregate, patterns));
-        let report = leeway_runtime::report::check::report(
-            &self.file,
-            &self.source,
-            &compilation,
-            self.aggregate,
-        );
+        let report =
+            leeway_report::check::report(&self.file, &self.source, &compilation, self.aggregate);
         serde_json::to_string(&report)
             .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None).into())
     }
@@ -245,8 +249,8 @@ fn choice<T: Copy>(what: &str, given: &str, table: &[(&str, T)]) -> Result<T, Fa
 /// passes (from the calling thread, the main one for an interactive user);
 /// the handler's `KeyboardInterrupt` is raised when the estimate has stopped
 /// (`interrupted`, see `failure.rs`).
-fn python_interrupt() -> leeway_runtime::estimate::Interrupt {
-    leeway_runtime::estimate::Interrupt::new(|| Python::attach(|py| py.check_signals().is_err()))
+fn python_interrupt() -> leeway_estimate::Interrupt {
+    leeway_estimate::Interrupt::new(|| Python::attach(|py| py.check_signals().is_err()))
 }
 
 /// The CLI's bounds on the options (cli/src/estimate.rs), so a script and a
@@ -261,7 +265,7 @@ impl EstimateOptions {
         load_options(ir, self.step, Some(self.time_tolerance), self.resample)
     }
 
-    fn runtime(&self) -> Result<leeway_runtime::EstimateOptions, Failure> {
+    fn runtime(&self) -> Result<leeway_estimate::EstimateOptions, Failure> {
         if !(1..=MAX_LAGS).contains(&self.lags) {
             return Err(Failure::option(
                 format!("lags={} is not in 1..={MAX_LAGS}", self.lags),
@@ -277,7 +281,7 @@ impl EstimateOptions {
                 None,
             ));
         }
-        Ok(leeway_runtime::EstimateOptions {
+        Ok(leeway_estimate::EstimateOptions {
             method: choice(
                 "method",
                 &self.method,
@@ -325,7 +329,7 @@ impl EstimateOptions {
             lags: self.lags,
             runaway_guard: self.runaway_guard,
             interrupt: Some(python_interrupt()),
-            ..leeway_runtime::EstimateOptions::default()
+            ..leeway_estimate::EstimateOptions::default()
         })
     }
 }
@@ -410,7 +414,7 @@ fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<data::Frame<'a>>,
                 })
                 .collect::<Result<Vec<_>, _>>()?;
             let experiment = match experiment {
-                Some((codes, names)) => Some(leeway_runtime::data::Labels::Coded {
+                Some((codes, names)) => Some(leeway_data::Labels::Coded {
                     codes: codes.as_slice().map_err(|_| {
                         Failure::data_plain(
                             name,
@@ -460,14 +464,14 @@ fn run_estimate(
     model: &Model,
     frames: &[data::Frame<'_>],
     load_options: &LoadOptions,
-    options: &leeway_runtime::EstimateOptions,
+    options: &leeway_estimate::EstimateOptions,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
     let (loaded, notes) =
         data::load_for_estimate(ir, frames, load_options, options.interrupt.as_ref())?;
     let sources = loaded.sources();
     let mut warnings = model.warnings.clone();
-    warnings.extend(leeway_runtime::report::unit_warnings(ir, &sources));
+    warnings.extend(leeway_report::unit_warnings(ir, &sources));
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
     let interpreter = Interpreter::new(ir.clone());
@@ -507,10 +511,10 @@ fn run_estimate(
 fn estimate_document(
     model: &Model,
     data: Vec<String>,
-    est: &leeway_runtime::Estimate,
+    est: &leeway_estimate::Estimate,
     experiments: &[(String, usize)],
     gains: &[(String, Option<f64>)],
-    notes: &[leeway_runtime::data::FileNotes],
+    notes: &[leeway_data::FileNotes],
     warnings: Vec<String>,
 ) -> Result<String, Failure> {
     let ir = &model.ir;

@@ -1,5 +1,5 @@
 //! `leeway.simulate` and `leeway.validate`: the runtime's simulation and
-//! validation (`leeway_runtime::input`, `leeway_runtime::simulate`), the code
+//! validation (`leeway_data::input`, `leeway_model::simulate`), the code
 //! `leeway simulate` and `leeway validate` run, on frames handed over from
 //! Python. A simulation's input frame is read by the CLI's input reader (the
 //! frame written once as CSV text in memory, every value in its shortest
@@ -8,11 +8,22 @@
 
 use crate::failure::Failure;
 use crate::{FrameArg, Model, borrow_frames, data, load_options};
-use leeway_runtime::data::{Columns, column_name};
-use leeway_runtime::input::{OptionNames, read_input};
-use leeway_runtime::report::{heading_gains, heading_warnings, unit_warnings};
-use leeway_runtime::simulate::{Disturbances, mean_fits, simulate, validate};
-use leeway_runtime::{DataError, Experiment, Interpreter, Source, write};
+use leeway_data::Columns;
+use leeway_data::DataError;
+use leeway_data::input::OptionNames;
+use leeway_data::input::read_input;
+use leeway_data::write;
+use leeway_model::Experiment;
+use leeway_model::Interpreter;
+use leeway_model::Source;
+use leeway_model::experiment::column_name;
+use leeway_model::simulate::Disturbances;
+use leeway_model::simulate::mean_fits;
+use leeway_model::simulate::simulate;
+use leeway_model::simulate::validate;
+use leeway_report::heading_gains;
+use leeway_report::heading_warnings;
+use leeway_report::unit_warnings;
 use leeway_structure::ir::{Ir, Rotation};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -109,7 +120,7 @@ fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Fail
 }
 
 /// A simulated trajectory: the columns of `leeway simulate`'s output
-/// (`leeway_runtime::write::header`) and, when it diverged, why (the
+/// (`leeway_data::write::header`) and, when it diverged, why (the
 /// columns then hold the samples before).
 type Simulated<'py> = (Vec<(String, Bound<'py, PyArray1<f64>>)>, Option<String>);
 

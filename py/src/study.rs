@@ -7,12 +7,17 @@
 
 use crate::Model;
 use crate::failure::Failure;
-use leeway_runtime::Interpreter;
-use leeway_runtime::estimate::{decode, encode};
-use leeway_runtime::study::{
-    self, Outcome, StudyConfig, claims, collect_outcomes, study_run as run_one, summarise,
-    validation_experiment,
-};
+use leeway_estimate::decode;
+use leeway_estimate::encode;
+use leeway_model::Interpreter;
+use leeway_scenarios::study;
+use leeway_scenarios::study::Outcome;
+use leeway_scenarios::study::StudyConfig;
+use leeway_scenarios::study::claims;
+use leeway_scenarios::study::collect_outcomes;
+use leeway_scenarios::study::study_run as run_one;
+use leeway_scenarios::study::summarise;
+use leeway_scenarios::study::validation_experiment;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 

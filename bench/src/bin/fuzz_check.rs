@@ -18,9 +18,10 @@
 //! `--from I` (start at model case I: with `--models 1 --csvs 0`, one case
 //! of a campaign is rerun and left in `DIR/scratch/case.som`).
 
-use leeway::runtime::study;
-use leeway::runtime::{Interpreter, write_csv};
+use leeway::data::write_csv;
+use leeway::model::Interpreter;
 use leeway_bench::models;
+use leeway_scenarios::study;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
@@ -625,7 +626,7 @@ fn main() {
         study::estimation_experiment(&ship, &study::InputDesign::default(), 1.0, 600, seed);
     let mut base = Vec::new();
     let _ = write_csv(
-        leeway::runtime::Model::ir(&ship),
+        leeway::model::Model::ir(&ship),
         &[&experiment],
         0.0,
         &mut base,

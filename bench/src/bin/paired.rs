@@ -17,11 +17,13 @@
 //! wind, with standard errors), ms (15 rounds); the two models' estimates
 //! are checked to be equal. Without an argument, both.
 
+use leeway::estimate::EstimateOptions;
+use leeway::estimate::Method;
+use leeway::estimate::estimate;
 use leeway::ir::PredictorKind;
-use leeway::runtime::Source;
-use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
-use leeway::runtime::study;
+use leeway::model::Source;
 use leeway::{Interpreter, Model, Signals, planar_rotation};
+use leeway_scenarios::study;
 use std::hint::black_box;
 use std::process::ExitCode;
 use std::time::Instant;

@@ -8,10 +8,14 @@
 //! instead (row by row, in flat memory), for measuring `leeway estimate` on
 //! a file: `/usr/bin/time -v leeway estimate examples/models/ship.som --data FILE.csv`.
 
-use leeway::runtime::Source;
-use leeway::runtime::estimate::{EstimateOptions, Method, estimate};
-use leeway::runtime::study::{self, InputDesign, Pulses};
-use leeway::runtime::synth::Stream;
+use leeway::estimate::EstimateOptions;
+use leeway::estimate::Method;
+use leeway::estimate::estimate;
+use leeway::model::Source;
+use leeway_scenarios::study;
+use leeway_scenarios::study::InputDesign;
+use leeway_scenarios::study::Pulses;
+use leeway_scenarios::synth::Stream;
 
 leeway::include_model!("../../../examples/models/ship.som");
 
@@ -25,7 +29,7 @@ fn peak_rss_kib() -> Option<u64> {
 /// Writes the stream as CSV, one row per sample, never holding it.
 fn write(stream: &Stream, path: &str) -> std::io::Result<()> {
     use std::io::Write;
-    let ir = leeway::runtime::Model::ir(&Ship);
+    let ir = leeway::model::Model::ir(&Ship);
     let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
     let measured: Vec<usize> = (0..ir.components.len())
         .filter(|c| ir.disturbances[ir.components[*c].disturbance].measured)

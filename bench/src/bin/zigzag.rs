@@ -1,4 +1,4 @@
-//! Writes the seeded tanker zigzag campaign (`leeway_runtime::zigzag`) as CSV
+//! Writes the seeded tanker zigzag campaign (`leeway_scenarios::zigzag`) as CSV
 //! files, for users and the docs, and measures the reference fit.
 //!
 //! ```text
@@ -14,7 +14,11 @@
 //! `--reference` prints the runs and the least-squares reference fit of the
 //! 17-term structure on noise-free and on noisy training runs.
 
-use leeway::runtime::zigzag::{self, Campaign, CampaignOptions, Noise, Run};
+use leeway_scenarios::zigzag;
+use leeway_scenarios::zigzag::Campaign;
+use leeway_scenarios::zigzag::CampaignOptions;
+use leeway_scenarios::zigzag::Noise;
+use leeway_scenarios::zigzag::Run;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::fmt::Write as _;

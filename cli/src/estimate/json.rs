@@ -2,12 +2,14 @@
 //! (README, "Estimating"). Fields may be added; none is renamed or removed.
 //! It is printed for every outcome: on an error the result fields are empty
 //! and `errors` says why. The document itself is built by
-//! [`leeway_runtime::report`], which the Python package's
+//! [`leeway_report`], which the Python package's
 //! `Estimate.to_json()` shares.
 
 use super::{EstimateArgs, Outcome};
 use crate::problem::{Failure, JsonError};
-use leeway_runtime::report::{EstimateReport, Estimated, estimate_report};
+use leeway_report::EstimateReport;
+use leeway_report::Estimated;
+use leeway_report::estimate_report;
 
 /// The whole document.
 pub type Report = EstimateReport<JsonError>;

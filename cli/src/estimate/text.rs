@@ -3,8 +3,8 @@
 
 use super::Outcome;
 use crate::output::{number, table};
-use leeway_runtime::estimate::ColumnEstimate;
-use leeway_runtime::signs::ArgSign;
+use leeway_estimate::ColumnEstimate;
+use leeway_model::signs::ArgSign;
 use std::fmt::Write;
 
 fn optional(v: Option<f64>) -> String {
@@ -43,7 +43,7 @@ fn signs(args: &[ArgSign]) -> String {
     )
 }
 
-pub use leeway_runtime::report::aggregate_of;
+pub use leeway_report::aggregate_of;
 
 /// The whole text.
 pub fn render(o: &Outcome) -> String {
@@ -229,7 +229,7 @@ pub fn render(o: &Outcome) -> String {
 
 /// The estimate's own simulation on its data, in a line: the mean fit and
 /// each state's, or where it diverged.
-fn own_simulation(d: &leeway_runtime::estimate::Diagnostics) -> String {
+fn own_simulation(d: &leeway_estimate::Diagnostics) -> String {
     let Some(own) = &d.own_simulation else {
         return "not run".to_string();
     };

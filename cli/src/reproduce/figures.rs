@@ -7,10 +7,15 @@
 
 use super::Report;
 use crate::plot::{Figure, clip_band, save, styled_mesh, y_range};
-use leeway_runtime::design::track;
-use leeway_runtime::simulate::{Disturbances, simulate};
-use leeway_runtime::study::{self, ESTIMATORS, OUTPUTS};
-use leeway_runtime::{Experiment, Model, Source};
+use leeway_model::Experiment;
+use leeway_model::Model;
+use leeway_model::Source;
+use leeway_model::simulate::Disturbances;
+use leeway_model::simulate::simulate;
+use leeway_scenarios::design::track;
+use leeway_scenarios::study;
+use leeway_scenarios::study::ESTIMATORS;
+use leeway_scenarios::study::OUTPUTS;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 

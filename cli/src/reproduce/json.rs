@@ -12,8 +12,12 @@
 use super::Report;
 use super::margins::{CaseCheck, DesignCheck};
 use crate::output::Ordered;
-use leeway_runtime::design::Range;
-use leeway_runtime::study::{self, CaseSummary, Claim, EstimatorSummary, InputDesign};
+use leeway_scenarios::design::Range;
+use leeway_scenarios::study;
+use leeway_scenarios::study::CaseSummary;
+use leeway_scenarios::study::Claim;
+use leeway_scenarios::study::EstimatorSummary;
+use leeway_scenarios::study::InputDesign;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -303,7 +307,8 @@ pub fn document(report: &Report) -> Document<'_> {
 
 #[cfg(test)]
 mod tests {
-    use leeway_runtime::study::{CaseSummary, EstimatorSummary};
+    use leeway_scenarios::study::CaseSummary;
+    use leeway_scenarios::study::EstimatorSummary;
 
     #[test]
     fn non_finite_numbers_are_written_as_null() {

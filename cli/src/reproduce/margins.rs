@@ -5,10 +5,14 @@
 //! under a modulus (`water.u`, `water.v`: the current; `air.u`, `air.v`: the
 //! wind) and of the yaw rate, from the true states, heading and disturbances.
 
-use leeway_runtime::Model;
-use leeway_runtime::design::{Range, block_mean_range, sign_argument_ranges, state_range};
-use leeway_runtime::study::{self, StudyConfig};
-use leeway_runtime::synth::Truth;
+use leeway_model::Model;
+use leeway_scenarios::design::Range;
+use leeway_scenarios::design::block_mean_range;
+use leeway_scenarios::design::sign_argument_ranges;
+use leeway_scenarios::design::state_range;
+use leeway_scenarios::study;
+use leeway_scenarios::study::StudyConfig;
+use leeway_scenarios::synth::Truth;
 use leeway_structure::ir::Rotation;
 
 /// Samples per block of the yaw rate's block means (one minute at 1 Hz).

@@ -5,7 +5,9 @@
 use super::margins::{CaseCheck, DesignCheck, medium_of};
 use super::{Report, ReproduceArgs};
 use crate::output::table;
-use leeway_runtime::study::{ESTIMATORS, OUTPUTS, StudyConfig};
+use leeway_scenarios::study::ESTIMATORS;
+use leeway_scenarios::study::OUTPUTS;
+use leeway_scenarios::study::StudyConfig;
 use std::fmt::Write;
 
 /// `mean ± std` of a fit, `-` when no run gave a finite fit.

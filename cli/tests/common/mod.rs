@@ -2,7 +2,10 @@
 //! the built binary, and synthetic ship data written as CSV.
 #![allow(dead_code)] // each test crate uses its own subset
 
-use leeway_runtime::{Experiment, Interpreter, study, write_csv};
+use leeway_data::write_csv;
+use leeway_model::Experiment;
+use leeway_model::Interpreter;
+use leeway_scenarios::study;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -72,13 +75,13 @@ pub fn no_panic(o: &Output) {
 
 pub fn ship() -> Interpreter {
     let src = std::fs::read_to_string(root().join(SHIP)).unwrap_or_default();
-    let c = leeway_runtime::structure::compile(&src, &Default::default());
+    let c = leeway_structure::compile(&src, &Default::default());
     Interpreter::new(c.ir.unwrap_or_else(|| panic!("{:?}", c.diagnostics)))
 }
 
 pub fn csv_text(model: &Interpreter, experiments: &[&Experiment]) -> String {
     let mut buf = Vec::new();
-    write_csv(leeway_runtime::Model::ir(model), experiments, 0.0, &mut buf)
+    write_csv(leeway_model::Model::ir(model), experiments, 0.0, &mut buf)
         .unwrap_or_else(|e| panic!("{e}"));
     String::from_utf8(buf).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -94,7 +97,7 @@ pub fn estimation_csv(n: usize, wind: f64, seed: u64) -> String {
 /// θ0 of the paper as a plain parameter file.
 pub fn true_params() -> String {
     let model = ship();
-    let ir = leeway_runtime::Model::ir(&model);
+    let ir = leeway_model::Model::ir(&model);
     let entries: Vec<String> = ir
         .parameters
         .iter()

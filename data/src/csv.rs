@@ -1,0 +1,454 @@
+//! CSV text: the line filter (comment and blank lines dropped and
+//! counted, CRLF folded, physical lines kept), [`Records`] (a [`Table`] of
+//! the file's records) and the CSV entry points.
+
+use crate::error::DataError;
+use crate::file::open_path;
+use crate::notes::LoadedFile;
+use crate::options::LoadOptions;
+use crate::spill::StreamedFile;
+use crate::validate::Places;
+use crate::validate::{Table, load_table, missing, not_a_number, not_finite, unique_headers};
+use leeway_model::experiment::Experiment;
+use leeway_structure::ir::Ir;
+use std::path::Path;
+
+/// Loads one CSV file: one experiment, or several when it has an
+/// `experiment` column (each experiment's rows contiguous, in file order).
+pub fn load_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Vec<Experiment>, DataError> {
+    load_csv_noted(path, ir, options).map(|f| f.experiments)
+}
+
+/// [`load_csv`], also returning what was noted on the way ([`FileNotes`](crate::notes::FileNotes)).
+pub fn load_csv_noted(
+    path: &Path,
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    load_table(&mut Records::open(path, "--data")?, ir, options)
+}
+
+/// Parses CSV text (see [`load_csv`]); `file` names it in errors.
+pub fn parse_csv(
+    file: &str,
+    text: &[u8],
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<Vec<Experiment>, DataError> {
+    parse_csv_noted(file, text, ir, options).map(|f| f.experiments)
+}
+
+/// [`parse_csv`], also returning what was noted on the way ([`FileNotes`](crate::notes::FileNotes)).
+pub fn parse_csv_noted(
+    file: &str,
+    text: &[u8],
+    ir: &Ir,
+    options: &LoadOptions,
+) -> Result<LoadedFile, DataError> {
+    load_table(&mut Records::new(file, text, "--data")?, ir, options)
+}
+
+/// Opens a CSV file for streaming: one validating pass (every check of
+/// [`load_csv`]) that also writes the parsed samples to a temporary spill
+/// file (8 bytes per value and row, in the system's temporary directory,
+/// removed when the sources are dropped); every later visit reads them from
+/// there. Memory is flat in the number of rows. `--resample` is not
+/// streamed: use [`load_csv_noted`] for it.
+pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
+    crate::spill::open_table(&mut Records::open(path, "--data")?, ir, options)
+}
+
+/// A reader that drops comment lines (first non-blank character `#`) and
+/// blank lines (only whitespace) outside quoted cells, counts them, and
+/// remembers where it dropped them, so that the csv reader's line and byte
+/// positions map back to the file's physical lines and bytes. Its memory is
+/// the current line plus one entry per run of dropped lines, never the file.
+struct Filter<R> {
+    inner: R,
+    line: Vec<u8>,
+    pos: usize,
+    in_quotes: bool,
+    /// Physical lines and bytes consumed, from where reading started.
+    physical: u64,
+    byte: u64,
+    /// Lines and bytes served to the csv reader.
+    kept: u64,
+    kept_bytes: u64,
+    /// `(first kept line after a drop, physical − kept)`, increasing.
+    line_jumps: Vec<(u64, u64)>,
+    /// `(kept byte of a line after a drop, physical − kept)`, increasing.
+    byte_jumps: Vec<(u64, u64)>,
+    comments: usize,
+    blanks: usize,
+    error: Option<std::io::Error>,
+    /// How the file ends its lines, once its first line end is read.
+    ends: Option<LineEnds>,
+}
+
+impl<R: std::io::BufRead> Filter<R> {
+    fn new(inner: R) -> Filter<R> {
+        Filter {
+            inner,
+            line: Vec::new(),
+            pos: 0,
+            in_quotes: false,
+            physical: 0,
+            byte: 0,
+            kept: 0,
+            kept_bytes: 0,
+            line_jumps: Vec::new(),
+            byte_jumps: Vec::new(),
+            comments: 0,
+            blanks: 0,
+            error: None,
+            ends: None,
+        }
+    }
+    /// The physical line (from 1) of a kept line (from 1).
+    fn physical_line(&self, kept: u64) -> u64 {
+        let i = self.line_jumps.partition_point(|(k, _)| *k <= kept);
+        kept + if i == 0 { 0 } else { self.line_jumps[i - 1].1 }
+    }
+    /// The physical byte offset of a kept byte offset at the start of a line.
+    fn physical_byte(&self, kept: u64) -> u64 {
+        let i = self.byte_jumps.partition_point(|(k, _)| *k <= kept);
+        kept + if i == 0 { 0 } else { self.byte_jumps[i - 1].1 }
+    }
+    /// Reads the next kept line into `self.line`; false at the end.
+    fn next_line(&mut self) -> std::io::Result<bool> {
+        let mut dropped = false;
+        loop {
+            self.line.clear();
+            self.pos = 0;
+            let n = read_line(&mut self.inner, &mut self.line, &mut self.ends)?;
+            if n == 0 {
+                return Ok(false);
+            }
+            self.physical += 1;
+            let start = self.byte;
+            self.byte += n as u64;
+            if !self.in_quotes {
+                match self.line.iter().find(|b| !b.is_ascii_whitespace()) {
+                    None => {
+                        self.blanks += 1;
+                        dropped = true;
+                        continue;
+                    }
+                    Some(b'#') => {
+                        self.comments += 1;
+                        dropped = true;
+                        continue;
+                    }
+                    Some(_) => {}
+                }
+            }
+            self.kept += 1;
+            if dropped {
+                self.line_jumps.push((self.kept, self.physical - self.kept));
+                self.byte_jumps
+                    .push((self.kept_bytes, start - self.kept_bytes));
+            }
+            self.kept_bytes += n as u64;
+            let quotes = self.line.iter().filter(|b| **b == b'"').count();
+            if quotes % 2 == 1 {
+                self.in_quotes = !self.in_quotes;
+            }
+            // CRLF outside quotes becomes " \n" (same length, so byte offsets
+            // hold; the space is trimmed): the csv reader then ends records
+            // at `\n` only and its positions count lines as an editor does.
+            // A lone CR (classic Mac OS line ends) becomes `\n` likewise.
+            let len = self.line.len();
+            if !self.in_quotes && self.line.ends_with(b"\r\n") {
+                self.line[len - 2] = b' ';
+            } else if !self.in_quotes
+                && self.ends == Some(LineEnds::Return)
+                && self.line.ends_with(b"\r")
+            {
+                self.line[len - 1] = b'\n';
+            }
+            return Ok(true);
+        }
+    }
+}
+
+/// How a file ends its lines, decided by its first line end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LineEnds {
+    /// `\n` or `\r\n` (a CR elsewhere is part of the line, as before).
+    Feed,
+    /// A lone `\r`: files from classic Mac OS tools.
+    Return,
+}
+
+/// Appends one physical line to `line`, with its end, and returns the bytes
+/// read. How the file ends its lines (`ends`) is decided from its first
+/// buffer: a CR without any LF there is a file of returns; anything else
+/// ends lines at LF (a CR then is part of a line, as it always was).
+fn read_line<R: std::io::BufRead>(
+    inner: &mut R,
+    line: &mut Vec<u8>,
+    ends: &mut Option<LineEnds>,
+) -> std::io::Result<usize> {
+    let ends = match *ends {
+        Some(e) => e,
+        None => {
+            let first = inner.fill_buf()?;
+            let decided = if !first.contains(&b'\n') && first.contains(&b'\r') {
+                LineEnds::Return
+            } else {
+                LineEnds::Feed
+            };
+            *ends = Some(decided);
+            decided
+        }
+    };
+    match ends {
+        LineEnds::Feed => inner.read_until(b'\n', line),
+        LineEnds::Return => inner.read_until(b'\r', line),
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Filter<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.pos >= self.line.len() {
+            match self.next_line() {
+                Ok(true) => {}
+                Ok(false) => return Ok(0),
+                Err(e) => {
+                    // Kept for the message: csv would only say "I/O error".
+                    let kind = e.kind();
+                    self.error = Some(e);
+                    return Err(std::io::Error::from(kind));
+                }
+            }
+        }
+        let n = buf.len().min(self.line.len() - self.pos);
+        buf[..n].copy_from_slice(&self.line[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
+}
+
+/// A CSV file read record by record through the line filter (comment and
+/// blank lines dropped and counted, CRLF folded, physical lines kept): the
+/// reader of data files (`estimate`, `validate`) and of `simulate`'s input,
+/// so every CSV file leeway reads follows the same rules and every problem
+/// is located the same way (`file:line`, `file:line:column (name)`). It holds
+/// one record, never the file.
+pub struct Records<R: std::io::BufRead> {
+    file: String,
+    what: String,
+    reader: csv::Reader<Filter<R>>,
+    record: csv::ByteRecord,
+    headers: Vec<String>,
+    header_line: u64,
+    line: u64,
+}
+
+impl Records<std::io::BufReader<std::fs::File>> {
+    /// Opens a file (`what` names the option that gave it, for the hint).
+    pub fn open(path: &Path, what: &str) -> Result<Self, DataError> {
+        let (file, handle) = open_path(path, what)?;
+        Records::new(
+            &file,
+            std::io::BufReader::with_capacity(1 << 16, handle),
+            what,
+        )
+    }
+}
+
+impl<R: std::io::BufRead> Records<R> {
+    /// Reads the header row (after any comment and blank lines); the header
+    /// must name each column once. `what` names the option that gave the
+    /// file (`--data`, `--input`), for the hint of a read failure.
+    pub fn new(file: &str, input: R, what: &str) -> Result<Self, DataError> {
+        let mut reader = csv_builder()
+            .has_headers(true)
+            .from_reader(Filter::new(input));
+        let headers: Vec<String> = match reader.byte_headers() {
+            Ok(h) => h
+                .iter()
+                .map(|c| String::from_utf8_lossy(c).into_owned())
+                .collect(),
+            Err(e) => {
+                if let Some(d) = io_error(file, what, &reader, &e) {
+                    return Err(d);
+                }
+                let line = reader.get_ref().physical_line(1);
+                return Err(DataError::new(
+                    format!("{file}:{line}"),
+                    format!("cannot read the header row: {e}"),
+                    "the first row names the columns",
+                ));
+            }
+        };
+        let header_line = if headers.is_empty() || reader.get_ref().kept == 0 {
+            reader.get_ref().physical + 1
+        } else {
+            reader.get_ref().physical_line(1)
+        };
+        if reader.get_ref().kept == 0 {
+            return Err(DataError::new(
+                format!("{file}:{header_line}"),
+                "the file has no header row (it is empty, or only comments and blank lines)",
+                "the first row names the columns",
+            ));
+        }
+        unique_headers(&headers, |i| format!("{file}:{header_line}:{}", i + 1))?;
+        Ok(Records {
+            file: file.to_string(),
+            what: what.to_string(),
+            reader,
+            record: csv::ByteRecord::new(),
+            headers,
+            header_line,
+            line: header_line,
+        })
+    }
+    /// The header's physical line.
+    pub fn header_line(&self) -> u64 {
+        self.header_line
+    }
+    /// The column of a header name.
+    pub fn find(&self, name: &str) -> Option<usize> {
+        self.headers.iter().position(|h| h == name)
+    }
+    /// Advances to the next record: `false` at the end; a malformed row (a
+    /// cell count other than the header's, an unclosed quote) or a read
+    /// failure is a located error.
+    pub fn next_record(&mut self) -> Result<bool, DataError> {
+        let file = self.file.as_str();
+        match self.reader.read_byte_record(&mut self.record) {
+            Ok(true) => {}
+            Ok(false) => return Ok(false),
+            Err(e) => {
+                if let Some(d) = io_error(file, &self.what, &self.reader, &e) {
+                    return Err(d);
+                }
+                let at = e.position().map_or(self.reader.get_ref().physical, |p| {
+                    self.reader.get_ref().physical_line(p.line())
+                });
+                let what = match e.kind() {
+                    csv::ErrorKind::UnequalLengths {
+                        expected_len, len, ..
+                    } => format!("malformed row: {len} cells, the header has {expected_len}"),
+                    _ => format!("malformed row: {e}"),
+                };
+                return Err(DataError::new(
+                    format!("{file}:{at}"),
+                    what,
+                    "every row needs as many cells as the header",
+                ));
+            }
+        }
+        let pos = self.record.position().map_or(1, csv::Position::line);
+        self.line = self.reader.get_ref().physical_line(pos);
+        Ok(true)
+    }
+    /// The current record's physical line.
+    pub fn line(&self) -> u64 {
+        self.line
+    }
+    /// The current record's physical byte offset.
+    fn byte(&self) -> u64 {
+        let pos = self.record.position().map_or(0, csv::Position::byte);
+        self.reader.get_ref().physical_byte(pos)
+    }
+    /// The raw bytes of cell `i` of the current record (empty if absent).
+    pub fn raw(&self, i: usize) -> &[u8] {
+        self.record.get(i).unwrap_or(b"")
+    }
+}
+
+/// A read failure met by the csv reader, with the filter's own message (csv
+/// would only say "I/O error").
+fn io_error<R: std::io::BufRead>(
+    file: &str,
+    what: &str,
+    r: &csv::Reader<Filter<R>>,
+    e: &csv::Error,
+) -> Option<DataError> {
+    if let csv::ErrorKind::Io(io) = e.kind() {
+        let why = r
+            .get_ref()
+            .error
+            .as_ref()
+            .map_or(io.to_string(), ToString::to_string);
+        return Some(DataError::new(
+            file,
+            format!("cannot read the file: {why}"),
+            format!("check the path passed to {what}"),
+        ));
+    }
+    None
+}
+impl<R: std::io::BufRead> Table for Records<R> {
+    fn file(&self) -> &str {
+        &self.file
+    }
+    fn headers(&self) -> &[String] {
+        &self.headers
+    }
+    fn places(&self) -> &Places {
+        &Places::Lines
+    }
+    fn header_at(&self, column: Option<usize>) -> String {
+        match column {
+            Some(i) => format!("{}:{}:{}", self.file, self.header_line, i + 1),
+            None => format!("{}:{}", self.file, self.header_line),
+        }
+    }
+    fn first_position(&self) -> u64 {
+        self.header_line + 1
+    }
+    fn next_row(&mut self) -> Result<bool, DataError> {
+        self.next_record()
+    }
+    fn position(&self) -> u64 {
+        self.line
+    }
+    fn offset(&self) -> u64 {
+        self.byte()
+    }
+    fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
+        cell(&self.file, self.line, &self.record, i, name)
+    }
+    fn label(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>, DataError> {
+        Ok(std::borrow::Cow::Borrowed(self.raw(i)))
+    }
+    fn dropped(&self) -> (usize, usize) {
+        let f = self.reader.get_ref();
+        (f.comments, f.blanks)
+    }
+}
+
+/// One cell as a finite number, or the located reason it is not.
+fn cell(
+    file: &str,
+    line: u64,
+    record: &csv::ByteRecord,
+    i: usize,
+    name: &str,
+) -> Result<f64, DataError> {
+    let bytes = record.get(i).unwrap_or(b"");
+    let raw = String::from_utf8_lossy(bytes);
+    let loc = || Places::Lines.at(file, line, Some((i, name)));
+    match std::str::from_utf8(bytes).ok().map(str::parse::<f64>) {
+        Some(Ok(v)) if v.is_finite() => Ok(v),
+        Some(Ok(_)) => Err(not_finite(loc(), &raw)),
+        _ if bytes.is_empty() => Err(missing(loc(), "empty cell")),
+        _ => Err(not_a_number(
+            loc(),
+            &raw,
+            "use a plain decimal such as 0.25 or -1.5e-3",
+        )),
+    }
+}
+
+fn csv_builder() -> csv::ReaderBuilder {
+    let mut b = csv::ReaderBuilder::new();
+    b.flexible(false)
+        .trim(csv::Trim::All)
+        .terminator(csv::Terminator::Any(b'\n'));
+    b
+}

@@ -1,0 +1,214 @@
+//! Resampling an irregularly stamped experiment onto a uniform grid by linear
+//! interpolation (`--resample H`): the grid `t0, t0 + H, …` within the
+//! experiment's time span. A planar heading is interpolated along the short
+//! arc between neighbouring samples (its unwrapped angle), so a heading that
+//! wraps at ±π does not sweep through zero between two samples.
+
+use leeway_model::experiment::Experiment;
+use leeway_structure::ir::{Ir, Rotation};
+use std::f64::consts::PI;
+
+/// The grid `t0 + k·h` for every `k` with `t0 + k·h ≤ t_last` (up to rounding).
+fn grid(times: &[f64], h: f64) -> Vec<f64> {
+    let (Some(&t0), Some(&t1)) = (times.first(), times.last()) else {
+        return Vec::new();
+    };
+    if h.is_nan() || h <= 0.0 || t1 < t0 {
+        return Vec::new();
+    }
+    // A relative slack of 1e-9 keeps the last stamp of a span that is an exact
+    // multiple of h despite rounding in the division.
+    let n = ((t1 - t0) / h * (1.0 + 1e-9)).floor();
+    // At most one sample per nanosecond of the span: bounded by the caller's data.
+    let n = n.min(1e9) as usize;
+    (0..=n).map(|k| t0 + k as f64 * h).collect()
+}
+
+/// For each grid time, the index `i` of the interval `[times[i], times[i+1]]`
+/// holding it and the fraction within it. `times` strictly increase.
+fn brackets(times: &[f64], grid: &[f64]) -> Vec<(usize, f64)> {
+    let mut i = 0;
+    grid.iter()
+        .map(|&t| {
+            while i + 2 < times.len() && times[i + 1] < t {
+                i += 1;
+            }
+            if times.len() < 2 {
+                return (0, 0.0);
+            }
+            let w = ((t - times[i]) / (times[i + 1] - times[i])).clamp(0.0, 1.0);
+            (i, w)
+        })
+        .collect()
+}
+
+fn linear(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
+    at.iter()
+        .map(|&(i, w)| match (values.get(i), values.get(i + 1)) {
+            (Some(a), Some(b)) => a + w * (b - a),
+            (Some(a), None) => *a,
+            _ => f64::NAN,
+        })
+        .collect()
+}
+
+/// The angle difference `b − a` brought into `[−π, π)`.
+fn short_arc(a: f64, b: f64) -> f64 {
+    let d = b - a;
+    d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor()
+}
+
+fn angular(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
+    at.iter()
+        .map(|&(i, w)| match (values.get(i), values.get(i + 1)) {
+            // Expressed on the branch of the nearer sample, so that values at
+            // the stamps are the logged ones and a wrapped log stays wrapped.
+            (Some(a), Some(b)) if w <= 0.5 => a + w * short_arc(*a, *b),
+            (Some(a), Some(b)) => b - (1.0 - w) * short_arc(*a, *b),
+            (Some(a), None) => *a,
+            _ => f64::NAN,
+        })
+        .collect()
+}
+
+/// `e` (stamped `times`, strictly increasing, one per sample) resampled every
+/// `h` seconds. Every column is interpolated linearly; a planar heading (in
+/// radians, after unit conversion) along the short arc.
+pub fn resample(ir: &Ir, e: &Experiment, times: &[f64], h: f64) -> Experiment {
+    let grid = grid(times, h);
+    let at = brackets(times, &grid);
+    let all = |cols: &[Vec<f64>]| -> Vec<Vec<f64>> {
+        cols.iter()
+            .map(|c| {
+                if c.is_empty() {
+                    Vec::new()
+                } else {
+                    linear(c, &at)
+                }
+            })
+            .collect()
+    };
+    Experiment {
+        name: e.name.clone(),
+        h,
+        states: all(&e.states),
+        inputs: all(&e.inputs),
+        heading: if matches!(ir.rotation, Rotation::Planar { .. }) {
+            angular(&e.heading, &at)
+        } else {
+            Vec::new()
+        },
+        rotation: all(&e.rotation),
+        disturbances: all(&e.disturbances),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::csv::parse_csv_noted;
+    use crate::options::LoadOptions;
+    use leeway_model::experiment::Source;
+
+    fn ship() -> Ir {
+        let src = "model M { state u, v, r input d heading psi integrates r
+            der u = X*u + T*d der v = Y*v der r = N*r }";
+        leeway_structure::compile(src, &leeway_structure::CompileOptions::default())
+            .ir
+            .unwrap_or_else(|| panic!("the test model compiles"))
+    }
+
+    #[test]
+    fn linear_data_are_resampled_exactly() {
+        let ir = ship();
+        // Irregular stamps; every signal a linear function of time.
+        let times = [0.0, 0.3, 0.5, 1.1, 1.2, 2.0, 2.05];
+        let mut e = Experiment::new(&ir, "x", 0.0);
+        for t in times {
+            e.states[0].push(2.0 * t + 1.0);
+            e.states[1].push(-t);
+            e.states[2].push(0.25 * t);
+            e.inputs[0].push(3.0 - t);
+            e.heading.push(0.1 * t);
+        }
+        let r = resample(&ir, &e, &times, 0.25);
+        let grid: Vec<f64> = (0..=8).map(|k| f64::from(k) * 0.25).collect();
+        assert_eq!(r.states[0].len(), grid.len());
+        assert_eq!(r.h, 0.25);
+        for (k, t) in grid.iter().enumerate() {
+            assert!((r.states[0][k] - (2.0 * t + 1.0)).abs() < 1e-12);
+            assert!((r.states[1][k] + t).abs() < 1e-12);
+            assert!((r.inputs[0][k] - (3.0 - t)).abs() < 1e-12);
+            assert!((r.heading[k] - 0.1 * t).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn the_heading_is_interpolated_across_the_wrap() {
+        let ir = ship();
+        let times = [0.0, 1.0, 2.0];
+        let mut e = Experiment::new(&ir, "x", 0.0);
+        // 3.0 → −3.0 rad is a turn of 2π − 6 ≈ 0.283 rad through ±π, not −6 rad through 0.
+        for psi in [2.9, 3.1, -3.1] {
+            e.heading.push(psi);
+            for c in e.states.iter_mut().chain(e.inputs.iter_mut()) {
+                c.push(0.0);
+            }
+        }
+        let r = resample(&ir, &e, &times, 0.5);
+        assert_eq!(r.heading.len(), 5);
+        assert!((r.heading[1] - 3.0).abs() < 1e-12);
+        let mid = r.heading[3];
+        assert!(
+            (mid - PI).abs() < 1e-12,
+            "{mid} should be π, halfway along the short arc"
+        );
+        assert!((r.heading[4] - (-3.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn jittered_stamps_load_and_resample_from_csv() {
+        let ir = ship();
+        let mut text = String::from("# logger v2\ntime,u,v,r,d,psi\n");
+        for k in 0..40 {
+            let jitter = if k % 3 == 0 { 0.004 } else { -0.002 };
+            let t = f64::from(k) * 0.5 + if k == 0 { 0.0 } else { jitter };
+            text.push_str(&format!("{t},{t},0,0,1,0\n"));
+        }
+        let strict = LoadOptions {
+            time_tolerance: 0.001,
+            ..LoadOptions::default()
+        };
+        let err = parse_csv_noted("j.csv", text.as_bytes(), &ir, &strict)
+            .err()
+            .unwrap_or_else(|| panic!("jitter beyond 0.1 % is an error"));
+        assert!(
+            err.location.starts_with("j.csv:") && err.location.ends_with(":1 (time)"),
+            "{err:?}"
+        );
+        assert!(
+            err.message.starts_with("inconsistent sample time"),
+            "{err:?}"
+        );
+        let loaded = parse_csv_noted("j.csv", text.as_bytes(), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let dev = loaded.notes.experiments[0]
+            .max_step_deviation
+            .unwrap_or_default();
+        assert!(dev > 0.01 && dev < 0.05, "{dev}");
+        assert_eq!(loaded.notes.comment_lines, 1);
+        let resampled = LoadOptions {
+            resample: Some(1.0),
+            ..LoadOptions::default()
+        };
+        let loaded = parse_csv_noted("j.csv", text.as_bytes(), &ir, &resampled)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let e = &loaded.experiments[0];
+        assert_eq!(e.h, 1.0);
+        assert_eq!(loaded.notes.experiments[0].resampled, Some(e.len()));
+        // u equals the time stamp, so the grid reads back exactly.
+        for (k, u) in e.states[0].iter().enumerate() {
+            assert!((u - k as f64).abs() < 1e-9, "{k}: {u}");
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! The signals a model reads from data, their roles and units.
+
+use leeway_model::experiment::Source;
+use leeway_structure::ir::{Ir, Rotation};
+
+/// The signals a model reads from data, as (signal name, role).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Role {
+    State(usize),
+    Input(usize),
+    Heading,
+    Rotation(usize),
+    Disturbance(usize),
+}
+
+pub(crate) fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
+    let mut v: Vec<(String, Role)> = Vec::new();
+    v.extend(
+        ir.states
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.clone(), Role::State(i))),
+    );
+    v.extend(
+        ir.inputs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.clone(), Role::Input(i))),
+    );
+    match &ir.rotation {
+        Rotation::Planar { heading, .. } => v.push((heading.clone(), Role::Heading)),
+        Rotation::Measured { .. } => v.extend(
+            ir.rotation_vars
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (s.clone(), Role::Rotation(i))),
+        ),
+        Rotation::None => {}
+    }
+    for (i, c) in ir.components.iter().enumerate() {
+        if ir.disturbances[c.disturbance].measured {
+            v.push((c.name.clone(), Role::Disturbance(i)));
+        }
+    }
+    v
+}
+
+/// The factor converting a signal's declared unit to the base unit (1 when
+/// none is declared).
+pub(crate) fn unit_factor(ir: &Ir, signal: &str) -> f64 {
+    ir.data_units
+        .get(signal)
+        .map_or(1.0, |u| leeway_structure::units::factor(u))
+}
+
+/// Unit check of a heading that integrates a yaw rate: the least-squares gain
+/// of `Δψ/h` on `r` (≈ 1 when consistent, ≈ 57.3 when ψ is in degrees and r
+/// in rad/s). `None` without a planar heading or with too little yaw motion.
+pub fn heading_gain(ir: &Ir, e: &dyn Source) -> Option<f64> {
+    let Rotation::Planar { integrates, .. } = &ir.rotation else {
+        return None;
+    };
+    let h = e.step();
+    // A log may wrap its heading at ±π (radians) or ±180 (degrees), or not at
+    // all. Fit the gain of Δψ/h on r under each hypothesis (removing whole
+    // periods from every step) and keep the one that explains Δψ/h best: a
+    // threshold on the step size would mistake large steps in degrees for
+    // wraps in radians. One visit accumulates all three.
+    let periods = [None, Some(2.0 * std::f64::consts::PI), Some(360.0)];
+    let mut sums = [(0.0, 0.0, 0.0); 3];
+    let mut prev: Option<(f64, f64)> = None;
+    e.visit(&mut |row| {
+        let r = row.states.get(*integrates).copied().unwrap_or(0.0);
+        if let Some((psi1, r1)) = prev {
+            for (period, (sxy, sxx, syy)) in periods.iter().zip(sums.iter_mut()) {
+                let mut d = row.heading - psi1;
+                if let Some(p) = period {
+                    d -= p * (d / p).round();
+                }
+                let y = d / h;
+                *sxy += r1 * y;
+                *sxx += r1 * r1;
+                *syy += y * y;
+            }
+        }
+        prev = Some((row.heading, r));
+    });
+    sums.into_iter()
+        .filter(|(_, sxx, _)| *sxx > 1e-12)
+        .map(|(sxy, sxx, syy)| {
+            let gain = sxy / sxx;
+            (gain, syy - gain * sxy)
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(gain, _)| gain)
+}

@@ -1,0 +1,223 @@
+//! What the caller chooses: the method, its instruments, centring and combination.
+
+use super::Centring;
+use leeway_structure::ir::PredictorKind;
+use serde::{Deserialize, Serialize};
+
+/// Which estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Least squares on IV3's predictor, with an intercept per output and experiment.
+    Ls,
+    /// IV on the basic predictor `Φ(y, u)`.
+    Iv1,
+    /// IV on the augmented predictor, every medium unmeasured.
+    Iv2,
+    /// IV on the augmented predictor plus `Φ2(y + y_aux)` for measured media.
+    Iv3,
+}
+
+impl Method {
+    /// The predictor the method uses.
+    pub fn predictor(self) -> PredictorKind {
+        match self {
+            Method::Iv1 => PredictorKind::Basic,
+            Method::Iv2 => PredictorKind::Augmented,
+            Method::Ls | Method::Iv3 => PredictorKind::Measured,
+        }
+    }
+    /// `ls`, `iv1`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ls => "ls",
+            Method::Iv1 => "iv1",
+            Method::Iv2 => "iv2",
+            Method::Iv3 => "iv3",
+        }
+    }
+    /// All four, in the paper's order.
+    pub const ALL: [Method; 4] = [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3];
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Method, String> {
+        match s.to_ascii_lowercase().as_str() {
+            "ls" => Ok(Method::Ls),
+            "iv1" => Ok(Method::Iv1),
+            "iv2" => Ok(Method::Iv2),
+            "iv3" => Ok(Method::Iv3),
+            other => Err(format!("unknown method `{other}`: use ls, iv1, iv2 or iv3")),
+        }
+    }
+}
+
+/// Where instruments come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Instruments {
+    /// Simulated nominal model, refined (default).
+    Simulated,
+    /// Regressors of the measurement one sample earlier.
+    Delayed,
+}
+
+/// Where the refined IV's first instrument simulation gets its θ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Initial {
+    /// The nominal model (`nominal { }` or `--nominal`).
+    Nominal,
+    /// An estimate with delayed-measurement instruments (measured disturbances
+    /// at their experiment mean): consistent, and close enough to the craft
+    /// that the first simulation gives strong instruments.
+    Delayed,
+}
+
+/// How the experiments' moment equations are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    /// `(Σᵢ Hᵢ) ϑ = Σᵢ gᵢ`: the pooled IV estimator (default). With model
+    /// error every run's equations have their own solution; summing weighs
+    /// runs by their length and keeps one consistent system.
+    Summed,
+    /// `[H₁/n₁; …; H_E/n_E] ϑ = [g₁/n₁; …]` solved by least squares: the
+    /// paper's eq. (IV_problem) as written.
+    Stacked,
+}
+
+impl Combine {
+    /// `summed`, `stacked`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Combine::Summed => "summed",
+            Combine::Stacked => "stacked",
+        }
+    }
+}
+
+/// Options of [`estimate`](crate::estimate): the method, its instruments, how
+/// experiments combine, the refinement and what is reported.
+#[derive(Clone, Debug)]
+pub struct EstimateOptions {
+    /// The estimator.
+    pub method: Method,
+    /// Instrument kind.
+    pub instruments: Instruments,
+    /// The θ the first instrument simulation uses (simulated instruments).
+    pub initial: Initial,
+    /// Instrument centring (`None`: the model's default,
+    /// [`Centring::for_model`]: per experiment when the model has a
+    /// disturbance the predictor does not take from data, none otherwise).
+    pub centring: Option<Centring>,
+    /// How the experiments' moment equations are combined.
+    pub combine: Combine,
+    /// θ of the nominal model (default: the model's `nominal { }`).
+    pub nominal: Option<Vec<f64>>,
+    /// Most re-simulations of the refined IV.
+    pub max_refinements: usize,
+    /// The refinement has settled when a new instrument simulation moves less
+    /// than this fraction of the simulated states' variation (RMS), or when
+    /// the refinement contracts (each move less than half the previous) and
+    /// the next move, predicted geometrically, would.
+    pub tolerance: f64,
+    /// Estimate identifiable combinations when θ is not identifiable.
+    pub aggregate: bool,
+    /// A7 violations (wrong signs) are errors instead of warnings.
+    pub strict: bool,
+    /// Lags of the long-run covariance (≥ 1: the Euler residual is MA(1)).
+    pub lags: usize,
+    /// Relative residual below which a column is numerically dependent.
+    pub rank_tolerance: f64,
+    /// Heading spread (circular std, rad) below which `R` counts as constant.
+    pub heading_spread: f64,
+    /// Compute standard errors and disturbance moments (one more pass).
+    pub covariance: bool,
+    /// Stop a refinement whose simulation tracks the data markedly worse than
+    /// an earlier iterate, and report the best iterate (small-sample runaway
+    /// guard). `false` gives the plain refined IV of the paper.
+    pub runaway_guard: bool,
+    /// A warm start: the first instrument simulation uses this θ and these
+    /// disturbance means instead of `initial` (e.g. the estimate from a
+    /// shorter record of the same experiment).
+    pub start: Option<Start>,
+    /// Simulate the reported estimate on its own data (one more pass) and
+    /// report its fit; an estimate whose simulation diverges or fits worse
+    /// than the data's mean is then never reported as converged (a warning,
+    /// or an error under `strict`). The Monte Carlo study, which validates
+    /// its estimates itself, turns it off.
+    pub own_simulation: bool,
+    /// Asked before and after every pass over the data: `true` stops the
+    /// estimate with the error `interrupted` (Ctrl-C in Python, whose
+    /// handler runs only when asked while native code runs).
+    pub interrupt: Option<Interrupt>,
+}
+
+pub use leeway_model::interrupt::Interrupt;
+
+/// The θ and disturbance-component means of a first instrument simulation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Start {
+    /// θ, one value per parameter.
+    pub theta: Vec<f64>,
+    /// Means of the disturbance components (by global index) in the
+    /// simulation; measured components are simulated as recorded.
+    pub means: Vec<f64>,
+    /// The simulation that gave the start's own instruments (a settled
+    /// refined IV estimate on records the new ones begin with): the first
+    /// instruments are then that simulation's, continued over the new
+    /// samples, instead of a simulation of `theta` — the same fixed point
+    /// within the refinement's tolerance, and the sums over the shorter
+    /// records need not be made again.
+    pub instruments: Option<super::InstrumentSimulation>,
+}
+
+impl Start {
+    /// The warm start an estimate gives: its θ and the unmeasured
+    /// disturbance means it implies (0 where it implies none).
+    pub fn from_estimate(ir: &leeway_structure::ir::Ir, estimate: &super::Estimate) -> Start {
+        let means = ir
+            .components
+            .iter()
+            .map(|c| {
+                estimate
+                    .disturbances
+                    .iter()
+                    .find(|d| d.component == c.name)
+                    .map_or(0.0, |d| d.mean)
+            })
+            .collect();
+        Start {
+            theta: estimate.theta.clone(),
+            means,
+            instruments: estimate.instrument_simulation.clone(),
+        }
+    }
+}
+
+impl Default for EstimateOptions {
+    fn default() -> EstimateOptions {
+        EstimateOptions {
+            method: Method::Iv3,
+            instruments: Instruments::Simulated,
+            initial: Initial::Delayed,
+            centring: None,
+            combine: Combine::Summed,
+            nominal: None,
+            max_refinements: 8,
+            tolerance: 1e-3,
+            aggregate: false,
+            strict: false,
+            lags: 1,
+            rank_tolerance: 1e-9,
+            heading_spread: 0.05,
+            covariance: true,
+            runaway_guard: true,
+            start: None,
+            own_simulation: true,
+            interrupt: None,
+        }
+    }
+}

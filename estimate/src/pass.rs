@@ -1,0 +1,1115 @@
+//! The map half of estimation: what one experiment contributes to a pass
+//! over the data, as a small summary (moment sums, long-run sums, sign
+//! facts) that serialises exactly, and the [`Passes`] trait through which the
+//! estimator runs its passes — in experiment order on this machine
+//! ([`LocalPasses`]), or mapped over the workers of a distributed engine.
+//! The driver (refinement, covariance) combines the summaries in experiment
+//! order whoever computed them, so local and distributed estimates agree bit
+//! for bit.
+
+use super::cache::{
+    Continued, InstrumentsKey, KEEP_BUDGET, Kept, RecordCache, Resume, SimulationKey, bits,
+};
+use super::record::FactsState;
+use super::walk::Reuse;
+use super::*;
+use crate::moments::{PartialSums, RegressorRows};
+use leeway_model::experiment::Experiment;
+use leeway_model::interp::TermPlan;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+/// What the facts pass needs of the options.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FactsRequest {
+    method: Method,
+    heading_spread: f64,
+}
+
+impl FactsRequest {
+    /// The facts pass of an estimate with these options.
+    pub fn new(options: &EstimateOptions) -> FactsRequest {
+        FactsRequest {
+            method: options.method,
+            heading_spread: options.heading_spread,
+        }
+    }
+}
+
+/// One experiment as read once before estimating: its name and length and,
+/// when it is long enough to estimate from, its sign pattern (paper A7),
+/// measured disturbance means, state bounds and heading spread.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ExperimentFacts {
+    /// The experiment's name.
+    pub name: String,
+    /// Samples.
+    pub len: usize,
+    pub(super) read: Option<(ExperimentSigns, ExperimentInfo)>,
+}
+
+/// One pass over the data as the driver asks it of every experiment: the
+/// estimator's plan, the θ to simulate the instruments with, and what each
+/// experiment's facts fixed (its signs, means, bounds).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PassRequest {
+    pub(super) plan: PassPlan,
+    pub(super) pass: Pass,
+    pub(super) infos: Vec<ExperimentInfo>,
+}
+
+/// What a data pass needs of the estimator's plan.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct PassPlan {
+    pub(super) kind: PredictorKind,
+    /// The instruments of the method (`None`: least squares).
+    pub(super) instruments: Option<Instruments>,
+    pub(super) delayed_mean: bool,
+    pub(super) n_cols: usize,
+    /// The block columns of each output.
+    pub(super) cols: Vec<Vec<usize>>,
+    /// Structurally dropped columns held at nominal.
+    pub(super) held: Vec<(usize, f64)>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) enum Pass {
+    /// Moment sums per output, the instruments simulated with `theta_sim`
+    /// (empty: the delayed bootstrap), compared with a `reference`
+    /// simulation; `scan` also looks for non-finite measured values.
+    Moments {
+        theta_sim: Vec<f64>,
+        mu: Vec<f64>,
+        reference: Option<(Vec<f64>, Vec<f64>)>,
+        scan: bool,
+        /// Per experiment (empty: none), the warm start's instruments: the
+        /// measured means they take, and the samples they settled on.
+        prefix: Vec<Option<PrefixInstruments>>,
+    },
+    /// Long-run sums of the moment residuals `ζ` (the covariance).
+    LongRun(LongRunPass),
+    /// The reported θ simulated on the data (unmeasured disturbances at
+    /// `means`), fitted: the estimate's own simulation.
+    FreeRun { theta: Vec<f64>, means: Vec<f64> },
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct LongRunPass {
+    pub(super) theta_sim: Vec<f64>,
+    pub(super) mu: Vec<f64>,
+    pub(super) lags: usize,
+    /// The regressors are their own instruments (least squares).
+    pub(super) own: bool,
+    /// Every predictor column's value (0 where not estimated).
+    pub(super) values: Vec<f64>,
+    /// Dimension of `ζ`.
+    pub(super) dim: usize,
+    /// Per output: `(ζ row, column, the column's index in the output's block)`.
+    pub(super) rows: Vec<Vec<(usize, usize, usize)>>,
+    /// Per experiment and output: the instruments' centre (by block index)
+    /// and the mean residual.
+    pub(super) centres: Vec<Vec<Vec<f64>>>,
+    pub(super) mean_res: Vec<Vec<f64>>,
+}
+
+/// The instruments a warm start settled on over the first `samples`
+/// samples of an experiment (a shorter record this one begins with; see
+/// [`super::Start::instruments`]): simulated instruments take the measured
+/// disturbances at `means`, that record's, over the whole experiment.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct PrefixInstruments {
+    pub(super) samples: usize,
+    pub(super) means: Vec<f64>,
+}
+
+/// What one experiment contributed to a pass.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PassSummary(pub(super) Summary);
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) enum Summary {
+    Moments {
+        moments: Vec<CrossMoments>,
+        change: SimChange,
+        bad: Option<BadValue>,
+    },
+    /// The instrument simulation left the states' bounds.
+    Diverged { bad: Option<BadValue> },
+    /// `ζ`'s long-run sum, row-major `dim × dim`; `None` if the simulation diverged.
+    LongRun { dim: usize, sums: Option<Vec<f64>> },
+    /// A free run's fit sums.
+    FreeRun(super::own::FreeRunSums),
+}
+
+/// A non-finite or overflowing measured value: where, and what.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct BadValue {
+    pub(super) location: String,
+    pub(super) what: String,
+}
+
+/// Runs the passes of an estimate over the experiments. Implementations
+/// return one result per experiment, in experiment order, each exactly what
+/// [`PassRunner::facts`] / [`PassRunner::pass`] compute for it: on this
+/// machine ([`LocalPasses`]) or mapped over workers that each read their own
+/// experiments.
+pub trait Passes {
+    /// The facts of every experiment.
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError>;
+    /// Every experiment's summary of one pass. A moment pass may stop at the
+    /// first experiment whose simulation diverged.
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError>;
+    /// The plan the structural analysis fixed for `key` in an earlier
+    /// estimate through these passes, if kept (runners that serve several
+    /// estimates keep them; none by default).
+    fn known_plan(&self, _key: &PlanKey) -> Option<std::sync::Arc<StructuralPlan>> {
+        None
+    }
+    /// Keeps the plan fixed for `key`, for later estimates through these
+    /// passes (nothing by default).
+    fn keep_plan(&self, _key: PlanKey, _plan: std::sync::Arc<StructuralPlan>) {}
+}
+
+/// Asks an interrupt every [`INTERRUPT_EVERY`] samples of a visit and
+/// remembers its yes.
+pub(super) struct Stopper<'a> {
+    interrupt: Option<&'a Interrupt>,
+    seen: usize,
+    stopped: bool,
+}
+
+impl<'a> Stopper<'a> {
+    pub(super) fn new(interrupt: Option<&'a Interrupt>) -> Stopper<'a> {
+        Stopper {
+            interrupt,
+            seen: 0,
+            stopped: false,
+        }
+    }
+
+    /// Whether this sample and the rest are to be skipped.
+    pub(super) fn now(&mut self) -> bool {
+        if !self.stopped && self.seen.is_multiple_of(INTERRUPT_EVERY) {
+            self.stopped = self.interrupt.is_some_and(Interrupt::requested);
+        }
+        self.seen += 1;
+        self.stopped
+    }
+}
+
+/// Structural plans by their keys, kept for later estimates.
+type KeptPlans = Vec<(PlanKey, std::sync::Arc<StructuralPlan>)>;
+
+/// The θ of one moment pass (see [`Pass::Moments`]).
+struct MomentPass<'a> {
+    theta_sim: &'a [f64],
+    mu: &'a [f64],
+    reference: Option<(&'a [f64], &'a [f64])>,
+    scan: bool,
+    prefix: Option<&'a PrefixInstruments>,
+}
+
+/// A model ready to run passes over experiments (its term plans built once).
+pub struct PassRunner<'a> {
+    model: &'a dyn Model,
+    terms: Vec<TermPlan>,
+    /// Asked during the data walks (see [`LocalPasses::interruptible`]).
+    interrupt: Option<Interrupt>,
+}
+
+impl<'a> PassRunner<'a> {
+    /// Passes of `model`.
+    pub fn new(model: &'a dyn Model) -> PassRunner<'a> {
+        PassRunner {
+            model,
+            terms: leeway_model::interp::term_plans(model.ir()),
+            interrupt: None,
+        }
+    }
+
+    /// The facts of one experiment, in one visit.
+    pub fn facts(&self, e: &dyn Source, request: &FactsRequest) -> ExperimentFacts {
+        self.facts_from(e, request, None).0
+    }
+
+    /// [`PassRunner::facts`], the visit going on from where it stood after
+    /// the first samples (`from`, kept over a record this in-memory one
+    /// begins with); and where it stands after this one's.
+    pub(super) fn facts_from(
+        &self,
+        e: &dyn Source,
+        request: &FactsRequest,
+        from: Option<FactsState>,
+    ) -> (ExperimentFacts, Option<FactsState>) {
+        let ir = self.model.ir();
+        let kind = request.method.predictor();
+        let mut stands = None;
+        let read = (e.len() >= leeway_model::experiment::MIN_SAMPLES).then(|| {
+            // Signs and sums in one visit, one heading rotation per sample.
+            let memory = e.in_memory();
+            let mut state = match from {
+                Some(s) if memory.is_some() && s.len <= e.len() => s,
+                _ => FactsState {
+                    len: 0,
+                    counter: SignCounter::new(ir, kind),
+                    sums: RecordSums::new(ir),
+                    headings: HeadingRotation::default(),
+                },
+            };
+            let planar = matches!(ir.rotation, Rotation::Planar { .. });
+            let start = state.len;
+            let FactsState {
+                counter,
+                sums,
+                headings,
+                ..
+            } = &mut state;
+            // Ctrl-C: the rest of the visit is skipped once asked for (the
+            // driver asks too, and discards these facts).
+            let mut stop = Stopper::new(self.interrupt.as_ref());
+            let mut sample = |row: &leeway_model::experiment::Row| {
+                if stop.now() {
+                    return;
+                }
+                let rot = headings.next(row.heading);
+                counter.sample(&Signals {
+                    states: row.states,
+                    inputs: row.inputs,
+                    rotation: if planar { &rot } else { row.rotation },
+                    disturbances: row.disturbances,
+                });
+                sums.sample(row, rot);
+            };
+            match memory {
+                Some(x) => x.rows_from(start, &mut sample),
+                None => e.visit(&mut sample),
+            }
+            state.len = e.len();
+            stands = memory.is_some().then(|| state.clone());
+            let signs = state.counter.finish(ir, e.name());
+            let info = record_info(
+                ir,
+                state.sums,
+                &signs,
+                request.method,
+                request.heading_spread,
+            );
+            (signs, info)
+        });
+        let facts = ExperimentFacts {
+            name: e.name().to_string(),
+            len: e.len(),
+            read,
+        };
+        (facts, stands)
+    }
+
+    fn walker(&self, plan: &PassPlan, instruments: Option<Instruments>) -> EquationWalker<'_> {
+        EquationWalker {
+            model: self.model,
+            ir: self.model.ir(),
+            terms: &self.terms,
+            kind: plan.kind,
+            instruments,
+            delayed_mean: plan.delayed_mean,
+            n_cols: plan.n_cols,
+            instrument_means: None,
+            interrupt: self.interrupt.as_ref(),
+        }
+    }
+
+    /// What experiment `index` (`e`) contributes to the pass.
+    pub fn pass(&self, e: &dyn Source, index: usize, request: &PassRequest) -> PassSummary {
+        self.pass_keeping(e, index, request, None)
+    }
+
+    /// [`PassRunner::pass`], reading and filling what earlier passes over
+    /// this in-memory record kept: the same summary, sooner.
+    pub(super) fn pass_keeping(
+        &self,
+        e: &dyn Source,
+        index: usize,
+        request: &PassRequest,
+        cache: Option<(&mut RecordCache, &mut usize, bool)>,
+    ) -> PassSummary {
+        let info = &request.infos[index];
+        let plan = &request.plan;
+        PassSummary(match &request.pass {
+            Pass::Moments {
+                theta_sim,
+                mu,
+                reference,
+                scan,
+                prefix,
+            } => {
+                let reference = reference
+                    .as_ref()
+                    .map(|(t, m)| (t.as_slice(), m.as_slice()));
+                self.moments(
+                    e,
+                    info,
+                    plan,
+                    MomentPass {
+                        theta_sim,
+                        mu,
+                        reference,
+                        scan: *scan,
+                        prefix: prefix.get(index).and_then(Option::as_ref),
+                    },
+                    cache,
+                )
+            }
+            Pass::LongRun(lr) => {
+                self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
+            }
+            Pass::FreeRun { theta, means } => {
+                Summary::FreeRun(super::own::FreeRunSums::of(self.model, theta, means, e))
+            }
+        })
+    }
+
+    fn moments(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        pass: MomentPass,
+        cache: Option<(&mut RecordCache, &mut usize, bool)>,
+    ) -> Summary {
+        let (mut cache, mut budget, keep_for_others) = match cache {
+            Some((c, b, o)) => (Some(c), Some(b), o),
+            None => (None, None, false),
+        };
+        let MomentPass {
+            theta_sim,
+            mu,
+            reference,
+            scan,
+            prefix: prefix_instruments,
+        } = pass;
+        let ir = self.model.ir();
+        // An empty θ asks for the delayed bootstrap pass of the refined IV.
+        let mut walker = if theta_sim.is_empty() {
+            self.walker(plan, Some(Instruments::Delayed))
+        } else {
+            self.walker(plan, plan.instruments)
+        };
+        walker.instrument_means = prefix_instruments.map(|p| p.means.as_slice());
+        // The measured means the instruments take.
+        let instrument_means = prefix_instruments.map_or(&info.measured_mean, |p| &p.means);
+        let simulates = walker.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
+        let n = plan.n_cols;
+        // What this pass keeps for later ones.
+        let mut new_headings = cache
+            .as_deref()
+            .is_some_and(|c| c.headings().is_none())
+            .then(|| Vec::with_capacity(e.len()));
+        let mut new_trajectory = match cache.as_deref_mut() {
+            Some(c) if simulates => Some(c.take_spare()),
+            _ => None,
+        };
+        // Regressor rows are kept by the scanning pass of an instrumental
+        // estimate (their values are then known to be finite) and read by
+        // its later passes — and by other estimates' passes with the same
+        // plan; least squares makes one pass, and keeps its rows only for
+        // others. Rows kept over a shorter prefix of the record are the
+        // scanning pass's first rows.
+        let keeps = scan && (plan.instruments.is_some() || keep_for_others);
+        let equations = e.len().saturating_sub(2);
+        let prefix = match (keeps, cache.as_deref_mut(), budget.as_deref_mut()) {
+            (true, Some(c), Some(b)) if c.regressors(plan, info).is_none() => {
+                c.take_prefix(plan, info, b)
+            }
+            _ => None,
+        }
+        .filter(|(p, _)| {
+            p.len() == plan.cols.len()
+                && p.iter()
+                    .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
+        });
+        // A pass whose instruments do not depend on θ goes on from where the
+        // pass that kept the prefix's rows stood, if it had these instruments.
+        let instruments_key = (walker.instruments != Some(Instruments::Simulated)).then(|| {
+            let delayed_means = walker.instruments == Some(Instruments::Delayed)
+                && walker.delayed_mean
+                && reads_measured_disturbances(ir, plan.kind);
+            InstrumentsKey {
+                instruments: walker.instruments,
+                means: if delayed_means {
+                    bits(&info.measured_mean)
+                } else {
+                    Vec::new()
+                },
+            }
+        });
+        let headings_known = cache
+            .as_deref()
+            .and_then(RecordCache::headings)
+            .is_some_and(|h| h.len() == e.len());
+        let (prefix, resume) = match prefix {
+            Some((rows, resume)) => {
+                let resume = resume.filter(|r| {
+                    instruments_key.as_ref() == Some(&r.instruments)
+                        && (r.history.continues_headings() || headings_known)
+                        && r.history.equations == rows[0].len()
+                        && r.history.samples == rows[0].len() + 2
+                        && r.sums.len() == rows.len()
+                        && r.sums.iter().zip(&rows).all(|(s, k)| s.continues(k))
+                });
+                (Some(rows), resume)
+            }
+            None => (None, None),
+        };
+        // A warm start's first pass goes on from where the pass over the
+        // shorter record that simulated the same instruments stood.
+        let reads_means = reads_measured_disturbances(ir, plan.kind);
+        let means_key = |m: &[f64]| if reads_means { bits(m) } else { Vec::new() };
+        let mut sim_resume = match (
+            prefix_instruments,
+            cache.as_deref_mut(),
+            budget.as_deref_mut(),
+        ) {
+            (Some(p), Some(c), Some(b))
+                if simulates && reference.is_none() && resume.is_none() && headings_known =>
+            {
+                let key = SimulationKey {
+                    theta: theta_sim,
+                    mu,
+                    means: means_key(&p.means),
+                };
+                c.take_prefix_simulation(plan, info, &key, p.samples, b)
+            }
+            _ => None,
+        };
+        // It needs the regressor rows of its first samples: the prefix's, or
+        // the whole record's kept by another pass.
+        sim_resume = sim_resume
+            .filter(|(s, _)| s.walk.fits(e.len(), ir.states.len()))
+            .filter(|(s, _)| match &prefix {
+                Some(rows) => {
+                    rows[0].len() == s.walk.equations
+                        && s.sums.len() == rows.len()
+                        && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
+                }
+                None => cache.as_deref().is_some_and(|c| {
+                    plan.instruments.is_some()
+                        && c.regressors(plan, info).is_some_and(|r| {
+                            r.len() == s.sums.len()
+                                && r.iter().zip(&s.sums).all(|(r, p)| {
+                                    r.len() == equations
+                                        && p.len() == s.walk.equations
+                                        && p.continues_over(r)
+                                })
+                        })
+                }),
+            });
+        let (sim_walk, sim_sums) = match sim_resume {
+            Some((s, states)) => {
+                if let Some(spare) = new_trajectory.replace(states)
+                    && let Some(c) = cache.as_deref_mut()
+                {
+                    c.return_spare(spare);
+                }
+                (Some(s.walk), Some(s.sums))
+            }
+            None => (None, None),
+        };
+        if let Some(r) = &resume {
+            // The heading rotations kept so far go on too, or none are kept.
+            new_headings = new_headings.and_then(|_| {
+                cache
+                    .as_deref_mut()
+                    .and_then(RecordCache::take_prefix_headings)
+                    .filter(|h| h.len() == r.history.samples)
+            });
+        }
+        let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
+        let reserve = cache.as_deref().map_or(0, |c| c.reserve);
+        let kept = cache.as_deref();
+        let kept_rows = kept.and_then(|c| c.regressors(plan, info));
+        let rows = kept_rows.filter(|_| plan.instruments.is_some());
+        let keep_rows = keeps && kept.is_some() && kept_rows.is_none();
+        // Where this pass stands at the end, for a pass over a longer record.
+        let mut history = None;
+        let keeps_history = keep_rows && instruments_key.is_some();
+        let resumed = resume
+            .as_ref()
+            .map(|r| r.history.equations)
+            .or(sim_walk.as_ref().map(|s| s.equations))
+            .unwrap_or(0);
+        let (resume_history, resume_sums) = match resume {
+            Some(r) => (Some(r.history), Some(r.sums)),
+            None => (None, None),
+        };
+        // A simulation resumed over kept rows of the whole record goes on
+        // from its instruments' sums; one over the prefix's rows, as a
+        // θ-free pass does, from its rows' too.
+        let (resume_sums, sums_over_kept) = match (resume_sums, sim_sums) {
+            (Some(s), _) => (Some(s), None),
+            (None, Some(s)) if prefix.is_some() => (Some(s), None),
+            (None, s) => (None, s),
+        };
+        let mut sim_kept = None;
+        let keeps_simulation = simulates && cache.is_some() && e.in_memory().is_some();
+        let mut reuse = Reuse {
+            headings: kept.and_then(RecordCache::headings),
+            keep_headings: new_headings.as_mut(),
+            skip_measured: rows.is_some(),
+            reference: match (kept, reference) {
+                (Some(c), Some((t, m))) => c.trajectory_of(t, m),
+                _ => None,
+            },
+            keep_trajectory: new_trajectory.as_mut(),
+            measured_known,
+            resume: resume_history,
+            keep_history: keeps_history.then_some(&mut history),
+            resume_simulation: sim_walk,
+            keep_simulation: keeps_simulation.then_some(&mut sim_kept),
+        };
+        // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
+        let mut k = 1 + resumed;
+        let mut bad = None;
+        let mut prefix = prefix.map(Vec::into_iter);
+        let mut resume_sums = resume_sums.map(Vec::into_iter);
+        let mut acc: Vec<MomentAccumulator> = plan
+            .cols
+            .iter()
+            .map(|c| {
+                let mut a = MomentAccumulator::new(c.len(), c.len());
+                match (
+                    prefix.as_mut().and_then(Iterator::next),
+                    resume_sums.as_mut().and_then(Iterator::next),
+                ) {
+                    (Some(known), Some(from)) => a.keep_rows_resuming(known, from, e.len()),
+                    (Some(known), None) => a.keep_rows_after(known, e.len()),
+                    (None, _) if keep_rows => a.keep_rows(e.len(), reserve),
+                    (None, _) => {}
+                }
+                a
+            })
+            .collect();
+        if let (Some(sums), Some(rows)) = (sums_over_kept, rows) {
+            for ((a, s), r) in acc.iter_mut().zip(sums).zip(rows) {
+                a.resume_instruments(s, r);
+            }
+        }
+        let walked = walker.walk(
+            e,
+            info,
+            theta_sim,
+            mu,
+            reference,
+            &mut reuse,
+            |z: &[f64], phi: &[f64], t: &[f64]| {
+                k += 1;
+                if let Some(rows) = rows {
+                    for ((o, a), r) in acc.iter_mut().enumerate().zip(rows) {
+                        a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
+                    }
+                    return;
+                }
+                if k - 2 < measured_known {
+                    for (o, a) in acc.iter_mut().enumerate() {
+                        let z = z.get(o * n..(o + 1) * n).unwrap_or(&[]);
+                        a.push_over_kept_row(z, &plan.cols[o]);
+                    }
+                    return;
+                }
+                if scan && bad.is_none() {
+                    bad = non_finite(ir, plan.kind, n, k, phi, t);
+                }
+                for (o, a) in acc.iter_mut().enumerate() {
+                    let mut target = t[o];
+                    for (c, v) in &plan.held {
+                        target -= phi[o * n + c] * v;
+                    }
+                    a.push_columns(
+                        &z[o * n..(o + 1) * n],
+                        &phi[o * n..(o + 1) * n],
+                        &plan.cols[o],
+                        target,
+                    );
+                }
+            },
+        );
+        let located = |bad: Option<(usize, String)>| {
+            bad.map(|(sample, what)| BadValue {
+                location: e.locate(sample),
+                what,
+            })
+        };
+        match walked {
+            Ok(change) => {
+                // Where the simulation's sums stood, for a warm start's pass
+                // over a longer record.
+                let simulation = sim_kept
+                    .and_then(|walk| {
+                        let sums = match rows {
+                            Some(_) => Some(
+                                acc.iter()
+                                    .map(MomentAccumulator::partial_instruments)
+                                    .collect(),
+                            ),
+                            None => acc.iter().map(MomentAccumulator::partial).collect(),
+                        };
+                        sums.map(|s: Vec<PartialSums>| (walk, s))
+                    })
+                    .filter(|_| bad.is_none())
+                    .map(|(walk, sums)| {
+                        let key = SimulationKey {
+                            theta: theta_sim,
+                            mu,
+                            means: means_key(instrument_means),
+                        };
+                        (key, walk, sums)
+                    });
+                let mut partial: Option<Vec<PartialSums>> = None;
+                let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
+                    match rows {
+                        Some(rows) => acc
+                            .into_iter()
+                            .zip(rows)
+                            .map(|(a, r)| (a.finish_with(r), None))
+                            .unzip(),
+                        None => {
+                            // Only a pass that can be gone on from keeps where it stood.
+                            if keeps_history {
+                                partial = acc.iter().map(MomentAccumulator::partial).collect();
+                            }
+                            acc.into_iter()
+                                .map(MomentAccumulator::finish_keeping)
+                                .unzip()
+                        }
+                    };
+                if let (Some(c), Some(budget)) = (cache, budget) {
+                    let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
+                    c.keep(
+                        plan,
+                        info,
+                        Kept {
+                            resume: match (instruments_key, history, partial) {
+                                (Some(instruments), Some(history), Some(sums)) if bad.is_none() => {
+                                    Some(Resume {
+                                        instruments,
+                                        history,
+                                        sums,
+                                    })
+                                }
+                                _ => None,
+                            },
+                            regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
+                            headings: new_headings,
+                            trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
+                            simulation,
+                        },
+                        budget,
+                    );
+                }
+                Summary::Moments {
+                    moments,
+                    change,
+                    bad: located(bad),
+                }
+            }
+            Err(Diverged) => {
+                if let (Some(c), Some(v)) = (cache, new_trajectory) {
+                    c.return_spare(v);
+                }
+                // The simulation stopped the walk early: a bad value further
+                // on is still a data error, not a divergence.
+                if scan && bad.is_none() {
+                    let mut k = 1usize;
+                    let _ = self.walker(plan, None).walk(
+                        e,
+                        info,
+                        &[],
+                        &[],
+                        None,
+                        &mut Reuse::default(),
+                        |_: &[f64], phi: &[f64], t: &[f64]| {
+                            k += 1;
+                            if bad.is_none() {
+                                bad = non_finite(ir, plan.kind, n, k, phi, t);
+                            }
+                        },
+                    );
+                }
+                Summary::Diverged { bad: located(bad) }
+            }
+        }
+    }
+
+    fn long_run(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        lr: &LongRunPass,
+        centres: &[Vec<f64>],
+        mean_res: &[f64],
+    ) -> Summary {
+        // The instruments of the reported iterate (empty θ: the delayed bootstrap).
+        let walker = if lr.theta_sim.is_empty() && !lr.own {
+            self.walker(plan, Some(Instruments::Delayed))
+        } else {
+            self.walker(plan, plan.instruments)
+        };
+        let n = plan.n_cols;
+        let mut sums = LongRun::new(lr.dim, lr.lags);
+        let mut zeta = DVector::zeros(lr.dim);
+        let walked = walker.walk(
+            e,
+            info,
+            &lr.theta_sim,
+            &lr.mu,
+            None,
+            &mut Reuse::default(),
+            |z: &[f64], phi: &[f64], t: &[f64]| {
+                zeta.fill(0.0);
+                for (o, rows) in lr.rows.iter().enumerate() {
+                    let mut res = t[o];
+                    for (c, v) in &plan.held {
+                        res -= phi[o * n + c] * v;
+                    }
+                    for c in &plan.cols[o] {
+                        res -= phi[o * n + c] * lr.values[*c];
+                    }
+                    res -= mean_res[o];
+                    let source = if lr.own { phi } else { z };
+                    for (r, c, j) in rows {
+                        zeta[*r] += (source[o * n + c] - centres[o][*j]) * res;
+                    }
+                }
+                sums.push(&zeta);
+            },
+        );
+        let sums = walked.ok().map(|_| {
+            let g = sums.sum_psd();
+            // Row-major, as documented (g is symmetric).
+            g.transpose().as_slice().to_vec()
+        });
+        Summary::LongRun { dim: lr.dim, sums }
+    }
+}
+
+/// The experiments of this machine, visited in order. What passes over its
+/// in-memory experiments compute that later passes need again is kept (at
+/// most 512 MiB), for the later passes of an estimate and for other
+/// estimates run through the same `LocalPasses` (other methods on the same
+/// records): their facts, regressor rows and targets, heading rotations and
+/// last instrument simulation. Every summary is what [`PassRunner`] computes,
+/// bit for bit, only sooner.
+pub struct LocalPasses<'a> {
+    runner: PassRunner<'a>,
+    experiments: &'a [&'a dyn Source],
+    kept: std::sync::Mutex<KeptPasses>,
+}
+
+/// What [`LocalPasses`] kept of each in-memory record — its regressor rows
+/// and where its facts visits stood — with a copy of the record, for the
+/// passes over longer records that begin with it ([`LocalPasses::continuing`]).
+pub struct PrefixRows {
+    records: Vec<Option<(Experiment, Continued)>>,
+    plans: KeptPlans,
+}
+
+/// What [`LocalPasses`] keeps: facts per request, each experiment's cache
+/// (none for a streamed one), and the bytes it may still keep.
+struct KeptPasses {
+    facts: Vec<((PredictorKind, u64), Vec<ExperimentFacts>)>,
+    records: Vec<Option<RecordCache>>,
+    /// The structural plans of the estimates made (their sign patterns
+    /// are those of records that may be continued: the key says them).
+    plans: KeptPlans,
+    budget: usize,
+    /// Serving several estimates: least squares keeps its rows too.
+    for_others: bool,
+}
+
+impl<'a> LocalPasses<'a> {
+    /// These passes, their data walks asking `interrupt` every few thousand
+    /// samples and skipping the rest of a pass once it says stop: for one
+    /// estimate only ([`estimate`] makes them), whose driver then stops with
+    /// `interrupted` — what a stopped pass kept must not serve another.
+    pub(super) fn interruptible(mut self, interrupt: Option<Interrupt>) -> LocalPasses<'a> {
+        self.runner.interrupt = interrupt;
+        self
+    }
+
+    /// Passes of `model` over `experiments`.
+    pub fn new(model: &'a dyn Model, experiments: &'a [&'a dyn Source]) -> LocalPasses<'a> {
+        LocalPasses {
+            runner: PassRunner::new(model),
+            experiments,
+            kept: std::sync::Mutex::new(KeptPasses {
+                facts: Vec::new(),
+                records: experiments
+                    .iter()
+                    .map(|e| e.in_memory().is_some().then(RecordCache::default))
+                    .collect(),
+                plans: Vec::new(),
+                budget: KEEP_BUDGET,
+                for_others: false,
+            }),
+        }
+    }
+
+    /// Keeps at most `bytes` for later passes (0: nothing; every pass then
+    /// computes everything, as for streamed records). The default is 512 MiB.
+    pub fn with_budget(self, bytes: usize) -> LocalPasses<'a> {
+        self.adjusted(|k| k.budget = bytes)
+    }
+
+    /// These passes will serve several estimates on the same records (the
+    /// study's four methods): a least-squares pass then keeps its regressor
+    /// rows for the instrumental estimates with the same plan.
+    pub fn for_several_estimates(self) -> LocalPasses<'a> {
+        self.adjusted(|k| k.for_others = true)
+    }
+
+    fn adjusted(self, f: impl FnOnce(&mut KeptPasses)) -> LocalPasses<'a> {
+        let mut kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
+        f(&mut kept);
+        LocalPasses {
+            runner: self.runner,
+            experiments: self.experiments,
+            kept: std::sync::Mutex::new(kept),
+        }
+    }
+
+    /// The regressor rows and facts visits these passes kept of each
+    /// in-memory record, to begin the passes over longer records that start
+    /// with the same samples ([`LocalPasses::continuing`]).
+    pub fn into_prefix_rows(self) -> PrefixRows {
+        let kept = self.kept.into_inner().unwrap_or_else(|p| p.into_inner());
+        PrefixRows {
+            records: self
+                .experiments
+                .iter()
+                .zip(kept.records)
+                .map(|(e, cache)| match (e.in_memory(), cache) {
+                    (Some(x), Some(c)) => Some((x.clone(), c.into_continued())),
+                    _ => None,
+                })
+                .collect(),
+            plans: kept.plans,
+        }
+    }
+
+    /// These passes begin with what `prefix` kept over shorter records:
+    /// where an experiment starts with the samples of the one `prefix` was
+    /// kept over (checked bit for bit), a scanning pass evaluates only the
+    /// regressors of the samples after them, and a facts visit reads only
+    /// those samples (the study, which estimates on longer and longer
+    /// prefixes of one record). The same summaries, sooner.
+    pub fn continuing(self, prefix: PrefixRows) -> LocalPasses<'a> {
+        let experiments = self.experiments;
+        self.adjusted(|k| {
+            k.plans = prefix.plans;
+            for ((e, cache), known) in experiments
+                .iter()
+                .zip(k.records.iter_mut())
+                .zip(prefix.records)
+            {
+                if let (Some(x), Some((before, rows))) = (e.in_memory(), known)
+                    && cache.is_some()
+                    && x.begins_with(&before)
+                {
+                    *cache = Some(RecordCache::with_prefix(rows, &mut k.budget));
+                }
+            }
+        })
+    }
+
+    /// The records passed over will be continued to at most `samples`
+    /// samples ([`LocalPasses::continuing`]): room for the longest record's
+    /// regressor rows is reserved at once, so that no pass copies them.
+    pub fn reserving(self, samples: usize) -> LocalPasses<'a> {
+        self.adjusted(|k| {
+            for c in k.records.iter_mut().flatten() {
+                c.reserve = samples;
+            }
+        })
+    }
+
+    fn kept(&self) -> std::sync::MutexGuard<'_, KeptPasses> {
+        // A poisoned lock only means an earlier pass panicked: what it kept
+        // is then dropped, not trusted.
+        self.kept.lock().unwrap_or_else(|poisoned| {
+            let mut k = poisoned.into_inner();
+            k.facts.clear();
+            k.records.iter_mut().for_each(|r| {
+                if r.is_some() {
+                    *r = Some(RecordCache::default());
+                }
+            });
+            k
+        })
+    }
+}
+
+impl Passes for LocalPasses<'_> {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        // Facts depend on the request only through the predictor kind and the spread.
+        let key = (request.method.predictor(), request.heading_spread.to_bits());
+        if let Some((_, f)) = self.kept().facts.iter().find(|(k, _)| *k == key) {
+            return Ok(f.clone());
+        }
+        // An in-memory record's visit goes on from where the last one over
+        // it (or over a record it begins with) stood.
+        let kind = request.method.predictor();
+        let from: Vec<Option<FactsState>> = self
+            .kept()
+            .records
+            .iter()
+            .map(|c| c.as_ref().and_then(|c| c.facts_state(kind)).cloned())
+            .collect();
+        let (facts, stands): (Vec<ExperimentFacts>, Vec<Option<FactsState>>) = self
+            .experiments
+            .iter()
+            .zip(from)
+            .map(|(e, from)| self.runner.facts_from(*e, request, from))
+            .unzip();
+        for (cache, stands) in self.kept().records.iter_mut().zip(stands) {
+            if let (Some(c), Some(s)) = (cache, stands) {
+                c.keep_facts_state(kind, s);
+            }
+        }
+        if self.experiments.iter().all(|e| e.in_memory().is_some()) {
+            self.kept().facts.push((key, facts.clone()));
+        }
+        Ok(facts)
+    }
+
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
+        let mut kept = self.kept();
+        let KeptPasses {
+            records,
+            budget,
+            for_others,
+            ..
+        } = &mut *kept;
+        let mut out = Vec::with_capacity(self.experiments.len());
+        for (i, (e, cache)) in self.experiments.iter().zip(records.iter_mut()).enumerate() {
+            let s = self.runner.pass_keeping(
+                *e,
+                i,
+                request,
+                cache.as_mut().map(|c| (c, &mut *budget, *for_others)),
+            );
+            let diverged = matches!(s.0, Summary::Diverged { .. });
+            out.push(s);
+            if diverged && stop_early {
+                break;
+            }
+        }
+        Ok(out)
+    }
+
+    fn known_plan(&self, key: &PlanKey) -> Option<std::sync::Arc<StructuralPlan>> {
+        let kept = self.kept();
+        kept.plans
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, p)| p.clone())
+    }
+
+    fn keep_plan(&self, key: PlanKey, plan: std::sync::Arc<StructuralPlan>) {
+        let mut kept = self.kept();
+        if !kept.plans.iter().any(|(k, _)| *k == key) {
+            kept.plans.push((key, plan));
+        }
+    }
+}
+
+/// A pass's request, facts or summaries as bytes (CBOR: every f64 bit for
+/// bit, NaN and infinities included), to send to workers and back.
+pub fn encode<T: Serialize>(value: &T) -> Vec<u8> {
+    let mut out = Vec::new();
+    // Writing into a Vec cannot fail, and these types serialise without error.
+    if let Err(e) = ciborium::into_writer(value, &mut out) {
+        unreachable!("a pass value failed to serialise: {e}");
+    }
+    out
+}
+
+/// Reads what [`encode`] wrote.
+pub fn decode<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, EstimateError> {
+    ciborium::from_reader(bytes).map_err(|e| {
+        err(
+            "invalid-pass",
+            format!("a pass message cannot be read: {e}"),
+            "driver and workers must run the same version of leeway",
+        )
+    })
+}
+
+/// A measured regressor or target that is not finite, or so large that
+/// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
+/// in equation `k` (regressors at `k − 1`): `(sample, what)`.
+pub(super) fn non_finite(
+    ir: &Ir,
+    kind: PredictorKind,
+    n: usize,
+    k: usize,
+    phi: &[f64],
+    t: &[f64],
+) -> Option<(usize, String)> {
+    // The common case in one branch-free sweep (NaN fails `<=` too): a
+    // count of the entries out of range vectorises (compare, mask, add);
+    // the rare bad value is then looked for entry by entry.
+    // `!(|x| <= limit)` and not `|x| > limit`: NaN must count.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    let out_of_range = |v: &[f64]| -> u64 {
+        v.iter()
+            .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))
+            .sum()
+    };
+    if out_of_range(phi) + out_of_range(t) == 0 {
+        return None;
+    }
+    let predictors = ir.predictors.get(kind);
+    let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
+    for (o, target) in t.iter().enumerate() {
+        for (c, col) in predictors.iter().enumerate().take(n) {
+            let v = phi[o * n + c];
+            if wrong(v) && v != 0.0 {
+                return Some((
+                    k - 1,
+                    format!(
+                        "the regressor {} of `{}` evaluates to {v:e}",
+                        col.name, ir.states[o]
+                    ),
+                ));
+            }
+        }
+        if wrong(*target) {
+            return Some((
+                k,
+                format!(
+                    "the difference quotient of `{}` evaluates to {target:e}",
+                    ir.states[o]
+                ),
+            ));
+        }
+    }
+    None
+}
+
+/// Whether `kind`'s regressors read disturbance values: only terms
+/// evaluated pointwise at the measured disturbances do (`Φ2` of IV3).
+fn reads_measured_disturbances(ir: &Ir, kind: PredictorKind) -> bool {
+    use leeway_structure::ir::{Entry, Pointwise};
+    ir.predictors.get(kind).iter().any(|c| {
+        c.entries.iter().any(|e| {
+            matches!(
+                e,
+                Entry::Term {
+                    pointwise: Pointwise::Measured,
+                    ..
+                }
+            )
+        })
+    })
+}

@@ -1,0 +1,210 @@
+//! Samples as estimators read them ([`Row`], [`Source`]) and experiments
+//! held in memory ([`Experiment`]).
+
+use leeway_structure::ir::{Ir, Rotation};
+
+/// The smallest number of samples an experiment may have.
+pub const MIN_SAMPLES: usize = 10;
+
+/// The data column a model signal is read from (`data { }` mapping or its own name).
+pub fn column_name(ir: &Ir, signal: &str) -> String {
+    ir.data_columns
+        .get(signal)
+        .cloned()
+        .unwrap_or_else(|| signal.to_string())
+}
+
+/// One sample as estimators read it.
+#[derive(Clone, Copy, Debug)]
+pub struct Row<'a> {
+    /// Measured states.
+    pub states: &'a [f64],
+    /// Inputs.
+    pub inputs: &'a [f64],
+    /// Measured heading (planar rotation; 0 otherwise).
+    pub heading: f64,
+    /// Measured rotation columns (measured `R`; empty otherwise).
+    pub rotation: &'a [f64],
+    /// Disturbance components by global index; measured ones from the data,
+    /// unmeasured ones 0.
+    pub disturbances: &'a [f64],
+}
+
+/// A sequence of samples that can be visited any number of times, in order.
+pub trait Source: Sync {
+    /// The experiment's name (file, or value of the `experiment` column).
+    fn name(&self) -> &str;
+    /// Number of samples.
+    fn len(&self) -> usize;
+    /// True when there are no samples.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The sample time `h`.
+    fn step(&self) -> f64;
+    /// Calls `f` on every sample in order.
+    fn visit(&self, f: &mut dyn FnMut(&Row));
+    /// Where sample `k` (from 0) comes from, for messages: `file:line` for a
+    /// file, the experiment and sample otherwise.
+    fn locate(&self, k: usize) -> String {
+        format!("experiment `{}`, sample {}", self.name(), k + 1)
+    }
+    /// The experiment itself when its samples are held in memory: passes
+    /// then walk its columns directly, and an estimate may keep what its
+    /// passes compute per sample for its later passes (its memory then
+    /// grows with the record, as the record's own does). Streamed sources
+    /// say `None`.
+    fn in_memory(&self) -> Option<&Experiment> {
+        None
+    }
+}
+
+/// An experiment held in memory, column by column.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Experiment {
+    /// Name.
+    pub name: String,
+    /// Sample time.
+    pub h: f64,
+    /// `states[i][k]`.
+    pub states: Vec<Vec<f64>>,
+    /// `inputs[i][k]`.
+    pub inputs: Vec<Vec<f64>>,
+    /// Heading per sample (planar rotation), else empty.
+    pub heading: Vec<f64>,
+    /// `rotation[c][k]` for a measured `R`.
+    pub rotation: Vec<Vec<f64>>,
+    /// `disturbances[c][k]` for measured components; empty for unmeasured ones.
+    pub disturbances: Vec<Vec<f64>>,
+}
+
+impl Experiment {
+    /// An empty experiment shaped for a model.
+    pub fn new(ir: &Ir, name: &str, h: f64) -> Experiment {
+        Experiment {
+            name: name.to_string(),
+            h,
+            states: vec![Vec::new(); ir.states.len()],
+            inputs: vec![Vec::new(); ir.inputs.len()],
+            heading: Vec::new(),
+            rotation: vec![
+                Vec::new();
+                if matches!(ir.rotation, Rotation::Measured { .. }) {
+                    ir.rotation_vars.len()
+                } else {
+                    0
+                }
+            ],
+            disturbances: vec![Vec::new(); ir.components.len()],
+        }
+    }
+    /// Appends one sample (`heading` ignored without a planar rotation,
+    /// `disturbances` read only for measured components).
+    pub fn push(&mut self, ir: &Ir, row: &Row) {
+        for (c, v) in self.states.iter_mut().zip(row.states) {
+            c.push(*v);
+        }
+        for (c, v) in self.inputs.iter_mut().zip(row.inputs) {
+            c.push(*v);
+        }
+        if matches!(ir.rotation, Rotation::Planar { .. }) {
+            self.heading.push(row.heading);
+        }
+        for (c, v) in self.rotation.iter_mut().zip(row.rotation) {
+            c.push(*v);
+        }
+        for (i, comp) in ir.components.iter().enumerate() {
+            if ir.disturbances[comp.disturbance].measured {
+                self.disturbances[i].push(row.disturbances.get(i).copied().unwrap_or(0.0));
+            }
+        }
+    }
+    /// True when this experiment's first samples are `prefix`'s samples,
+    /// bit for bit (same step, same columns).
+    pub fn begins_with(&self, prefix: &Experiment) -> bool {
+        let same = |a: &[f64], b: &[f64]| {
+            b.len() <= a.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+        };
+        let columns = |a: &[Vec<f64>], b: &[Vec<f64>]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(a, b)| same(a, b))
+        };
+        self.h.to_bits() == prefix.h.to_bits()
+            && prefix.len() <= self.len()
+            && columns(&self.states, &prefix.states)
+            && columns(&self.inputs, &prefix.inputs)
+            && same(&self.heading, &prefix.heading)
+            && self.heading.is_empty() == prefix.heading.is_empty()
+            && columns(&self.rotation, &prefix.rotation)
+            && columns(&self.disturbances, &prefix.disturbances)
+    }
+
+    /// The first `n` samples.
+    pub fn truncated(&self, n: usize) -> Experiment {
+        let cut = |v: &Vec<Vec<f64>>| v.iter().map(|c| c[..n.min(c.len())].to_vec()).collect();
+        Experiment {
+            name: self.name.clone(),
+            h: self.h,
+            states: cut(&self.states),
+            inputs: cut(&self.inputs),
+            heading: self.heading[..n.min(self.heading.len())].to_vec(),
+            rotation: cut(&self.rotation),
+            disturbances: cut(&self.disturbances),
+        }
+    }
+}
+
+impl Source for Experiment {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn len(&self) -> usize {
+        self.states.first().map_or(0, Vec::len)
+    }
+    fn step(&self) -> f64 {
+        self.h
+    }
+    fn in_memory(&self) -> Option<&Experiment> {
+        Some(self)
+    }
+    fn visit(&self, f: &mut dyn FnMut(&Row)) {
+        self.rows(f);
+    }
+}
+
+impl Experiment {
+    /// Calls `f` on every sample in order, as [`Source::visit`] does;
+    /// generic, so that `f` is inlined into the loop.
+    pub fn rows<F: FnMut(&Row)>(&self, f: F) {
+        self.rows_from(0, f);
+    }
+
+    /// Calls `f` on every sample from sample `start` on, in order.
+    pub fn rows_from<F: FnMut(&Row)>(&self, start: usize, mut f: F) {
+        let mut states = vec![0.0; self.states.len()];
+        let mut inputs = vec![0.0; self.inputs.len()];
+        let mut rotation = vec![0.0; self.rotation.len()];
+        let mut dist = vec![0.0; self.disturbances.len()];
+        for k in start..self.len() {
+            for (d, c) in states.iter_mut().zip(&self.states) {
+                *d = c[k];
+            }
+            for (d, c) in inputs.iter_mut().zip(&self.inputs) {
+                *d = c[k];
+            }
+            for (d, c) in rotation.iter_mut().zip(&self.rotation) {
+                *d = c[k];
+            }
+            for (d, c) in dist.iter_mut().zip(&self.disturbances) {
+                *d = c.get(k).copied().unwrap_or(0.0);
+            }
+            let heading = self.heading.get(k).copied().unwrap_or(0.0);
+            f(&Row {
+                states: &states,
+                inputs: &inputs,
+                heading,
+                rotation: &rotation,
+                disturbances: &dist,
+            });
+        }
+    }
+}

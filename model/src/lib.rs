@@ -1,0 +1,20 @@
+//! leeway-model: what every later stage shares about a craft. The [`Model`]
+//! trait that generated (`include_model!`) and interpreted models implement,
+//! the IR [`Interpreter`], samples and experiments as estimators read them
+//! ([`experiment`]), the sign patterns found in data ([`signs`]), simulation
+//! and fits ([`simulate`]), and the [`interrupt`] flag a caller raises to
+//! stop a long computation. No IO, no randomness.
+
+pub mod experiment;
+pub mod interp;
+pub mod interrupt;
+pub mod model;
+pub mod signs;
+pub mod simulate;
+
+#[doc(inline)]
+pub use experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
+#[doc(inline)]
+pub use interp::Interpreter;
+#[doc(inline)]
+pub use model::{Model, Signals, next_heading, planar_rotation};

@@ -1,0 +1,284 @@
+//! Simulation of a model on an input, the normalised fit, and validation:
+//! the fits of one θ on a recorded experiment (what `leeway validate` and
+//! `leeway.validate` report).
+
+use crate::experiment::{Experiment, Row, Source};
+use crate::model::{HeadingRotation, Model, Signals, next_heading};
+use leeway_structure::ir::Rotation;
+
+/// A simulated trajectory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Trajectory {
+    /// `states[i][k]`.
+    pub states: Vec<Vec<f64>>,
+    /// Heading per sample (planar rotation), else empty.
+    pub heading: Vec<f64>,
+    /// True when the simulation left the finite numbers and was stopped.
+    pub diverged: bool,
+}
+
+/// Disturbance values during a simulation.
+#[derive(Clone, Copy, Debug)]
+pub enum Disturbances<'a> {
+    /// Every component zero (undisturbed).
+    None,
+    /// Constant values per global component (earth frame for earth disturbances);
+    /// measured components are taken from the data when present.
+    Constant(&'a [f64]),
+}
+
+/// Simulates `model` with parameters `theta` from the data's first sample,
+/// driven by the data's inputs (and, for a measured `R`, its rotation; for
+/// measured disturbances, their recorded values). A planar heading is
+/// integrated from the first measured heading.
+pub fn simulate(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &dyn Source,
+    disturbances: Disturbances,
+) -> Trajectory {
+    let ir = model.ir();
+    let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    let mut states = vec![Vec::with_capacity(data.len()); ir.states.len()];
+    let mut heading = Vec::new();
+    let diverged = simulate_each(model, theta, data, disturbances, &mut |_, x, psi| {
+        for (s, v) in states.iter_mut().zip(x) {
+            s.push(*v);
+        }
+        if planar {
+            heading.push(psi);
+        }
+    });
+    Trajectory {
+        states,
+        heading,
+        diverged,
+    }
+}
+
+/// Simulates as [`simulate`] does, handing `each` every sample's row with
+/// the simulated states and heading at that sample (NaN once diverged)
+/// instead of keeping them: memory flat in the samples, for a simulation
+/// over a streamed record. Returns whether the simulation diverged.
+pub fn simulate_each(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &dyn Source,
+    disturbances: Disturbances,
+    each: &mut dyn FnMut(&Row, &[f64], f64),
+) -> bool {
+    let ir = model.ir();
+    let n_out = ir.states.len();
+    let n_comp = ir.components.len();
+    let h = data.step();
+    let planar = matches!(ir.rotation, Rotation::Planar { .. });
+    let mut x = vec![0.0; n_out];
+    let mut next = vec![0.0; n_out];
+    let mut f = vec![0.0; n_out];
+    let mut psi = 0.0;
+    // The integrated heading's rotation, by small steps (re-anchored).
+    let mut headings = HeadingRotation::default();
+    let mut dist = vec![0.0; n_comp];
+    let mut k = 0usize;
+    let mut diverged = false;
+    data.visit(&mut |row| {
+        if k == 0 {
+            x.copy_from_slice(row.states);
+            psi = row.heading;
+        }
+        each(row, &x, psi);
+        for (c, value) in dist.iter_mut().enumerate() {
+            *value = if ir.disturbances[ir.components[c].disturbance].measured {
+                row.disturbances[c]
+            } else {
+                match disturbances {
+                    Disturbances::None => 0.0,
+                    Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
+                }
+            };
+        }
+        let rot_buf;
+        let rotation: &[f64] = if planar {
+            rot_buf = headings.next(psi);
+            &rot_buf
+        } else {
+            row.rotation
+        };
+        if !diverged {
+            let sig = Signals {
+                states: &x,
+                inputs: row.inputs,
+                rotation,
+                disturbances: &dist,
+            };
+            model.step(theta, h, &sig, &mut f, &mut next);
+            psi = next_heading(ir, psi, h, &x);
+            if next.iter().any(|v| !v.is_finite() || v.abs() > 1e12) {
+                diverged = true;
+                next.fill(f64::NAN);
+            }
+            x.copy_from_slice(&next);
+        }
+        k += 1;
+    });
+    diverged
+}
+
+/// The normalised fit `100·(1 − ‖y − ŷ‖ / ‖y − ȳ‖)` (100 is perfect; may be
+/// negative). `NaN` when the measurement is constant or the simulation diverged.
+pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
+    let n = y.len().min(yhat.len());
+    if n == 0 {
+        return f64::NAN;
+    }
+    let mean = y[..n].iter().sum::<f64>() / n as f64;
+    let num: f64 = y[..n]
+        .iter()
+        .zip(&yhat[..n])
+        .map(|(a, b)| (a - b) * (a - b))
+        .sum::<f64>()
+        .sqrt();
+    let den: f64 = y[..n]
+        .iter()
+        .map(|a| (a - mean) * (a - mean))
+        .sum::<f64>()
+        .sqrt();
+    if den == 0.0 || !num.is_finite() {
+        return f64::NAN;
+    }
+    100.0 * (1.0 - num / den)
+}
+
+/// Fit of every output of a simulation against an experiment, in the
+/// model's state order: [`fit`] of each measured state against its
+/// simulation, as `leeway validate` reports it.
+pub fn fits(data: &Experiment, sim: &Trajectory) -> Vec<f64> {
+    data.states
+        .iter()
+        .zip(&sim.states)
+        .map(|(y, s)| fit(y, s))
+        .collect()
+}
+
+/// Fit of the integrated heading of a simulation against the measured one
+/// ([`unwrap_heading`]), as `leeway validate` reports it; `NaN` when the
+/// model has no planar heading (the simulation integrates none).
+pub fn heading_fit(data: &Experiment, sim: &Trajectory) -> f64 {
+    fit(&unwrap_heading(&data.heading), &sim.heading)
+}
+
+/// The measured heading unwrapped (steps taken along the short arc), so that
+/// it compares with a simulation, which integrates the yaw rate without
+/// wrapping.
+pub fn unwrap_heading(heading: &[f64]) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let mut out = Vec::with_capacity(heading.len());
+    let mut acc = 0.0;
+    for (k, psi) in heading.iter().enumerate() {
+        if k == 0 {
+            acc = *psi;
+        } else {
+            let d = psi - heading[k - 1];
+            acc += d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor();
+        }
+        out.push(acc);
+    }
+    out
+}
+
+/// One θ simulated on one recorded experiment, against its measurement.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Validation {
+    /// The simulation (from the experiment's first sample, with its inputs,
+    /// measured disturbances and rotation).
+    pub trajectory: Trajectory,
+    /// Fit per state in % ([`fit`]); `None` when the measurement is constant
+    /// or the simulation diverged.
+    pub fits: Vec<Option<f64>>,
+    /// For a planar heading, the fit of the integrated heading against the
+    /// measured one [`unwrap_heading`] (`Some(None)` when undefined); `None` for
+    /// a model without one.
+    pub heading_fit: Option<Option<f64>>,
+}
+
+impl Validation {
+    /// The simulation left the finite numbers.
+    pub fn diverged(&self) -> bool {
+        self.trajectory.diverged
+    }
+
+    /// The fits per output: the states, then the heading when integrated.
+    pub fn outputs(&self) -> Vec<Option<f64>> {
+        let mut out = self.fits.clone();
+        out.extend(self.heading_fit);
+        out
+    }
+}
+
+/// Simulates `model` with `theta` on the experiment and fits every output,
+/// as MATLAB's `compare` does.
+pub fn validate(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &Experiment,
+    disturbances: Disturbances,
+) -> Validation {
+    let trajectory = simulate(model, theta, data, disturbances);
+    let fits = fits(data, &trajectory)
+        .into_iter()
+        .map(|f| f.is_finite().then_some(f))
+        .collect();
+    // A diverged simulation has no fit, its integrated heading included
+    // (the heading stays finite for a while after the states run away).
+    let heading_fit = matches!(model.ir().rotation, Rotation::Planar { .. }).then(|| {
+        let f = heading_fit(data, &trajectory);
+        (f.is_finite() && !trajectory.diverged).then_some(f)
+    });
+    Validation {
+        trajectory,
+        fits,
+        heading_fit,
+    }
+}
+
+impl Validation {
+    /// A warning when the simulation fits an output worse than the
+    /// measurement's own mean would (a fit below 0 %): such a model does not
+    /// describe the data, whatever else it fits. `names`: the outputs (the
+    /// states, then the heading), `what`: the θ and experiment, for the text.
+    pub fn below_mean(&self, names: &[String], what: &str) -> Option<String> {
+        if self.diverged() {
+            return None; // said as a divergence
+        }
+        let below: Vec<String> = names
+            .iter()
+            .zip(self.outputs())
+            .filter_map(|(n, f)| f.filter(|f| *f < 0.0).map(|f| format!("`{n}` at {f:.1} %")))
+            .collect();
+        (!below.is_empty()).then(|| {
+            format!(
+                "{what}: the simulation fits {} — worse than the data's mean, a constant, would: the model does not describe these data",
+                leeway_structure::grammar::and_list(below)
+            )
+        })
+    }
+}
+
+/// The mean fit over experiments per output ([`Validation::outputs`]):
+/// `None` for every output when an experiment diverged (a mean would flatter
+/// the model), and for an output no experiment defines; experiments whose
+/// measurement is constant (fit undefined) are left out.
+pub fn mean_fits(validations: &[Validation]) -> Vec<Option<f64>> {
+    let outputs: Vec<Vec<Option<f64>>> = validations.iter().map(Validation::outputs).collect();
+    let n = outputs.first().map_or(0, Vec::len);
+    let diverged = validations.iter().any(Validation::diverged);
+    (0..n)
+        .map(|o| {
+            if diverged {
+                return None;
+            }
+            let defined: Vec<f64> = outputs.iter().filter_map(|f| f[o]).collect();
+            (!defined.is_empty()).then(|| defined.iter().sum::<f64>() / defined.len() as f64)
+        })
+        .collect()
+}

@@ -1,0 +1,508 @@
+//! leeway-report: what the CLI and the Python package both report: the JSON documents of
+//! `leeway check --json` ([`check`]) and `leeway estimate --json` (a contract scripts rely on:
+//! README, "Estimating"; fields may be added, none renamed or removed), and
+//! the checks of the data that come with it (the heading's unit, angles
+//! logged in degrees). Kept here, beside the estimator, so that
+//! `leeway.Estimate.to_json()` and the CLI print the same bytes from one
+//! piece of code.
+
+pub mod check;
+
+use leeway_data::{FileNotes, heading_gain};
+use leeway_estimate::{ColumnEstimate, Diagnostics, Estimate, Method};
+use leeway_model::experiment::Source;
+use leeway_model::signs::ArgSign;
+use leeway_structure::ir::{Ir, Rotation};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A JSON object whose keys keep the order given (the model's order), not
+/// the alphabetical order of a map.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ordered<T>(pub Vec<(String, T)>);
+
+impl<T> Default for Ordered<T> {
+    fn default() -> Ordered<T> {
+        Ordered(Vec::new())
+    }
+}
+
+impl<T: Serialize> Serialize for Ordered<T> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+/// Words in an input's name or column that say it is an angle.
+const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
+
+/// An input without a declared unit, named like an angle (`delta`,
+/// `rudder_deg`, ...), whose values exceed π in magnitude is probably an
+/// angle logged in degrees: say so, with the declaration that fixes it. Only
+/// the name can tell an angle from a force of the same magnitude, so inputs
+/// named otherwise are left alone rather than warned about on every run.
+pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
+    unit_warnings_from_peaks(ir, &input_peaks(ir, experiments))
+}
+
+/// The inputs whose name or column reads like an angle without a declared unit.
+fn angle_like_inputs(ir: &Ir) -> Vec<usize> {
+    ir.inputs
+        .iter()
+        .enumerate()
+        .filter(|(_, name)| {
+            let column = leeway_model::experiment::column_name(ir, name).to_lowercase();
+            let angle_like = ANGLE_WORDS
+                .iter()
+                .any(|w| name.to_lowercase().contains(w) || column.contains(w));
+            !ir.data_units.contains_key(*name) && angle_like
+        })
+        .map(|(i, _)| i)
+        .collect()
+}
+
+/// The largest magnitude of every angle-like input over the experiments (0
+/// for the other inputs): what [`unit_warnings`] judges. Peaks of disjoint
+/// sets of experiments combine by their maximum, exactly.
+pub fn input_peaks(ir: &Ir, experiments: &[&dyn Source]) -> Vec<f64> {
+    let angle_like = angle_like_inputs(ir);
+    let mut peaks = vec![0.0f64; ir.inputs.len()];
+    if angle_like.is_empty() {
+        return peaks;
+    }
+    // One visit of every experiment for all such inputs.
+    for e in experiments {
+        e.visit(&mut |row| {
+            for &i in &angle_like {
+                if let Some(v) = row.inputs.get(i) {
+                    peaks[i] = peaks[i].max(v.abs());
+                }
+            }
+        });
+    }
+    peaks
+}
+
+/// [`unit_warnings`] from the peaks of [`input_peaks`].
+pub fn unit_warnings_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<String> {
+    let mut out = Vec::new();
+    for i in angle_like_inputs(ir) {
+        let (name, peak) = (&ir.inputs[i], peaks.get(i).copied().unwrap_or(0.0));
+        if peak > std::f64::consts::PI {
+            out.push(format!(
+                "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
+            ));
+        }
+    }
+    out
+}
+
+/// The heading gain of every experiment (`None` without a planar heading or
+/// with too little yaw motion to tell), one visit each.
+pub fn heading_gains(ir: &Ir, experiments: &[&dyn Source]) -> Vec<(String, Option<f64>)> {
+    if heading_name(ir).is_none() {
+        return Vec::new();
+    }
+    experiments
+        .iter()
+        .map(|e| (e.name().to_string(), heading_gain(ir, *e)))
+        .collect()
+}
+
+/// The heading's unit check (SPEC §5): a warning with the measured gain of
+/// `Δψ/h` on the yaw rate when it is off by more than 20 %, from the gains of
+/// [`heading_gains`].
+pub fn heading_warnings(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<String> {
+    let Some(heading) = heading_name(ir) else {
+        return Vec::new();
+    };
+    gains
+        .iter()
+        .filter_map(|(name, gain)| {
+            let gain = (*gain)?;
+            ((gain - 1.0).abs() > 0.2).then(|| heading_warning(ir, name, &heading, gain))
+        })
+        .collect()
+}
+
+fn heading_name(ir: &Ir) -> Option<String> {
+    match &ir.rotation {
+        Rotation::Planar { heading, .. } => {
+            Some(leeway_model::experiment::column_name(ir, heading))
+        }
+        _ => None,
+    }
+}
+
+fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> String {
+    let rate = match &ir.rotation {
+        Rotation::Planar { integrates, .. } => {
+            ir.states.get(*integrates).map_or("r", String::as_str)
+        }
+        _ => "r",
+    };
+    // Far above 1 points at degrees (57.3 = 180/π); the figure itself is
+    // reported as measured, whatever it is.
+    let why = if gain > 20.0 {
+        "a gain near 57.3 (180/π) means the heading is in degrees while the model works in radians"
+    } else {
+        "check the units and frame of both columns"
+    };
+    format!(
+        "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
+    )
+}
+
+/// The JSON form of the loading notes (README: `data_files`).
+#[derive(Debug, serde::Serialize)]
+pub struct DataFileJson {
+    /// The file as given.
+    pub file: String,
+    /// Lines skipped as comments (`#`).
+    pub comment_lines: usize,
+    /// Lines skipped as blank (only whitespace).
+    pub blank_lines: usize,
+    /// Per experiment: rows read, largest relative step deviation, samples after resampling.
+    pub experiments: Vec<DataExperimentJson>,
+}
+
+/// One experiment of [`DataFileJson`].
+#[derive(Debug, serde::Serialize)]
+pub struct DataExperimentJson {
+    /// The experiment's name.
+    pub name: String,
+    /// Rows read from the file.
+    pub rows: usize,
+    /// Largest `|Δt − h|/h` over the steps (null without a time column).
+    pub max_step_deviation: Option<f64>,
+    /// Samples after `--resample` (null when not resampled).
+    pub resampled: Option<usize>,
+}
+
+/// [`FileNotes`] as JSON.
+pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
+    notes
+        .iter()
+        .map(|f| DataFileJson {
+            file: f.file.clone(),
+            comment_lines: f.comment_lines,
+            blank_lines: f.blank_lines,
+            experiments: f
+                .experiments
+                .iter()
+                .map(|e| DataExperimentJson {
+                    name: e.experiment.clone(),
+                    rows: e.rows,
+                    max_step_deviation: e.max_step_deviation,
+                    resampled: e.resampled,
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// What an estimate produced besides θ, for the report: the model, the
+/// experiments read and what reading them noted.
+#[derive(Clone, Copy, Debug)]
+pub struct Estimated<'a> {
+    /// The model's name.
+    pub model: &'a str,
+    /// The estimate.
+    pub estimate: &'a Estimate,
+    /// Experiment names with their sample counts.
+    pub experiments: &'a [(String, usize)],
+    /// The heading's unit check per experiment ([`heading_gains`]).
+    pub heading_gains: &'a [(String, Option<f64>)],
+    /// What reading each data file noted (comment lines, jitter, resampling).
+    pub data_notes: &'a [FileNotes],
+    /// The units declared in the model's `data { }`, by signal.
+    pub data_units: &'a BTreeMap<String, String>,
+}
+
+/// The document of `leeway estimate --json`. `E` is the shape of an error
+/// (the CLI's model diagnostics or located problems).
+#[derive(Debug, Serialize)]
+pub struct EstimateReport<E> {
+    /// `model Name`, or null when the model did not compile (set whenever it
+    /// compiled, also on a data or estimate error).
+    pub model: Option<String>,
+    /// The model file as given.
+    pub file: String,
+    /// The data files as given.
+    pub data: Vec<String>,
+    /// `ls`, `iv1`, `iv2` or `iv3`.
+    pub method: &'static str,
+    /// Experiments and their sample counts.
+    experiments: Vec<ExperimentJson>,
+    /// θ by name, in the model's order (held parameters at their nominal value).
+    estimates: Ordered<f64>,
+    /// Standard errors of θ (null for held parameters).
+    std_errors: Ordered<Option<f64>>,
+    /// The covariance of θ, `{row: {column: number or null}}` in the model's
+    /// order (the sandwich the standard errors come from; null where a
+    /// parameter was not estimated).
+    covariance: Ordered<Ordered<Option<f64>>>,
+    /// θ with status and meaning.
+    parameters: Vec<Column>,
+    /// The nuisance parameters (moments of the unmeasured disturbances times θ).
+    nuisance: Vec<Column>,
+    /// `{disturbance: {component: {mean, std_error}}}` for unmeasured media.
+    disturbances: Ordered<Ordered<Moment>>,
+    /// Per experiment, the sign of every modulus argument.
+    sign_patterns: Vec<SignPattern>,
+    /// How the estimate was computed (an empty object on error).
+    diagnostics: serde_json::Value,
+    /// Per data file: comment lines skipped, time-stamp jitter, resampling.
+    data_files: Vec<DataFileJson>,
+    /// `{signal: unit}` as declared in the model's `data { }` (values converted to base units).
+    data_units: Ordered<String>,
+    /// Model warnings, data checks, estimator warnings.
+    pub warnings: Vec<String>,
+    /// Facts worth knowing that need no action (e.g. pointwise moduli crossing zero).
+    notes: Vec<String>,
+    /// Why nothing was estimated.
+    pub errors: Vec<E>,
+}
+
+#[derive(Debug, Serialize)]
+struct ExperimentJson {
+    name: String,
+    samples: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct Column {
+    name: String,
+    /// `theta`, `rho` or `lambda`.
+    kind: &'static str,
+    value: Option<f64>,
+    std_error: Option<f64>,
+    /// `estimated`, `held at nominal`, `held at 0`, `dropped`.
+    status: String,
+    /// What the value estimates.
+    estimates: String,
+    /// For a parameter that estimates an aggregate, the sum it stands for
+    /// (`X_uu + W_uu`); null otherwise.
+    aggregate: Option<String>,
+}
+
+#[derive(Debug, Serialize)]
+struct Moment {
+    mean: f64,
+    std_error: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+struct SignPattern {
+    experiment: String,
+    /// `{argument: "+" | "-"}` for the arguments the predictor fixes.
+    pattern: Ordered<&'static str>,
+    arguments: Vec<Argument>,
+    /// Arguments relative to a measured medium, evaluated pointwise by IV3.
+    pointwise: Vec<Argument>,
+}
+
+#[derive(Debug, Serialize)]
+struct Argument {
+    argument: String,
+    sign: &'static str,
+    /// Fraction of the samples with the other sign (0 when paper A7 holds).
+    minority_fraction: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct DiagnosticsJson<'a> {
+    #[serde(flatten)]
+    estimator: &'a Diagnostics,
+    /// Gain of `Δψ/h` on the yaw rate per experiment (≈ 1 when consistent).
+    heading_gains: Ordered<Option<f64>>,
+}
+
+/// `+` or `-` for a sign.
+pub fn sign_symbol(s: i8) -> &'static str {
+    if s < 0 { "-" } else { "+" }
+}
+
+fn argument(a: &ArgSign) -> Argument {
+    Argument {
+        argument: a.argument.clone(),
+        sign: sign_symbol(a.sign),
+        minority_fraction: a.minority_fraction,
+    }
+}
+
+fn column(c: &ColumnEstimate, aggregates: &[String]) -> Column {
+    Column {
+        aggregate: aggregate_of(c, aggregates),
+        name: c.name.clone(),
+        kind: c.kind,
+        value: c.value,
+        std_error: c.std_error,
+        status: c.status.clone(),
+        estimates: c.estimates.clone(),
+    }
+}
+
+/// What an estimated parameter stands for when it is an aggregate (`X_uu +
+/// W_uu`): its column estimates more than itself, or the estimator's
+/// diagnostics name it (`X_uu estimates …`).
+pub fn aggregate_of(c: &ColumnEstimate, aggregates: &[String]) -> Option<String> {
+    if c.kind != "theta" || c.value.is_none() || c.status.starts_with("held") {
+        return None;
+    }
+    if c.estimates != c.name && !c.estimates.is_empty() {
+        return Some(c.estimates.clone());
+    }
+    let prefix = format!("{} estimates ", c.name);
+    aggregates.iter().find_map(|a| {
+        let rest = a.strip_prefix(&prefix)?;
+        // The remark in parentheses is said once, in the diagnostics.
+        Some(rest.split(" (").next().unwrap_or(rest).to_string())
+    })
+}
+
+/// The means of the unmeasured disturbances grouped by disturbance, in the
+/// estimator's order.
+fn disturbances(e: &Estimate) -> Ordered<Ordered<Moment>> {
+    let mut out: Vec<(String, Ordered<Moment>)> = Vec::new();
+    for m in &e.disturbances {
+        let moment = Moment {
+            mean: m.mean,
+            std_error: m.std_error,
+        };
+        match out.iter_mut().find(|(d, _)| *d == m.disturbance) {
+            Some((_, comps)) => comps.0.push((m.component.clone(), moment)),
+            None => out.push((
+                m.disturbance.clone(),
+                Ordered(vec![(m.component.clone(), moment)]),
+            )),
+        }
+    }
+    Ordered(out)
+}
+
+/// The document for a result (`Ok`) or the errors that stopped it. `model`
+/// names the model when it compiled (also on a data or estimate error);
+/// `file` and `data` name the model and data files as given.
+pub fn estimate_report<E>(
+    file: String,
+    data: Vec<String>,
+    method: Method,
+    model: Option<String>,
+    result: Result<Estimated<'_>, Vec<E>>,
+    warnings: Vec<String>,
+) -> EstimateReport<E> {
+    let mut r = EstimateReport {
+        model,
+        file,
+        data,
+        method: method.name(),
+        experiments: Vec::new(),
+        estimates: Ordered::default(),
+        std_errors: Ordered::default(),
+        covariance: Ordered::default(),
+        parameters: Vec::new(),
+        nuisance: Vec::new(),
+        disturbances: Ordered::default(),
+        sign_patterns: Vec::new(),
+        diagnostics: serde_json::Value::Object(serde_json::Map::new()),
+        data_files: Vec::new(),
+        data_units: Ordered::default(),
+        warnings,
+        notes: Vec::new(),
+        errors: Vec::new(),
+    };
+    let o = match result {
+        Ok(o) => o,
+        Err(errors) => {
+            r.errors = errors;
+            return r;
+        }
+    };
+    let e = o.estimate;
+    r.model = Some(o.model.to_string());
+    r.notes = e.notes.clone();
+    r.data_files = data_files_json(o.data_notes);
+    r.data_units = Ordered(
+        o.data_units
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect(),
+    );
+    r.experiments = o
+        .experiments
+        .iter()
+        .map(|(name, samples)| ExperimentJson {
+            name: name.clone(),
+            samples: *samples,
+        })
+        .collect();
+    r.estimates = Ordered(e.parameters.iter().cloned().zip(e.theta.clone()).collect());
+    r.std_errors = Ordered(
+        e.parameters
+            .iter()
+            .cloned()
+            .zip(e.std_errors.clone())
+            .collect(),
+    );
+    r.covariance = Ordered(
+        e.parameters
+            .iter()
+            .zip(&e.covariance)
+            .map(|(name, row)| {
+                let row = e.parameters.iter().cloned().zip(row.clone()).collect();
+                (name.clone(), Ordered(row))
+            })
+            .collect(),
+    );
+    r.parameters = e
+        .columns
+        .iter()
+        .filter(|c| c.kind == "theta")
+        .map(|c| column(c, &e.diagnostics.aggregates))
+        .collect();
+    r.nuisance = e
+        .columns
+        .iter()
+        .filter(|c| c.kind != "theta")
+        .map(|c| column(c, &e.diagnostics.aggregates))
+        .collect();
+    r.disturbances = disturbances(e);
+    r.sign_patterns = e
+        .sign_patterns
+        .iter()
+        .map(|s| SignPattern {
+            experiment: s.experiment.clone(),
+            pattern: Ordered(
+                s.arguments
+                    .iter()
+                    .map(|a| (a.argument.clone(), sign_symbol(a.sign)))
+                    .collect(),
+            ),
+            arguments: s.arguments.iter().map(argument).collect(),
+            pointwise: s.pointwise.iter().map(argument).collect(),
+        })
+        .collect();
+    let diagnostics = DiagnosticsJson {
+        estimator: &e.diagnostics,
+        heading_gains: Ordered(o.heading_gains.to_vec()),
+    };
+    // Plain structs of strings and numbers always serialise; an empty object
+    // is the documented shape on error should that ever change.
+    r.diagnostics = serde_json::to_value(&diagnostics)
+        .unwrap_or_else(|_| serde_json::Value::Object(serde_json::Map::new()));
+    r
+}
+
+impl<E: Serialize> EstimateReport<E> {
+    /// The document as the CLI prints it (pretty, two-space indent, no
+    /// trailing newline).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        serde_json::to_string_pretty(self)
+    }
+}

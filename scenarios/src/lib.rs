@@ -1,0 +1,11 @@
+//! leeway-scenarios: data leeway makes up, seeded and reproducible at any
+//! thread count. Synthetic experiments from a true system ([`synth`]), the
+//! paper's Monte Carlo study ([`study`]), a tanker zigzag campaign
+//! ([`zigzag`]) and the checks of an input design on the true trajectory
+//! ([`design`]). The only crate of the workspace that uses random numbers
+//! (rand, rand_chacha, rand_distr) and threads (rayon).
+
+pub mod design;
+pub mod study;
+pub mod synth;
+pub mod zigzag;
