@@ -5,7 +5,6 @@
 
 use crate::error::DataError;
 use crate::options::LoadOptions;
-use crate::validate::Block;
 use leeway_structure::ir::Ir;
 
 /// The most extreme samples of each signal column kept for the outlier check.
@@ -147,6 +146,14 @@ impl TimeScan {
     }
 }
 
+/// What [`sample_time`] reads of one experiment's block.
+#[derive(Clone, Copy)]
+pub(super) struct BlockTimes<'a> {
+    pub(super) times: &'a TimeScan,
+    pub(super) rows: usize,
+    pub(super) first: u64,
+}
+
 /// The sample time of one experiment and the largest relative deviation of
 /// its steps from it (`None` without time stamps). The nominal step is the
 /// mean step; every step must lie within `options.time_tolerance` of it, in
@@ -156,7 +163,7 @@ impl TimeScan {
 pub(super) fn sample_time(
     file: &str,
     ir: &Ir,
-    block: &Block,
+    block: BlockTimes<'_>,
     at: &dyn Fn(u64) -> String,
     options: &LoadOptions,
 ) -> Result<(f64, Option<f64>), DataError> {

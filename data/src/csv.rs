@@ -3,7 +3,7 @@
 //! the file's records) and the CSV entry points.
 
 use crate::error::DataError;
-use crate::file::open_path;
+use crate::open::open_path;
 use crate::notes::LoadedFile;
 use crate::options::LoadOptions;
 use crate::spill::StreamedFile;

@@ -29,6 +29,7 @@ pub mod error;
 pub mod file;
 pub mod input;
 pub mod notes;
+mod open;
 pub mod options;
 #[cfg(feature = "parquet")]
 pub mod parquet;

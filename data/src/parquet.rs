@@ -25,7 +25,7 @@
 //! stored one, is verified: a flipped bit is an error, not a changed number.
 
 use crate::error::DataError;
-use crate::file::open_path;
+use crate::open::open_path;
 use crate::validate::{Places, Table, finite, missing, not_a_number};
 use parquet::column::reader::{ColumnReader, ColumnReaderImpl};
 use parquet::data_type::DataType;

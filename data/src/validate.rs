@@ -7,7 +7,7 @@
 //! terms ([`Places`]). [`load_table`] holds the validated experiments in
 //! memory; `open_table` (in `spill`) streams them through a binary copy.
 
-use crate::checks::{Extremes, TimeScan, sample_time};
+use crate::checks::{BlockTimes, Extremes, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};
 use crate::error::DataError;
 use crate::notes::{FileNotes, LoadedFile, TimeNotes};
@@ -498,7 +498,13 @@ pub(super) fn scan(
         }
         let time_at =
             |position: u64| table.at(position, Some((layout.time_col.unwrap_or(0), "time")));
-        let (h, deviation) = sample_time(table.file(), ir, block, &time_at, options)?;
+        let (h, deviation) = sample_time(
+            table.file(),
+            ir,
+            BlockTimes { times: &block.times, rows: block.rows, first: block.first },
+            &time_at,
+            options,
+        )?;
         block.h = h;
         notes.experiments.push(TimeNotes {
             experiment: block.name.clone(),

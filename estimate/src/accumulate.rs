@@ -1,6 +1,11 @@
 //! One accumulation pass: moment sums per experiment and output, and the moment equations they give.
 
-use super::*;
+use crate::estimator::Estimator;
+use crate::moments::CrossMoments;
+use crate::outcome::{EstimateError, err};
+use crate::protocol::{BadValue, Pass, PassRequest, PrefixInstruments, Summary};
+use leeway_structure::identify::Centring;
+use nalgebra::{DMatrix, DVector};
 
 /// How a moment pass ended.
 pub(super) enum Accumulated {

@@ -1,9 +1,11 @@
 //! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation — values later passes would compute again bit for bit.
 
-use super::record::{FactsState, FixedSignColumn};
-use super::walk::SimWalk;
-use super::*;
+use crate::method::Instruments;
 use crate::moments::{PartialSums, RegressorRows};
+use crate::protocol::PassPlan;
+use crate::record::{ExperimentInfo, FactsState, FixedSignColumn};
+use crate::walk::{History, SimWalk};
+use leeway_structure::ir::PredictorKind;
 
 /// The most one [`LocalPasses`] keeps for later passes, over all its
 /// records (bytes). What does not fit is computed again on every pass, as

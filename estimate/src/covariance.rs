@@ -1,6 +1,14 @@
 //! The sandwich covariance of the estimated columns (long-run sums of the moment residuals).
 
-use super::*;
+use crate::accumulate::mismatched;
+use crate::estimator::Estimator;
+use crate::method::Method;
+use crate::moments::CrossMoments;
+use crate::outcome::EstimateError;
+use crate::protocol::{LongRunPass, Pass, PassRequest, Summary};
+use crate::solve::BlockSolution;
+use nalgebra::DMatrix;
+use std::collections::BTreeMap;
 
 /// Covariance entries by (column, column) of the estimated columns.
 pub(super) type ColumnCovariance = BTreeMap<(usize, usize), f64>;

@@ -1,6 +1,10 @@
 //! Unmeasured disturbance means from the nuisance estimates (paper Corollary 1).
 
-use super::*;
+use crate::estimator::Estimator;
+use crate::outcome::DisturbanceMoment;
+use leeway_structure::ir::{ColumnKind, PredictorKind};
+use nalgebra::{DMatrix, DVector};
+use std::collections::BTreeMap;
 
 /// `(kept column, [(component, parameter, coefficient)])`: what a kept ρ column
 /// estimates in terms of disturbance means and θ.

@@ -1,7 +1,8 @@
 //! What an estimate returns: θ, the nuisance columns, disturbance moments, diagnostics, errors.
 
-use super::ExperimentSigns;
-use super::Method;
+use crate::method::Method;
+use leeway_model::signs::ExperimentSigns;
+
 use serde::Serialize;
 
 /// One column's estimate (θ or nuisance).
@@ -68,7 +69,7 @@ pub struct Diagnostics {
     /// What kept parameters estimate when others were held.
     pub aggregates: Vec<String>,
     /// The estimate's own simulation on its data (`None` when not asked:
-    /// [`EstimateOptions::own_simulation`](super::EstimateOptions::own_simulation)).
+    /// [`EstimateOptions::own_simulation`](crate::EstimateOptions::own_simulation)).
     pub own_simulation: Option<OwnSimulation>,
 }
 
@@ -132,7 +133,7 @@ pub struct Estimate {
     pub notes: Vec<String>,
     /// The simulation whose instruments gave a refined IV estimate that
     /// settled (`None` otherwise): what a warm start on longer records that
-    /// begin with these experiments continues ([`super::Start::from_estimate`]).
+    /// begin with these experiments continues ([`crate::Start::from_estimate`]).
     #[serde(skip)]
     pub instrument_simulation: Option<InstrumentSimulation>,
 }

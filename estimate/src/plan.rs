@@ -1,6 +1,17 @@
 //! What is estimated before any data pass: the structural analysis for the experiments' sign patterns, held columns, blocks of outputs, the meaning of each kept column.
 
-use super::*;
+use crate::options::EstimateOptions;
+use crate::outcome::{EstimateError, err};
+use crate::record::ExperimentInfo;
+use leeway_model::signs::ExperimentSigns;
+use leeway_structure::exact::Q;
+use leeway_structure::identify::Centring;
+use leeway_structure::identify::{
+    Analysis, ExperimentStructure, Patterns, constant_parameters, linear_text, patterns_text,
+    verdict,
+};
+use leeway_structure::ir::{ColumnKind, Ir, PredictorKind};
+use std::collections::BTreeMap;
 
 /// What an estimate's structural analysis depends on: the predictor, the
 /// centring, whether unidentifiable parameters are aggregated (and the
@@ -8,11 +19,11 @@ use super::*;
 /// pattern, sign-changing arguments and frozen rotation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PlanKey {
-    kind: PredictorKind,
-    centring: Centring,
-    aggregate: bool,
-    nominal: Vec<u64>,
-    experiments: Vec<ExperimentStructure>,
+    pub(crate) kind: PredictorKind,
+    pub(crate) centring: Centring,
+    pub(crate) aggregate: bool,
+    pub(crate) nominal: Vec<u64>,
+    pub(crate) experiments: Vec<ExperimentStructure>,
 }
 
 /// What the structural analysis fixed for an estimate (see [`PlanKey`]):
@@ -22,141 +33,25 @@ pub struct PlanKey {
 /// ([`Passes::known_plan`]).
 #[derive(Clone, Debug)]
 pub struct StructuralPlan {
-    constant_cols: Vec<bool>,
-    blocks: Vec<Block>,
-    block_of_output: Vec<usize>,
-    held: Vec<(usize, f64)>,
-    preference: Vec<usize>,
-    meaning: BTreeMap<usize, Vec<(usize, f64)>>,
+    pub(crate) constant_cols: Vec<bool>,
+    pub(crate) blocks: Vec<Block>,
+    pub(crate) block_of_output: Vec<usize>,
+    pub(crate) held: Vec<(usize, f64)>,
+    pub(crate) preference: Vec<usize>,
+    pub(crate) meaning: BTreeMap<usize, Vec<(usize, f64)>>,
     /// What each predictor column estimates, as the report states it.
-    column_texts: std::sync::Arc<[String]>,
-    aggregates: Vec<String>,
+    pub(crate) column_texts: std::sync::Arc<[String]>,
+    pub(crate) aggregates: Vec<String>,
 }
 
 /// Fewest equations per column of the largest block (a bare minimum for the
 /// moment matrices to have full rank with some margin).
 pub(super) const MIN_EQUATIONS_PER_COLUMN: usize = 3;
 
-impl<'a> Estimator<'a> {
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn new(
-        model: &'a dyn Model,
-        options: &'a EstimateOptions,
-        kind: PredictorKind,
-        nominal: Vec<f64>,
-        infos: Vec<ExperimentInfo>,
-        signs: &[ExperimentSigns],
-        warnings: Vec<String>,
-        passes: &'a dyn Passes,
-        facts: Vec<ExperimentFacts>,
-    ) -> Result<Estimator<'a>, EstimateError> {
-        let ir = model.ir();
-        let centring = options
-            .centring
-            .unwrap_or_else(|| Centring::for_model(ir, kind));
-        let n_cols = ir.predictors.get(kind).len();
-        let exps: Vec<ExperimentStructure> = signs
-            .iter()
-            .zip(&infos)
-            .map(|(s, info)| ExperimentStructure {
-                varying: s
-                    .pointwise
-                    .iter()
-                    .filter(|a| a.minority_fraction > 0.0)
-                    .filter_map(|a| ir.sign_args.iter().position(|x| x.name == a.argument))
-                    .collect(),
-                pattern: s.pattern.clone(),
-                frozen_rotation: info.frozen.as_ref().map(|v| {
-                    v.iter()
-                        .map(|x| Q::from_float(*x).unwrap_or_default())
-                        .collect()
-                }),
-            })
-            .collect();
-        let key = PlanKey {
-            kind,
-            centring,
-            aggregate: options.aggregate,
-            nominal: nominal.iter().map(|v| v.to_bits()).collect(),
-            experiments: exps,
-        };
-        let plan = match passes.known_plan(&key) {
-            Some(plan) => plan,
-            None => {
-                let plan = std::sync::Arc::new(StructuralPlan::new(
-                    ir, options, kind, centring, &nominal, &infos, signs, &key,
-                )?);
-                passes.keep_plan(key, plan.clone());
-                plan
-            }
-        };
-        let StructuralPlan {
-            constant_cols,
-            blocks,
-            block_of_output,
-            held,
-            preference,
-            meaning,
-            column_texts,
-            aggregates,
-        } = (*plan).clone();
-        Ok(Estimator {
-            ir,
-            options,
-            kind,
-            centring,
-            constant_cols,
-            n_cols,
-            blocks,
-            block_of_output,
-            held,
-            preference,
-            nominal,
-            infos,
-            meaning,
-            column_texts,
-            warnings,
-            unexcited: Vec::new(),
-            aggregates,
-            passes,
-            facts,
-        })
-    }
-
-    pub(super) fn combine(&self) -> Combine {
-        self.options.combine
-    }
-
-    /// Refuses records too short for the number of columns estimated together.
-    pub(super) fn check_length(&self) -> Result<(), EstimateError> {
-        let equations: usize = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
-        if let Some(block) = self.blocks.iter().max_by_key(|b| b.cols.len()) {
-            let needed = MIN_EQUATIONS_PER_COLUMN * block.cols.len();
-            if equations < needed {
-                let outputs: Vec<&str> = block
-                    .outputs
-                    .iter()
-                    .map(|o| self.ir.states[*o].as_str())
-                    .collect();
-                return Err(err(
-                    "too-few-samples",
-                    format!(
-                        "{equations} equations for {} columns estimated together (outputs {}): at least {needed} are needed",
-                        block.cols.len(),
-                        outputs.join(", ")
-                    ),
-                    "record longer experiments (hundreds of samples per parameter give useful standard errors)",
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
 impl StructuralPlan {
     /// Runs the structural analysis for `key` (see [`PlanKey`]).
     #[allow(clippy::too_many_arguments)]
-    fn new(
+    pub(crate) fn new(
         ir: &Ir,
         options: &EstimateOptions,
         kind: PredictorKind,
@@ -335,4 +230,11 @@ fn column_texts(
             None => names.moment(c),
         })
         .collect()
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct Block {
+    pub(crate) outputs: Vec<usize>,
+    /// Structurally kept predictor columns of the block, in column order.
+    pub(crate) cols: Vec<usize>,
 }

@@ -1,6 +1,9 @@
 //! Per-experiment facts read once before estimating: sign pattern, measured means, state bounds, heading spread, fixed-sign Φ2 columns.
 
-use super::*;
+use crate::method::Method;
+use leeway_model::model::HeadingRotation;
+use leeway_model::signs::{ExperimentSigns, SignCounter, plain_sign_args};
+use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 
 /// A measured-medium (`Φ2`) column whose modulus arguments keep their sign
 /// in the data: its instrument is the noise-free `s·a_sim·…` rather than a

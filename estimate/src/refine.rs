@@ -1,6 +1,14 @@
 //! The refinement policy: bootstrap, re-simulation with the estimate, damping, convergence, the iterate reported.
 
-use super::*;
+use crate::accumulate::Accumulated;
+use crate::estimator::Estimator;
+use crate::method::{Initial, Instruments, Method};
+use crate::moments::CrossMoments;
+use crate::outcome::{Estimate, EstimateError, InstrumentSimulation, err};
+use crate::protocol::PrefixInstruments;
+use crate::solve::BlockSolution;
+use leeway_model::signs::ExperimentSigns;
+use std::collections::BTreeMap;
 
 /// Fit points by which a refinement's simulation may fall below the best
 /// earlier iterate before the refinement counts as running away.

@@ -1,6 +1,13 @@
 //! Turning the solution into the returned `Estimate`: column statuses, standard errors, warnings, diagnostics.
 
-use super::*;
+use crate::estimator::Estimator;
+use crate::method::{Initial, Instruments, Method};
+use crate::outcome::{ColumnEstimate, Diagnostics, Estimate, EstimateError};
+use crate::solve::{BlockSolution, CONDITION_WARNING};
+use leeway_model::signs::ExperimentSigns;
+use leeway_structure::identify::Centring;
+use leeway_structure::ir::{ColumnKind, PredictorKind};
+use std::collections::BTreeMap;
 
 impl Estimator<'_> {
     #[allow(clippy::too_many_arguments)]

@@ -1,6 +1,12 @@
 //! Solving the moment equations per block: residue test, equilibration, column selection, the pseudo-inverse map used by the covariance.
 
-use super::*;
+use crate::estimator::Estimator;
+use crate::method::{Combine, Method};
+use crate::moments::CrossMoments;
+use crate::outcome::{EstimateError, err};
+use leeway_structure::exact::Q;
+use leeway_structure::ir::{ColumnKind, PredictorKind};
+use nalgebra::{DMatrix, DVector};
 
 /// A moment column below this many machine epsilons per equation of its
 /// Cauchy–Schwarz scale is rounding residue, not information.

@@ -1,6 +1,16 @@
 //! The data pass: every equation of an experiment with its regressors, instruments (simulated, delayed or none) and target, and the instrument simulation stepped along.
 
-use super::*;
+use crate::estimator::Estimator;
+use crate::method::{Instruments, Method};
+use crate::outcome::{EstimateError, err};
+use crate::protocol::{BadValue, PassPlan, SimChange};
+use crate::record::ExperimentInfo;
+use leeway_model::experiment::Source;
+use leeway_model::interrupt::Interrupt;
+use leeway_model::model::{HeadingRotation, Model, Signals, planar_rotation, rotated};
+use leeway_model::signs::set_pointwise_signs;
+use leeway_structure::grammar::EquationKind;
+use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 
 /// Visits every equation of an experiment: `f(z, φ, t)` with dense buffers
 /// (`n_out × n_cols`) of instruments and regressors and the targets.
@@ -113,22 +123,6 @@ pub(super) struct History {
     pub(super) equations: usize,
 }
 
-/// How far an instrument simulation moved from a reference one, per output:
-/// `‖x − x_ref‖ / ‖x_ref − x̄_ref‖` (0 without a reference).
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
-pub(super) struct SimChange {
-    pub(super) diff2: Vec<f64>,
-    pub(super) sum: Vec<f64>,
-    pub(super) sum2: Vec<f64>,
-    pub(super) n: usize,
-    /// `Σ (y − x_sim)²`, `Σ y`, `Σ y²` per output: how well the instrument
-    /// simulation tracks the measured states (its strength as an instrument).
-    pub(super) err2: Vec<f64>,
-    pub(super) y_sum: Vec<f64>,
-    pub(super) y_sum2: Vec<f64>,
-    pub(super) y_n: usize,
-}
-
 impl SimWalk {
     /// Whether a walk over a record of `samples` samples and `n_out`
     /// states can go on from here (its caller sums from here too: the
@@ -151,39 +145,6 @@ impl History {
     /// advanced the rotation itself over every sample.
     pub(super) fn continues_headings(&self) -> bool {
         self.headings.is_some()
-    }
-}
-
-impl SimChange {
-    /// Mean over outputs of the fit `100·(1 − ‖y − x_sim‖/‖y − ȳ‖)`.
-    pub(super) fn fit(&self) -> f64 {
-        let n = self.y_n.max(1) as f64;
-        let fits: Vec<f64> = (0..self.err2.len())
-            .map(|o| {
-                let var = (self.y_sum2[o] - self.y_sum[o] * self.y_sum[o] / n).max(0.0);
-                if var > 0.0 {
-                    100.0 * (1.0 - (self.err2[o] / var).sqrt())
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        fits.iter().sum::<f64>() / fits.len().max(1) as f64
-    }
-
-    pub(super) fn relative(&self) -> f64 {
-        let n = self.n.max(1) as f64;
-        (0..self.diff2.len())
-            .map(|o| {
-                let mean = self.sum[o] / n;
-                let var = (self.sum2[o] / n - mean * mean).max(0.0) * n;
-                if var > 0.0 {
-                    (self.diff2[o] / var).sqrt()
-                } else {
-                    0.0
-                }
-            })
-            .fold(0.0, f64::max)
     }
 }
 
@@ -358,7 +319,7 @@ impl EquationWalker<'_> {
         // Signs of the pointwise moduli, sample by sample where they change.
         let mut signs = info.signs.clone();
         let simulates = self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
-        let mut stop = super::pass::Stopper::new(self.interrupt);
+        let mut stop = Stopper::new(self.interrupt);
         let mut sample = |row: &leeway_model::experiment::Row| {
             if diverged || stop.now() {
                 return;
@@ -674,5 +635,32 @@ impl Estimator<'_> {
             ),
             "a value this large is a logging error or a unit mistake: repair the sample, or declare the column's unit in data { } so that values are in base units",
         )
+    }
+}
+
+/// Asks an interrupt every [`INTERRUPT_EVERY`] samples of a visit and
+/// remembers its yes.
+pub(super) struct Stopper<'a> {
+    interrupt: Option<&'a Interrupt>,
+    seen: usize,
+    stopped: bool,
+}
+
+impl<'a> Stopper<'a> {
+    pub(super) fn new(interrupt: Option<&'a Interrupt>) -> Stopper<'a> {
+        Stopper {
+            interrupt,
+            seen: 0,
+            stopped: false,
+        }
+    }
+
+    /// Whether this sample and the rest are to be skipped.
+    pub(super) fn now(&mut self) -> bool {
+        if !self.stopped && self.seen.is_multiple_of(INTERRUPT_EVERY) {
+            self.stopped = self.interrupt.is_some_and(Interrupt::requested);
+        }
+        self.seen += 1;
+        self.stopped
     }
 }
