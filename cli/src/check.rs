@@ -5,7 +5,9 @@
 // The document is built in the runtime, which the Python package shares.
 pub use leeway_report::check as json;
 
+use crate::options::choices;
 use crate::output::{Status, err, out, print_json, stderr_style};
+use leeway_estimate::Centring;
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use leeway_structure::identify::parse_pattern;
 use leeway_structure::{Compilation, CompileOptions, compile, render};
@@ -31,8 +33,8 @@ pub struct CheckArgs {
     pub patterns: Vec<String>,
     /// The instrument centring to analyse (it decides which constants are
     /// annihilated). Default: the model's, as `leeway estimate` would choose it.
-    #[arg(long, value_enum)]
-    pub centring: Option<crate::estimate::CentringArg>,
+    #[arg(long, value_parser = choices::<Centring>())]
+    pub centring: Option<Centring>,
 }
 
 impl CheckArgs {
@@ -40,7 +42,7 @@ impl CheckArgs {
         CompileOptions {
             aggregate: self.aggregate,
             patterns,
-            centring: self.centring.map(crate::estimate::CentringArg::centring),
+            centring: self.centring,
         }
     }
 }
@@ -48,7 +50,7 @@ impl CheckArgs {
 /// Runs `leeway check`.
 pub fn run(args: &CheckArgs) -> Status {
     let file = args.model.display().to_string();
-    let (source, compilation) = match crate::model::read_model(&args.model) {
+    let (source, compilation) = match crate::files::read_model(&args.model) {
         Ok(Ok(source)) => match analyse(args, &source) {
             Ok(c) => (source, c),
             Err(message) => return fail(args, &file, "invalid-pattern", message),
@@ -62,7 +64,7 @@ pub fn run(args: &CheckArgs) -> Status {
             },
         ),
         Err(e) => {
-            let message = format!("cannot read `{file}`: {}", crate::model::io_reason(&e));
+            let message = format!("cannot read `{file}`: {}", crate::files::io_reason(&e));
             return fail(args, &file, "io", message);
         }
     };

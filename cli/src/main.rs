@@ -19,15 +19,19 @@
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod check;
+mod data;
 mod estimate;
+mod files;
 mod input;
 mod model;
+mod options;
 mod output;
 mod params;
 mod plot;
 mod problem;
 mod reproduce;
 mod simulate;
+mod units;
 mod validate;
 
 use clap::{Parser, Subcommand};
@@ -46,13 +50,13 @@ enum Command {
     /// Derive a model's regressors and prove whether θ is identifiable, and from which experiments.
     Check(check::CheckArgs),
     /// Estimate θ, the nuisance parameters and the disturbance means from experiments (CSV).
-    Estimate(estimate::EstimateArgs),
+    Estimate(estimate::args::EstimateArgs),
     /// Simulate a model with given parameters on an input file; write the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
     /// Fit of models with given parameters on validation data (like MATLAB's compare); a plot with --plot.
     Validate(validate::ValidateArgs),
     /// Re-run the paper's simulation study (§V): tables, claims, results.json and figures.
-    Reproduce(reproduce::ReproduceArgs),
+    Reproduce(reproduce::args::ReproduceArgs),
 }
 
 fn main() -> ExitCode {
@@ -65,8 +69,10 @@ fn main() -> ExitCode {
         Command::Validate(args) => validate::run(&args),
         Command::Reproduce(args) => {
             // Bounds across options, reported like clap's own (exit 2).
-            if let Err(e) = reproduce::check_work(&args) {
-                e.exit();
+            if let Err(message) = reproduce::args::check_work(&args) {
+                let mut cmd = <Cli as clap::CommandFactory>::command();
+                cmd.error(clap::error::ErrorKind::ValueValidation, message)
+                    .exit();
             }
             reproduce::run(&args)
         }

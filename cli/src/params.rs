@@ -4,7 +4,7 @@
 //! and every name must be a model parameter: nothing is silently ignored or
 //! filled in. Problems are located at `file:line:column` of the offending key.
 
-use crate::model::read_text;
+use crate::files::read_text;
 use crate::problem::{Failure, Problem};
 use leeway_structure::grammar::line_col;
 use leeway_structure::ir::Ir;

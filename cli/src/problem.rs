@@ -3,10 +3,10 @@
 //! parameter file, an option, an estimate the data cannot support — each
 //! with its place (`file:row:column`) and a hint, and the exit status it maps to.
 
-use crate::check::json::{JsonDiagnostic, diagnostic};
 use crate::output::{Status, headline};
 use leeway_data::DataError;
 use leeway_estimate::EstimateError;
+use leeway_report::check::{JsonDiagnostic, diagnostic};
 use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
 use serde::Serialize;
 

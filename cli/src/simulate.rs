@@ -4,15 +4,17 @@
 //! CSV data file. Exit 0 on success, 1 when the simulation diverges (the rows
 //! before the divergence are still written), 2 on any model, file or option error.
 
+use crate::input::disturbance_values;
 use crate::input::{initial_values, load_input};
-use crate::model::{disturbance_values, load, load_options};
+use crate::model::load;
+use crate::options::load_options;
+use crate::options::positive;
 use crate::output::{Status, err, headline, out, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_data::write_csv;
-use leeway_model::Experiment;
 use leeway_model::Interpreter;
 use leeway_model::simulate::Disturbances;
-use leeway_model::simulate::simulate;
+use leeway_model::simulate::simulate_written;
 use std::path::PathBuf;
 
 /// Arguments of `leeway simulate`.
@@ -40,7 +42,7 @@ pub struct SimulateArgs {
     #[arg(long = "disturbance", value_name = "NAME=VALUE,...")]
     pub disturbances: Vec<String>,
     /// Sample time for an input without a time column when the model declares no `step`.
-    #[arg(long, value_name = "H", value_parser = crate::estimate::positive)]
+    #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,
 }
 
@@ -72,17 +74,8 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Fa
     let input = load_input(&args.input, &ir, &options, &x0)?;
     let model = Interpreter::new(ir.clone());
     let e = &input.experiment;
-    let trajectory = simulate(&model, &theta, e, Disturbances::Constant(&dist));
-    let finite = trajectory
-        .states
-        .first()
-        .map_or(0, |s| s.iter().take_while(|v| v.is_finite()).count());
-    let mut result = Experiment {
-        states: trajectory.states,
-        heading: trajectory.heading,
-        ..e.clone()
-    };
-    result = result.truncated(finite);
+    let written = simulate_written(&model, &theta, e, Disturbances::Constant(&dist));
+    let (result, finite) = (written.experiment, written.samples);
     let mut buffer = Vec::new();
     write_csv(&ir, &[&result], input.t0, &mut buffer)
         .map_err(|error| Problem::error("io", format!("cannot write the trajectory: {error}")))?;
@@ -93,7 +86,7 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Fa
         })?,
         None => out(&String::from_utf8_lossy(&buffer)),
     }
-    if trajectory.diverged {
+    if written.diverged {
         let t = input.t0 + finite as f64 * e.h;
         return Err(Problem {
             status: Status::Unsupported,

@@ -8,19 +8,22 @@
 //! success (whatever the fit), 1 when a simulation diverges, 2 on any model,
 //! data, parameter-file or option error.
 
-use crate::model::{
-    TimeArgs, axis_label, data_files_json, data_notes, disturbance_values, heading_gains,
-    heading_warnings, load, load_data, load_options, unit_lines, unit_warnings,
-};
+use crate::data::{data_notes, load_data};
+use crate::input::disturbance_values;
+use crate::model::load;
+use crate::options::positive;
+use crate::options::{TimeArgs, load_options};
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
+use crate::units::{axis_label, unit_lines};
 use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::mean_fits;
 use leeway_model::simulate::unwrap_heading;
 use leeway_model::simulate::validate;
+use leeway_report::{data_files_json, heading_gains, heading_warnings, unit_warnings};
 use leeway_structure::ir::Rotation;
 use serde::Serialize;
 use std::fmt::Write;
@@ -54,7 +57,7 @@ pub struct ValidateArgs {
     #[arg(long = "disturbance", value_name = "NAME=VALUE,...")]
     pub disturbances: Vec<String>,
     /// Sample time for data without a time column when the model declares no `step`.
-    #[arg(long, value_name = "H", value_parser = crate::estimate::positive)]
+    #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,
     /// Time stamps: jitter tolerance and resampling.
     #[command(flatten)]
@@ -103,7 +106,7 @@ struct Report {
     /// Every parameter file, in the order given.
     models: Vec<ModelFits>,
     /// Per data file: comment lines skipped, time-stamp jitter, resampling.
-    data_files: Vec<crate::model::DataFileJson>,
+    data_files: Vec<leeway_report::DataFileJson>,
     /// `{signal: unit}` as declared in the model's `data { }`.
     data_units: Ordered<String>,
     /// The plot written, or null.

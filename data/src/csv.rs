@@ -3,8 +3,8 @@
 //! the file's records) and the CSV entry points.
 
 use crate::error::DataError;
-use crate::open::open_path;
 use crate::notes::LoadedFile;
+use crate::open::open_path;
 use crate::options::LoadOptions;
 use crate::spill::StreamedFile;
 use crate::validate::Places;

@@ -44,7 +44,10 @@ pub use csv::{Records, load_csv, load_csv_noted, open_csv, parse_csv, parse_csv_
 pub use error::DataError;
 pub use file::{load_file_noted, open_file, with_table};
 pub use notes::{FileNotes, LoadedFile, TimeNotes};
-pub use options::{DEFAULT_TIME_TOLERANCE, LoadOptions};
+pub use options::{
+    DEFAULT_TIME_TOLERANCE, LoadOptionError, LoadOptions, STEP_RANGE, TIME_TOLERANCE_HINT,
+    sample_time_ok, time_tolerance_ok,
+};
 pub use signals::heading_gain;
 pub use spill::{CsvSource, FileSource, StreamedFile, open_table};
 pub use validate::{

@@ -1,4 +1,7 @@
-//! How files are loaded: step, time tolerance, resampling.
+//! How files are loaded: step, time tolerance, resampling, and the rules
+//! those options obey whoever gives them (the CLI, Python).
+
+use leeway_structure::ir::Ir;
 
 /// The default relative tolerance of each time step against the nominal
 /// step: covers a logger's jitter, still catches a dropped sample (a 100 %
@@ -25,5 +28,95 @@ impl Default for LoadOptions {
             time_tolerance: DEFAULT_TIME_TOLERANCE,
             resample: None,
         }
+    }
+}
+
+/// Sample times (`step`, `resample`) in seconds: from a microsecond to a
+/// day (11.6 days at most).
+pub const STEP_RANGE: (f64, f64) = (1e-6, 1e6);
+
+/// Whether `h` is a sample time leeway accepts (within [`STEP_RANGE`]).
+pub fn sample_time_ok(h: f64) -> bool {
+    h.is_finite() && (STEP_RANGE.0..=STEP_RANGE.1).contains(&h)
+}
+
+/// Whether `tolerance` is a relative step tolerance leeway accepts: a
+/// fraction in (0, 0.5). From one half on, a dropped sample (a 100 % step)
+/// could pass for jitter.
+pub fn time_tolerance_ok(tolerance: f64) -> bool {
+    tolerance > 0.0 && tolerance < 0.5
+}
+
+/// The hint for a time tolerance out of range.
+pub const TIME_TOLERANCE_HINT: &str =
+    "write 0.05 for 5 %; 0.5 or more would accept a dropped sample";
+
+/// Load options that cannot be used with a model, each front end naming the
+/// options in its own syntax (`--step 0.1`, `step=0.1`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LoadOptionError {
+    /// `step` or `resample` (the option) outside [`STEP_RANGE`].
+    SampleTime {
+        /// `step` or `resample`.
+        option: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A time tolerance outside (0, 0.5).
+    TimeTolerance(f64),
+    /// `step` differs from the model's own `step`.
+    StepConflict {
+        /// The step given.
+        given: f64,
+        /// The model's.
+        declared: f64,
+    },
+    /// `resample` differs from the sample time (the model's `step`, or the
+    /// `step` given).
+    ResampleConflict {
+        /// The resampling step given.
+        given: f64,
+        /// The sample time.
+        declared: f64,
+    },
+}
+
+impl LoadOptions {
+    /// The load options for `ir`: `step` and `resample` within
+    /// [`STEP_RANGE`], the time tolerance within (0, 0.5), `step` equal to
+    /// the model's own `step` and `resample` to the sample time when both
+    /// are given — a conflict is an error, never silently resolved.
+    pub fn for_model(
+        ir: &Ir,
+        step: Option<f64>,
+        time_tolerance: f64,
+        resample: Option<f64>,
+    ) -> Result<LoadOptions, LoadOptionError> {
+        for (option, value) in [("step", step), ("resample", resample)] {
+            if let Some(value) = value
+                && !sample_time_ok(value)
+            {
+                return Err(LoadOptionError::SampleTime { option, value });
+            }
+        }
+        if !time_tolerance_ok(time_tolerance) {
+            return Err(LoadOptionError::TimeTolerance(time_tolerance));
+        }
+        let differs = |a: f64, b: f64| (a - b).abs() > 1e-9 * a.abs();
+        if let (Some(declared), Some(given)) = (ir.step, step)
+            && differs(declared, given)
+        {
+            return Err(LoadOptionError::StepConflict { given, declared });
+        }
+        if let (Some(declared), Some(given)) = (ir.step.or(step), resample)
+            && differs(declared, given)
+        {
+            return Err(LoadOptionError::ResampleConflict { given, declared });
+        }
+        Ok(LoadOptions {
+            step,
+            time_tolerance,
+            resample,
+        })
     }
 }

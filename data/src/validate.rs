@@ -501,7 +501,11 @@ pub(super) fn scan(
         let (h, deviation) = sample_time(
             table.file(),
             ir,
-            BlockTimes { times: &block.times, rows: block.rows, first: block.first },
+            BlockTimes {
+                times: &block.times,
+                rows: block.rows,
+                first: block.first,
+            },
             &time_at,
             options,
         )?;

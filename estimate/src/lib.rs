@@ -39,8 +39,8 @@ mod walk;
 
 pub use leeway_structure::identify::Centring;
 pub use local::{LocalPasses, PrefixRows};
-pub use method::{Combine, Initial, Instruments, Method};
-pub use options::{EstimateOptions, Interrupt, Start};
+pub use method::{Choice, Combine, Initial, Instruments, Method, Named, UnknownName};
+pub use options::{EstimateOptions, Interrupt, MAX_LAGS, MAX_REFINEMENTS, OutOfRange, Start};
 pub use outcome::{
     ColumnEstimate, Diagnostics, DisturbanceMoment, Estimate, EstimateError, InstrumentSimulation,
     OwnSimulation, StateFit,

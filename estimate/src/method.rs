@@ -1,6 +1,7 @@
 //! The option enums of an estimate: the method, its instruments, how the
 //! first instruments start, how experiments combine.
 
+use leeway_structure::identify::Centring;
 use leeway_structure::ir::PredictorKind;
 use serde::{Deserialize, Serialize};
 
@@ -29,12 +30,7 @@ impl Method {
     }
     /// `ls`, `iv1`, ...
     pub fn name(self) -> &'static str {
-        match self {
-            Method::Ls => "ls",
-            Method::Iv1 => "iv1",
-            Method::Iv2 => "iv2",
-            Method::Iv3 => "iv3",
-        }
+        Named::name(self)
     }
     /// All four, in the paper's order.
     pub const ALL: [Method; 4] = [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3];
@@ -75,25 +71,186 @@ pub enum Combine {
     Stacked,
 }
 
-impl std::str::FromStr for Method {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Method, String> {
-        match s.to_ascii_lowercase().as_str() {
-            "ls" => Ok(Method::Ls),
-            "iv1" => Ok(Method::Iv1),
-            "iv2" => Ok(Method::Iv2),
-            "iv3" => Ok(Method::Iv3),
-            other => Err(format!("unknown method `{other}`: use ls, iv1, iv2 or iv3")),
-        }
+/// One value of a [`Named`] option: its name and what it means, as the
+/// CLI's help and Python's errors show them.
+#[derive(Clone, Copy, Debug)]
+pub struct Choice<T: 'static> {
+    /// The name (`iv3`).
+    pub name: &'static str,
+    /// The value.
+    pub value: T,
+    /// One line on what it does.
+    pub help: &'static str,
+}
+
+/// An option whose values have names: the one table the CLI's flags and
+/// Python's keywords are both read through.
+pub trait Named: Copy + PartialEq + 'static {
+    /// The option's name (`method`, `instruments`, …).
+    const OPTION: &'static str;
+    /// Every value, in the order help lists them.
+    const CHOICES: &'static [Choice<Self>];
+
+    /// The value's name.
+    fn name(self) -> &'static str {
+        Self::CHOICES
+            .iter()
+            .find(|c| c.value == self)
+            .map_or("", |c| c.name)
     }
+
+    /// The value of a name, exactly as written (`iv3`, not `IV3`).
+    fn from_name(name: &str) -> Result<Self, UnknownName> {
+        Self::CHOICES
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| c.value)
+            .ok_or_else(|| UnknownName {
+                option: Self::OPTION,
+                given: name.to_string(),
+                names: Self::CHOICES.iter().map(|c| c.name).collect(),
+            })
+    }
+}
+
+/// A name that is not one of an option's values.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("`{given}` is not a {option}: use {}", .names.join(", "))]
+pub struct UnknownName {
+    /// The option (`method`, …).
+    pub option: &'static str,
+    /// The name given.
+    pub given: String,
+    /// The names it may have.
+    pub names: Vec<&'static str>,
+}
+
+const fn choice<T>(name: &'static str, value: T, help: &'static str) -> Choice<T> {
+    Choice { name, value, help }
+}
+
+impl Named for Method {
+    const OPTION: &'static str = "method";
+    const CHOICES: &'static [Choice<Method>] = &[
+        choice(
+            "ls",
+            Method::Ls,
+            "Least squares (biased under noise and disturbances; a baseline)",
+        ),
+        choice(
+            "iv1",
+            Method::Iv1,
+            "IV on the basic predictor (consistent only for zero-mean disturbances)",
+        ),
+        choice(
+            "iv2",
+            Method::Iv2,
+            "IV on the augmented predictor, every medium unmeasured",
+        ),
+        choice(
+            "iv3",
+            Method::Iv3,
+            "IV on the augmented predictor plus measured media pointwise",
+        ),
+    ];
+}
+
+impl Named for Instruments {
+    const OPTION: &'static str = "instruments";
+    const CHOICES: &'static [Choice<Instruments>] = &[
+        choice(
+            "simulated",
+            Instruments::Simulated,
+            "Noise-free regressors of a simulated nominal model, refined",
+        ),
+        choice(
+            "delayed",
+            Instruments::Delayed,
+            "Regressors of the measurements one sample earlier",
+        ),
+    ];
+}
+
+impl Named for Initial {
+    const OPTION: &'static str = "initial";
+    const CHOICES: &'static [Choice<Initial>] = &[
+        choice("delayed", Initial::Delayed, "A delayed-instrument estimate"),
+        choice("nominal", Initial::Nominal, "The nominal model"),
+    ];
+}
+
+impl Named for Combine {
+    const OPTION: &'static str = "combine";
+    const CHOICES: &'static [Choice<Combine>] = &[
+        choice(
+            "summed",
+            Combine::Summed,
+            "`(Σ H_i) ϑ = Σ g_i`: one system over all experiments",
+        ),
+        choice(
+            "stacked",
+            Combine::Stacked,
+            "`[H_1/n_1; …] ϑ = [g_1/n_1; …]` by least squares",
+        ),
+    ];
+}
+
+impl Named for Centring {
+    const OPTION: &'static str = "centring";
+    const CHOICES: &'static [Choice<Centring>] = &[
+        choice(
+            "experiment",
+            Centring::Experiment,
+            "Zero-mean instruments per experiment",
+        ),
+        choice(
+            "pooled",
+            Centring::Pooled,
+            "Zero mean over all experiments pooled",
+        ),
+        choice("none", Centring::None, "No centring"),
+    ];
 }
 
 impl Combine {
     /// `summed`, `stacked`.
     pub fn name(self) -> &'static str {
-        match self {
-            Combine::Summed => "summed",
-            Combine::Stacked => "stacked",
+        Named::name(self)
+    }
+}
+
+macro_rules! from_str_by_name {
+    ($($t:ty),*) => {$(
+        impl std::str::FromStr for $t {
+            type Err = UnknownName;
+            fn from_str(s: &str) -> Result<$t, UnknownName> {
+                <$t as Named>::from_name(s)
+            }
         }
+    )*};
+}
+from_str_by_name!(Method, Instruments, Initial, Combine);
+
+#[cfg(test)]
+mod tests {
+    use super::{Combine, Initial, Instruments, Method, Named};
+
+    fn round_trip<T: Named + std::fmt::Debug>() {
+        for c in T::CHOICES {
+            assert_eq!(c.value.name(), c.name);
+            assert_eq!(T::from_name(c.name), Ok(c.value));
+        }
+        let e = T::from_name("IV3x").err().map(|e| e.to_string());
+        assert!(e.is_some_and(|e| e.starts_with("`IV3x` is not a ")));
+    }
+
+    #[test]
+    fn every_name_reads_back_and_others_are_refused() {
+        round_trip::<Method>();
+        round_trip::<Instruments>();
+        round_trip::<Initial>();
+        round_trip::<Combine>();
+        assert_eq!("iv3".parse::<Method>(), Ok(Method::Iv3));
+        assert!("IV3".parse::<Method>().is_err());
     }
 }

@@ -105,6 +105,50 @@ impl Start {
     }
 }
 
+/// Most lags of the robust covariance ([`EstimateOptions::lags`]): each
+/// costs one pass of O(n_ϑ²) work; an MA(1) residual needs one.
+pub const MAX_LAGS: usize = 1000;
+
+/// Most re-simulations of the refined IV
+/// ([`EstimateOptions::max_refinements`]): each re-reads the data; one or two
+/// give most of the gain.
+pub const MAX_REFINEMENTS: usize = 100;
+
+/// A count option outside the range the estimator accepts.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{option}={value} is not in {min}..={max}")]
+pub struct OutOfRange {
+    /// The option (`lags`, `max_refinements`).
+    pub option: &'static str,
+    /// The value given.
+    pub value: usize,
+    /// The smallest value accepted.
+    pub min: usize,
+    /// The largest value accepted.
+    pub max: usize,
+}
+
+impl EstimateOptions {
+    /// The options' counts within what the estimator accepts: `lags` in
+    /// 1..=[`MAX_LAGS`], `max_refinements` in 0..=[`MAX_REFINEMENTS`].
+    pub fn validate(&self) -> Result<(), OutOfRange> {
+        let within = |option, value, min, max| {
+            if (min..=max).contains(&value) {
+                Ok(())
+            } else {
+                Err(OutOfRange {
+                    option,
+                    value,
+                    min,
+                    max,
+                })
+            }
+        };
+        within("lags", self.lags, 1, MAX_LAGS)?;
+        within("max_refinements", self.max_refinements, 0, MAX_REFINEMENTS)
+    }
+}
+
 impl Default for EstimateOptions {
     fn default() -> EstimateOptions {
         EstimateOptions {

@@ -6,6 +6,7 @@
 //! stop a long computation. No IO, no randomness.
 
 pub mod experiment;
+pub mod given;
 pub mod interp;
 pub mod interrupt;
 pub mod model;

@@ -124,6 +124,45 @@ pub fn simulate_each(
     diverged
 }
 
+/// A simulation as `leeway simulate` writes it: the input experiment with
+/// the simulated states and heading, cut before the first sample whose
+/// states are not finite.
+#[derive(Clone, Debug)]
+pub struct Written {
+    /// The experiment written.
+    pub experiment: Experiment,
+    /// Its samples (all of the input's unless the simulation diverged).
+    pub samples: usize,
+    /// The states left the finite numbers at `samples`.
+    pub diverged: bool,
+}
+
+/// Simulates `model` with `theta` on the input `e` (see [`simulate`]) and
+/// keeps the samples before any divergence.
+pub fn simulate_written(
+    model: &dyn Model,
+    theta: &[f64],
+    e: &Experiment,
+    disturbances: Disturbances,
+) -> Written {
+    let trajectory = simulate(model, theta, e, disturbances);
+    let samples = trajectory
+        .states
+        .first()
+        .map_or(0, |s| s.iter().take_while(|v| v.is_finite()).count());
+    let experiment = Experiment {
+        states: trajectory.states,
+        heading: trajectory.heading,
+        ..e.clone()
+    }
+    .truncated(samples);
+    Written {
+        experiment,
+        samples,
+        diverged: trajectory.diverged,
+    }
+}
+
 /// The normalised fit `100·(1 − ‖y − ŷ‖ / ‖y − ȳ‖)` (100 is perfect; may be
 /// negative). `NaN` when the measurement is constant or the simulation diverged.
 pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {

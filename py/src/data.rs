@@ -23,6 +23,7 @@ use leeway_model::Experiment;
 use leeway_model::Source;
 use leeway_model::interrupt::Interrupt;
 use leeway_structure::ir::Ir;
+use numpy::PyReadonlyArray1;
 
 /// One frame: its name (the "file" of messages and of the experiment name
 /// when it has no experiment column), float64 columns, experiment labels.
@@ -150,4 +151,50 @@ pub fn load_for_estimate(
         notes.push(opened.notes);
     }
     Ok((Loaded::Streamed(sources), notes))
+}
+
+/// A frame as `leeway` hands it over: name, float64 columns, and the
+/// experiment labels coded (`pandas.factorize`: a code per row, the names).
+pub(crate) type FrameArg<'py> = (
+    String,
+    Vec<(String, PyReadonlyArray1<'py, f64>)>,
+    Option<(PyReadonlyArray1<'py, i64>, Vec<String>)>,
+);
+
+/// The frames' columns borrowed in place (`leeway` hands over contiguous
+/// float64 arrays).
+pub(crate) fn borrow_frames<'a>(frames: &'a [FrameArg<'_>]) -> Result<Vec<Frame<'a>>, Failure> {
+    frames
+        .iter()
+        .map(|(name, columns, experiment)| {
+            let columns = columns
+                .iter()
+                .map(|(c, a)| {
+                    a.as_slice().map(|s| (c.as_str(), s)).map_err(|_| {
+                        Failure::data_plain(
+                            name,
+                            format!("column `{c}` is not a contiguous float64 array"),
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            let experiment = match experiment {
+                Some((codes, names)) => Some(leeway_data::Labels::Coded {
+                    codes: codes.as_slice().map_err(|_| {
+                        Failure::data_plain(
+                            name,
+                            "the experiment codes are not a contiguous int64 array".into(),
+                        )
+                    })?,
+                    names,
+                }),
+                None => None,
+            };
+            Ok(Frame {
+                name,
+                columns,
+                experiment,
+            })
+        })
+        .collect()
 }

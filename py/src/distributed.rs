@@ -6,8 +6,11 @@
 //! back into Python (`leeway.dask` maps them over the cluster), and writes
 //! the same document as `leeway estimate --json`.
 
+use crate::data::{FrameArg, borrow_frames};
+use crate::estimate::estimate_document;
 use crate::failure::Failure;
-use crate::{EstimateOptions, FrameArg, Model, borrow_frames, estimate_document};
+use crate::model::Model;
+use crate::options::EstimateOptions;
 use leeway_data::FileNotes;
 use leeway_data::LoadOptions;
 use leeway_data::load_file_noted;

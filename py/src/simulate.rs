@@ -6,20 +6,22 @@
 //! round-trip form, so the reader sees the bits numpy holds); validation data
 //! are loaded as `leeway.estimate` loads them.
 
+use crate::data::{self, FrameArg, borrow_frames};
 use crate::failure::Failure;
-use crate::{FrameArg, Model, borrow_frames, data, load_options};
+use crate::model::Model;
+use crate::options::load_options;
 use leeway_data::Columns;
 use leeway_data::DataError;
 use leeway_data::input::OptionNames;
 use leeway_data::input::read_input;
 use leeway_data::write;
-use leeway_model::Experiment;
 use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::experiment::column_name;
+use leeway_model::given::{components_hint, given_value_ok};
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::mean_fits;
-use leeway_model::simulate::simulate;
+use leeway_model::simulate::simulate_written;
 use leeway_model::simulate::validate;
 use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
@@ -38,7 +40,7 @@ const NAMES: OptionNames = OptionNames {
 };
 
 fn checked(what: &str, name: &str, v: f64) -> Result<f64, Failure> {
-    if v.is_finite() && v.abs() <= MAX_VALUE {
+    if given_value_ok(v) {
         Ok(v)
     } else {
         Err(Failure::option(
@@ -80,43 +82,16 @@ fn initial_values(ir: &Ir, x0: &[(String, f64)]) -> Result<Vec<(String, f64)>, F
 /// Constant unmeasured disturbance components by name (`north` or
 /// `current.north`, as `--disturbance` takes them); others are zero.
 fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Failure> {
-    let mut values = vec![0.0; ir.components.len()];
-    let mut set = vec![false; ir.components.len()];
-    let unmeasured: Vec<String> = ir
-        .components
-        .iter()
-        .filter(|c| !ir.disturbances[c.disturbance].measured)
-        .map(|c| format!("{}.{}", ir.disturbances[c.disturbance].name, c.name))
-        .collect();
-    let hint = if unmeasured.is_empty() {
-        format!("model `{}` has no unmeasured disturbance", ir.name)
-    } else {
-        format!(
-            "the unmeasured components are {}",
-            leeway_structure::grammar::join_capped(&unmeasured, ", ")
-        )
-    };
+    let mut named = Vec::with_capacity(given.len());
     for (name, v) in given {
-        let bad = |why: String| Failure::option(format!("disturbances: {why}"), Some(hint.clone()));
-        let found = ir.components.iter().position(|c| {
-            let d = &ir.disturbances[c.disturbance].name;
-            *name == c.name || *name == format!("{d}.{}", c.name)
-        });
-        let Some(i) = found else {
-            return Err(bad(format!("`{name}` is not a disturbance component")));
-        };
-        if ir.disturbances[ir.components[i].disturbance].measured {
-            return Err(bad(format!(
-                "`{name}` is measured: its values come from the data"
-            )));
-        }
-        if set[i] {
-            return Err(bad(format!("`{name}` is given twice")));
-        }
-        values[i] = checked("disturbances", name, *v)?;
-        set[i] = true;
+        named.push((name.as_str(), checked("disturbances", name, *v)?));
     }
-    Ok(values)
+    leeway_model::given::disturbance_values(ir, &named).map_err(|p| {
+        Failure::option(
+            format!("disturbances: {}", p.reason),
+            Some(components_hint(ir)),
+        )
+    })
 }
 
 /// A simulated trajectory: the columns of `leeway simulate`'s output
@@ -158,19 +133,10 @@ pub fn simulate_columns<'py>(
         let input = read_input(&mut table, ir, &options, &x0, &NAMES).map_err(read)?;
         let interpreter = Interpreter::new(ir.clone());
         let e = &input.experiment;
-        let trajectory = simulate(&interpreter, &theta, e, Disturbances::Constant(&dist));
         // As the CLI: the samples before a divergence.
-        let finite = trajectory
-            .states
-            .first()
-            .map_or(0, |s| s.iter().take_while(|v| v.is_finite()).count());
-        let result = Experiment {
-            states: trajectory.states,
-            heading: trajectory.heading,
-            ..e.clone()
-        }
-        .truncated(finite);
-        let diverged = trajectory.diverged.then(|| {
+        let written = simulate_written(&interpreter, &theta, e, Disturbances::Constant(&dist));
+        let (result, finite) = (written.experiment, written.samples);
+        let diverged = written.diverged.then(|| {
             let t = input.t0 + finite as f64 * e.h;
             format!(
                 "the simulation diverged at sample {finite} (time {t}): the states left the finite numbers; the {finite} rows before are returned"

@@ -5,8 +5,8 @@
 //! study's tables and claims — the same figures as `reproduce`'s
 //! `results.json`, however the runs were spread.
 
-use crate::Model;
 use crate::failure::Failure;
+use crate::model::Model;
 use leeway_estimate::decode;
 use leeway_estimate::encode;
 use leeway_model::Interpreter;

@@ -5,7 +5,8 @@
 //! [`leeway_report`], which the Python package's
 //! `Estimate.to_json()` shares.
 
-use super::{EstimateArgs, Outcome};
+use crate::estimate::args::EstimateArgs;
+use crate::estimate::outcome::Outcome;
 use crate::problem::{Failure, JsonError};
 use leeway_report::EstimateReport;
 use leeway_report::Estimated;

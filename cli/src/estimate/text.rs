@@ -1,7 +1,7 @@
 //! The human-readable result of `leeway estimate`: aligned plain-text tables
 //! on stdout (warnings and errors go to stderr).
 
-use super::Outcome;
+use crate::estimate::outcome::Outcome;
 use crate::output::{number, table};
 use leeway_estimate::ColumnEstimate;
 use leeway_model::signs::ArgSign;
@@ -214,7 +214,7 @@ pub fn render(o: &Outcome) -> String {
     for u in &o.units {
         rows.push(vec!["unit".to_string(), u.clone()]);
     }
-    for note in crate::model::data_notes(&o.data_notes) {
+    for note in crate::data::data_notes(&o.data_notes) {
         rows.push(vec!["data".to_string(), note]);
     }
     for u in &d.unexcited {

@@ -5,8 +5,8 @@
 //! validation run (the true undisturbed outputs against the four models of
 //! run 0 at the largest N).
 
-use super::Report;
 use crate::plot::{Figure, clip_band, save, styled_mesh, y_range};
+use crate::reproduce::report::Report;
 use leeway_model::Experiment;
 use leeway_model::Model;
 use leeway_model::Source;

@@ -9,9 +9,9 @@
 //! written as `null`: serde_json serialises NaN and ±∞ that way, and the
 //! tests hold it to that.
 
-use super::Report;
-use super::margins::{CaseCheck, DesignCheck};
 use crate::output::Ordered;
+use crate::reproduce::margins::{CaseCheck, DesignCheck};
+use crate::reproduce::report::Report;
 use leeway_scenarios::design::Range;
 use leeway_scenarios::study;
 use leeway_scenarios::study::CaseSummary;
@@ -270,16 +270,16 @@ pub fn document(report: &Report) -> Document<'_> {
         seconds: report.seconds,
         threads: report.threads,
         claims: &report.claims,
-        ls_parameter_error_below_iv3: super::ls_ahead(report),
+        ls_parameter_error_below_iv3: crate::reproduce::report::ls_ahead(report),
         config: Config {
-            model: super::MODEL_FILE,
+            model: crate::reproduce::ship::MODEL_FILE,
             n: cfg.n.clone(),
             cases: cfg.cases.clone(),
             validation_len: cfg.validation_len,
             max_refinements: cfg.max_refinements,
             refined_iv: if cfg.paper_iv { "paper" } else { "leeway" },
             theta0: Ordered(
-                super::ship::ShipParams::NAMES
+                crate::reproduce::ship::ShipParams::NAMES
                     .iter()
                     .zip(study::THETA0)
                     .map(|(n, v)| (n.to_string(), v))

@@ -2,9 +2,10 @@
 //! case, the input design's margins, and the paper's claims with their
 //! verdicts and evidence.
 
-use super::margins::{CaseCheck, DesignCheck, medium_of};
-use super::{Report, ReproduceArgs};
 use crate::output::table;
+use crate::reproduce::args::ReproduceArgs;
+use crate::reproduce::margins::{CaseCheck, DesignCheck, medium_of};
+use crate::reproduce::report::Report;
 use leeway_scenarios::study::ESTIMATORS;
 use leeway_scenarios::study::OUTPUTS;
 use leeway_scenarios::study::StudyConfig;
@@ -42,7 +43,7 @@ fn header(cfg: &StudyConfig, args: &ReproduceArgs) -> String {
          parameter error = mean relative error of the identifiable aggregates (X_uu + W_uu, Y_vv + W_vv, N_uv + W_uv and the other parameters);\n\
          diverged = runs whose estimate failed or whose model's simulation diverged on the validation record: left out of every\n\
          figure but \"median, all\", the median parameter error over every estimate returned (diverged models included).\n",
-        model = super::MODEL_FILE,
+        model = crate::reproduce::ship::MODEL_FILE,
         cases = cfg.cases.len(),
         s = if cfg.cases.len() == 1 { "" } else { "s" },
         n = n.join(", "),
@@ -231,7 +232,7 @@ fn claims(report: &Report) -> String {
         let _ = writeln!(s, "      criterion: {}", c.criterion);
         let _ = writeln!(s, "      evidence: {}", c.evidence);
         if c.id == "a" {
-            let ahead: Vec<String> = super::ls_ahead(report)
+            let ahead: Vec<String> = crate::reproduce::report::ls_ahead(report)
                 .iter()
                 .map(|(case, ns)| {
                     if ns.is_empty() {

@@ -1,0 +1,173 @@
+//! Data files for a command: loaded or streamed, every failing file reported, and what loading noted.
+
+use crate::problem::{Failure, Problem};
+use leeway_data::{FileNotes, FileSource, LoadOptions, load_file_noted, open_file};
+use leeway_model::{Experiment, Source};
+use leeway_structure::ir::Ir;
+use std::path::PathBuf;
+
+/// Loads every data file (CSV, or Parquet: extension `.parquet` or the
+/// magic `PAR1`); all files are read and every failing one reported.
+/// What was noted while reading (comment lines, jitter, resampling) comes back
+/// per file, for the output.
+pub fn load_data(
+    ir: &Ir,
+    files: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(Vec<Experiment>, Vec<FileNotes>), Failure> {
+    load_files(ir, files, options).map(|(e, n)| (e.experiments, n))
+}
+
+/// Experiments held in memory, each with its file as messages name it.
+struct Held {
+    experiments: Vec<Experiment>,
+    files: Vec<String>,
+}
+
+/// [`load_data`], with each experiment's file.
+fn load_files(
+    ir: &Ir,
+    files: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(Held, Vec<FileNotes>), Failure> {
+    let mut experiments = Vec::new();
+    let mut names = Vec::new();
+    let mut notes = Vec::new();
+    let mut problems = Vec::new();
+    for path in files {
+        match load_file_noted(path, ir, options) {
+            Ok(f) => {
+                let name = path.display().to_string();
+                names.extend(f.experiments.iter().map(|_| name.clone()));
+                experiments.extend(f.experiments);
+                notes.push(f.notes);
+            }
+            Err(e) => problems.push(Problem::data(&e)),
+        }
+    }
+    if problems.is_empty() {
+        let held = Held {
+            experiments,
+            files: names,
+        };
+        Ok((held, notes))
+    } else {
+        Err(Failure::Problems(problems))
+    }
+}
+
+/// Experiments for an estimate: streamed from their files (validated once,
+/// then read on every pass from a binary copy, flat memory in N), or held in
+/// memory under `--resample`, which interpolates over a whole experiment.
+pub enum DataSet {
+    /// Read per pass from the validated copy.
+    Streamed(Vec<FileSource>),
+    /// Loaded (resampled), with each experiment's file.
+    Held(Vec<Experiment>, Vec<String>),
+}
+
+impl DataSet {
+    /// Every experiment as a source, in file order.
+    pub fn sources(&self) -> Vec<&dyn Source> {
+        match self {
+            DataSet::Streamed(v) => v.iter().map(|e| e as &dyn Source).collect(),
+            DataSet::Held(v, _) => v.iter().map(|e| e as &dyn Source).collect(),
+        }
+    }
+    /// Each experiment's file, as named in messages.
+    pub fn files(&self) -> Vec<&str> {
+        match self {
+            DataSet::Streamed(v) => v.iter().map(FileSource::file).collect(),
+            DataSet::Held(_, files) => files.iter().map(String::as_str).collect(),
+        }
+    }
+    /// A problem met by a later pass (the validated copy could not be read).
+    pub fn failure(&self) -> Option<Problem> {
+        match self {
+            DataSet::Streamed(v) => v
+                .iter()
+                .find_map(FileSource::failure)
+                .map(|e| Problem::data(&e)),
+            DataSet::Held(..) => None,
+        }
+    }
+}
+
+/// [`load_data`] for an estimate: streamed unless `--resample` is given.
+pub fn open_data(
+    ir: &Ir,
+    files: &[PathBuf],
+    options: &LoadOptions,
+) -> Result<(DataSet, Vec<FileNotes>), Failure> {
+    if options.resample.is_some() {
+        return load_files(ir, files, options)
+            .map(|(h, n)| (DataSet::Held(h.experiments, h.files), n));
+    }
+    let mut sources = Vec::new();
+    let mut notes = Vec::new();
+    let mut problems = Vec::new();
+    for path in files {
+        match open_file(path, ir, options) {
+            Ok(f) => {
+                sources.extend(f.sources);
+                notes.push(f.notes);
+            }
+            Err(e) => problems.push(Problem::data(&e)),
+        }
+    }
+    if problems.is_empty() {
+        Ok((DataSet::Streamed(sources), notes))
+    } else {
+        Err(Failure::Problems(problems))
+    }
+}
+
+/// Below this relative step deviation, time stamps count as uniform: decimal
+/// stamps such as 0.1·k carry rounding of order 1e-15.
+const JITTER_FLOOR: f64 = 1e-6;
+
+/// What loading did, one line each, for the text output: comment lines
+/// skipped, jitter tolerated, experiments resampled.
+pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
+    let mut lines = Vec::new();
+    for f in notes {
+        if f.comment_lines > 0 {
+            lines.push(format!(
+                "{}: {} comment line{} skipped",
+                f.file,
+                f.comment_lines,
+                if f.comment_lines == 1 { "" } else { "s" }
+            ));
+        }
+        if f.blank_lines > 0 {
+            lines.push(format!(
+                "{}: {} blank line{} skipped",
+                f.file,
+                f.blank_lines,
+                if f.blank_lines == 1 { "" } else { "s" }
+            ));
+        }
+        for e in &f.experiments {
+            if let Some(n) = e.resampled {
+                lines.push(format!(
+                    "{}: experiment `{}` resampled from {} rows to {n} samples",
+                    f.file, e.experiment, e.rows
+                ));
+            }
+            if let Some(d) = e.max_step_deviation.filter(|d| *d > JITTER_FLOOR) {
+                lines.push(format!(
+                    "{}: experiment `{}` time steps deviate up to {:.2} % from the nominal step{}",
+                    f.file,
+                    e.experiment,
+                    100.0 * d,
+                    if e.resampled.is_some() {
+                        " (before resampling)"
+                    } else {
+                        " (within --time-tolerance)"
+                    }
+                ));
+            }
+        }
+    }
+    lines
+}

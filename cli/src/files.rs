@@ -1,0 +1,48 @@
+//! Reading files the user names: text and model sources, with located IO errors.
+
+use crate::problem::Problem;
+use leeway_structure::grammar;
+use leeway_structure::grammar::source::Refused;
+use std::path::Path;
+
+/// Reads a text file; a problem names the path and what went wrong.
+pub fn read_text(path: &Path, what: &str) -> Result<String, Problem> {
+    let file = path.display().to_string();
+    std::fs::read_to_string(path).map_err(|e| {
+        let reason = match e.kind() {
+            std::io::ErrorKind::NotFound => "no such file".to_string(),
+            std::io::ErrorKind::InvalidData => "it is not UTF-8 text".to_string(),
+            _ => e.to_string(),
+        };
+        Problem::error("io", format!("cannot read {what} `{file}`: {reason}")).at(&file)
+    })
+}
+
+/// Reads a model file: its size is checked before reading (a file over
+/// [`grammar::MAX_SOURCE_BYTES`] is never read whole: at most one byte more is
+/// read), then the bytes are decoded, a non-UTF-8 file refused with the
+/// line and column of its first invalid byte. `Err` is an IO failure.
+pub fn read_model(path: &Path) -> std::io::Result<Result<String, Box<Refused>>> {
+    use std::io::Read;
+    let file = std::fs::File::open(path)?;
+    let size = file.metadata()?.len();
+    let limit = grammar::MAX_SOURCE_BYTES as u64;
+    if size > limit {
+        return Ok(Err(Box::new(Refused {
+            text: String::new(),
+            diagnostic: grammar::source::too_large(size),
+        })));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes)?;
+    Ok(grammar::source::decode(bytes))
+}
+
+/// Why a model file cannot be read, as the CLI says it.
+pub fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".to_string(),
+        std::io::ErrorKind::IsADirectory => "it is a directory".to_string(),
+        _ => e.to_string(),
+    }
+}

@@ -1,0 +1,102 @@
+//! Options as flags: how data are read (sample times, the time tolerance)
+//! and option values by name, on the rules of leeway-data and
+//! leeway-estimate, which Python follows too.
+
+use crate::problem::Problem;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use leeway_data::{
+    DEFAULT_TIME_TOLERANCE, LoadOptionError, LoadOptions, STEP_RANGE, TIME_TOLERANCE_HINT,
+    sample_time_ok, time_tolerance_ok,
+};
+use leeway_estimate::{MAX_REFINEMENTS, Named};
+use leeway_structure::ir::Ir;
+
+/// How data files with time stamps are read: shared by `estimate` and `validate`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TimeArgs {
+    /// Largest relative deviation of a time step from the nominal (mean) step,
+    /// as a fraction in (0, 0.5): 0.05 accepts ±5 % logger jitter and still
+    /// rejects a dropped sample (a 100 % step).
+    #[arg(long, value_name = "TOL", default_value_t = leeway_data::DEFAULT_TIME_TOLERANCE, value_parser = tolerance)]
+    pub time_tolerance: f64,
+    /// Interpolate every experiment linearly onto a uniform grid of H seconds
+    /// from its first time stamp (needs a time column; the heading along the short arc).
+    #[arg(long, value_name = "H", value_parser = positive)]
+    pub resample: Option<f64>,
+}
+
+/// `--time-tolerance`: a fraction in (0, 0.5) ([`time_tolerance_ok`]).
+pub fn tolerance(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if time_tolerance_ok(v) => Ok(v),
+        Ok(v) if (0.5..50.0).contains(&v) => Err(format!(
+            "`{s}` is not a fraction in (0, 0.5) ({TIME_TOLERANCE_HINT})"
+        )),
+        _ => Err(format!(
+            "`{s}` is not a fraction in (0, 0.5): the relative step tolerance, e.g. 0.05 for 5 %"
+        )),
+    }
+}
+
+/// The load options of a command ([`LoadOptions::for_model`]), its
+/// conflicts with the model in the CLI's words.
+pub fn load_options(
+    ir: &Ir,
+    step: Option<f64>,
+    time: Option<&TimeArgs>,
+) -> Result<LoadOptions, Problem> {
+    let tolerance = time.map_or(DEFAULT_TIME_TOLERANCE, |t| t.time_tolerance);
+    let resample = time.and_then(|t| t.resample);
+    LoadOptions::for_model(ir, step, tolerance, resample).map_err(|e| {
+        let (message, help) = match e {
+            LoadOptionError::SampleTime { option, value } => (
+                format!("--{option} {value} is outside 1e-6..=1e6 seconds, the sample times leeway accepts"),
+                "give a sample time in seconds".to_string(),
+            ),
+            LoadOptionError::TimeTolerance(v) => (
+                format!("--time-tolerance {v} is not a fraction in (0, 0.5)"),
+                TIME_TOLERANCE_HINT.to_string(),
+            ),
+            LoadOptionError::StepConflict { given, declared } => (
+                format!("--step {given} conflicts with the model's `step {declared}`"),
+                "drop --step (the model's step is used), or change `step` in the model".into(),
+            ),
+            LoadOptionError::ResampleConflict { given, declared } => (
+                format!("--resample {given} conflicts with the sample time {declared} (the model's `step` or --step)"),
+                format!("resample at the model's step: --resample {declared}"),
+            ),
+        };
+        Problem::error("invalid-option", message).help(help)
+    })
+}
+
+pub fn refinements(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(v) if v <= MAX_REFINEMENTS => Ok(v),
+        Ok(_) => Err(format!("`{s}` is not in 0..={MAX_REFINEMENTS}")),
+        Err(_) => Err(format!("`{s}` is not a whole number")),
+    }
+}
+
+/// A sample time in seconds within [`STEP_RANGE`] (`--step`, `--resample`).
+pub fn positive(s: &str) -> Result<f64, String> {
+    let (lo, hi) = STEP_RANGE;
+    match s.trim().parse::<f64>() {
+        Ok(v) if sample_time_ok(v) => Ok(v),
+        Ok(v) if v.is_finite() && v > 0.0 => Err(format!(
+            "`{s}` s is outside {lo:e}..={hi:e} seconds, the sample times leeway accepts"
+        )),
+        _ => Err(format!("`{s}` is not a positive number of seconds")),
+    }
+}
+
+/// A named option's values ([`Named`]) as a clap parser: the names and
+/// their help from the one table Python reads too.
+pub fn choices<T: Named + Clone + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(
+        T::CHOICES
+            .iter()
+            .map(|c| PossibleValue::new(c.name).help(c.help)),
+    )
+    .try_map(|name| T::from_name(&name))
+}

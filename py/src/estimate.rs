@@ -1,0 +1,115 @@
+//! `leeway estimate --json` of a model on frames: the GIL released while the data are read and estimated.
+
+use crate::data::{self, FrameArg, borrow_frames};
+use crate::failure::Failure;
+use crate::model::Model;
+use crate::options::{EstimateOptions, load_options};
+use leeway_data::LoadOptions;
+use leeway_estimate::estimate;
+use leeway_model::Interpreter;
+use leeway_report::{Estimated, estimate_report, heading_gains, heading_warnings};
+use pyo3::prelude::*;
+
+/// `leeway estimate --json` of `model` on the frames: each frame is
+/// `(name, [(column, float64 array)], experiment labels or None)`. The GIL is
+/// released from the moment the columns are borrowed until the document is
+/// written.
+#[pyfunction]
+pub(crate) fn estimate_json(
+    py: Python<'_>,
+    model: &Model,
+    frames: Vec<FrameArg<'_>>,
+    options: EstimateOptions,
+) -> PyResult<String> {
+    let runtime_options = options.runtime()?;
+    // `aggregate` changes what the structure compiler keeps: the CLI compiles
+    // with it, so does this.
+    let model = &*model.for_aggregate(options.aggregate)?;
+    let load_options = load_options(
+        &model.ir,
+        options.step,
+        Some(options.time_tolerance),
+        options.resample,
+    )?;
+    let borrowed = borrow_frames(&frames)?;
+    let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
+    Ok(document)
+}
+
+fn run_estimate(
+    model: &Model,
+    frames: &[data::Frame<'_>],
+    load_options: &LoadOptions,
+    options: &leeway_estimate::EstimateOptions,
+) -> Result<String, Failure> {
+    let ir = &model.ir;
+    let (loaded, notes) =
+        data::load_for_estimate(ir, frames, load_options, options.interrupt.as_ref())?;
+    let sources = loaded.sources();
+    let mut warnings = model.warnings.clone();
+    warnings.extend(leeway_report::unit_warnings(ir, &sources));
+    let gains = heading_gains(ir, &sources);
+    warnings.extend(heading_warnings(ir, &gains));
+    let interpreter = Interpreter::new(ir.clone());
+    let result = estimate(&interpreter, &sources, options);
+    // A spill file that could not be read back voids whatever was computed.
+    if let Some(f) = loaded.failure() {
+        return Err(f);
+    }
+    let est = result.map_err(|mut e| {
+        if e.code == "too-few-samples" {
+            let list: Vec<String> = sources
+                .iter()
+                .map(|s| format!("`{}`: {} samples", s.name(), s.len()))
+                .collect();
+            e.message = format!("{} (experiments: {})", e.message, list.join("; "));
+        }
+        Failure::estimate(&e)
+    })?;
+    warnings.extend(est.warnings.iter().cloned());
+    let experiments: Vec<(String, usize)> = sources
+        .iter()
+        .map(|e| (e.name().to_string(), e.len()))
+        .collect();
+    estimate_document(
+        model,
+        frames.iter().map(|f| f.name.to_string()).collect(),
+        &est,
+        &experiments,
+        &gains,
+        &notes,
+        warnings,
+    )
+}
+
+/// `leeway estimate --json`'s document of an estimate of `model` from the
+/// named data (frames or files), with what loading and the data checks found.
+pub(crate) fn estimate_document(
+    model: &Model,
+    data: Vec<String>,
+    est: &leeway_estimate::Estimate,
+    experiments: &[(String, usize)],
+    gains: &[(String, Option<f64>)],
+    notes: &[leeway_data::FileNotes],
+    warnings: Vec<String>,
+) -> Result<String, Failure> {
+    let ir = &model.ir;
+    let report = estimate_report::<serde_json::Value>(
+        model.file.clone(),
+        data,
+        est.method,
+        Some(ir.name.clone()),
+        Ok(Estimated {
+            model: &ir.name,
+            estimate: est,
+            experiments,
+            heading_gains: gains,
+            data_notes: notes,
+            data_units: &ir.data_units,
+        }),
+        warnings,
+    );
+    report
+        .to_json()
+        .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None))
+}
