@@ -1,7 +1,7 @@
 //! Text → syntax tree. pest types never leave this module.
 
 use crate::ast::*;
-use crate::diagnostic::Diagnostic;
+use crate::diagnostic::data::Diagnostic;
 use pest::Parser;
 use pest::iterators::Pair;
 

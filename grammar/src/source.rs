@@ -4,7 +4,7 @@
 //! not UTF-8 gives one located diagnostic and the text to render it against.
 
 use crate::ast::Span;
-use crate::diagnostic::Diagnostic;
+use crate::diagnostic::data::Diagnostic;
 use crate::parse::MAX_SOURCE_BYTES;
 
 /// A model file refused before parsing: the diagnostic, and the text it
