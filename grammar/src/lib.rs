@@ -22,4 +22,8 @@ pub use diagnostic::render::{MAX_RENDERED, RenderStyle, render, render_short};
 #[doc(inline)]
 pub use diagnostic::view::MAX_LINE_COLUMNS;
 #[doc(inline)]
-pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};
+pub use parse::guards::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS};
+#[doc(inline)]
+pub use parse::parse;
+#[doc(inline)]
+pub use source::MAX_SOURCE_BYTES;

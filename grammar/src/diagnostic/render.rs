@@ -230,7 +230,7 @@ mod tests {
 
     #[test]
     fn at_most_fifty_diagnostics_are_rendered() {
-        // Issue 10: 4,097 errors from a 117-byte model filled 1.5 MB of stderr.
+        // No flood: 4,097 errors from a 117-byte model must not fill 1.5 MB of stderr.
         // One error per line (errors on one line are merged, see below).
         let src = "x\n".repeat(5000);
         let src = src.as_str();

@@ -243,7 +243,7 @@ mod tests {
 
     #[test]
     fn long_lines_are_cut_to_a_window_around_the_caret() {
-        // Issue 10: `state u` 4,000 times on one line reprinted the 28 KB line per error.
+        // A 28 KB line (`state u` 4,000 times) is not reprinted whole for an error on it.
         let src = format!("model M {{ {}}}\n", "state u ".repeat(4000));
         let at = 10 + 8 * 3000 + 6;
         let d = Diagnostic::error("duplicate-declaration", "`u` is declared twice")
