@@ -34,6 +34,116 @@ pub(crate) struct View<'a> {
     pieces: Vec<Piece>,
 }
 
+/// The lines a diagnostic shows, as the bytes `from..to` of `source`: from
+/// the line of its first label to the line after the one of its last.
+fn shown_lines(source: &str, first: usize, last: usize) -> (usize, usize) {
+    let from = source[..first].rfind('\n').map_or(0, |i| i + 1);
+    let mut to = source[last..].find('\n').map_or(source.len(), |i| last + i);
+    if to < source.len() {
+        to = source[to + 1..]
+            .find('\n')
+            .map_or(source.len(), |i| to + 1 + i);
+    }
+    (from, to)
+}
+
+/// Whether a line is drawn changed: wider than [`MAX_LINE_COLUMNS`], or
+/// holding a character drawn escaped.
+fn needs_change(line: &str) -> bool {
+    line.chars().nth(MAX_LINE_COLUMNS).is_some() || line.chars().any(escaped)
+}
+
+/// The first and the last character (`lo`, `hi`) of a line under the
+/// labels `ranges`; the line starts at byte `at` and is `len` bytes long.
+fn label_columns(
+    chars: &[(usize, char)],
+    at: usize,
+    len: usize,
+    ranges: &[std::ops::Range<usize>],
+) -> (usize, usize) {
+    let on_line: Vec<&std::ops::Range<usize>> = ranges
+        .iter()
+        .filter(|r| r.end >= at && r.start <= at + len)
+        .collect();
+    let char_at = |b: usize| chars.partition_point(|(i, _)| at + *i < b);
+    let lo = on_line
+        .iter()
+        .map(|r| char_at(r.start.max(at)))
+        .min()
+        .unwrap_or(0);
+    let hi = on_line
+        .iter()
+        .map(|r| char_at(r.end.min(at + len)))
+        .max()
+        .unwrap_or(0);
+    (lo, hi)
+}
+
+/// The characters `start..end` drawn of a line of `count` characters: all
+/// of them up to [`MAX_LINE_COLUMNS`], else a window around `lo..hi`.
+fn window(count: usize, lo: usize, hi: usize) -> (usize, usize) {
+    if count <= MAX_LINE_COLUMNS {
+        (0, count)
+    } else {
+        let margin = MAX_LINE_COLUMNS.saturating_sub(hi - lo) / 2;
+        let start = lo.saturating_sub(margin.max(MAX_LINE_COLUMNS / 4)).min(lo);
+        let start = start.min(count.saturating_sub(MAX_LINE_COLUMNS));
+        (start, (start + MAX_LINE_COLUMNS).min(count))
+    }
+}
+
+/// Draws a changed `line` (starting at source byte `at`) onto `text`: cut to
+/// its window with `…` at the cut ends, control characters escaped, and the
+/// pieces that map the drawn bytes back to the source.
+fn draw_line(
+    text: &mut String,
+    pieces: &mut Vec<Piece>,
+    line: &str,
+    at: usize,
+    ranges: &[std::ops::Range<usize>],
+) {
+    let chars: Vec<(usize, char)> = line.char_indices().collect();
+    let (lo, hi) = label_columns(&chars, at, line.len(), ranges);
+    let (start, end) = window(chars.len(), lo, hi);
+    if start > 0 {
+        pieces.push(Piece {
+            disp: text.len(),
+            orig: at,
+            verbatim: false,
+        });
+        text.push('…');
+    }
+    for &(i, c) in &chars[start..end] {
+        let verbatim = !escaped(c);
+        if pieces.last().is_none_or(|p| !(p.verbatim && verbatim)) {
+            pieces.push(Piece {
+                disp: text.len(),
+                orig: at + i,
+                verbatim,
+            });
+        }
+        if verbatim {
+            text.push(c);
+        } else {
+            text.push_str(&format!("\\u{{{:x}}}", u32::from(c)));
+        }
+    }
+    if end < chars.len() {
+        let cut = chars.get(end).map_or(at + line.len(), |(i, _)| at + i);
+        pieces.push(Piece {
+            disp: text.len(),
+            orig: cut,
+            verbatim: false,
+        });
+        text.push('…');
+    }
+    pieces.push(Piece {
+        disp: text.len(),
+        orig: at + line.len(),
+        verbatim: true,
+    });
+}
+
 impl<'a> View<'a> {
     /// The view for a diagnostic, or `None` when its lines need no change.
     pub(crate) fn of(name: &'a str, source: &'a str, d: &cs::Diagnostic<()>) -> Option<View<'a>> {
@@ -41,17 +151,8 @@ impl<'a> View<'a> {
             d.labels.iter().map(|l| l.range.clone()).collect();
         let first = ranges.iter().map(|r| r.start).min()?;
         let last = ranges.iter().map(|r| r.end).max()?;
-        // The lines from the first label to the line after the last one.
-        let from = source[..first].rfind('\n').map_or(0, |i| i + 1);
-        let mut to = source[last..].find('\n').map_or(source.len(), |i| last + i);
-        if to < source.len() {
-            to = source[to + 1..]
-                .find('\n')
-                .map_or(source.len(), |i| to + 1 + i);
-        }
-        let needs =
-            |line: &str| line.chars().nth(MAX_LINE_COLUMNS).is_some() || line.chars().any(escaped);
-        if !source[from..to].split('\n').any(needs) {
+        let (from, to) = shown_lines(source, first, last);
+        if !source[from..to].split('\n').any(needs_change) {
             return None;
         }
         let mut text = String::with_capacity(from + 2 * (to - from).min(4096));
@@ -63,68 +164,8 @@ impl<'a> View<'a> {
         }];
         let mut at = from;
         for line in source[from..to].split('\n') {
-            if needs(line) {
-                let on_line: Vec<&std::ops::Range<usize>> = ranges
-                    .iter()
-                    .filter(|r| r.end >= at && r.start <= at + line.len())
-                    .collect();
-                let chars: Vec<(usize, char)> = line.char_indices().collect();
-                let char_at = |b: usize| chars.partition_point(|(i, _)| at + *i < b);
-                let lo = on_line
-                    .iter()
-                    .map(|r| char_at(r.start.max(at)))
-                    .min()
-                    .unwrap_or(0);
-                let hi = on_line
-                    .iter()
-                    .map(|r| char_at(r.end.min(at + line.len())))
-                    .max()
-                    .unwrap_or(0);
-                let (start, end) = if chars.len() <= MAX_LINE_COLUMNS {
-                    (0, chars.len())
-                } else {
-                    let margin = MAX_LINE_COLUMNS.saturating_sub(hi - lo) / 2;
-                    let start = lo.saturating_sub(margin.max(MAX_LINE_COLUMNS / 4)).min(lo);
-                    let start = start.min(chars.len().saturating_sub(MAX_LINE_COLUMNS));
-                    (start, (start + MAX_LINE_COLUMNS).min(chars.len()))
-                };
-                if start > 0 {
-                    pieces.push(Piece {
-                        disp: text.len(),
-                        orig: at,
-                        verbatim: false,
-                    });
-                    text.push('…');
-                }
-                for &(i, c) in &chars[start..end] {
-                    let verbatim = !escaped(c);
-                    if pieces.last().is_none_or(|p| !(p.verbatim && verbatim)) {
-                        pieces.push(Piece {
-                            disp: text.len(),
-                            orig: at + i,
-                            verbatim,
-                        });
-                    }
-                    if verbatim {
-                        text.push(c);
-                    } else {
-                        text.push_str(&format!("\\u{{{:x}}}", u32::from(c)));
-                    }
-                }
-                if end < chars.len() {
-                    let cut = chars.get(end).map_or(at + line.len(), |(i, _)| at + i);
-                    pieces.push(Piece {
-                        disp: text.len(),
-                        orig: cut,
-                        verbatim: false,
-                    });
-                    text.push('…');
-                }
-                pieces.push(Piece {
-                    disp: text.len(),
-                    orig: at + line.len(),
-                    verbatim: true,
-                });
+            if needs_change(line) {
+                draw_line(&mut text, &mut pieces, line, at, &ranges);
             } else {
                 text.push_str(line);
             }
