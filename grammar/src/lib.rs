@@ -6,7 +6,9 @@
 
 pub mod ast;
 pub mod diagnostic;
+mod guards;
 mod parse;
+mod scan;
 pub mod source;
 
 #[doc(inline)]
@@ -22,7 +24,7 @@ pub use diagnostic::render::{MAX_RENDERED, RenderStyle, render, render_short};
 #[doc(inline)]
 pub use diagnostic::view::MAX_LINE_COLUMNS;
 #[doc(inline)]
-pub use parse::guards::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS};
+pub use guards::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS};
 #[doc(inline)]
 pub use parse::parse;
 #[doc(inline)]

@@ -4,7 +4,7 @@
 use crate::ast::Span;
 use crate::diagnostic::data::Diagnostic;
 use crate::parse::rules::{Rule, is_keyword};
-use crate::parse::scan::unclosed_delimiter;
+use crate::scan::unclosed_delimiter;
 use pest::error::{Error, ErrorVariant, InputLocation};
 
 /// How the user reads what a grammar rule expects.

@@ -3,7 +3,7 @@
 
 use crate::ast::Span;
 use crate::diagnostic::data::Diagnostic;
-use crate::parse::scan::{comment_end, scan_delimiters, string_end};
+use crate::scan::{comment_end, scan_delimiters, string_end};
 use crate::source::{MAX_SOURCE_BYTES, too_large};
 
 /// Deepest nesting of parentheses and moduli accepted. Deeper input is

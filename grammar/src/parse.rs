@@ -1,21 +1,18 @@
 //! Text → syntax tree: the entry [`parse`]. pest types never leave this module.
 //!
-//! The input is refused up front by [`guards`] when it is too large or too
-//! deep, parsed by the pest grammar of [`rules`], built into the syntax tree by
-//! [`build`], and a syntax error is worded for the user by [`wording`].
+//! The input is refused up front by [`guards`](crate::guards) when it is too
+//! large or too deep, parsed by the pest grammar of [`rules`], built into the
+//! syntax tree by [`build`], and a syntax error is worded for the user by
+//! [`wording`].
 
 pub(crate) mod build;
-pub(crate) mod guards;
 pub(crate) mod rules;
-pub(crate) mod scan;
-#[cfg(test)]
-mod testing;
 pub(crate) mod wording;
 
 use crate::ast::ModelSyntax;
 use crate::diagnostic::data::Diagnostic;
+use crate::guards::refuse;
 use crate::parse::build::build_model;
-use crate::parse::guards::refuse;
 use crate::parse::rules::{Rule, SomParser};
 use crate::parse::wording::syntax_error;
 use pest::Parser;
@@ -40,3 +37,6 @@ pub fn parse(source: &str) -> (Option<ModelSyntax>, Vec<Diagnostic>) {
         Err(e) => (None, vec![syntax_error(source, e)]),
     }
 }
+
+#[cfg(test)]
+pub(crate) mod testing;
