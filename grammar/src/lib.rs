@@ -6,15 +6,26 @@
 
 pub mod ast;
 pub mod diagnostic;
+mod guards;
 mod parse;
+mod scan;
 pub mod source;
 
 #[doc(inline)]
 pub use ast::*;
 #[doc(inline)]
-pub use diagnostic::{
-    Diagnostic, Label, MAX_LINE_COLUMNS, MAX_LISTED, MAX_RENDERED, RenderStyle, Severity, and_list,
-    join_capped, line_col, render, render_short,
-};
+pub use diagnostic::data::{Diagnostic, Label, Severity};
 #[doc(inline)]
-pub use parse::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS, MAX_SOURCE_BYTES, parse};
+pub use diagnostic::lists::{MAX_LISTED, and_list, join_capped};
+#[doc(inline)]
+pub use diagnostic::location::line_col;
+#[doc(inline)]
+pub use diagnostic::render::{MAX_RENDERED, RenderStyle, render, render_short};
+#[doc(inline)]
+pub use diagnostic::view::MAX_LINE_COLUMNS;
+#[doc(inline)]
+pub use guards::{MAX_NESTING, MAX_OPERANDS, MAX_SIGNS};
+#[doc(inline)]
+pub use parse::parse;
+#[doc(inline)]
+pub use source::MAX_SOURCE_BYTES;

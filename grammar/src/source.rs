@@ -4,8 +4,10 @@
 //! not UTF-8 gives one located diagnostic and the text to render it against.
 
 use crate::ast::Span;
-use crate::diagnostic::Diagnostic;
-use crate::parse::MAX_SOURCE_BYTES;
+use crate::diagnostic::data::Diagnostic;
+
+/// Largest model file accepted, in bytes.
+pub const MAX_SOURCE_BYTES: usize = 1 << 20;
 
 /// A model file refused before parsing: the diagnostic, and the text it
 /// points into (invalid bytes replaced by `�`, which the caret marks).
@@ -66,7 +68,8 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, Box<Refused>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::diagnostic::{RenderStyle, line_col, render};
+    use crate::diagnostic::location::line_col;
+    use crate::diagnostic::render::{RenderStyle, render};
 
     #[test]
     fn invalid_utf8_is_located_at_its_first_byte() {
