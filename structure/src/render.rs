@@ -1,7 +1,9 @@
 //! Human-readable rendering of a compiled structure: the text of
 //! `leeway check` and of the snapshot tests. Plain text, no terminal codes.
 
-use crate::identify::{Analysis, Patterns, pattern_text, patterns_text};
+use crate::identify::analysis::Analysis;
+use crate::identify::pattern::{pattern_text, patterns_text};
+use crate::identify::reduce::Patterns;
 use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation};
 use leeway_grammar::{EquationKind, join_capped};
 use std::fmt::Write;
