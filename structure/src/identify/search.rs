@@ -148,7 +148,8 @@ impl Analysis<'_> {
         })
     }
     /// The smallest set of patterns over one component's arguments (see
-    /// [`Analysis::smallest`]).
+    /// [`Analysis::smallest`]): the completion, pruned, then every smaller
+    /// set from the lower bound up, within the budget.
     fn component_search(
         &self,
         args: &[usize],
@@ -161,16 +162,23 @@ impl Analysis<'_> {
         if !ok(&upper) {
             return None;
         }
-        let u = upper.len();
-        let done = |patterns: Vec<SignPattern>, exhausted_below: Option<usize>| {
-            Some(ComponentSet {
-                patterns,
-                exhausted_below,
-            })
-        };
-        // Each pattern gives one row per family (output, monomial without
-        // its signs), so the θ columns living in one family alone, which must
-        // be independent, need at least as many patterns.
+        let lower = self.family_lower_bound(blocks, need);
+        let (upper, spent) = prune(upper, lower, &ok);
+        if lower >= upper.len() {
+            return Some(ComponentSet {
+                patterns: upper,
+                exhausted_below: None,
+            });
+        }
+        // With homogeneous columns a common flip of every pattern changes no
+        // rank, so one experiment may be taken all-plus.
+        let fix_first = self.homogeneous_over(blocks, args);
+        Some(enumerate(args.len(), lower, upper, spent, fix_first, &ok))
+    }
+    /// Each pattern gives one row per family (output, monomial without its
+    /// signs), so the θ columns living in one family alone, which must be
+    /// independent, need at least as many patterns.
+    fn family_lower_bound(&self, blocks: &[usize], need: &dyn Fn(usize) -> bool) -> usize {
         let mut per_family: BTreeMap<FamilyKey, usize> = BTreeMap::new();
         for &b in blocks {
             for &c in self.blocks[b].iter().filter(|c| need(**c)) {
@@ -190,83 +198,7 @@ impl Analysis<'_> {
                 }
             }
         }
-        let lower = per_family.values().copied().max().unwrap_or(1).max(1);
-        // The completion asks full rank of every family, which is more than
-        // θ may need (a measured medium's constant character, say): drop
-        // patterns one at a time while the rest still identify, a few rank
-        // evaluations that often bring the upper bound down to the lower one.
-        let (mut upper, mut u) = (upper, u);
-        let mut spent = 0usize;
-        'prune: while lower < u {
-            // The latest first: the all-plus pattern keeps the rows sparse.
-            for drop in (0..u).rev() {
-                if spent >= PRUNE_BUDGET {
-                    break 'prune;
-                }
-                spent += 1;
-                let fewer: Vec<SignPattern> = upper
-                    .iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != drop)
-                    .map(|(_, p)| p.clone())
-                    .collect();
-                if ok(&fewer) {
-                    upper = fewer;
-                    u -= 1;
-                    continue 'prune;
-                }
-            }
-            break;
-        }
-        if lower >= u {
-            return done(upper, None);
-        }
-        // Candidates by index: bit k of the index is the sign of args[k].
-        let bits = args.len().min(60);
-        let n_cand = 1usize << bits;
-        let candidate = |index: usize| -> SignPattern {
-            let mut p = vec![1i8; args.len()];
-            for (k, slot) in p.iter_mut().enumerate().take(bits) {
-                if index >> k & 1 == 1 {
-                    *slot = -1;
-                }
-            }
-            p
-        };
-        // With homogeneous columns a common flip of every pattern changes no
-        // rank, so one experiment may be taken all-plus.
-        let fix_first = self.homogeneous_over(blocks, args);
-        for size in lower..=u {
-            // The sets of this size to try; when more than the budget left,
-            // the size cannot be exhausted (the found set is minimal anyway
-            // once every smaller size was).
-            let count = if fix_first {
-                binomial(n_cand - 1, size - 1)
-            } else {
-                binomial(n_cand, size)
-            };
-            if (bits < args.len() && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent {
-                return done(upper, (size < u).then_some(size));
-            }
-            if size > n_cand {
-                break;
-            }
-            let mut idx: Vec<usize> = (0..size).collect();
-            loop {
-                if fix_first && idx[0] != 0 {
-                    break;
-                }
-                spent += 1;
-                let set: Vec<SignPattern> = idx.iter().map(|i| candidate(*i)).collect();
-                if ok(&set) {
-                    return done(set, None);
-                }
-                if !next_combination(&mut idx, n_cand) {
-                    break;
-                }
-            }
-        }
-        done(upper, None)
+        per_family.values().copied().max().unwrap_or(1).max(1)
     }
     /// Every pattern over `args`, the other signs +1, all-plus first.
     pub fn expand_patterns(&self, args: &[usize]) -> Vec<SignPattern> {
@@ -346,6 +278,106 @@ impl Analysis<'_> {
         }
         Some(true)
     }
+}
+
+/// The completion asks full rank of every family, which is more than θ may
+/// need (a measured medium's constant character, say): drop patterns one at
+/// a time while the rest still identify, a few rank evaluations that often
+/// bring the upper bound down to the lower one. Returns the set kept and the
+/// rank evaluations spent (at most [`PRUNE_BUDGET`]).
+fn prune(
+    upper: Vec<SignPattern>,
+    lower: usize,
+    ok: &dyn Fn(&[SignPattern]) -> bool,
+) -> (Vec<SignPattern>, usize) {
+    let mut u = upper.len();
+    let mut upper = upper;
+    let mut spent = 0usize;
+    'prune: while lower < u {
+        // The latest first: the all-plus pattern keeps the rows sparse.
+        for drop in (0..u).rev() {
+            if spent >= PRUNE_BUDGET {
+                break 'prune;
+            }
+            spent += 1;
+            let fewer: Vec<SignPattern> = upper
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k != drop)
+                .map(|(_, p)| p.clone())
+                .collect();
+            if ok(&fewer) {
+                upper = fewer;
+                u -= 1;
+                continue 'prune;
+            }
+        }
+        break;
+    }
+    (upper, spent)
+}
+
+/// Every set of `lower` to `upper.len()` patterns over `n_args` arguments,
+/// smallest first, within what is left of [`SEARCH_BUDGET`] after `spent`;
+/// the first that works, else `upper` (with the size from which sets were
+/// not all tried, when the budget cut the search).
+fn enumerate(
+    n_args: usize,
+    lower: usize,
+    upper: Vec<SignPattern>,
+    spent: usize,
+    fix_first: bool,
+    ok: &dyn Fn(&[SignPattern]) -> bool,
+) -> ComponentSet {
+    let u = upper.len();
+    let mut spent = spent;
+    let done = |patterns: Vec<SignPattern>, exhausted_below: Option<usize>| ComponentSet {
+        patterns,
+        exhausted_below,
+    };
+    // Candidates by index: bit k of the index is the sign of args[k].
+    let bits = n_args.min(60);
+    let n_cand = 1usize << bits;
+    let candidate = |index: usize| -> SignPattern {
+        let mut p = vec![1i8; n_args];
+        for (k, slot) in p.iter_mut().enumerate().take(bits) {
+            if index >> k & 1 == 1 {
+                *slot = -1;
+            }
+        }
+        p
+    };
+    for size in lower..=u {
+        // The sets of this size to try; when more than the budget left,
+        // the size cannot be exhausted (the found set is minimal anyway
+        // once every smaller size was).
+        let count = if fix_first {
+            binomial(n_cand - 1, size - 1)
+        } else {
+            binomial(n_cand, size)
+        };
+        if (bits < n_args && !(fix_first && size == 1)) || count > SEARCH_BUDGET - spent {
+            return done(upper, (size < u).then_some(size));
+        }
+        if size > n_cand {
+            break;
+        }
+        let mut idx: Vec<usize> = (0..size).collect();
+        loop {
+            if fix_first && idx[0] != 0 {
+                break;
+            }
+            spent += 1;
+            let set: Vec<SignPattern> = idx.iter().map(|i| candidate(*i)).collect();
+            if ok(&set) {
+                return done(set, None);
+            }
+            if !next_combination(&mut idx, n_cand) {
+                break;
+            }
+        }
+    }
+    done(upper, None)
 }
 
 /// `C(n, k)`, saturating at `usize::MAX`.

@@ -25,22 +25,39 @@ pub struct Verdict {
 
 /// Reads the θ verdict off a reduction.
 pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
-    let cols = names.columns;
-    let param_of = |c: usize| match cols[c].kind {
+    let dropped: Vec<usize> = (0..names.columns.len())
+        .filter(|c| !red.pivot[*c] && theta_param(names, *c).is_some())
+        .collect();
+    let mut combinations = Vec::new();
+    let mut aggregates = Vec::new();
+    for g in theta_groups(names, red, &dropped) {
+        combinations.push(group_combination(names, red, &g, &mut aggregates));
+    }
+    Verdict {
+        identifiable: dropped.is_empty(),
+        combinations,
+        aggregates,
+    }
+}
+
+/// The parameter of a θ column (`None` for a nuisance column).
+fn theta_param(names: &Names, c: usize) -> Option<usize> {
+    match names.columns[c].kind {
         ColumnKind::Theta { parameter } => Some(parameter),
         _ => None,
-    };
-    let dropped: Vec<usize> = (0..cols.len())
-        .filter(|c| !red.pivot[*c] && param_of(*c).is_some())
-        .collect();
-    // Union-find over θ columns linked by combinations.
+    }
+}
+
+/// The θ columns linked by the combinations of the dropped ones, as groups
+/// (in the order their first dropped column comes), none empty.
+fn theta_groups(names: &Names, red: &Reduction, dropped: &[usize]) -> Vec<BTreeSet<usize>> {
     let mut group_of: BTreeMap<usize, usize> = BTreeMap::new();
     let mut groups: Vec<BTreeSet<usize>> = Vec::new();
-    for &d in &dropped {
+    for &d in dropped {
         let mut members: BTreeSet<usize> = BTreeSet::new();
         members.insert(d);
         for (k, _) in &red.combination[d] {
-            if param_of(*k).is_some() {
+            if theta_param(names, *k).is_some() {
                 members.insert(*k);
             }
         }
@@ -67,100 +84,131 @@ pub fn verdict(names: &Names, red: &Reduction) -> Verdict {
             groups[target].insert(m);
         }
     }
-    let mut combinations = Vec::new();
-    let mut aggregates = Vec::new();
-    for g in groups.into_iter().filter(|g| !g.is_empty()) {
-        let kept: Vec<usize> = g.iter().copied().filter(|c| red.pivot[*c]).collect();
-        let lost: Vec<usize> = g.iter().copied().filter(|c| !red.pivot[*c]).collect();
-        let mut idents = Vec::new();
-        let mut idents_short = Vec::new();
-        for &k in &kept {
-            let Some(pk) = param_of(k) else { continue };
-            let mut items = vec![(names.param(pk).to_string(), Q::one())];
-            let mut absorbed = Vec::new();
-            for &d in &lost {
-                if let Some((_, q)) = red.combination[d].iter().find(|(c, _)| *c == k)
-                    && let Some(pd) = param_of(d)
-                {
-                    items.push((names.param(pd).to_string(), q.clone()));
-                    absorbed.push(pd);
-                }
-            }
-            let text = linear_text(&items);
-            idents_short.push(linear_text_capped(&items));
-            aggregates.push(Aggregate {
-                parameter: pk,
-                estimates: text.clone(),
-                absorbed,
-            });
-            idents.push(text);
-        }
-        let nuisance: BTreeSet<usize> = lost
+    groups.into_iter().filter(|g| !g.is_empty()).collect()
+}
+
+/// One group's combination; the aggregates of its kept columns are added.
+fn group_combination(
+    names: &Names,
+    red: &Reduction,
+    g: &BTreeSet<usize>,
+    aggregates: &mut Vec<Aggregate>,
+) -> Combination {
+    let kept: Vec<usize> = g.iter().copied().filter(|c| red.pivot[*c]).collect();
+    let lost: Vec<usize> = g.iter().copied().filter(|c| !red.pivot[*c]).collect();
+    let (idents, idents_short) = identifiable_combinations(names, red, &kept, &lost, aggregates);
+    let nuisance: BTreeSet<usize> = lost
+        .iter()
+        .flat_map(|d| red.combination[*d].iter().map(|(k, _)| *k))
+        .filter(|k| theta_param(names, *k).is_none())
+        .collect();
+    let mut params: Vec<usize> = g.iter().filter_map(|c| theta_param(names, *c)).collect();
+    params.sort_unstable();
+    let mut message = group_message(names, red, &params, &lost, &idents_short, &nuisance);
+    if !nuisance.is_empty() {
+        let ns: Vec<String> = nuisance
             .iter()
-            .flat_map(|d| red.combination[*d].iter().map(|(k, _)| *k))
-            .filter(|k| param_of(*k).is_none())
+            .map(|k| names.columns[*k].name.clone())
             .collect();
-        let mut params: Vec<usize> = g.iter().filter_map(|c| param_of(*c)).collect();
-        params.sort_unstable();
-        let list = quoted_list(
-            &params
-                .iter()
-                .map(|p| names.param(*p).to_string())
-                .collect::<Vec<_>>(),
-        );
-        let constant_terms: Vec<String> = lost
+        message.push_str(&format!(" (together with {})", join_capped(&ns, ", ")));
+    }
+    Combination {
+        parameters: params,
+        identifiable: idents,
+        message,
+    }
+}
+
+/// What each kept column of a group estimates (in full, and capped for a
+/// message), with its aggregate.
+fn identifiable_combinations(
+    names: &Names,
+    red: &Reduction,
+    kept: &[usize],
+    lost: &[usize],
+    aggregates: &mut Vec<Aggregate>,
+) -> (Vec<String>, Vec<String>) {
+    let mut idents = Vec::new();
+    let mut idents_short = Vec::new();
+    for &k in kept {
+        let Some(pk) = theta_param(names, k) else {
+            continue;
+        };
+        let mut items = vec![(names.param(pk).to_string(), Q::one())];
+        let mut absorbed = Vec::new();
+        for &d in lost {
+            if let Some((_, q)) = red.combination[d].iter().find(|(c, _)| *c == k)
+                && let Some(pd) = theta_param(names, d)
+            {
+                items.push((names.param(pd).to_string(), q.clone()));
+                absorbed.push(pd);
+            }
+        }
+        let text = linear_text(&items);
+        idents_short.push(linear_text_capped(&items));
+        aggregates.push(Aggregate {
+            parameter: pk,
+            estimates: text.clone(),
+            absorbed,
+        });
+        idents.push(text);
+    }
+    (idents, idents_short)
+}
+
+/// Why a group is not identifiable, without its nuisance columns.
+fn group_message(
+    names: &Names,
+    red: &Reduction,
+    params: &[usize],
+    lost: &[usize],
+    idents_short: &[String],
+    nuisance: &BTreeSet<usize>,
+) -> String {
+    let list = quoted_list(
+        &params
             .iter()
-            .filter(|d| red.combination[**d].is_empty() && is_constant_term(names, **d))
-            .filter_map(|d| param_of(*d))
+            .map(|p| names.param(*p).to_string())
+            .collect::<Vec<_>>(),
+    );
+    let constant_terms: Vec<String> = lost
+        .iter()
+        .filter(|d| red.combination[**d].is_empty() && is_constant_term(names, **d))
+        .filter_map(|d| theta_param(names, *d))
+        .map(|p| format!("`{}`", names.param(p)))
+        .collect();
+    if idents_short.is_empty() && !constant_terms.is_empty() {
+        format!(
+            "{} {} a constant term, annihilated by {} (zero-mean instruments remove every constant)",
+            join_capped(&constant_terms, ", "),
+            if constant_terms.len() == 1 {
+                "is"
+            } else {
+                "are"
+            },
+            match names.centring {
+                Centring::Experiment => "per-experiment centring",
+                _ => "pooled centring",
+            }
+        )
+    } else if idents_short.is_empty() {
+        let empty: Vec<String> = lost
+            .iter()
+            .filter(|d| red.combination[**d].is_empty())
+            .filter_map(|d| theta_param(names, *d))
             .map(|p| format!("`{}`", names.param(p)))
             .collect();
-        let mut message = if idents.is_empty() && !constant_terms.is_empty() {
+        if !empty.is_empty() && nuisance.is_empty() {
             format!(
-                "{} {} a constant term, annihilated by {} (zero-mean instruments remove every constant)",
-                join_capped(&constant_terms, ", "),
-                if constant_terms.len() == 1 {
-                    "is"
-                } else {
-                    "are"
-                },
-                match names.centring {
-                    Centring::Experiment => "per-experiment centring",
-                    _ => "pooled centring",
-                }
+                "{} {} not excited: the regressor vanishes or is constant within an experiment (zero-mean instruments annihilate constants)",
+                join_capped(&empty, ", "),
+                if empty.len() == 1 { "is" } else { "are" }
             )
-        } else if idents.is_empty() {
-            let empty: Vec<String> = lost
-                .iter()
-                .filter(|d| red.combination[**d].is_empty())
-                .filter_map(|d| param_of(*d))
-                .map(|p| format!("`{}`", names.param(p)))
-                .collect();
-            if !empty.is_empty() && nuisance.is_empty() {
-                format!(
-                    "{} {} not excited: the regressor vanishes or is constant within an experiment (zero-mean instruments annihilate constants)",
-                    join_capped(&empty, ", "),
-                    if empty.len() == 1 { "is" } else { "are" }
-                )
-            } else {
-                format!("{list} cannot be told apart from nuisance terms")
-            }
         } else {
-            format!("{list} enter only as {}", join_capped(&idents_short, ", "))
-        };
-        if !nuisance.is_empty() {
-            let ns: Vec<String> = nuisance.iter().map(|k| cols[*k].name.clone()).collect();
-            message.push_str(&format!(" (together with {})", join_capped(&ns, ", ")));
+            format!("{list} cannot be told apart from nuisance terms")
         }
-        combinations.push(Combination {
-            parameters: params,
-            identifiable: idents,
-            message,
-        });
-    }
-    Verdict {
-        identifiable: dropped.is_empty(),
-        combinations,
-        aggregates,
+    } else {
+        format!("{list} enter only as {}", join_capped(idents_short, ", "))
     }
 }
 
