@@ -11,7 +11,7 @@
 //! * with aggregation, the later of two confounded parameters is held at its
 //!   nominal value and the kept one estimates the aggregate.
 //!
-//! The passes, in the order [`report`] runs them: `structural` parses the
+//! The passes, in the order [`report()`] runs them: `structural` parses the
 //! columns once; `reduce` takes the exact echelon form block by block;
 //! `verdict` reads θ's verdict and the nuisance reduction off it; `search`
 //! (with `completion`) finds the fewest experiments; `separation` says
