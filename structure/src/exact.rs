@@ -576,7 +576,8 @@ mod tests {
 
     #[test]
     fn literal_limits_are_checked_on_the_text() {
-        // Issue 10: `1e-9223372036854775808` wrapped `scale.abs()` and hung.
+        // Extreme exponents: `1e-9223372036854775808` must not wrap
+        // `scale.abs()` (it once hung).
         for text in [
             "1e-9223372036854775808",
             "1e9223372036854775807",

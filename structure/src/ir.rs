@@ -347,7 +347,7 @@ pub struct Column {
     /// Structural polynomial per output, sign variables symbolic. Monomials
     /// that are constant within an experiment (no variable but signs) are
     /// kept: whether the instruments annihilate them depends on the centring
-    /// ([`crate::identify::Centring`]).
+    /// ([`Centring`]).
     pub structural: Vec<StructuralEntry>,
 }
 
@@ -476,6 +476,36 @@ pub struct StructuralEntry {
 /// A sign pattern: one `±1` per sign argument.
 pub type SignPattern = Vec<i8>;
 
+/// How the instruments are centred, which decides which constants they
+/// annihilate (paper A9): a monomial that is constant within an experiment
+/// (the `1` of `cos² = 1 − sin²`, a constant term `X_0`, a sign alone).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Centring {
+    /// Zero mean per experiment: every constant within an experiment is
+    /// annihilated, and with it the means of the disturbances.
+    Experiment,
+    /// Zero mean over all experiments pooled: a constant common to every
+    /// experiment is annihilated unless the model has a constant term in that
+    /// output (whose own instrument, the constant, is kept: it spans the same
+    /// instruments as no centring); constants that differ between
+    /// experiments are kept.
+    Pooled,
+    /// No centring: constants are columns like any other.
+    None,
+}
+
+impl Centring {
+    /// `experiment`, `pooled`, `none`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Centring::Experiment => "experiment",
+            Centring::Pooled => "pooled",
+            Centring::None => "none",
+        }
+    }
+}
+
 /// The compile-time identifiability report of the model as declared
 /// (the measured predictor, IV3; equal to IV2's when nothing is measured).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -501,7 +531,7 @@ pub struct Report {
     /// The instrument centring the verdicts assume (the model's default
     /// unless asked otherwise): it decides which constants are annihilated.
     #[serde(default)]
-    pub centring: Option<crate::identify::Centring>,
+    pub centring: Option<Centring>,
     /// Why that centring is valid for this model.
     #[serde(default)]
     pub centring_reason: String,

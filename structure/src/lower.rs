@@ -5,9 +5,9 @@ use crate::ir::{self, Ir, Predictors, Report, SignArg};
 use crate::resolve::{Resolved, RotationDecl};
 use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
 use leeway_grammar::{Diagnostic, EquationKind};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
-/// Builds the IR (without the report, which [`crate::identify::report`] fills).
+/// Builds the IR (without the report, which `identify::report` fills).
 pub fn lower(
     r: &Resolved,
     params: &[ParamDecl],
@@ -16,91 +16,9 @@ pub fn lower(
     predictors: Predictors,
     diags: &mut Vec<Diagnostic>,
 ) -> Ir {
-    let (rotation, rotation_vars) = match &r.rotation {
-        RotationDecl::None => (ir::Rotation::None, Vec::new()),
-        RotationDecl::Planar {
-            heading,
-            integrates,
-            axes,
-        } => (
-            ir::Rotation::Planar {
-                heading: heading.name.clone(),
-                integrates: *integrates,
-                axes: *axes,
-            },
-            vec![
-                format!("cos({})", heading.name),
-                format!("sin({})", heading.name),
-            ],
-        ),
-        RotationDecl::Measured { columns, rows, .. } => (
-            ir::Rotation::Measured { rows: rows.clone() },
-            columns.iter().map(|c| c.name.clone()).collect(),
-        ),
-    };
-    let names: std::collections::BTreeSet<&str> = params.iter().map(|p| p.name.as_str()).collect();
-    let mut nominal: BTreeMap<&str, f64> = BTreeMap::new();
-    for (id, q, span) in &r.nominal {
-        if names.contains(id.name.as_str()) {
-            nominal.insert(&id.name, to_f64(q));
-        } else {
-            diags.push(
-                Diagnostic::error(
-                    "unknown-parameter",
-                    format!("`{}` is not a parameter of this model", id.name),
-                )
-                .with_primary(*span, "no term uses it")
-                .with_help(format!(
-                    "parameters: {}",
-                    leeway_grammar::join_capped(params.iter().map(|p| p.name.as_str()), ", ")
-                )),
-            );
-        }
-    }
-    // The terms of each parameter, in one pass (a model may have 10⁴ parameters).
-    let mut by_parameter: Vec<Vec<&TermDecl>> = vec![Vec::new(); params.len()];
-    for t in terms {
-        if let Some(mine) = by_parameter.get_mut(t.parameter) {
-            mine.push(t);
-        }
-    }
-    let parameters = params
-        .iter()
-        .zip(by_parameter)
-        .map(|(p, mine)| {
-            let media: Vec<usize> = {
-                let mut m: Vec<usize> = mine
-                    .iter()
-                    .filter_map(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg)))
-                    .collect();
-                m.sort_unstable();
-                m.dedup();
-                m
-            };
-            let medium = if media.len() == 1 {
-                Some(media[0])
-            } else {
-                None
-            };
-            let measured = !mine.is_empty()
-                && mine.iter().all(|t| {
-                    t.factors
-                        .iter()
-                        .find_map(|f| arg_medium(r, &f.arg))
-                        .is_some_and(|d| r.disturbances[d].measured)
-                });
-            let mut outputs: Vec<usize> = mine.iter().map(|t| t.output).collect();
-            outputs.sort_unstable();
-            outputs.dedup();
-            ir::Parameter {
-                name: p.name.clone(),
-                nominal: nominal.get(p.name.as_str()).copied().unwrap_or(0.0),
-                medium,
-                measured,
-                outputs,
-            }
-        })
-        .collect();
+    let (rotation, rotation_vars) = lower_rotation(&r.rotation);
+    let nominal = nominal_values(r, params, diags);
+    let parameters = lower_parameters(r, params, terms, &nominal);
     let ir_terms = terms
         .iter()
         .map(|t| ir::Term {
@@ -172,4 +90,112 @@ pub fn lower(
             .collect(),
         report: Report::default(),
     }
+}
+
+/// The rotation and the names of its variables.
+fn lower_rotation(rotation: &RotationDecl) -> (ir::Rotation, Vec<String>) {
+    match rotation {
+        RotationDecl::None => (ir::Rotation::None, Vec::new()),
+        RotationDecl::Planar {
+            heading,
+            integrates,
+            axes,
+        } => (
+            ir::Rotation::Planar {
+                heading: heading.name.clone(),
+                integrates: *integrates,
+                axes: *axes,
+            },
+            vec![
+                format!("cos({})", heading.name),
+                format!("sin({})", heading.name),
+            ],
+        ),
+        RotationDecl::Measured { columns, rows, .. } => (
+            ir::Rotation::Measured { rows: rows.clone() },
+            columns.iter().map(|c| c.name.clone()).collect(),
+        ),
+    }
+}
+
+/// The nominal values by parameter name; an error for a name no term uses.
+fn nominal_values<'a>(
+    r: &'a Resolved,
+    params: &[ParamDecl],
+    diags: &mut Vec<Diagnostic>,
+) -> BTreeMap<&'a str, f64> {
+    let names: BTreeSet<&str> = params.iter().map(|p| p.name.as_str()).collect();
+    let mut nominal: BTreeMap<&str, f64> = BTreeMap::new();
+    for (id, q, span) in &r.nominal {
+        if names.contains(id.name.as_str()) {
+            nominal.insert(&id.name, to_f64(q));
+        } else {
+            diags.push(
+                Diagnostic::error(
+                    "unknown-parameter",
+                    format!("`{}` is not a parameter of this model", id.name),
+                )
+                .with_primary(*span, "no term uses it")
+                .with_help(format!(
+                    "parameters: {}",
+                    leeway_grammar::join_capped(params.iter().map(|p| p.name.as_str()), ", ")
+                )),
+            );
+        }
+    }
+    nominal
+}
+
+/// Each parameter with its nominal value, medium, whether that medium is
+/// measured, and the outputs it enters.
+fn lower_parameters(
+    r: &Resolved,
+    params: &[ParamDecl],
+    terms: &[TermDecl],
+    nominal: &BTreeMap<&str, f64>,
+) -> Vec<ir::Parameter> {
+    // The terms of each parameter, in one pass (a model may have 10⁴ parameters).
+    let mut by_parameter: Vec<Vec<&TermDecl>> = vec![Vec::new(); params.len()];
+    for t in terms {
+        if let Some(mine) = by_parameter.get_mut(t.parameter) {
+            mine.push(t);
+        }
+    }
+    params
+        .iter()
+        .zip(by_parameter)
+        .map(|(p, mine)| {
+            let media: Vec<usize> = {
+                let mut m: Vec<usize> = mine
+                    .iter()
+                    .filter_map(|t| t.factors.iter().find_map(|f| arg_medium(r, &f.arg)))
+                    .collect();
+                m.sort_unstable();
+                m.dedup();
+                m
+            };
+            let medium = if media.len() == 1 {
+                Some(media[0])
+            } else {
+                None
+            };
+            let measured = !mine.is_empty()
+                && mine.iter().all(|t| {
+                    t.factors
+                        .iter()
+                        .find_map(|f| arg_medium(r, &f.arg))
+                        .is_some_and(|d| r.disturbances[d].measured)
+                });
+            let mut outputs: Vec<usize> = mine.iter().map(|t| t.output).collect();
+            outputs.sort_unstable();
+            outputs.dedup();
+            ir::Parameter {
+                name: p.name.clone(),
+                nominal: nominal.get(p.name.as_str()).copied().unwrap_or(0.0),
+                medium,
+                measured,
+                outputs,
+            }
+        })
+        .collect()
 }

@@ -1,9 +1,12 @@
 //! Human-readable rendering of a compiled structure: the text of
 //! `leeway check` and of the snapshot tests. Plain text, no terminal codes.
 
-use crate::identify::{Analysis, Patterns, pattern_text, patterns_text};
-use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation};
+use crate::identify::analysis::Analysis;
+use crate::identify::pattern::{pattern_text, patterns_text};
+use crate::identify::reduce::Patterns;
+use crate::ir::{Column, Entry, EvalVar, Ir, PredictorKind, Rotation, columns_by_output};
 use leeway_grammar::{EquationKind, join_capped};
+use std::collections::BTreeMap;
 use std::fmt::Write;
 
 /// The name of an evaluation variable.
@@ -86,9 +89,8 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
 
 /// The terms as written of each (parameter, output), in one pass over the
 /// terms (a model may have 10⁴ of them: no scan per column).
-pub fn written_terms(ir: &Ir) -> std::collections::BTreeMap<(usize, usize), Vec<&str>> {
-    let mut written: std::collections::BTreeMap<(usize, usize), Vec<&str>> =
-        std::collections::BTreeMap::new();
+pub fn written_terms(ir: &Ir) -> BTreeMap<(usize, usize), Vec<&str>> {
+    let mut written: BTreeMap<(usize, usize), Vec<&str>> = BTreeMap::new();
     for t in &ir.terms {
         written
             .entry((t.parameter, t.output))
@@ -101,6 +103,18 @@ pub fn written_terms(ir: &Ir) -> std::collections::BTreeMap<(usize, usize), Vec<
 /// The full structure report.
 pub fn render(ir: &Ir) -> String {
     let mut o = String::new();
+    render_header(&mut o, ir);
+    render_disturbances(&mut o, ir);
+    render_sign_args(&mut o, ir);
+    render_theta(&mut o, ir);
+    render_nuisance(&mut o, ir);
+    render_verdict(&mut o, ir);
+    render_groups(&mut o, ir);
+    o
+}
+
+/// The model line: states, inputs, parameters, equations, step and rotation.
+fn render_header(o: &mut String, ir: &Ir) {
     let _ = writeln!(
         o,
         "model {}: {} states ({}), {} inputs ({}), {} parameters",
@@ -156,8 +170,11 @@ pub fn render(ir: &Ir) -> String {
             );
         }
     }
-    let mut relatives_of: std::collections::BTreeMap<&str, Vec<&str>> =
-        std::collections::BTreeMap::new();
+}
+
+/// One line per disturbance: frame, components and relative velocities.
+fn render_disturbances(o: &mut String, ir: &Ir) {
+    let mut relatives_of: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
     for r in &ir.relatives {
         relatives_of
             .entry(ir.disturbances[r.disturbance].name.as_str())
@@ -194,6 +211,10 @@ pub fn render(ir: &Ir) -> String {
             }
         );
     }
+}
+
+/// The sign arguments, by how the predictors evaluate them.
+fn render_sign_args(o: &mut String, ir: &Ir) {
     let fixed: Vec<&str> = ir
         .sign_args
         .iter()
@@ -240,10 +261,13 @@ pub fn render(ir: &Ir) -> String {
             parts.join("; ")
         }
     );
+}
 
+/// Φ: the θ regressors of each output.
+fn render_theta(o: &mut String, ir: &Ir) {
     let cols = &ir.predictors.measured;
     let _ = writeln!(o, "\nΦ: θ regressors ({} parameters)", ir.parameters.len());
-    let by_output = crate::ir::columns_by_output(
+    let by_output = columns_by_output(
         cols.iter().filter(|c| !c.kind.is_nuisance()),
         ir.states.len(),
     );
@@ -272,6 +296,11 @@ pub fn render(ir: &Ir) -> String {
             );
         }
     }
+}
+
+/// The nuisance regressors of each output, and their reduction.
+fn render_nuisance(o: &mut String, ir: &Ir) {
+    let cols = &ir.predictors.measured;
     let nuis: Vec<&Column> = cols.iter().filter(|c| c.kind.is_nuisance()).collect();
     let unmeasured: Vec<&str> = ir
         .disturbances
@@ -289,7 +318,7 @@ pub fn render(ir: &Ir) -> String {
             join_capped(&unmeasured, ", ")
         }
     );
-    let by_output = crate::ir::columns_by_output(nuis.iter().copied(), ir.states.len());
+    let by_output = columns_by_output(nuis.iter().copied(), ir.states.len());
     for ((out, state), mine) in ir.states.iter().enumerate().zip(by_output) {
         if mine.is_empty() {
             continue;
@@ -313,6 +342,11 @@ pub fn render(ir: &Ir) -> String {
     for d in &r.nuisance.dropped {
         let _ = writeln!(o, "  dropped {:<24} {}", d.name, d.reason);
     }
+}
+
+/// Whether θ is identifiable, and from which experiments.
+fn render_verdict(o: &mut String, ir: &Ir) {
+    let r = &ir.report;
     let _ = writeln!(o, "\nIdentifiability of θ");
     if let Some(c) = r.centring {
         let _ = writeln!(
@@ -358,6 +392,11 @@ pub fn render(ir: &Ir) -> String {
     } else {
         let _ = writeln!(o, "  NOT identifiable from any set of experiments");
     }
+}
+
+/// The unidentifiable groups, what separates them, the aggregates and the notes.
+fn render_groups(o: &mut String, ir: &Ir) {
+    let r = &ir.report;
     if !r.unidentifiable.is_empty() {
         let base = r
             .patterns
@@ -388,5 +427,4 @@ pub fn render(ir: &Ir) -> String {
     for n in &r.notes {
         let _ = writeln!(o, "  note: {n}");
     }
-    o
 }

@@ -293,19 +293,28 @@ fn coefficients_fit(v: Vec<Product>, span: Span, ctx: &mut Ctx) -> Option<Vec<Pr
 }
 
 fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
+    let base = ctx.r.symbols.get(&p.base.name).map(|(s, _)| *s);
+    match &p.field {
+        None => resolve_name(p, base, ctx),
+        Some(field) => resolve_field(p, field, base, ctx),
+    }
+}
+
+/// A name alone: a parameter (undeclared), a state or an input; any other
+/// declared name is an error here.
+fn resolve_name(p: &Path, base: Option<Symbol>, ctx: &mut Ctx) -> Option<Atom> {
     let r = ctx.r;
-    let base = r.symbols.get(&p.base.name).map(|(s, _)| *s);
-    match (&p.field, base) {
-        (None, None) => Some(Atom::Param(p.base.clone())),
-        (None, Some(Symbol::State(i))) => Some(Atom::Signal(Arg {
+    match base {
+        None => Some(Atom::Param(p.base.clone())),
+        Some(Symbol::State(i)) => Some(Atom::Signal(Arg {
             signal: Signal::State(i),
             relative: None,
         })),
-        (None, Some(Symbol::Input(i))) => Some(Atom::Signal(Arg {
+        Some(Symbol::Input(i)) => Some(Atom::Signal(Arg {
             signal: Signal::Input(i),
             relative: None,
         })),
-        (None, Some(Symbol::Heading | Symbol::RotationColumn(_))) => {
+        Some(Symbol::Heading | Symbol::RotationColumn(_)) => {
             ctx.diags.push(
                 Diagnostic::error("not-a-regressor-signal", format!("`{}` belongs to the rotation R and cannot appear in a term", p.base.name))
                     .with_primary(p.span, "part of R")
@@ -313,7 +322,7 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
             );
             None
         }
-        (None, Some(Symbol::Disturbance(_) | Symbol::Component(_))) => {
+        Some(Symbol::Disturbance(_) | Symbol::Component(_)) => {
             ctx.diags.push(
                 Diagnostic::error(
                     "disturbance-used-directly",
@@ -329,7 +338,7 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
             );
             None
         }
-        (None, Some(Symbol::Relative(_))) => {
+        Some(Symbol::Relative(_)) => {
             ctx.diags.push(
                 Diagnostic::error(
                     "relative-needs-component",
@@ -347,7 +356,14 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
             );
             None
         }
-        (Some(field), Some(Symbol::Relative(ri))) => match r.symbols.get(&field.name) {
+    }
+}
+
+/// `name.field`: a component of a relative velocity.
+fn resolve_field(p: &Path, field: &Ident, base: Option<Symbol>, ctx: &mut Ctx) -> Option<Atom> {
+    let r = ctx.r;
+    match base {
+        Some(Symbol::Relative(ri)) => match r.symbols.get(&field.name) {
             Some((Symbol::State(i), _)) => Some(Atom::Signal(Arg {
                 signal: Signal::State(*i),
                 relative: Some(ri),
@@ -367,7 +383,7 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
                 None
             }
         },
-        (Some(_), Some(_)) => {
+        Some(_) => {
             ctx.diags.push(
                 Diagnostic::error("unknown-name", format!("`{}` has no components", p.base.name))
                     .with_primary(p.span, "only relative velocities have components")
@@ -375,7 +391,7 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
             );
             None
         }
-        (Some(_), None) => {
+        None => {
             ctx.diags.push(
                 Diagnostic::error(
                     "unknown-name",
@@ -483,7 +499,6 @@ pub fn arg_medium(r: &Resolved, a: &Arg) -> Option<usize> {
 }
 
 fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
-    let r = ctx.r;
     let params: Vec<&Ident> = p
         .atoms
         .iter()
@@ -510,12 +525,29 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
             Atom::Param(_) => None,
         })
         .collect();
+    // Every check reports, in this order, before the term is refused.
+    let one_parameter = check_one_parameter(p, &params, &factors, ctx);
+    // A parameter alone is a constant force (thrust at a constant propeller
+    // rate, a trim offset): a column like any other wherever the instruments
+    // keep constants; `identify` decides under which centring it is identifiable.
+    let in_class = check_order(p, &factors, ctx);
+    let one_medium = check_one_medium(p, &factors, ctx);
+    if !(one_parameter && in_class && one_medium) {
+        return None;
+    }
+    factors.sort_by_key(|f| (f.modulus, f.arg));
+    Some((params[0].clone(), factors))
+}
+
+/// A term has exactly one parameter.
+fn check_one_parameter(p: &Product, params: &[&Ident], factors: &[Factor], ctx: &mut Ctx) -> bool {
+    let r = ctx.r;
     let mut ok = true;
     if params.is_empty() {
         let message = if factors.is_empty() {
             "a constant term has no parameter".to_string()
         } else {
-            format!("the term `{}` has no parameter", factors_text(r, &factors))
+            format!("the term `{}` has no parameter", factors_text(r, factors))
         };
         ctx.diags.push(
             Diagnostic::error("missing-parameter", message)
@@ -524,62 +556,69 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         );
         ok = false;
     } else if params.len() > 1 {
-        let mut list: Vec<&str> = Vec::new();
-        for q in &params {
-            if !list.contains(&q.name.as_str()) {
-                list.push(q.name.as_str());
-            }
-        }
-        let quoted: Vec<String> = list.iter().map(|n| format!("`{n}`")).collect();
-        let msg = match quoted.as_slice() {
-            [one] if params.len() == 2 => {
-                format!(
-                    "parameter {one} appears twice in one term: the model would not be linear in θ"
-                )
-            }
-            [one] => format!(
-                "parameter {one} appears {} times in one term: the model would not be linear in θ",
-                params.len()
-            ),
-            [a, b] => format!(
-                "{a} and {b} are both parameters in one term: the model would not be linear in θ"
-            ),
-            [_, _, ..] => format!(
-                "{} are all parameters in one term: the model would not be linear in θ",
-                leeway_grammar::and_list(quoted.iter())
-            ),
-            [] => String::new(),
-        };
-        let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(
-            p.span,
-            format!("{} unknown factors in one term", params.len()),
-        );
-        for extra in params.iter().skip(1).take(leeway_grammar::MAX_LISTED) {
-            let label = if extra.name == params[0].name {
-                format!("`{}` again", extra.name)
-            } else {
-                format!(
-                    "`{}` is not a declared signal, so it is a parameter",
-                    extra.name
-                )
-            };
-            d = d.with_secondary(extra.span, label);
-        }
-        ctx.diags.push(d.with_help(
-            "each term has exactly one parameter; names not declared as signals are parameters, so declare misspelt or missing signals",
-        ));
+        ctx.diags.push(nonlinear_parameter(p, params));
         ok = false;
     }
-    // A parameter alone is a constant force (thrust at a constant propeller
-    // rate, a trim offset): a column like any other wherever the instruments
-    // keep constants; `identify` decides under which centring it is identifiable.
+    ok
+}
+
+/// The error for a term with several parameters, each extra one labelled.
+fn nonlinear_parameter(p: &Product, params: &[&Ident]) -> Diagnostic {
+    let mut list: Vec<&str> = Vec::new();
+    for q in params {
+        if !list.contains(&q.name.as_str()) {
+            list.push(q.name.as_str());
+        }
+    }
+    let quoted: Vec<String> = list.iter().map(|n| format!("`{n}`")).collect();
+    let msg = match quoted.as_slice() {
+        [one] if params.len() == 2 => {
+            format!("parameter {one} appears twice in one term: the model would not be linear in θ")
+        }
+        [one] => format!(
+            "parameter {one} appears {} times in one term: the model would not be linear in θ",
+            params.len()
+        ),
+        [a, b] => format!(
+            "{a} and {b} are both parameters in one term: the model would not be linear in θ"
+        ),
+        [_, _, ..] => format!(
+            "{} are all parameters in one term: the model would not be linear in θ",
+            leeway_grammar::and_list(quoted.iter())
+        ),
+        [] => String::new(),
+    };
+    let mut d = Diagnostic::error("nonlinear-parameter", msg).with_primary(
+        p.span,
+        format!("{} unknown factors in one term", params.len()),
+    );
+    for extra in params.iter().skip(1).take(leeway_grammar::MAX_LISTED) {
+        let label = if extra.name == params[0].name {
+            format!("`{}` again", extra.name)
+        } else {
+            format!(
+                "`{}` is not a declared signal, so it is a parameter",
+                extra.name
+            )
+        };
+        d = d.with_secondary(extra.span, label);
+    }
+    d.with_help(
+        "each term has exactly one parameter; names not declared as signals are parameters, so declare misspelt or missing signals",
+    )
+}
+
+/// At most second order, and not a product of two moduli.
+fn check_order(p: &Product, factors: &[Factor], ctx: &mut Ctx) -> bool {
+    let r = ctx.r;
+    let mut ok = true;
     if factors.len() > 2 {
         ctx.diags.push(
             Diagnostic::error(
                 "order-too-high",
                 format!(
                     "the term `{}` is beyond second order",
-                    factors_text(r, &factors)
+                    factors_text(r, factors)
                 ),
             )
             .with_primary(p.span, format!("{} signals in one term", factors.len()))
@@ -590,13 +629,20 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         ctx.diags.push(
             Diagnostic::error(
                 "modulus-product",
-                format!("`{}` is not in the model class", factors_text(r, &factors)),
+                format!("`{}` is not in the model class", factors_text(r, factors)),
             )
             .with_primary(p.span, "two moduli in one term")
             .with_help("the class allows a*|b|; for |a|*|a| write a*a"),
         );
         ok = false;
     }
+    ok
+}
+
+/// The signals of a term are relative to one medium at most.
+fn check_one_medium(p: &Product, factors: &[Factor], ctx: &mut Ctx) -> bool {
+    let r = ctx.r;
+    let mut ok = true;
     let media: Vec<usize> = {
         let mut m: Vec<usize> = factors
             .iter()
@@ -618,11 +664,7 @@ fn classify(p: &Product, ctx: &mut Ctx) -> Option<(Ident, Vec<Factor>)> {
         );
         ok = false;
     }
-    if !ok {
-        return None;
-    }
-    factors.sort_by_key(|f| (f.modulus, f.arg));
-    Some((params[0].clone(), factors))
+    ok
 }
 
 /// The common-term rules of paper A11/A12.

@@ -1,5 +1,5 @@
-//! The language's limits (docs/language.md, Diagnostics): each reproducer of
-//! issue 10 gives one located error, quickly, without exhausting the stack.
+//! The language's limits (docs/language.md, Diagnostics): each oversized or
+//! extreme input gives one located error, quickly, without exhausting the stack.
 //! Every compile runs on a thread with a small stack, so that recursion
 //! proportional to the input aborts the test instead of passing by luck on a
 //! large main stack, and under a time bound, so that a hang fails it.
@@ -135,8 +135,8 @@ fn literals_out_of_range_are_one_error_each_and_quick() {
     assert_eq!(d[0].code, "invalid-number");
 }
 
-/// Issue 10: one `unidentifiable-combination` of 499 parameters was a 96 KB
-/// message. Every list in a message, note or help names at most
+/// Messages stay short: one `unidentifiable-combination` of 499 parameters
+/// must not be a 96 KB message. Every list in a message, note or help names at most
 /// `MAX_LISTED` items and counts the rest; the report's structured fields
 /// keep every name.
 #[test]

@@ -1,5 +1,5 @@
-//! The experiment search is exact for any number of sign arguments (issue
-//! "Hardened against every input", item 3): independent sign arguments are
+//! The experiment search is exact for any number of sign arguments:
+//! independent sign arguments are
 //! searched per component, and only a component of interacting arguments
 //! beyond the budget leaves the verdict `undecided` — never a false "not
 //! identifiable".
