@@ -1,4 +1,4 @@
-"""leeway.dask under faults (issue 22), on LocalClusters of two worker
+"""leeway.dask under faults, on LocalClusters of two worker
 processes: a file rewritten, truncated or deleted between two estimates on
 the same cluster gives the new file's estimate (the worker cache is never
 stale); a file that changes during an estimate (rewritten, truncated,

@@ -1,4 +1,4 @@
-"""A seeded fuzzer of the Python API's inputs and options (issue 22): bad
+"""A seeded fuzzer of the Python API's inputs and options: bad
 frames (every dtype pandas, numpy and Arrow offer, missing values, huge
 integers, odd shapes and containers) and bad options (bools, text, NaN,
 signs, containers, numpy scalars) through `estimate`, `simulate`,
@@ -223,7 +223,7 @@ def bad_data(rng: random.Random, model: leeway.Model) -> Any:
 
 
 def huge(v: Any) -> bool:
-    """A finite float beyond 1e12 (the extreme nominal values of issue 22, item 2)."""
+    """A finite float beyond 1e12 (an extreme nominal value, such as 1e300)."""
     return isinstance(v, float) and np.isfinite(v) and abs(v) > 1e12
 
 

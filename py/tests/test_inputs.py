@@ -1,4 +1,4 @@
-"""What Python hands over is read exactly or refused, located (issue 22):
+"""What Python hands over is read exactly or refused, located:
 no datetime, duration, complex, boolean, text or categorical value column is
 coerced to numbers; a datetime or duration time column is read as seconds
 since its first stamp (the Parquet reader's rule), so that it gives the

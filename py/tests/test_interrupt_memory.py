@@ -1,4 +1,4 @@
-"""Issue 22, items 4 and 5: Ctrl-C stops a running estimate within a
+"""Interrupts and memory: Ctrl-C stops a running estimate within a
 second, and an estimate from a large frame streams it like the CLI streams a
 file (memory flat in the rows, no copy of the frame)."""
 

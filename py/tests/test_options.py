@@ -1,4 +1,4 @@
-"""Options are type-checked (issue 22): bools are not numbers, numbers are
+"""Options are type-checked: bools are not numbers, numbers are
 not text, signs and ranges are checked, nominal values and θ are finite
 numbers — each an `OptionError` naming the option, with a hint, never a
 bare TypeError from the native half. numpy scalars are numbers."""

@@ -265,7 +265,7 @@ def test_the_gil_is_released_while_validating(ship: leeway.Model, ship_frame: pd
 
 
 def test_validate_says_when_a_fit_is_below_zero(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
-    # Issue 22: a fit of −300 % was reported without a word, as in the CLI.
+    # A fit far below 0 % (N_tau of the wrong sign) is reported with a warning, as in the CLI.
     wrong = {**TRUE, "N_tau": -TRUE["N_tau"]}
     with pytest.warns(leeway.LeewayWarning, match=r"wrong, experiment `data`: the simulation fits .*worse than the data's mean"):
         fits = leeway.validate(ship, {"wrong": wrong}, ship_frame)

@@ -696,8 +696,8 @@ def estimate(
     resample: float | None = None,
 ) -> Estimate:
     """Estimates θ, the nuisance parameters and the disturbance means, as
-    ``leeway estimate`` does (the options are its flags; README,
-    "Estimating"). ``data`` is a DataFrame (split on its ``experiment``
+    ``leeway estimate`` does (the options are its flags; docs/cli.md,
+    "leeway estimate"). ``data`` is a DataFrame (split on its ``experiment``
     column if it has one), a list or dict of DataFrames (a dict names the
     experiments), or Arrow/polars tables. Warnings are issued as
     ``LeewayWarning``; errors raise the classes of ``leeway.errors``."""
@@ -821,7 +821,7 @@ def simulate(
     step: float | None = None,
 ) -> pd.DataFrame:
     """Simulates ``model`` with ``theta`` on ``inputs`` from its first row, as
-    ``leeway simulate`` does (README, "leeway simulate"), and returns the
+    ``leeway simulate`` does (docs/cli.md, "leeway simulate"), and returns the
     trajectory: the columns ``leeway simulate`` writes (time, states,
     heading, inputs, measured rotation and disturbances; data column names,
     declared units), bit for bit.
