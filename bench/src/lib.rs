@@ -20,7 +20,7 @@ use leeway::structure::identify::ExperimentStructure;
 use leeway::structure::identify::Patterns;
 
 /// Peak double-precision rate of one core of the machine the benches were
-/// written on, GFLOP/s (issue 11's figure: two 8-wide FMA ports at the
+/// written on, GFLOP/s (the profile's figure: two 8-wide FMA ports at the
 /// sustained clock). Only a yardstick: [`flop_line`] prints the fraction of
 /// it achieved.
 pub const PEAK_GFLOPS: f64 = 57.0;
@@ -59,7 +59,7 @@ pub fn kept_columns(ir: &Ir, kind: PredictorKind, record: &dyn Source) -> Vec<us
 /// block — outputs joined into one block when a column of the predictor
 /// appears in several of them (`Column::outputs`), as `Estimator::new`
 /// builds them. The lower-order sums (means, energies: `O(m_o)`) are left
-/// out. For IV3 on the ship at the paper's wind this is 1,204 (issue 11).
+/// out. For IV3 on the ship at the paper's wind this is 1,204.
 pub fn moment_flops(ir: &Ir, kind: PredictorKind, kept: &[usize]) -> u64 {
     let columns = ir.predictors.get(kind);
     let n_out = ir.states.len();
@@ -184,7 +184,7 @@ mod tests {
         );
     }
 
-    /// Issue 11's count for IV3 on the paper's ship: the kept columns
+    /// The count for IV3 on the paper's ship: the kept columns
     /// (13, 14 and 14 per output) give 1,204 FLOP a sample a pass.
     #[test]
     fn iv3_on_the_paper_ship() {

@@ -19,7 +19,7 @@ pub struct CheckArgs {
     /// The `.som` model file.
     #[arg(value_name = "MODEL.som")]
     pub model: PathBuf,
-    /// Print one JSON document on stdout instead of text (the contract is in the README).
+    /// Print one JSON document on stdout instead of text (the contract is in docs/json.md).
     #[arg(long)]
     pub json: bool,
     /// When θ is not identifiable, estimate its identifiable combinations instead

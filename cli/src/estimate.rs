@@ -1,7 +1,7 @@
 //! `leeway estimate MODEL --data A.csv [--data B.csv]... --method iv3`:
 //! load and validate the experiments, estimate θ and the nuisance parameters,
 //! and print the table, disturbance means, sign patterns, diagnostics and
-//! warnings — or one JSON document (README, "Estimating"). Exit 0 on success
+//! warnings — or one JSON document (docs/json.md). Exit 0 on success
 //! (warnings allowed), 1 when the data cannot support the model, 2 on any
 //! model, data or option error.
 

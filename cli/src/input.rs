@@ -270,7 +270,7 @@ mod tests {
 
     #[test]
     fn comment_and_blank_lines_are_skipped_and_rows_keep_their_physical_line() {
-        // Issue 10: simulate's loader read every line as a record; it now
+        // Regression: simulate's loader read every line as a record; it now
         // uses the data files' reader (the same rules as `estimate`).
         let head = "# logged by the bridge\n\ntime,u,v,r,psi,tau1,tau2,tau3,wind_n,wind_e\r\n";
         let ok = format!(

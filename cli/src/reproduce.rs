@@ -4,7 +4,7 @@
 //! study of the runtime (`leeway_scenarios::study`), checks the input design
 //! on the true trajectories, prints a table per case, the design margins and
 //! the paper's four claims with their verdicts, and writes `DIR/results.json`
-//! (the contract of the README) and the figures (SVG and PNG). Exit 0 when
+//! (the contract of docs/json.md) and the figures (SVG and PNG). Exit 0 when
 //! everything was written (whatever the claims' verdicts), 2 on an option
 //! error or a file that cannot be written (the results are still printed).
 

@@ -49,7 +49,7 @@ pub struct ValidateArgs {
     /// Draw no plot (the default; kept so that older scripts still run).
     #[arg(long)]
     pub no_plot: bool,
-    /// Print one JSON document on stdout instead of text (the contract is in the README).
+    /// Print one JSON document on stdout instead of text (the contract is in docs/json.md).
     #[arg(long)]
     pub json: bool,
     /// A constant unmeasured disturbance component during the simulation, e.g.
@@ -91,7 +91,7 @@ struct ModelFits {
     mean: Ordered<Option<f64>>,
 }
 
-/// The JSON document of `leeway validate --json` (README, "Validating").
+/// The JSON document of `leeway validate --json` (docs/json.md).
 /// The fields of the first parameter file stay at the top level as before;
 /// `models` holds every file's.
 #[derive(Debug, Serialize)]

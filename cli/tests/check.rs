@@ -1,5 +1,5 @@
 //! End-to-end tests of `leeway check`: the built binary, its exit codes,
-//! its text on stdout/stderr and the JSON contract of the README.
+//! its text on stdout/stderr and the JSON contract of docs/json.md.
 
 use serde_json::Value;
 use std::path::Path;
@@ -200,7 +200,7 @@ fn patterns_select_the_experiments() {
     assert_eq!(json(&bad_json)["errors"][0]["code"], "invalid-pattern");
 }
 
-/// Every key of the README's contract, with its type.
+/// Every key of the contract of docs/json.md, with its type.
 fn assert_contract(v: &Value) {
     for key in [
         "model",
@@ -449,7 +449,7 @@ fn check_path(path: &Path, json: bool) -> Output {
 
 #[test]
 fn a_non_utf8_model_is_one_located_error() {
-    // Issue 10: no line:col and no hint.
+    // Regression: no line:col and no hint.
     let path = scratch(
         "latin1.som",
         b"model M {\n    state u // caf\xe9\n    der u = X*u\n}\n",
@@ -490,7 +490,7 @@ fn control_bytes_are_escaped_with_a_caret() {
 
 #[test]
 fn an_oversized_model_is_refused_before_it_is_read() {
-    // Issue 10: a 6.7 GB file took 6.6 GB of memory. A sparse 8 GiB file is
+    // Regression: a 6.7 GB file took 6.6 GB of memory. A sparse 8 GiB file is
     // refused from its metadata (reading it would take seconds and gigabytes).
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("check-limits");
     std::fs::create_dir_all(&dir).expect("scratch dir");
@@ -508,7 +508,7 @@ fn an_oversized_model_is_refused_before_it_is_read() {
 
 #[test]
 fn floods_are_capped() {
-    // Issue 10: `state u` 4,000 times on one line gave 257 MB of stderr.
+    // Regression: `state u` 4,000 times on one line gave 257 MB of stderr.
     let src = format!("model M {{ {}\n der u = X*u }}\n", "state u ".repeat(4000));
     let o = check_path(&scratch("dup.som", src.as_bytes()), false);
     no_panic(&o);
@@ -575,7 +575,7 @@ fn floods_are_capped() {
 
 /// 100 unmeasured media (each its own drag in every equation) and 10⁴
 /// plain states with moduli: exact verdicts (no search cut), short notes.
-/// Their time is measured on the release binary (README), not here.
+/// Their time is measured on the release binary (docs/performance.md), not here.
 #[test]
 fn large_models_get_exact_verdicts_and_short_reports() {
     let n = 100;

@@ -812,7 +812,7 @@ fn every_numeric_option_is_bounded_with_an_error_naming_it() {
 
 #[test]
 fn too_few_samples_after_resampling_still_names_the_file() {
-    // Issue 22: under --resample the experiments are held in memory, and
+    // Regression: under --resample the experiments are held in memory, and
     // the error named them without their file.
     let dir = Scratch::new("few-resampled");
     let text = estimation_csv(400, 1.0, 5);
@@ -830,7 +830,7 @@ fn too_few_samples_after_resampling_still_names_the_file() {
 
 #[test]
 fn a_file_with_carriage_return_line_ends_reads_as_with_line_feeds() {
-    // Issue 22: files written with lone CRs (classic Mac OS tools) were
+    // Regression: files written with lone CRs (classic Mac OS tools) were
     // one long line, refused as "missing column".
     let (dir, other) = (Scratch::new("cr-only"), Scratch::new("lf-only"));
     let text = estimation_csv(1500, 1.0, 9);
@@ -862,7 +862,7 @@ fn a_file_with_carriage_return_line_ends_reads_as_with_line_feeds() {
 
 #[test]
 fn an_overflowing_nominal_value_is_a_located_error_not_a_panic() {
-    // Issue 22: one nominal value of 1e305 panicked in nalgebra's SVD.
+    // Regression: one nominal value of 1e305 panicked in nalgebra's SVD.
     let dir = Scratch::new("nominal-overflow");
     let data = dir.write("log.csv", &estimation_csv(1500, 1.0, 5));
     for value in ["1e305", "5e307", "1.7e308", "-1e200"] {
@@ -911,7 +911,7 @@ fn an_overflowing_nominal_value_is_a_located_error_not_a_panic() {
 
 #[test]
 fn validate_calls_a_fit_below_zero_what_it_is() {
-    // Issue 22: a model whose simulation fits at −299 % was reported
+    // Regression: a model whose simulation fits at −299 % was reported
     // without a word.
     let dir = Scratch::new("below-mean");
     let data = dir.write("log.csv", &estimation_csv(1500, 1.0, 5));

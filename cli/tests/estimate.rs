@@ -1,7 +1,7 @@
 //! End-to-end tests of `leeway estimate`, `simulate` and `validate`: the
 //! built binary on synthetic ship data written as CSV by the tests themselves
 //! (the paper's study, fixed seeds), every malformed-CSV class with its
-//! location and exit code 2, the JSON contract of the README, the parameter
+//! location and exit code 2, the JSON contract of docs/json.md, the parameter
 //! file round trip and the heading's unit check.
 
 use leeway_scenarios::study;

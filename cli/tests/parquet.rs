@@ -485,7 +485,7 @@ fn simulate_reads_a_parquet_input_as_the_csv_of_the_same_values() {
 
 #[test]
 fn logical_types_are_read_as_what_they_mean_or_refused() {
-    // Issue 22: unsigned integers were read signed, decimals without their
+    // Regression: unsigned integers were read signed, decimals without their
     // scale, and a date or timestamp in a signal's column as a count.
     let dir = Scratch::new("parquet-logical");
     let text = estimation_csv(1500, 1.0, 7);

@@ -1,6 +1,6 @@
 //! End-to-end tests of `leeway reproduce`: the built binary runs the paper's
 //! study with few runs (fixed seeds, the generated ship model) and the tests
-//! check results.json against the README's contract, the figures, that the
+//! check results.json against the contract of docs/json.md, the figures, that the
 //! thread count changes no figure, the input design's margins, and the
 //! paper's claims as they actually come out of this design — (b), (c) and
 //! (d) hold; (a) does not at N ≥ 1000, and LS is ahead on parameter error

@@ -704,7 +704,7 @@ impl Table for ParquetFile {
 #[cfg(test)]
 mod tests {
     //! Every logical type read as what it means, or refused with a located
-    //! error (issue 22): files written here with the crate's own writer.
+    //! error: files written here with the crate's own writer.
     use super::*;
     use parquet::data_type::{ByteArray, FixedLenByteArray, Int32Type, Int64Type};
     use parquet::file::properties::WriterProperties;
@@ -1055,7 +1055,7 @@ mod tests {
 
     #[test]
     fn a_list_column_is_named_by_its_field_and_refused_as_a_list() {
-        // Issue 22: `a` (a list of doubles) was reported as a missing column.
+        // Regression: `a` (a list of doubles) was reported as a missing column.
         let path = fixture("list.parquet");
         let t = ParquetFile::open(&path).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(t.headers(), ["time", "a"]);
@@ -1067,7 +1067,7 @@ mod tests {
 
     #[test]
     fn a_file_without_row_groups_is_located_as_such() {
-        // Issue 22: located at "row group 0", which the file does not have.
+        // Regression: located at "row group 0", which the file does not have.
         let t =
             ParquetFile::open(&fixture("no-row-groups.parquet")).unwrap_or_else(|e| panic!("{e}"));
         let at = t.at(t.first_position(), None);

@@ -229,7 +229,7 @@ fn a_gross_outlier_is_located_by_row_and_a_zigzag_is_not_one() {
 
 #[test]
 fn a_stuck_sensor_with_a_spike_is_an_outlier() {
-    // Issue 10 (the gap of the spread rule): a column constant apart from
+    // Regression (the gap of the spread rule): a column constant apart from
     // a few samples has no spread; a spike far from the constant, or far
     // from 0 for a column of zeros, is still named by its row.
     let log = |u: &dyn Fn(usize) -> f64, delta: &dyn Fn(usize) -> f64| {
@@ -583,7 +583,7 @@ fn columns_fail_as_csv_does_located_by_positional_row() {
 
 #[test]
 fn streamed_columns_visit_bit_for_bit_as_loaded_ones() {
-    // Issue 22: frames from Python are streamed through the spill like a
+    // Regression: frames from Python are streamed through the spill like a
     // file, so an estimate holds no copy of a large frame: the samples each
     // visit gives are the loaded ones, bit for bit, with the same notes.
     let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
@@ -639,7 +639,7 @@ fn a_code_without_a_label_is_a_located_error() {
 
 #[test]
 fn reading_a_frame_stops_when_its_interrupt_says_so() {
-    // Issue 22: Ctrl-C while a large frame is validated.
+    // Regression: Ctrl-C while a large frame is validated.
     let ir = model("data { delta = \"rudder\" in deg, r in deg/s, time in ms }");
     let (cols, labels) = columns_of(&log_text());
     let borrowed: Vec<(&str, &[f64])> = cols.iter().map(|(n, v)| (n.as_str(), &v[..])).collect();

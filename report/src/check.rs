@@ -1,5 +1,5 @@
 //! The JSON document of `leeway check --json`: a contract scripts rely on
-//! (README, "Checking a model"). Fields may be added; none is renamed or removed.
+//! (docs/json.md). Fields may be added; none is renamed or removed.
 
 use leeway_structure::Compilation;
 use leeway_structure::grammar::{self, Diagnostic, Severity};

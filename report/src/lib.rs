@@ -1,6 +1,6 @@
 //! leeway-report: what the CLI and the Python package both report: the JSON documents of
 //! `leeway check --json` ([`check`]) and `leeway estimate --json` (a contract scripts rely on:
-//! README, "Estimating"; fields may be added, none renamed or removed), and
+//! docs/json.md; fields may be added, none renamed or removed), and
 //! the checks of the data that come with it (the heading's unit, angles
 //! logged in degrees). Kept here, beside the estimator, so that
 //! `leeway.Estimate.to_json()` and the CLI print the same bytes from one
@@ -158,7 +158,7 @@ fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> Strin
     )
 }
 
-/// The JSON form of the loading notes (README: `data_files`).
+/// The JSON form of the loading notes (docs/json.md: `data_files`).
 #[derive(Debug, serde::Serialize)]
 pub struct DataFileJson {
     /// The file as given.

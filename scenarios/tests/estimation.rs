@@ -367,7 +367,7 @@ fn yaw_under_autopilot(n_r: f64, seed: u64) -> (Interpreter, Experiment) {
 
 #[test]
 fn an_estimate_whose_own_simulation_diverges_is_never_called_converged() {
-    // Issue 22: a craft unstable in open loop, logged under an autopilot: the
+    // Regression: a craft unstable in open loop, logged under an autopilot: the
     // right estimate's free run on the recorded rudder diverges, and the
     // estimate must say so (a warning, not "converged"; an error under
     // --strict), whatever the method.
@@ -427,7 +427,7 @@ fn an_estimate_whose_own_simulation_diverges_is_never_called_converged() {
 
 #[test]
 fn an_interrupt_stops_the_estimate_between_passes() {
-    // Issue 22: Ctrl-C from Python; the interrupt is asked around every pass.
+    // Regression: Ctrl-C from Python; the interrupt is asked around every pass.
     use std::sync::Arc;
     use std::sync::atomic::{AtomicUsize, Ordering};
     let model = ship();

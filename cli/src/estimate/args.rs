@@ -21,7 +21,7 @@ pub struct EstimateArgs {
     /// output or `{"name": value}`), instead of the model's `nominal { }`.
     #[arg(long, value_name = "FILE.json")]
     pub nominal: Option<PathBuf>,
-    /// Print one JSON document on stdout instead of text (the contract is in the README).
+    /// Print one JSON document on stdout instead of text (the contract is in docs/json.md).
     #[arg(long)]
     pub json: bool,
     /// Instruments: simulated (the nominal model, refined) or delayed (measurements one sample earlier).

@@ -1,5 +1,5 @@
 //! The JSON document of `leeway estimate --json`: a contract scripts rely on
-//! (README, "Estimating"). Fields may be added; none is renamed or removed.
+//! (docs/json.md). Fields may be added; none is renamed or removed.
 //! It is printed for every outcome: on an error the result fields are empty
 //! and `errors` says why. The document itself is built by
 //! [`leeway_report`], which the Python package's

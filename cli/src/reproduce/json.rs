@@ -1,5 +1,4 @@
-//! `DIR/results.json`, the contract scripts rely on (README, "Reproducing the
-//! paper's study"): `{"runs", "seed", "cases": {"low"|"high": {"wind", "N",
+//! `DIR/results.json`, the contract scripts rely on (docs/json.md): `{"runs", "seed", "cases": {"low"|"high": {"wind", "N",
 //! "estimators": {"LS"|"IV1"|"IV2"|"IV3": {"fit_mean": {"surge", "sway",
 //! "yaw"}, "fit_std", "param_error", "diverged"}}}}, "seconds"}` with arrays
 //! aligned with `N`, plus fields that may grow (never renamed or removed):

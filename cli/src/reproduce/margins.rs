@@ -1,5 +1,5 @@
-//! The input design checked on the true trajectories (issue 5: "check it and
-//! report the margin"): over every estimation experiment of the study —
+//! The input design checked on the true trajectories (reporting
+//! the margin): over every estimation experiment of the study —
 //! measured as the study simulates them, so these are exactly the records
 //! the estimators saw, at the largest N — the range of each relative velocity
 //! under a modulus (`water.u`, `water.v`: the current; `air.u`, `air.v`: the
