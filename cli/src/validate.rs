@@ -19,10 +19,8 @@ use crate::problem::{Failure, JsonError, Problem};
 use crate::units::{axis_label, unit_lines};
 use leeway_model::Interpreter;
 use leeway_model::Source;
-use leeway_model::simulate::Disturbances;
-use leeway_model::simulate::mean_fits;
-use leeway_model::simulate::unwrap_heading;
-use leeway_model::simulate::validate;
+use leeway_model::simulate::{Trajectory, unwrap_heading};
+use leeway_model::validation::compare;
 use leeway_report::{data_files_json, heading_gains, heading_warnings, unit_warnings};
 use leeway_structure::ir::Rotation;
 use serde::Serialize;
@@ -273,52 +271,28 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             });
         }
     }
+    let comparison = compare(&model, &thetas, &names, &experiments, &dist);
+    warnings.extend(comparison.warnings);
     let mut results = Vec::new();
-    for (theta, name) in thetas.iter().zip(&names) {
-        let mut fits_of_model = Vec::new();
-        let mut validations = Vec::new();
-        for (k, e) in experiments.iter().enumerate() {
-            let v = validate(&model, theta, e, Disturbances::Constant(&dist));
-            let sim = &v.trajectory;
-            for (f, out_name) in v.fits.iter().zip(&ir.states) {
-                // Said once, for the first model: it is a property of the data.
-                if f.is_none() && !sim.diverged && results.is_empty() {
-                    warnings.push(format!(
-                        "experiment `{}`: `{out_name}` is constant in the data, so its fit is undefined",
-                        e.name
-                    ));
-                }
-            }
-            if sim.diverged {
-                warnings.push(format!(
-                    "{name}, experiment `{}`: the simulation diverged (the states left the finite numbers); check the parameters",
-                    e.name
-                ));
-            }
-            warnings.extend(v.below_mean(&outputs, &format!("{name}, experiment `{}`", e.name)));
-            for (o, panel) in panels.iter_mut().enumerate() {
-                let simulated = if o < ir.states.len() {
-                    sim.states.get(o).cloned().unwrap_or_default()
-                } else {
-                    sim.heading.clone()
-                };
-                if let Some(seg) = panel.segments.get_mut(k) {
-                    seg.simulated.push(simulated);
-                }
-            }
-            fits_of_model.push(ExperimentFit {
+    for ((validations, mean), name) in comparison
+        .validations
+        .iter()
+        .zip(comparison.means)
+        .zip(&names)
+    {
+        for (k, v) in validations.iter().enumerate() {
+            add_simulated(&mut panels, k, &v.trajectory, ir.states.len());
+        }
+        let experiments = experiments
+            .iter()
+            .zip(validations)
+            .map(|(e, v)| ExperimentFit {
                 name: e.name.clone(),
                 samples: e.len(),
                 fit: Ordered(ir.states.iter().cloned().zip(v.fits.clone()).collect()),
                 heading_fit: v.heading_fit,
-                diverged: sim.diverged,
-            });
-            validations.push(v);
-        }
-        let mean = outputs
-            .iter()
-            .cloned()
-            .zip(mean_fits(&validations))
+                diverged: v.diverged(),
+            })
             .collect();
         results.push(ModelFits {
             params: args
@@ -327,8 +301,8 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
                 .map(|p| p.display().to_string())
                 .unwrap_or_default(),
             name: name.clone(),
-            experiments: fits_of_model,
-            mean: Ordered(mean),
+            experiments,
+            mean: Ordered(outputs.iter().cloned().zip(mean).collect()),
         });
     }
     for (o, panel) in panels.iter_mut().enumerate() {
@@ -380,6 +354,20 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
         plot,
         plot_problem,
     })
+}
+
+/// A model's simulation of experiment `k` drawn in every output's panel.
+fn add_simulated(panels: &mut [Panel], k: usize, sim: &Trajectory, n_states: usize) {
+    for (o, panel) in panels.iter_mut().enumerate() {
+        let simulated = if o < n_states {
+            sim.states.get(o).cloned().unwrap_or_default()
+        } else {
+            sim.heading.clone()
+        };
+        if let Some(seg) = panel.segments.get_mut(k) {
+            seg.simulated.push(simulated);
+        }
+    }
 }
 
 fn cell(f: Option<f64>, diverged: bool) -> String {

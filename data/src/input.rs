@@ -63,8 +63,39 @@ pub fn read_input(
     let file = file.as_str();
     let header_at = records.header_at(None);
     let headers = records.headers().to_vec();
-    let find = |name: &str| headers.iter().position(|h| h == name);
-    let mut required: Vec<(Role, usize, String)> = Vec::new();
+    let required = required_columns(ir, &headers, &header_at)?;
+    let mut initial = initial_values(ir, &headers, &header_at, x0, names)?;
+    let time_col = headers.iter().position(|h| *h == column_name(ir, "time"));
+    let read = read_rows(records, ir, &required, &mut initial, time_col, &headers)?;
+    let time_name = column_name(ir, "time");
+    let first_time_at = time_col.map(|i| records.at(read.first_line, Some((i, &time_name))));
+    let h = sample_time(file, ir, &read.times, first_time_at, options, names)?;
+    let name = read.experiment.clone().unwrap_or_else(|| {
+        Path::new(file)
+            .file_stem()
+            .map_or(file.to_string(), |s| s.to_string_lossy().to_string())
+    });
+    let t0 = read.times.first.unwrap_or(0.0);
+    Ok(Input {
+        experiment: read.into_experiment(ir, &name, h, &initial),
+        t0,
+    })
+}
+
+/// A column the simulation reads on every row: its role, index and name.
+type Required = (Role, usize, String);
+
+/// An initial value: the state or heading, its value once known, and the
+/// column its first row gives it from (none when `x0` gives it).
+type Initial = (String, Option<f64>, Option<usize>);
+
+/// Every input, measured rotation and measured disturbance column, or the
+/// error naming the first missing one.
+fn required_columns(
+    ir: &Ir,
+    headers: &[String],
+    header_at: &str,
+) -> Result<Vec<Required>, DataError> {
     let mut wanted: Vec<(Role, String)> = ir
         .inputs
         .iter()
@@ -84,24 +115,34 @@ pub fn read_input(
             wanted.push((Role::Disturbance(i), c.name.clone()));
         }
     }
+    let mut required = Vec::with_capacity(wanted.len());
     for (role, signal) in wanted {
         let col = column_name(ir, &signal);
-        match find(&col) {
-            Some(i) => required.push((role, i, col)),
-            None => {
-                return Err(DataError::new(
-                    header_at.clone(),
-                    format!("missing column `{col}`"),
-                    format!(
-                        "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
-                        leeway_structure::grammar::join_capped(&headers, ", ")
-                    ),
-                ));
-            }
-        }
+        let Some(i) = headers.iter().position(|h| *h == col) else {
+            return Err(DataError::new(
+                header_at,
+                format!("missing column `{col}`"),
+                format!(
+                    "the header has: {}. A simulation needs every input, measured rotation and measured disturbance on every row",
+                    leeway_structure::grammar::join_capped(headers, ", ")
+                ),
+            ));
+        };
+        required.push((role, i, col));
     }
-    // Initial values: `x0` first, else the first row of the column.
-    let mut initial: Vec<(String, Option<f64>, Option<usize>)> = ir
+    Ok(required)
+}
+
+/// Initial values: `x0` first, else the first row of the state's column.
+fn initial_values(
+    ir: &Ir,
+    headers: &[String],
+    header_at: &str,
+    x0: &[(String, f64)],
+    names: &OptionNames,
+) -> Result<Vec<Initial>, DataError> {
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let mut initial: Vec<Initial> = ir
         .states
         .iter()
         .map(|s| (s.clone(), None, find(&column_name(ir, s))))
@@ -115,7 +156,7 @@ pub fn read_input(
             *col = None;
         } else if col.is_none() {
             return Err(DataError::new(
-                header_at.clone(),
+                header_at,
                 format!(
                     "no initial value for `{name}`: the input has no column `{}`",
                     column_name(ir, name)
@@ -128,36 +169,50 @@ pub fn read_input(
             ));
         }
     }
-    let time_col = find(&column_name(ir, "time"));
+    Ok(initial)
+}
+
+/// What the rows of an input gave.
+struct Rows {
+    inputs: Vec<Vec<f64>>,
+    rotation: Vec<Vec<f64>>,
+    disturbances: Vec<Vec<f64>>,
+    times: TimeSteps,
+    experiment: Option<String>,
+    rows: usize,
+    first_line: u64,
+}
+
+/// Reads every row: the required columns (in base units), the initial
+/// values from the first row, the time stamps checked as they come, and the
+/// one experiment's label.
+fn read_rows(
+    records: &mut dyn Table,
+    ir: &Ir,
+    required: &[Required],
+    initial: &mut [Initial],
+    time_col: Option<usize>,
+    headers: &[String],
+) -> Result<Rows, DataError> {
     let time_name = column_name(ir, "time");
-    let exp_col = find(&column_name(ir, "experiment"));
-    let n_comp = ir.components.len();
-    let mut inputs = vec![Vec::new(); ir.inputs.len()];
-    let mut rotation = vec![Vec::new(); ir.rotation_vars.len()];
-    let mut dist = vec![Vec::new(); n_comp];
-    let mut times = TimeSteps::default();
-    let mut experiment: Option<String> = None;
-    let mut rows = 0usize;
-    let mut first_line = records.first_position();
+    let exp_col = headers
+        .iter()
+        .position(|h| *h == column_name(ir, "experiment"));
+    let mut read = Rows {
+        inputs: vec![Vec::new(); ir.inputs.len()],
+        rotation: vec![Vec::new(); ir.rotation_vars.len()],
+        disturbances: vec![Vec::new(); ir.components.len()],
+        times: TimeSteps::default(),
+        experiment: None,
+        rows: 0,
+        first_line: records.first_position(),
+    };
     while records.next_row()? {
         let line = records.position();
-        for (role, i, name) in &required {
-            // Declared units are converted to base units, as for data files.
-            let signal = match role {
-                Role::Input(s) => ir.inputs.get(*s),
-                Role::Rotation(s) => ir.rotation_vars.get(*s),
-                Role::Disturbance(s) => ir.components.get(*s).map(|c| &c.name),
-            };
-            let v = records.number(*i, name)? * signal.map_or(1.0, |s| unit(ir, s));
-            match role {
-                Role::Input(s) => inputs[*s].push(v),
-                Role::Rotation(s) => rotation[*s].push(v),
-                Role::Disturbance(s) => dist[*s].push(v),
-            }
-        }
-        if rows == 0 {
-            first_line = line;
-            for (name, value, col) in &mut initial {
+        read.push_required(records, ir, required)?;
+        if read.rows == 0 {
+            read.first_line = line;
+            for (name, value, col) in initial.iter_mut() {
                 if let Some(i) = *col {
                     *value = Some(records.number(i, &column_name(ir, name))? * unit(ir, name));
                 }
@@ -165,12 +220,13 @@ pub fn read_input(
         }
         if let Some(i) = time_col {
             let t = records.number(i, &time_name)? * unit(ir, "time");
-            times.push(t, || records.at(line, Some((i, &time_name))))?;
+            read.times
+                .push(t, || records.at(line, Some((i, &time_name))))?;
         }
         if let Some(i) = exp_col {
             let name = String::from_utf8_lossy(&records.label(i)?).into_owned();
-            match &experiment {
-                None => experiment = Some(name),
+            match &read.experiment {
+                None => read.experiment = Some(name),
                 Some(first) if *first != name => {
                     return Err(DataError::new(
                         records.at(line, Some((i, "experiment"))),
@@ -181,47 +237,73 @@ pub fn read_input(
                 Some(_) => {}
             }
         }
-        rows += 1;
+        read.rows += 1;
     }
-    if rows == 0 {
+    if read.rows == 0 {
         return Err(DataError::new(
             records.at(records.first_position(), None),
             "the file has a header but no samples",
             "one row per sample of the input",
         ));
     }
-    let first_time_at = time_col.map(|i| records.at(first_line, Some((i, &time_name))));
-    let h = sample_time(file, ir, &times, first_time_at, options, names)?;
-    let name = experiment.unwrap_or_else(|| {
-        Path::new(file)
-            .file_stem()
-            .map_or(file.to_string(), |s| s.to_string_lossy().to_string())
-    });
-    let mut e = Experiment::new(ir, &name, h);
-    let value = |name: &str| {
-        initial
-            .iter()
-            .find(|(n, _, _)| n == name)
-            .and_then(|(_, v, _)| *v)
-            .unwrap_or(0.0)
-    };
-    e.states = ir.states.iter().map(|s| vec![value(s); rows]).collect();
-    if let Rotation::Planar { heading, .. } = &ir.rotation {
-        e.heading = vec![value(heading); rows];
-    }
-    e.inputs = inputs;
-    if matches!(ir.rotation, Rotation::Measured { .. }) {
-        e.rotation = rotation;
-    }
-    for (i, c) in ir.components.iter().enumerate() {
-        if ir.disturbances[c.disturbance].measured {
-            e.disturbances[i] = std::mem::take(&mut dist[i]);
+    Ok(read)
+}
+
+impl Rows {
+    /// One row's required columns, declared units converted to base units
+    /// (as for data files).
+    fn push_required(
+        &mut self,
+        records: &mut dyn Table,
+        ir: &Ir,
+        required: &[Required],
+    ) -> Result<(), DataError> {
+        for (role, i, name) in required {
+            let signal = match role {
+                Role::Input(s) => ir.inputs.get(*s),
+                Role::Rotation(s) => ir.rotation_vars.get(*s),
+                Role::Disturbance(s) => ir.components.get(*s).map(|c| &c.name),
+            };
+            let v = records.number(*i, name)? * signal.map_or(1.0, |s| unit(ir, s));
+            match role {
+                Role::Input(s) => self.inputs[*s].push(v),
+                Role::Rotation(s) => self.rotation[*s].push(v),
+                Role::Disturbance(s) => self.disturbances[*s].push(v),
+            }
         }
+        Ok(())
     }
-    Ok(Input {
-        experiment: e,
-        t0: times.first.unwrap_or(0.0),
-    })
+
+    /// The experiment a simulation starts from: the initial values held on
+    /// every row (states, heading), the inputs and measured signals as read.
+    fn into_experiment(mut self, ir: &Ir, name: &str, h: f64, initial: &[Initial]) -> Experiment {
+        let mut e = Experiment::new(ir, name, h);
+        let value = |name: &str| {
+            initial
+                .iter()
+                .find(|(n, _, _)| n == name)
+                .and_then(|(_, v, _)| *v)
+                .unwrap_or(0.0)
+        };
+        e.states = ir
+            .states
+            .iter()
+            .map(|s| vec![value(s); self.rows])
+            .collect();
+        if let Rotation::Planar { heading, .. } = &ir.rotation {
+            e.heading = vec![value(heading); self.rows];
+        }
+        e.inputs = self.inputs;
+        if matches!(ir.rotation, Rotation::Measured { .. }) {
+            e.rotation = self.rotation;
+        }
+        for (i, c) in ir.components.iter().enumerate() {
+            if ir.disturbances[c.disturbance].measured {
+                e.disturbances[i] = std::mem::take(&mut self.disturbances[i]);
+            }
+        }
+        e
+    }
 }
 
 /// The time stamps of the input, checked as they are read: each step equal

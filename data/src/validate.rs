@@ -7,7 +7,7 @@
 //! terms ([`Places`]). [`load_table`] holds the validated experiments in
 //! memory; `open_table` (in `spill`) streams them through a binary copy.
 
-use crate::checks::{BlockTimes, Extremes, TimeScan, sample_time};
+use crate::checks::{BlockTimes, Extremes, Outlier, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};
 use crate::error::DataError;
 use crate::notes::{FileNotes, LoadedFile, TimeNotes};
@@ -376,9 +376,64 @@ pub(super) fn scan(
         .collect();
     table.select(&used);
     let file = table.file().to_string();
-    let base_name = Path::new(&file)
+    let mut blocks = read_blocks(table, &layout, ir, &file, sink)?;
+    let (comment_lines, blank_lines) = table.dropped();
+    let mut notes = FileNotes {
+        file,
+        comment_lines,
+        blank_lines,
+        experiments: Vec::new(),
+    };
+    if blocks.is_empty() {
+        return Err(DataError::new(
+            table.at(table.first_position(), None),
+            "the file has a header but no samples",
+            "record at least a few hundred samples per experiment",
+        ));
+    }
+    for block in &mut blocks {
+        check_block(table, &layout, block)?;
+        let time_at =
+            |position: u64| table.at(position, Some((layout.time_col.unwrap_or(0), "time")));
+        let (h, deviation) = sample_time(
+            table.file(),
+            ir,
+            BlockTimes {
+                times: &block.times,
+                rows: block.rows,
+                first: block.first,
+            },
+            &time_at,
+            options,
+        )?;
+        block.h = h;
+        notes.experiments.push(TimeNotes {
+            experiment: block.name.clone(),
+            rows: block.rows,
+            max_step_deviation: deviation,
+            resampled: None,
+        });
+    }
+    Ok(Scanned {
+        header_at: table.header_at(None),
+        blocks,
+        notes,
+    })
+}
+
+/// Reads every row once: each experiment a block (its rows together, in
+/// order: one that resumes after another is an error), its time stamps and
+/// each column's extremes kept, every sample handed to `sink`.
+fn read_blocks(
+    table: &mut dyn Table,
+    layout: &Layout,
+    ir: &Ir,
+    file: &str,
+    sink: &mut Sink,
+) -> Result<Vec<Block>, DataError> {
+    let base_name = Path::new(file)
         .file_stem()
-        .map_or(file.clone(), |s| s.to_string_lossy().to_string());
+        .map_or(file.to_string(), |s| s.to_string_lossy().to_string());
     let mut blocks: Vec<Block> = Vec::new();
     let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
     let mut current: Option<Vec<u8>> = None;
@@ -427,101 +482,77 @@ pub(super) fn scan(
         }
         sink(b, line, &row, t)?;
     }
-    let (comment_lines, blank_lines) = table.dropped();
-    let mut notes = FileNotes {
-        file,
-        comment_lines,
-        blank_lines,
-        experiments: Vec::new(),
-    };
-    if blocks.is_empty() {
+    Ok(blocks)
+}
+
+/// An experiment long enough, and no gross outlier in any column.
+fn check_block(table: &dyn Table, layout: &Layout, block: &Block) -> Result<(), DataError> {
+    let n = block.rows;
+    if n < MIN_SAMPLES {
         return Err(DataError::new(
-            table.at(table.first_position(), None),
-            "the file has a header but no samples",
-            "record at least a few hundred samples per experiment",
+            table.at(block.first, None),
+            format!(
+                "experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed",
+                block.name
+            ),
+            "an estimate needs many more samples than parameters; record a longer experiment",
         ));
     }
-    for block in &mut blocks {
-        let n = block.rows;
-        if n < MIN_SAMPLES {
-            return Err(DataError::new(
-                table.at(block.first, None),
-                format!(
-                    "experiment `{}` has {n} samples; at least {MIN_SAMPLES} are needed",
-                    block.name
-                ),
-                "an estimate needs many more samples than parameters; record a longer experiment",
-            ));
+    for (j, (role, i, name, _)) in layout.cols.iter().enumerate() {
+        let zero_bound = match role {
+            Role::Input(_) => ZERO_OUTLIER_INPUT,
+            _ => ZERO_OUTLIER,
+        };
+        let found = block.extremes[j].outliers(n, zero_bound);
+        if let Some(o) = found.first() {
+            return Err(outlier_error(table, block, o, found.len() - 1, (*i, name)));
         }
-        for (j, (role, i, name, _)) in layout.cols.iter().enumerate() {
-            let zero_bound = match role {
-                Role::Input(_) => ZERO_OUTLIER_INPUT,
-                _ => ZERO_OUTLIER,
-            };
-            let found = block.extremes[j].outliers(n, zero_bound);
-            if let Some(o) = found.first() {
-                let more = match found.len() - 1 {
-                    0 => String::new(),
-                    m => format!(" ({m} more in this column)"),
-                };
-                let (v, lo, hi) = (o.value, o.lo, o.hi);
-                let why = if hi > lo {
-                    format!(
-                        "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
-                        block.name,
-                        if v > hi {
-                            (v - hi) / (hi - lo)
-                        } else {
-                            (lo - v) / (hi - lo)
-                        }
-                    )
-                } else if let Some(bound) = o.zero_bound {
-                    format!(
-                        "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
-                        block.name
-                    )
-                } else {
-                    format!(
-                        "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
-                        block.name,
-                        (v - lo).abs() / lo.abs()
-                    )
-                };
-                return Err(DataError::new(
-                    table.at(o.line, Some((*i, name))),
-                    format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
-                    format!(
-                        "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
-                    ),
-                ));
-            }
-        }
-        let time_at =
-            |position: u64| table.at(position, Some((layout.time_col.unwrap_or(0), "time")));
-        let (h, deviation) = sample_time(
-            table.file(),
-            ir,
-            BlockTimes {
-                times: &block.times,
-                rows: block.rows,
-                first: block.first,
-            },
-            &time_at,
-            options,
-        )?;
-        block.h = h;
-        notes.experiments.push(TimeNotes {
-            experiment: block.name.clone(),
-            rows: n,
-            max_step_deviation: deviation,
-            resampled: None,
-        });
     }
-    Ok(Scanned {
-        header_at: table.header_at(None),
-        blocks,
-        notes,
-    })
+    Ok(())
+}
+
+/// The error of a gross outlier, saying how far it lies from the rest.
+fn outlier_error(
+    table: &dyn Table,
+    block: &Block,
+    o: &Outlier,
+    others: usize,
+    (i, name): (usize, &str),
+) -> DataError {
+    let more = match others {
+        0 => String::new(),
+        m => format!(" ({m} more in this column)"),
+    };
+    let (v, lo, hi) = (o.value, o.lo, o.hi);
+    let why = if hi > lo {
+        format!(
+            "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
+            block.name,
+            if v > hi {
+                (v - hi) / (hi - lo)
+            } else {
+                (lo - v) / (hi - lo)
+            }
+        )
+    } else if let Some(bound) = o.zero_bound {
+        format!(
+            "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
+            block.name
+        )
+    } else {
+        format!(
+            "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+            block.name,
+            (v - lo).abs() / lo.abs()
+        )
+    };
+    DataError::new(
+        table.at(o.line, Some((i, name))),
+        format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+        format!(
+            "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
+        ),
+    )
 }
 
 /// Most samples `--resample` may make per row read: a finer grid only

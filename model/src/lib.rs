@@ -12,6 +12,7 @@ pub mod interrupt;
 pub mod model;
 pub mod signs;
 pub mod simulate;
+pub mod validation;
 
 #[doc(inline)]
 pub use experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};

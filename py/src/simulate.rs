@@ -20,9 +20,8 @@ use leeway_model::Source;
 use leeway_model::experiment::column_name;
 use leeway_model::given::{components_hint, given_value_ok};
 use leeway_model::simulate::Disturbances;
-use leeway_model::simulate::mean_fits;
 use leeway_model::simulate::simulate_written;
-use leeway_model::simulate::validate;
+use leeway_model::validation::compare;
 use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
 use leeway_report::unit_warnings;
@@ -217,39 +216,21 @@ pub fn validate_fits(
         let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
         let mut warnings = unit_warnings(ir, &sources);
         warnings.extend(heading_warnings(ir, &heading_gains(ir, &sources)));
-        let mut outputs = ir.states.clone();
-        if let Rotation::Planar { heading, .. } = &ir.rotation {
-            outputs.push(heading.clone());
-        }
         let interpreter = Interpreter::new(ir.clone());
-        let mut rows = Vec::new();
-        let mut means = Vec::new();
-        for (m, theta) in thetas.iter().enumerate() {
-            let name = names.get(m).map_or("θ", String::as_str);
-            let mut validations = Vec::new();
-            for e in &experiments {
-                let v = validate(&interpreter, theta, e, Disturbances::Constant(&dist));
-                for (f, output) in v.fits.iter().zip(&ir.states) {
-                    // Said once, for the first θ: it is a property of the data.
-                    if f.is_none() && !v.diverged() && m == 0 {
-                        warnings.push(format!(
-                            "experiment `{}`: `{output}` is constant in the data, so its fit is undefined",
-                            e.name
-                        ));
-                    }
-                }
-                if v.diverged() {
-                    warnings.push(format!(
-                        "{name}, experiment `{}`: the simulation diverged (the states left the finite numbers); check the parameters",
-                        e.name
-                    ));
-                }
-                warnings.extend(v.below_mean(&outputs, &format!("{name}, experiment `{}`", e.name)));
-                rows.push((m, e.name.clone(), e.len(), v.diverged(), v.outputs()));
-                validations.push(v);
-            }
-            means.push(mean_fits(&validations));
-        }
+        let comparison = compare(&interpreter, &thetas, &names, &experiments, &dist);
+        warnings.extend(comparison.warnings);
+        let rows = comparison
+            .validations
+            .iter()
+            .enumerate()
+            .flat_map(|(m, validations)| {
+                experiments
+                    .iter()
+                    .zip(validations)
+                    .map(move |(e, v)| (m, e.name.clone(), e.len(), v.diverged(), v.outputs()))
+            })
+            .collect();
+        let (outputs, means) = (comparison.outputs, comparison.means);
         Ok((outputs, rows, means, warnings))
     })?;
     Ok(fits)

@@ -3,7 +3,7 @@
 
 use crate::estimate::outcome::Outcome;
 use crate::output::{number, table};
-use leeway_estimate::ColumnEstimate;
+use leeway_estimate::{ColumnEstimate, Estimate};
 use leeway_model::signs::ArgSign;
 use std::fmt::Write;
 
@@ -60,7 +60,16 @@ pub fn render(o: &Outcome) -> String {
         if n == 1 { "" } else { "s" },
         d.equations
     );
+    parameters(&mut s, e);
+    nuisance(&mut s, e);
+    disturbances(&mut s, e);
+    sign_patterns(&mut s, e);
+    diagnostics(&mut s, o);
+    s
+}
 
+/// θ, an aggregate's sum on the row under it.
+fn parameters(s: &mut String, e: &Estimate) {
     s.push_str("parameters\n");
     let mut rows = vec![vec![
         "name".to_string(),
@@ -87,7 +96,10 @@ pub fn render(o: &Outcome) -> String {
         }
     }
     s.push_str(&table(&rows));
+}
 
+/// The nuisance parameters and what each estimates.
+fn nuisance(s: &mut String, e: &Estimate) {
     let nuisance: Vec<&ColumnEstimate> = e.columns.iter().filter(|c| c.kind != "theta").collect();
     if !nuisance.is_empty() {
         s.push_str("\nnuisance parameters\n");
@@ -105,7 +117,10 @@ pub fn render(o: &Outcome) -> String {
         }));
         s.push_str(&table(&rows));
     }
+}
 
+/// The unmeasured disturbances' means.
+fn disturbances(s: &mut String, e: &Estimate) {
     if !e.disturbances.is_empty() {
         s.push_str("\nunmeasured disturbance means (paper Corollary 1)\n");
         let rows: Vec<Vec<String>> = e
@@ -123,7 +138,10 @@ pub fn render(o: &Outcome) -> String {
             .collect();
         s.push_str(&table(&rows));
     }
+}
 
+/// Each experiment's sign pattern.
+fn sign_patterns(s: &mut String, e: &Estimate) {
     if e.sign_patterns
         .iter()
         .any(|p| !p.arguments.is_empty() || !p.pointwise.is_empty())
@@ -150,7 +168,12 @@ pub fn render(o: &Outcome) -> String {
         }
         s.push_str(&table(&rows));
     }
+}
 
+/// The diagnostics table: predictor, experiments, rank, refinement, data notes.
+fn diagnostics(s: &mut String, o: &Outcome) {
+    let e = &o.estimate;
+    let d = &e.diagnostics;
     s.push_str("\ndiagnostics\n");
     let mut rows = vec![
         vec![
@@ -224,7 +247,6 @@ pub fn render(o: &Outcome) -> String {
         rows.push(vec!["aggregate".to_string(), a.clone()]);
     }
     s.push_str(&table(&rows));
-    s
 }
 
 /// The estimate's own simulation on its data, in a line: the mean fit and
