@@ -6,6 +6,7 @@
 
 use crate::files::read_text;
 use crate::problem::{Failure, Problem};
+use leeway_model::given::parameter_names;
 use leeway_structure::grammar::line_col;
 use leeway_structure::ir::Ir;
 use serde_json::Value;
@@ -48,72 +49,90 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
         let entries: Entries = serde_json::from_str(text).map_err(invalid)?;
         (entries.0, text.find('{'))
     };
-    let place = |offset: Option<usize>| match offset {
-        Some(o) => {
-            let (l, c) = line_col(text, o);
-            format!("{file}:{l}:{c}")
+    let places = Places { file, text };
+    theta_of(ir, &entries, start, &places, &help)
+}
+
+/// Where a parameter file's entries are, as `file:line:col`.
+struct Places<'a> {
+    file: &'a str,
+    text: &'a str,
+}
+
+impl Places<'_> {
+    fn at(&self, offset: Option<usize>) -> String {
+        match offset {
+            Some(o) => {
+                let (l, c) = line_col(self.text, o);
+                format!("{}:{l}:{c}", self.file)
+            }
+            None => self.file.to_string(),
         }
-        None => file.to_string(),
-    };
+    }
+}
+
+/// θ from a file's entries (`start`: where they begin): every parameter
+/// exactly once ([`parameter_names`]) and finite; each problem at its entry.
+fn theta_of(
+    ir: &Ir,
+    entries: &[(String, Value)],
+    start: Option<usize>,
+    places: &Places<'_>,
+    help: &str,
+) -> Result<Vec<f64>, Vec<Problem>> {
     let names: Vec<&str> = ir.parameters.iter().map(|p| p.name.as_str()).collect();
-    let mut theta = vec![f64::NAN; names.len()];
-    let mut named: Vec<Option<String>> = vec![None; names.len()];
-    let mut problems = Vec::new();
+    let matched = parameter_names(ir, entries.iter().map(|(k, _)| k.as_str()));
+    // Each entry's place, found in file order.
     let mut from = start.unwrap_or(0);
-    for (key, value) in &entries {
-        let offset = key_offset(text, from, key, false);
-        if let Some(o) = offset {
-            from = o + key.len();
-        }
-        let at = place(offset);
-        let Some(i) = names.iter().position(|n| n == key) else {
+    let at: Vec<String> = entries
+        .iter()
+        .map(|(key, _)| {
+            let offset = key_offset(places.text, from, key, false);
+            if let Some(o) = offset {
+                from = o + key.len();
+            }
+            places.at(offset)
+        })
+        .collect();
+    let mut theta = vec![f64::NAN; names.len()];
+    let mut problems = Vec::new();
+    for (k, (key, value)) in entries.iter().enumerate() {
+        let problem = |message: String| Problem::error("invalid-params", message).at(&at[k]);
+        if matched.unknown.contains(&k) {
             problems.push(
-                Problem::error(
-                    "invalid-params",
-                    format!(
-                        "unknown parameter `{key}`: model `{}` has no such parameter",
-                        ir.name
-                    ),
-                )
-                .at(at)
+                problem(format!(
+                    "unknown parameter `{key}`: model `{}` has no such parameter",
+                    ir.name
+                ))
                 .help(format!(
                     "the parameters are {}",
                     leeway_structure::grammar::join_capped(&names, ", ")
                 )),
             );
-            continue;
-        };
-        if let Some(first) = &named[i] {
+        } else if let Some(&(_, first)) = matched.twice.iter().find(|(i, _)| *i == k) {
             problems.push(
-                Problem::error(
-                    "invalid-params",
-                    format!("parameter `{key}` is given twice (first at {first})"),
-                )
-                .at(at)
+                problem(format!(
+                    "parameter `{key}` is given twice (first at {})",
+                    at[first]
+                ))
                 .help("keep one value per parameter"),
             );
-            continue;
-        }
-        named[i] = Some(at.clone());
-        match value.as_f64() {
-            Some(v) if v.is_finite() => theta[i] = v,
-            _ => problems.push(
-                Problem::error(
-                    "invalid-params",
-                    format!("`{key}` is {value}, not a number"),
-                )
-                .at(at)
-                .help("give every parameter a finite number"),
-            ),
+        } else if let Some(i) = matched.slots[k] {
+            match value.as_f64() {
+                Some(v) if v.is_finite() => theta[i] = v,
+                _ => problems.push(
+                    problem(format!("`{key}` is {value}, not a number"))
+                        .help("give every parameter a finite number"),
+                ),
+            }
         }
     }
-    let missing: Vec<String> = names
-        .iter()
-        .zip(&named)
-        .filter(|(_, seen)| seen.is_none())
-        .map(|(n, _)| format!("`{n}`"))
-        .collect();
-    if !missing.is_empty() {
+    if !matched.missing.is_empty() {
+        let missing: Vec<String> = matched
+            .missing
+            .iter()
+            .map(|&p| format!("`{}`", names[p]))
+            .collect();
         let plural = if missing.len() == 1 { "" } else { "s" };
         problems.push(
             Problem::error(
@@ -124,7 +143,7 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
                     ir.name
                 ),
             )
-            .at(place(start))
+            .at(places.at(start))
             .help(help),
         );
     }

@@ -249,120 +249,135 @@ fn draw_on<DB: DrawingBackend>(
     panels: &[Panel],
     models: &[String],
 ) -> Result<(), String> {
-    let e = |err: DrawingAreaErrorKind<DB::ErrorType>| err.to_string();
-    root.fill(&WHITE).map_err(e)?;
+    root.fill(&WHITE).map_err(|err| err.to_string())?;
     let areas = root.split_evenly((panels.len().max(1), 1));
-    // The measurement wide and grey, the simulations thin and coloured on top: all stay visible.
+    for (area, p) in areas.iter().zip(panels) {
+        draw_panel(area, p, models)?;
+    }
+    Ok(())
+}
+
+/// One output: the measurement wide and grey, the simulations thin and
+/// coloured on top (all stay visible), decimated to a budget of points.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    p: &Panel,
+    models: &[String],
+) -> Result<(), String> {
+    let e = |err: DrawingAreaErrorKind<DB::ErrorType>| err.to_string();
     let measured_style = ShapeStyle::from(&BLACK.mix(0.45)).stroke_width(3);
     let model_style =
         |m: usize| ShapeStyle::from(&MODEL_COLOURS[m % MODEL_COLOURS.len()]).stroke_width(1);
-    for (area, p) in areas.iter().zip(panels) {
-        let budget = MAX_POINTS / p.segments.len().max(1);
-        let measured: Vec<Vec<(f64, f64)>> = p
-            .segments
-            .iter()
-            .map(|s| decimate_to(&s.time, &s.measured, budget))
-            .collect();
-        let simulated: Vec<Vec<Vec<(f64, f64)>>> = p
-            .segments
-            .iter()
-            .map(|s| {
-                s.simulated
-                    .iter()
-                    .map(|v| decimate_to(&s.time, v, budget))
-                    .collect()
-            })
-            .collect();
-        let first = p.segments.first().and_then(|s| s.time.first()).copied();
-        let last = p.segments.last().and_then(|s| s.time.last()).copied();
-        let (x0, x1) = match (first, last) {
-            (Some(a), Some(b)) if b > a => (a, b),
-            (Some(a), _) => (a, a + 1.0),
-            _ => (0.0, 1.0),
-        };
-        let all_measured: Vec<(f64, f64)> = measured.iter().flatten().copied().collect();
-        let all_simulated: Vec<(f64, f64)> =
-            simulated.iter().flatten().flatten().copied().collect();
-        let (y0, y1) = y_range(&all_measured, &all_simulated);
-        let mut chart = ChartBuilder::on(area)
-            .caption(
-                &p.title,
-                ("sans-serif", 22).into_font().style(FontStyle::Bold),
-            )
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
+    let budget = MAX_POINTS / p.segments.len().max(1);
+    let measured: Vec<Vec<(f64, f64)>> = p
+        .segments
+        .iter()
+        .map(|s| decimate_to(&s.time, &s.measured, budget))
+        .collect();
+    let simulated: Vec<Vec<Vec<(f64, f64)>>> = p
+        .segments
+        .iter()
+        .map(|s| {
+            s.simulated
+                .iter()
+                .map(|v| decimate_to(&s.time, v, budget))
+                .collect()
+        })
+        .collect();
+    let first = p.segments.first().and_then(|s| s.time.first()).copied();
+    let last = p.segments.last().and_then(|s| s.time.last()).copied();
+    let (x0, x1) = match (first, last) {
+        (Some(a), Some(b)) if b > a => (a, b),
+        (Some(a), _) => (a, a + 1.0),
+        _ => (0.0, 1.0),
+    };
+    let all_measured: Vec<(f64, f64)> = measured.iter().flatten().copied().collect();
+    let all_simulated: Vec<(f64, f64)> = simulated.iter().flatten().flatten().copied().collect();
+    let (y0, y1) = y_range(&all_measured, &all_simulated);
+    let mut chart = ChartBuilder::on(area)
+        .caption(
+            &p.title,
+            ("sans-serif", 22).into_font().style(FontStyle::Bold),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(e)?;
+    let x_desc = if p.segments.len() > 1 {
+        "time (s; experiments end to end)"
+    } else {
+        "time (s)"
+    };
+    styled_mesh(&mut chart, x_desc, &p.y_label)
+        .x_label_formatter(&|x| format!("{x}"))
+        .draw()
+        .map_err(e)?;
+    separators(&mut chart, p, (y0, y1)).map_err(e)?;
+    let clip = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        pts.iter().map(|(t, v)| (*t, v.clamp(y0, y1))).collect()
+    };
+    for (k, pts) in measured.iter().enumerate() {
+        let series = chart
+            .draw_series(LineSeries::new(clip(pts), measured_style))
             .map_err(e)?;
-        let x_desc = if p.segments.len() > 1 {
-            "time (s; experiments end to end)"
-        } else {
-            "time (s)"
-        };
-        styled_mesh(&mut chart, x_desc, &p.y_label)
-            .x_label_formatter(&|x| format!("{x}"))
-            .draw()
-            .map_err(e)?;
-        // Experiments after the first start at a dashed separator, named when there is room.
-        if p.segments.len() > 1 {
-            for (k, s) in p.segments.iter().enumerate() {
-                let Some(&t) = s.time.first() else { continue };
-                if k > 0 {
-                    chart
-                        .draw_series(DashedLineSeries::new(
-                            [(t, y0), (t, y1)],
-                            6,
-                            4,
-                            ShapeStyle::from(&BLACK.mix(0.5)).stroke_width(1),
-                        ))
-                        .map_err(e)?;
-                }
-                if p.segments.len() <= MAX_SEGMENT_LABELS {
-                    chart
-                        .draw_series(std::iter::once(Text::new(
-                            s.name.clone(),
-                            (t, y1),
-                            ("sans-serif", 13).into_font().color(&BLACK.mix(0.7)),
-                        )))
-                        .map_err(e)?;
-                }
-            }
+        if k == 0 {
+            series
+                .label("measured")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], measured_style));
         }
-        let clip = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
-            pts.iter().map(|(t, v)| (*t, v.clamp(y0, y1))).collect()
-        };
-        for (k, pts) in measured.iter().enumerate() {
+    }
+    for (m, model) in models.iter().enumerate() {
+        let style = model_style(m);
+        for (k, seg) in simulated.iter().enumerate() {
+            let Some(pts) = seg.get(m) else { continue };
             let series = chart
-                .draw_series(LineSeries::new(clip(pts), measured_style))
+                .draw_series(LineSeries::new(clip(pts), style))
                 .map_err(e)?;
             if k == 0 {
-                series.label("measured").legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 24, y)], measured_style)
-                });
+                series
+                    .label(model.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
             }
         }
-        for (m, model) in models.iter().enumerate() {
-            let style = model_style(m);
-            for (k, seg) in simulated.iter().enumerate() {
-                let Some(pts) = seg.get(m) else { continue };
-                let series = chart
-                    .draw_series(LineSeries::new(clip(pts), style))
-                    .map_err(e)?;
-                if k == 0 {
-                    series
-                        .label(model.as_str())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], style));
-                }
+    }
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font(("sans-serif", 15))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK.mix(0.4))
+        .draw()
+        .map_err(e)?;
+    Ok(())
+}
+
+/// Experiments after the first start at a dashed separator, named when
+/// there is room.
+fn separators<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    p: &Panel,
+    (y0, y1): (f64, f64),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if p.segments.len() > 1 {
+        for (k, s) in p.segments.iter().enumerate() {
+            let Some(&t) = s.time.first() else { continue };
+            if k > 0 {
+                chart.draw_series(DashedLineSeries::new(
+                    [(t, y0), (t, y1)],
+                    6,
+                    4,
+                    ShapeStyle::from(&BLACK.mix(0.5)).stroke_width(1),
+                ))?;
+            }
+            if p.segments.len() <= MAX_SEGMENT_LABELS {
+                chart.draw_series(std::iter::once(Text::new(
+                    s.name.clone(),
+                    (t, y1),
+                    ("sans-serif", 13).into_font().color(&BLACK.mix(0.7)),
+                )))?;
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font(("sans-serif", 15))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .draw()
-            .map_err(e)?;
     }
     Ok(())
 }

@@ -17,12 +17,12 @@ use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_styl
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
 use crate::units::{axis_label, unit_lines};
-use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::simulate::{Trajectory, unwrap_heading};
 use leeway_model::validation::compare;
+use leeway_model::{Experiment, Interpreter};
 use leeway_report::{data_files_json, heading_gains, heading_warnings, unit_warnings};
-use leeway_structure::ir::Rotation;
+use leeway_structure::ir::{Ir, Rotation};
 use serde::Serialize;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
@@ -244,33 +244,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     outputs.extend(heading.iter().cloned());
     let names = model_names(&args.params);
     let model = Interpreter::new(ir.clone());
-    // Panels: one per output, experiments end to end, a line per model.
-    let mut panels: Vec<Panel> = outputs
-        .iter()
-        .map(|o| Panel {
-            title: String::new(),
-            y_label: axis_label(&ir, o),
-            segments: Vec::new(),
-        })
-        .collect();
-    let mut offset = 0.0;
-    for e in &experiments {
-        let time: Vec<f64> = (0..e.len()).map(|k| offset + k as f64 * e.h).collect();
-        offset += e.len() as f64 * e.h;
-        for (o, panel) in panels.iter_mut().enumerate() {
-            let measured = if o < ir.states.len() {
-                e.states.get(o).cloned().unwrap_or_default()
-            } else {
-                unwrap_heading(&e.heading)
-            };
-            panel.segments.push(Segment {
-                name: e.name.clone(),
-                time: time.clone(),
-                measured,
-                simulated: Vec::new(),
-            });
-        }
-    }
+    let mut panels = measured_panels(&ir, &outputs, &experiments);
     let comparison = compare(&model, &thetas, &names, &experiments, &dist);
     warnings.extend(comparison.warnings);
     let mut results = Vec::new();
@@ -305,31 +279,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             mean: Ordered(outputs.iter().cloned().zip(mean).collect()),
         });
     }
-    for (o, panel) in panels.iter_mut().enumerate() {
-        let fits: Vec<String> = results
-            .iter()
-            .map(|m| {
-                let f = m.mean.0.get(o).and_then(|(_, v)| *v);
-                let diverged = m.experiments.iter().any(|e| e.diverged);
-                let value = match f {
-                    Some(f) => format!("{f:.1} %"),
-                    None if diverged => "diverged".to_string(),
-                    None => "undefined".to_string(),
-                };
-                if results.len() > 1 {
-                    format!("{} {value}", m.name)
-                } else {
-                    value
-                }
-            })
-            .collect();
-        let scope = if experiments.len() > 1 {
-            format!("mean fit over {} experiments", experiments.len())
-        } else {
-            "fit".to_string()
-        };
-        panel.title = format!("{}: {scope} {}", outputs[o], fits.join(", "));
-    }
+    title_panels(&mut panels, &results, &outputs, experiments.len());
     let plot = if args.no_plot {
         None
     } else {
@@ -354,6 +304,73 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
         plot,
         plot_problem,
     })
+}
+
+/// One panel per output, the experiments end to end, each with its
+/// measurement (the simulations are added per model).
+fn measured_panels(ir: &Ir, outputs: &[String], experiments: &[Experiment]) -> Vec<Panel> {
+    // Panels: one per output, experiments end to end, a line per model.
+    let mut panels: Vec<Panel> = outputs
+        .iter()
+        .map(|o| Panel {
+            title: String::new(),
+            y_label: axis_label(ir, o),
+            segments: Vec::new(),
+        })
+        .collect();
+    let mut offset = 0.0;
+    for e in experiments {
+        let time: Vec<f64> = (0..e.len()).map(|k| offset + k as f64 * e.h).collect();
+        offset += e.len() as f64 * e.h;
+        for (o, panel) in panels.iter_mut().enumerate() {
+            let measured = if o < ir.states.len() {
+                e.states.get(o).cloned().unwrap_or_default()
+            } else {
+                unwrap_heading(&e.heading)
+            };
+            panel.segments.push(Segment {
+                name: e.name.clone(),
+                time: time.clone(),
+                measured,
+                simulated: Vec::new(),
+            });
+        }
+    }
+    panels
+}
+
+/// Each panel's title: its output and every model's (mean) fit.
+fn title_panels(
+    panels: &mut [Panel],
+    results: &[ModelFits],
+    outputs: &[String],
+    n_experiments: usize,
+) {
+    for (o, panel) in panels.iter_mut().enumerate() {
+        let fits: Vec<String> = results
+            .iter()
+            .map(|m| {
+                let f = m.mean.0.get(o).and_then(|(_, v)| *v);
+                let diverged = m.experiments.iter().any(|e| e.diverged);
+                let value = match f {
+                    Some(f) => format!("{f:.1} %"),
+                    None if diverged => "diverged".to_string(),
+                    None => "undefined".to_string(),
+                };
+                if results.len() > 1 {
+                    format!("{} {value}", m.name)
+                } else {
+                    value
+                }
+            })
+            .collect();
+        let scope = if n_experiments > 1 {
+            format!("mean fit over {n_experiments} experiments")
+        } else {
+            "fit".to_string()
+        };
+        panel.title = format!("{}: {scope} {}", outputs[o], fits.join(", "));
+    }
 }
 
 /// A model's simulation of experiment `k` drawn in every output's panel.

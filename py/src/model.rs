@@ -155,6 +155,26 @@ impl Model {
         self.warnings.clone()
     }
 
+    /// Names given for θ matched against the parameters, by the rule the
+    /// CLI's parameter files follow (every parameter exactly once): per
+    /// name its parameter's index (`None`: unknown), then the unknown names
+    /// and the missing parameters.
+    #[allow(clippy::type_complexity)]
+    fn parameter_names(
+        &self,
+        names: Vec<String>,
+    ) -> (Vec<Option<usize>>, Vec<String>, Vec<String>) {
+        let matched =
+            leeway_model::given::parameter_names(&self.ir, names.iter().map(String::as_str));
+        let unknown = matched.unknown.iter().map(|&i| names[i].clone()).collect();
+        let missing = matched
+            .missing
+            .iter()
+            .map(|&p| self.ir.parameters[p].name.clone())
+            .collect();
+        (matched.slots, unknown, missing)
+    }
+
     /// `leeway check --json` of this model, for the given sign patterns
     /// (`"water.u:+,water.v:-"`, as `--pattern` takes them) or the searched ones.
     #[pyo3(signature = (patterns=None))]

@@ -4,7 +4,9 @@
 use leeway_structure::Compilation;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::identify::{relevant_signs, shown_signs};
-use leeway_structure::ir::{ColumnKind, Ir, PredictorKind, SignPattern};
+use leeway_structure::ir::{
+    ColumnKind, Ir, PredictorKind, Report, Separation as IrSeparation, SignPattern,
+};
 use leeway_structure::render::{column_text, written_terms};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -260,6 +262,58 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Ch
     };
     let r = &ir.report;
     let relevant = relevant_signs(ir, PredictorKind::Measured);
+    let (regressors, nuisance_regressors) = regressors(ir);
+    CheckReport {
+        model: Some(ir.name.clone()),
+        file: file.to_string(),
+        outputs: ir.states.clone(),
+        parameters: ir.parameters.iter().map(|p| p.name.clone()).collect(),
+        identifiable: r.identifiable,
+        verdict: (!c.has_errors() || c.only_unidentifiable()).then(|| r.verdict()),
+        search_cut: r.search_cut.clone(),
+        any_single_pattern: r.any_single_pattern,
+        aggregate,
+        regressors,
+        nuisance: nuisance(r, nuisance_regressors),
+        sign_arguments: ir
+            .sign_args
+            .iter()
+            .map(|s| SignArgument {
+                name: s.name.clone(),
+                fixed_per_experiment: !s.measured,
+            })
+            .collect(),
+        required_sign_patterns: patterns(ir, &r.required_patterns),
+        analysed_sign_patterns: patterns(ir, &r.patterns),
+        unidentifiable: r
+            .unidentifiable
+            .iter()
+            .map(|u| Unidentifiable {
+                parameters: names(ir, &u.parameters),
+                combinations: u.identifiable.clone(),
+                message: u.message.clone(),
+            })
+            .collect(),
+        separations: separations(ir, &r.separations, &relevant),
+        aggregates: r
+            .aggregates
+            .iter()
+            .map(|a| Aggregate {
+                parameter: ir.parameters[a.parameter].name.clone(),
+                estimates: a.estimates.clone(),
+                absorbed: names(ir, &a.absorbed),
+            })
+            .collect(),
+        errors,
+        warnings,
+        notes,
+        omitted: 0,
+    }
+}
+
+/// The θ regressors (with the terms written for them) and the nuisance
+/// regressors of the measured predictor, output by output.
+fn regressors(ir: &Ir) -> (Vec<Regressor>, Vec<NuisanceRegressor>) {
     let columns = &ir.predictors.measured;
     let mut regressors = Vec::new();
     let mut nuisance_regressors = Vec::new();
@@ -291,98 +345,62 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Ch
             }
         }
     }
-    CheckReport {
-        model: Some(ir.name.clone()),
-        file: file.to_string(),
-        outputs: ir.states.clone(),
-        parameters: ir.parameters.iter().map(|p| p.name.clone()).collect(),
-        identifiable: r.identifiable,
-        verdict: (!c.has_errors() || c.only_unidentifiable()).then(|| r.verdict()),
-        search_cut: r.search_cut.clone(),
-        any_single_pattern: r.any_single_pattern,
-        aggregate,
+    (regressors, nuisance_regressors)
+}
+
+/// The nuisance parameters kept and dropped by the analysis.
+fn nuisance(r: &Report, regressors: Vec<NuisanceRegressor>) -> Nuisance {
+    Nuisance {
+        before: r.nuisance.before,
+        after: r.nuisance.after,
+        kept: r
+            .nuisance
+            .kept
+            .iter()
+            .map(|k| Kept {
+                name: k.name.clone(),
+                estimates: k.estimates.clone(),
+            })
+            .collect(),
+        dropped: r
+            .nuisance
+            .dropped
+            .iter()
+            .map(|d| Dropped {
+                name: d.name.clone(),
+                reason: d.reason.clone(),
+            })
+            .collect(),
         regressors,
-        nuisance: Nuisance {
-            before: r.nuisance.before,
-            after: r.nuisance.after,
-            kept: r
-                .nuisance
-                .kept
-                .iter()
-                .map(|k| Kept {
-                    name: k.name.clone(),
-                    estimates: k.estimates.clone(),
-                })
-                .collect(),
-            dropped: r
-                .nuisance
-                .dropped
-                .iter()
-                .map(|d| Dropped {
-                    name: d.name.clone(),
-                    reason: d.reason.clone(),
-                })
-                .collect(),
-            regressors: nuisance_regressors,
-        },
-        sign_arguments: ir
-            .sign_args
-            .iter()
-            .map(|s| SignArgument {
-                name: s.name.clone(),
-                fixed_per_experiment: !s.measured,
-            })
-            .collect(),
-        required_sign_patterns: patterns(ir, &r.required_patterns),
-        analysed_sign_patterns: patterns(ir, &r.patterns),
-        unidentifiable: r
-            .unidentifiable
-            .iter()
-            .map(|u| Unidentifiable {
-                parameters: names(ir, &u.parameters),
-                combinations: u.identifiable.clone(),
-                message: u.message.clone(),
-            })
-            .collect(),
-        separations: r
-            .separations
-            .iter()
-            .map(|s| Separation {
-                parameters: names(ir, &s.parameters),
-                sign_patterns: s.patterns.as_ref().map(|set| {
-                    // The group's own arguments the predictor fixes, and any
-                    // sign made negative (the patterns hold nothing else).
-                    set.iter()
-                        .map(|p| {
-                            s.arguments
-                                .iter()
-                                .zip(p)
-                                .filter(|(a, sign)| **sign < 0 || relevant.binary_search(a).is_ok())
-                                .map(|(a, sign)| {
-                                    let text = if *sign < 0 { "-" } else { "+" };
-                                    (ir.sign_args[*a].name.clone(), text.to_string())
-                                })
-                                .collect()
-                        })
-                        .collect()
-                }),
-                message: s.message.clone(),
-            })
-            .collect(),
-        aggregates: r
-            .aggregates
-            .iter()
-            .map(|a| Aggregate {
-                parameter: ir.parameters[a.parameter].name.clone(),
-                estimates: a.estimates.clone(),
-                absorbed: names(ir, &a.absorbed),
-            })
-            .collect(),
-        errors,
-        warnings,
-        notes,
-        omitted: 0,
     }
+}
+
+/// Each separation of parameters with the sign patterns that separate them.
+fn separations(ir: &Ir, separations: &[IrSeparation], relevant: &[usize]) -> Vec<Separation> {
+    separations
+        .iter()
+        .map(|s| Separation {
+            parameters: names(ir, &s.parameters),
+            sign_patterns: s.patterns.as_ref().map(|set| {
+                // The group's own arguments the predictor fixes, and any
+                // sign made negative (the patterns hold nothing else).
+                set.iter()
+                    .map(|p| {
+                        s.arguments
+                            .iter()
+                            .zip(p)
+                            .filter(|(a, sign)| **sign < 0 || relevant.binary_search(a).is_ok())
+                            .map(|(a, sign)| {
+                                let text = if *sign < 0 { "-" } else { "+" };
+                                (ir.sign_args[*a].name.clone(), text.to_string())
+                            })
+                            .collect()
+                    })
+                    .collect()
+            }),
+            message: s.message.clone(),
+        })
+        .collect()
 }
 
 /// The document for a failure before compiling (unreadable file, bad `--pattern`).

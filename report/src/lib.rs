@@ -386,6 +386,87 @@ fn disturbances(e: &Estimate) -> Ordered<Ordered<Moment>> {
     Ordered(out)
 }
 
+impl<E> EstimateReport<E> {
+    /// Everything an estimate reports: θ with its errors and covariance,
+    /// the columns, disturbances, sign patterns, diagnostics and what
+    /// loading noted.
+    fn fill(&mut self, o: &Estimated<'_>) {
+        let e = o.estimate;
+        let r = self;
+        r.model = Some(o.model.to_string());
+        r.notes = e.notes.clone();
+        r.data_files = data_files_json(o.data_notes);
+        r.data_units = Ordered(
+            o.data_units
+                .iter()
+                .map(|(k, v)| (k.clone(), v.clone()))
+                .collect(),
+        );
+        r.experiments = o
+            .experiments
+            .iter()
+            .map(|(name, samples)| ExperimentJson {
+                name: name.clone(),
+                samples: *samples,
+            })
+            .collect();
+        r.estimates = Ordered(e.parameters.iter().cloned().zip(e.theta.clone()).collect());
+        r.std_errors = Ordered(
+            e.parameters
+                .iter()
+                .cloned()
+                .zip(e.std_errors.clone())
+                .collect(),
+        );
+        r.covariance = Ordered(
+            e.parameters
+                .iter()
+                .zip(&e.covariance)
+                .map(|(name, row)| {
+                    let row = e.parameters.iter().cloned().zip(row.clone()).collect();
+                    (name.clone(), Ordered(row))
+                })
+                .collect(),
+        );
+        r.parameters = e
+            .columns
+            .iter()
+            .filter(|c| c.kind == "theta")
+            .map(|c| column(c, &e.diagnostics.aggregates))
+            .collect();
+        r.nuisance = e
+            .columns
+            .iter()
+            .filter(|c| c.kind != "theta")
+            .map(|c| column(c, &e.diagnostics.aggregates))
+            .collect();
+        r.disturbances = disturbances(e);
+        r.sign_patterns = e
+            .sign_patterns
+            .iter()
+            .map(|s| SignPattern {
+                experiment: s.experiment.clone(),
+                pattern: Ordered(
+                    s.arguments
+                        .iter()
+                        .map(|a| (a.argument.clone(), sign_symbol(a.sign)))
+                        .collect(),
+                ),
+                arguments: s.arguments.iter().map(argument).collect(),
+                pointwise: s.pointwise.iter().map(argument).collect(),
+            })
+            .collect();
+        let diagnostics = DiagnosticsJson {
+            estimator: &e.diagnostics,
+            heading_gains: Ordered(o.heading_gains.to_vec()),
+        };
+        // Plain structs of strings and numbers always serialise; an empty object
+        // is the documented shape on error should that ever change.
+        r.diagnostics = serde_json::to_value(&diagnostics)
+            .unwrap_or_else(|_| serde_json::Value::Object(serde_json::Map::new()));
+    }
+}
+
 /// The document for a result (`Ok`) or the errors that stopped it. `model`
 /// names the model when it compiled (also on a data or estimate error);
 /// `file` and `data` name the model and data files as given.
@@ -424,78 +505,7 @@ pub fn estimate_report<E>(
             return r;
         }
     };
-    let e = o.estimate;
-    r.model = Some(o.model.to_string());
-    r.notes = e.notes.clone();
-    r.data_files = data_files_json(o.data_notes);
-    r.data_units = Ordered(
-        o.data_units
-            .iter()
-            .map(|(k, v)| (k.clone(), v.clone()))
-            .collect(),
-    );
-    r.experiments = o
-        .experiments
-        .iter()
-        .map(|(name, samples)| ExperimentJson {
-            name: name.clone(),
-            samples: *samples,
-        })
-        .collect();
-    r.estimates = Ordered(e.parameters.iter().cloned().zip(e.theta.clone()).collect());
-    r.std_errors = Ordered(
-        e.parameters
-            .iter()
-            .cloned()
-            .zip(e.std_errors.clone())
-            .collect(),
-    );
-    r.covariance = Ordered(
-        e.parameters
-            .iter()
-            .zip(&e.covariance)
-            .map(|(name, row)| {
-                let row = e.parameters.iter().cloned().zip(row.clone()).collect();
-                (name.clone(), Ordered(row))
-            })
-            .collect(),
-    );
-    r.parameters = e
-        .columns
-        .iter()
-        .filter(|c| c.kind == "theta")
-        .map(|c| column(c, &e.diagnostics.aggregates))
-        .collect();
-    r.nuisance = e
-        .columns
-        .iter()
-        .filter(|c| c.kind != "theta")
-        .map(|c| column(c, &e.diagnostics.aggregates))
-        .collect();
-    r.disturbances = disturbances(e);
-    r.sign_patterns = e
-        .sign_patterns
-        .iter()
-        .map(|s| SignPattern {
-            experiment: s.experiment.clone(),
-            pattern: Ordered(
-                s.arguments
-                    .iter()
-                    .map(|a| (a.argument.clone(), sign_symbol(a.sign)))
-                    .collect(),
-            ),
-            arguments: s.arguments.iter().map(argument).collect(),
-            pointwise: s.pointwise.iter().map(argument).collect(),
-        })
-        .collect();
-    let diagnostics = DiagnosticsJson {
-        estimator: &e.diagnostics,
-        heading_gains: Ordered(o.heading_gains.to_vec()),
-    };
-    // Plain structs of strings and numbers always serialise; an empty object
-    // is the documented shape on error should that ever change.
-    r.diagnostics = serde_json::to_value(&diagnostics)
-        .unwrap_or_else(|_| serde_json::Value::Object(serde_json::Map::new()));
+    r.fill(&o);
     r
 }
 

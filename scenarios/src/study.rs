@@ -685,10 +685,21 @@ fn fits_text(s: &EstimatorSummary, ni: usize) -> String {
 /// (d) IV1's mean fit is below IV2's and IV3's by more than 10 points in
 ///     surge or sway at every N of every case.
 pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Claim> {
-    let est =
-        |case: &CaseSummary, name: &str| case.estimators.get(name).cloned().unwrap_or_default();
-    let mut out = Vec::new();
-    // (a)
+    vec![
+        claim_a(cases),
+        claim_b(cases),
+        claim_c(cases),
+        claim_d(cases),
+    ]
+}
+
+/// An estimator's summary in a case (empty when it was not run).
+fn est(case: &CaseSummary, name: &str) -> EstimatorSummary {
+    case.estimators.get(name).cloned().unwrap_or_default()
+}
+
+/// Claim (a): LS fits best at the smallest N; IV2 and IV3 overtake it.
+fn claim_a(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Claim {
     let mut holds_a = None;
     let mut ev_a = Vec::new();
     for (name, case) in cases {
@@ -716,14 +727,17 @@ pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Cl
             breakpoint.map_or("no N run".to_string(), |n| n.to_string())
         ));
     }
-    out.push(Claim {
+    Claim {
         id: "a".into(),
         statement: "LS fits best at the smallest N; IV2 and IV3 overtake it beyond a breakpoint".into(),
         criterion: "mean fit over outputs: LS ≥ IV2, IV3 at the smallest N, and IV2, IV3 > LS at the largest N, in every case".into(),
         holds: holds_a,
         evidence: ev_a.join("; "),
-    });
-    // (b)
+    }
+}
+
+/// Claim (b): At low wind IV2 and IV3 perform equally well.
+fn claim_b(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Claim {
     let (holds_b, ev_b) = match cases.get("low") {
         Some(case) if !case.n.is_empty() => {
             let last = case.n.len() - 1;
@@ -745,14 +759,17 @@ pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Cl
         }
         _ => (None, "the low-wind case was not run".to_string()),
     };
-    out.push(Claim {
+    Claim {
         id: "b".into(),
         statement: "at low wind IV2 and IV3 perform equally well".into(),
         criterion: "low wind, largest N: |IV2 − IV3| ≤ 2 fit points in every output".into(),
         holds: holds_b,
         evidence: ev_b,
-    });
-    // (c)
+    }
+}
+
+/// Claim (c): At high wind IV2 degrades, in surge most, while IV3 stays good.
+fn claim_c(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Claim {
     let (holds_c, ev_c) = match (cases.get("high"), cases.get("low")) {
         (Some(high), Some(low)) if !high.n.is_empty() && !low.n.is_empty() => {
             let (lh, ll) = (high.n.len() - 1, low.n.len() - 1);
@@ -784,14 +801,17 @@ pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Cl
             "needs both the low- and the high-wind case".to_string(),
         ),
     };
-    out.push(Claim {
+    Claim {
         id: "c".into(),
         statement: "at high wind IV2 degrades, in surge most, while IV3 stays good".into(),
         criterion: "high wind, largest N: IV3 − IV2 > 2 points in surge, largest in surge, and IV3 within 5 points of its low-wind fit".into(),
         holds: holds_c,
         evidence: ev_c,
-    });
-    // (d)
+    }
+}
+
+/// Claim (d): IV1 fits poorly.
+fn claim_d(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Claim {
     let mut holds_d = None;
     let mut ev_d = Vec::new();
     for (name, case) in cases {
@@ -813,12 +833,11 @@ pub fn claims(cases: &std::collections::BTreeMap<String, CaseSummary>) -> Vec<Cl
             ));
         }
     }
-    out.push(Claim {
+    Claim {
         id: "d".into(),
         statement: "IV1 fits poorly".into(),
         criterion: "IV1 more than 10 points below IV2 and IV3 in surge or sway at every N".into(),
         holds: holds_d,
         evidence: ev_d.join("; "),
-    });
-    out
+    }
 }

@@ -651,6 +651,27 @@ def _checked_options(options: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _by_name(model: Model, mapping: Mapping[Any, Any], what: str, code: str) -> list[Any]:
+    """The values of ``{name: value}`` in the model's parameter order: every
+    parameter exactly once (the rule of the CLI's parameter files, applied
+    by the same code)."""
+    keys = list(mapping)
+    slots, unknown, missing = model._core.parameter_names([str(k) for k in keys])
+    if unknown or missing:
+        raise OptionError(
+            f"{what} must give every parameter of the model once"
+            + (f"; unknown: {', '.join(unknown)}" if unknown else "")
+            + (f"; missing: {', '.join(missing)}" if missing else ""),
+            code=code,
+            hint=f"the parameters are {', '.join(model.parameters)}",
+        )
+    values: list[Any] = [None] * len(model.parameters)
+    for key, slot in zip(keys, slots):
+        assert slot is not None  # every name is a parameter (checked above)
+        values[slot] = mapping[key]
+    return values
+
+
 def _nominal(model: Model, nominal: Mapping[str, float] | None) -> list[float] | None:
     if nominal is None:
         return None
@@ -660,19 +681,10 @@ def _nominal(model: Model, nominal: Mapping[str, float] | None) -> list[float] |
             code="invalid-nominal",
             hint="pass nominal={name: value} with every parameter of the model",
         )
-    unknown = [str(k) for k in nominal if k not in model.parameters]
-    missing = [p for p in model.parameters if p not in nominal]
-    if unknown or missing:
-        raise OptionError(
-            "nominal must give every parameter of the model once"
-            + (f"; unknown: {', '.join(unknown)}" if unknown else "")
-            + (f"; missing: {', '.join(missing)}" if missing else ""),
-            code="invalid-nominal",
-            hint=f"the parameters are {', '.join(model.parameters)}",
-        )
+    values = _by_name(model, nominal, "nominal", "invalid-nominal")
     return [
-        _number(f"nominal[{p!r}]", nominal[p], code="invalid-nominal", hint="nominal values are finite numbers")
-        for p in model.parameters
+        _number(f"nominal[{p!r}]", v, code="invalid-nominal", hint="nominal values are finite numbers")
+        for p, v in zip(model.parameters, values)
     ]
 
 
@@ -764,17 +776,7 @@ def _theta(model: Model, theta: Any, what: str = "theta") -> list[float]:
     if isinstance(theta, Estimate):
         theta = theta.theta
     if isinstance(theta, Mapping):
-        unknown = [str(k) for k in theta if k not in model.parameters]
-        missing = [p for p in model.parameters if p not in theta]
-        if unknown or missing:
-            raise OptionError(
-                f"{what} must give every parameter of the model once"
-                + (f"; unknown: {', '.join(unknown)}" if unknown else "")
-                + (f"; missing: {', '.join(missing)}" if missing else ""),
-                code="invalid-params",
-                hint=f"the parameters are {', '.join(model.parameters)}",
-            )
-        values = [theta[p] for p in model.parameters]
+        values = _by_name(model, theta, what, "invalid-params")
     elif isinstance(theta, (str, bytes)) or not isinstance(theta, (Sequence, np.ndarray)):
         raise OptionError(
             f"{what} is a {type(theta).__name__}",
