@@ -24,36 +24,47 @@ struct Held {
     files: Vec<String>,
 }
 
+/// Every file read with `read`, in order; every failing one reported.
+fn each_file<T>(
+    files: &[PathBuf],
+    mut read: impl FnMut(&PathBuf) -> Result<T, leeway_data::DataError>,
+) -> Result<Vec<T>, Failure> {
+    let mut read_files = Vec::with_capacity(files.len());
+    let mut problems = Vec::new();
+    for path in files {
+        match read(path) {
+            Ok(f) => read_files.push(f),
+            Err(e) => problems.push(Problem::data(&e)),
+        }
+    }
+    if problems.is_empty() {
+        Ok(read_files)
+    } else {
+        Err(Failure::Problems(problems))
+    }
+}
+
 /// [`load_data`], with each experiment's file.
 fn load_files(
     ir: &Ir,
     files: &[PathBuf],
     options: &LoadOptions,
 ) -> Result<(Held, Vec<FileNotes>), Failure> {
-    let mut experiments = Vec::new();
-    let mut names = Vec::new();
-    let mut notes = Vec::new();
-    let mut problems = Vec::new();
-    for path in files {
-        match load_file_noted(path, ir, options) {
-            Ok(f) => {
-                let name = path.display().to_string();
-                names.extend(f.experiments.iter().map(|_| name.clone()));
-                experiments.extend(f.experiments);
-                notes.push(f.notes);
-            }
-            Err(e) => problems.push(Problem::data(&e)),
-        }
+    let loaded = each_file(files, |path| {
+        load_file_noted(path, ir, options).map(|f| (path.display().to_string(), f))
+    })?;
+    let mut held = Held {
+        experiments: Vec::new(),
+        files: Vec::new(),
+    };
+    let mut notes = Vec::with_capacity(loaded.len());
+    for (name, f) in loaded {
+        held.files
+            .extend(f.experiments.iter().map(|_| name.clone()));
+        held.experiments.extend(f.experiments);
+        notes.push(f.notes);
     }
-    if problems.is_empty() {
-        let held = Held {
-            experiments,
-            files: names,
-        };
-        Ok((held, notes))
-    } else {
-        Err(Failure::Problems(problems))
-    }
+    Ok((held, notes))
 }
 
 /// Experiments for an estimate: streamed from their files (validated once,
@@ -103,23 +114,14 @@ pub fn open_data(
         return load_files(ir, files, options)
             .map(|(h, n)| (DataSet::Held(h.experiments, h.files), n));
     }
+    let opened = each_file(files, |path| open_file(path, ir, options))?;
     let mut sources = Vec::new();
-    let mut notes = Vec::new();
-    let mut problems = Vec::new();
-    for path in files {
-        match open_file(path, ir, options) {
-            Ok(f) => {
-                sources.extend(f.sources);
-                notes.push(f.notes);
-            }
-            Err(e) => problems.push(Problem::data(&e)),
-        }
+    let mut notes = Vec::with_capacity(opened.len());
+    for f in opened {
+        sources.extend(f.sources);
+        notes.push(f.notes);
     }
-    if problems.is_empty() {
-        Ok((DataSet::Streamed(sources), notes))
-    } else {
-        Err(Failure::Problems(problems))
-    }
+    Ok((DataSet::Streamed(sources), notes))
 }
 
 /// Below this relative step deviation, time stamps count as uniform: decimal

@@ -97,6 +97,27 @@ pub(crate) fn names(shape: &Shape) -> (Option<Names>, Vec<String>) {
     (names, errors)
 }
 
+/// The model's type with `doc`, its constants and its parameter struct:
+/// what a model compiled or not declares alike.
+pub(crate) fn declared(doc: TokenStream, shape: &Shape, names: &Names) -> TokenStream {
+    let ty = &names.model;
+    let consts = consts(shape);
+    let params = params(shape, names);
+    quote! {
+        #doc
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+        #[allow(non_camel_case_types)]
+        pub struct #ty;
+
+        #[allow(clippy::all, clippy::pedantic, clippy::nursery)]
+        impl #ty {
+            #consts
+        }
+
+        #params
+    }
+}
+
 /// The inherent constants of the model struct.
 pub(crate) fn consts(shape: &Shape) -> TokenStream {
     let arr = |items: &[String]| {
@@ -378,9 +399,7 @@ pub(crate) fn model(ir: &Ir, label: &str, remarks: &[String]) -> Result<TokenStr
         return Err(errors);
     };
     let ty = &names.model;
-    let doc = model_doc(ir, label, remarks);
-    let consts = consts(&shape);
-    let params = params(&shape, &names);
+    let declared = declared(model_doc(ir, label, remarks), &shape, &names);
     let predictors = eval::predictors(ir);
     let rhs = eval::rhs(ir);
     let step = eval::step(ir);
@@ -389,17 +408,7 @@ pub(crate) fn model(ir: &Ir, label: &str, remarks: &[String]) -> Result<TokenStr
     let n_measured = index(shape.measured.len());
     let n_out = index(shape.states.len());
     Ok(quote! {
-        #doc
-        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-        #[allow(non_camel_case_types)]
-        pub struct #ty;
-
-        #[allow(clippy::all, clippy::pedantic, clippy::nursery)]
-        impl #ty {
-            #consts
-        }
-
-        #params
+        #declared
 
         #[allow(non_snake_case, unused_qualifications, clippy::all, clippy::pedantic, clippy::nursery)]
         impl ::leeway::__private::Model for #ty {

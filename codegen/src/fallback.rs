@@ -6,7 +6,7 @@
 //! follow-on errors about missing items. The `compile_error!`s emitted beside
 //! it guarantee the crate does not build.
 
-use crate::emit::{Shape, consts, names, params};
+use crate::emit::{Shape, declared, names};
 use crate::tokens::rust_ident;
 use leeway_structure::{grammar, resolve, terms};
 use proc_macro2::TokenStream;
@@ -61,21 +61,13 @@ pub(crate) fn expansion(shape: &Shape) -> TokenStream {
         return TokenStream::new();
     };
     let ty = &names.model;
-    let consts = consts(shape);
-    let params = params(shape, &names);
+    let doc = quote!(
+        /// The model as declared; its `.som` file has errors (see the compile errors).
+    );
+    let declared = declared(doc, shape, &names);
     let never = quote!(::core::unreachable!("the model did not compile"));
     quote! {
-        /// The model as declared; its `.som` file has errors (see the compile errors).
-        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-        #[allow(non_camel_case_types)]
-        pub struct #ty;
-
-        #[allow(clippy::all, clippy::pedantic, clippy::nursery)]
-        impl #ty {
-            #consts
-        }
-
-        #params
+        #declared
 
         #[allow(clippy::all, clippy::pedantic, clippy::nursery)]
         impl ::leeway::__private::Model for #ty {

@@ -29,7 +29,7 @@ from typing import Any, TypeVar, Union
 import numpy as np
 import pandas as pd
 
-from . import _leeway
+from . import _leeway, errors
 from .errors import (
     DataError,
     EstimateError,
@@ -52,15 +52,7 @@ __all__ = [
     "simulate",
     "validate",
     "Theta",
-    "LeewayError",
-    "ModelError",
-    "DataError",
-    "OptionError",
-    "EstimateError",
-    "Unidentifiable",
-    "RankDeficient",
-    "SignViolation",
-    "LeewayWarning",
+    *errors.__all__,
 ]
 
 

@@ -10,7 +10,8 @@ from typing import Any
 class LeewayError(Exception):
     """A leeway error: ``code`` is the CLI's stable kebab-case code,
     ``hint`` how to fix it, ``location`` where (``file:line:col`` in a model,
-    ``frame: row r, column `c``` in data) or ``None``."""
+    ``frame: row r, column `c``` in data) or ``None``; ``report``, where the
+    error comes with one, the JSON document of ``leeway check --json``."""
 
     def __init__(
         self,
@@ -19,12 +20,14 @@ class LeewayError(Exception):
         code: str,
         hint: str | None = None,
         location: str | None = None,
+        report: str | None = None,
     ) -> None:
         super().__init__(message)
         self.message = message
         self.code = code
         self.hint = hint
         self.location = location
+        self.report: dict[str, Any] = json.loads(report) if report else {}
 
     def __str__(self) -> str:
         text = f"{self.location}: {self.message}" if self.location else self.message
@@ -46,18 +49,9 @@ class ModelError(LeewayError):
     ``leeway check --json`` does (code, message, location, file, line,
     column, labels, help, notes); the exception's own fields are the first."""
 
-    def __init__(
-        self,
-        message: str,
-        *,
-        code: str,
-        hint: str | None = None,
-        location: str | None = None,
-        report: str | None = None,
-    ) -> None:
-        super().__init__(message, code=code, hint=hint, location=location)
-        self.report: dict[str, Any] = json.loads(report) if report else {}
-        self.diagnostics: list[dict[str, Any]] = list(self.report.get("errors", []))
+    @property
+    def diagnostics(self) -> list[dict[str, Any]]:
+        return list(self.report.get("errors", []))
 
 
 class DataError(LeewayError, ValueError):
