@@ -8,9 +8,9 @@ pub use leeway_report::check as json;
 use crate::options::choices;
 use crate::output::{Status, err, out, print_json, stderr_style};
 use leeway_estimate::Centring;
-use leeway_structure::grammar::{self, Diagnostic, RenderStyle};
+use leeway_structure::grammar::{self, Diagnostic, RenderStyle, Severity};
 use leeway_structure::identify::parse_pattern;
-use leeway_structure::{Compilation, CompileOptions, compile, render};
+use leeway_structure::{Compilation, CompileOptions, compile, compile_with, render};
 use std::path::PathBuf;
 
 /// Arguments of `leeway check`.
@@ -74,7 +74,14 @@ pub fn run(args: &CheckArgs) -> Status {
         print_json(&report);
     } else {
         if let Some(ir) = &compilation.ir {
-            out(&render::render(ir));
+            // The notes that are diagnostics are rendered below, in full.
+            let shown: Vec<&str> = compilation
+                .diagnostics
+                .iter()
+                .filter(|d| d.severity == Severity::Note)
+                .map(|d| d.message.as_str())
+                .collect();
+            out(&render::render_except(ir, &shown));
         }
         let style = stderr_style();
         let diagnostics = grammar::render(&compilation.diagnostics, &file, &source, style);
@@ -98,25 +105,22 @@ pub fn run(args: &CheckArgs) -> Status {
     status
 }
 
-/// Compiles with the experiments given on the command line, if any.
+/// Compiles with the experiments given on the command line, if any: the
+/// patterns are read against the sign arguments of the lowered model, before
+/// its analysis (one compilation).
 fn analyse(args: &CheckArgs, source: &str) -> Result<Compilation, String> {
     if args.patterns.is_empty() {
         return Ok(compile(source, &args.options(None)));
     }
-    // The sign arguments are known only after compiling: a first pass analyses one
-    // all-plus experiment (no search), then the given experiments are analysed.
-    let probe = compile(source, &args.options(Some(vec![Vec::new()])));
-    let Some(ir) = &probe.ir else {
-        return Ok(probe);
-    };
-    let patterns = args
-        .patterns
-        .iter()
-        .map(|spec| {
-            parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}"))
-        })
-        .collect::<Result<Vec<_>, _>>()?;
-    Ok(compile(source, &args.options(Some(patterns))))
+    compile_with(source, &args.options(None), |ir| {
+        args.patterns
+            .iter()
+            .map(|spec| {
+                parse_pattern(&ir.sign_args, spec).map_err(|e| format!("--pattern `{spec}`: {e}"))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map(Some)
+    })
 }
 
 fn status_of(c: &Compilation) -> Status {

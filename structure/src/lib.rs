@@ -55,21 +55,37 @@ impl Compilation {
 
 /// Parses and compiles a `.som` source.
 pub fn compile(source: &str, options: &CompileOptions) -> Compilation {
+    let analysed = |_: &Ir| Ok::<_, std::convert::Infallible>(options.patterns.clone());
+    match compile_with(source, options, analysed) {
+        Ok(c) => c,
+        Err(never) => match never {},
+    }
+}
+
+/// Compiles as [`compile`] does, the experiments to analyse decided by
+/// `patterns` from the lowered IR, before the analysis: a sign pattern the
+/// user wrote (`water.u:+`) names sign arguments that only the compiled
+/// model knows. An `Err` from `patterns` ends the compilation with it.
+pub fn compile_with<E>(
+    source: &str,
+    options: &CompileOptions,
+    patterns: impl FnOnce(&Ir) -> Result<Option<Vec<ir::SignPattern>>, E>,
+) -> Result<Compilation, E> {
     let (model, mut diagnostics) = leeway_grammar::parse(source);
     let Some(model) = model else {
-        return Compilation {
+        return Ok(Compilation {
             ir: None,
             diagnostics,
-        };
+        });
     };
     let resolved = resolve::resolve(&model, &mut diagnostics);
     let (params, terms) = terms::lower_terms(&resolved, &mut diagnostics);
     merge_repeats(&mut diagnostics);
     if diagnostics.iter().any(Diagnostic::is_error) {
-        return Compilation {
+        return Ok(Compilation {
             ir: None,
             diagnostics,
-        };
+        });
     }
     if params.is_empty() {
         diagnostics.push(
@@ -83,10 +99,10 @@ pub fn compile(source: &str, options: &CompileOptions) -> Compilation {
             .with_primary(resolved.name.span, "")
             .with_help("write each equation as a sum of `parameter * regressor` terms"),
         );
-        return Compilation {
+        return Ok(Compilation {
             ir: None,
             diagnostics,
-        };
+        });
     }
     unused_declarations(&resolved, &terms, &mut diagnostics);
     let signs = expand::sign_args(&resolved, &terms);
@@ -105,13 +121,17 @@ pub fn compile(source: &str, options: &CompileOptions) -> Compilation {
         &mut diagnostics,
     );
     if diagnostics.iter().any(Diagnostic::is_error) {
-        return Compilation {
+        return Ok(Compilation {
             ir: None,
             diagnostics,
-        };
+        });
     }
-    ir.report = identify::report::report(&ir, options);
-    identifiability_diagnostics(&ir, options, &mut diagnostics);
+    let options = CompileOptions {
+        patterns: patterns(&ir)?,
+        ..options.clone()
+    };
+    ir.report = identify::report::report(&ir, &options);
+    identifiability_diagnostics(&ir, &options, &mut diagnostics);
     let mut notes: Vec<String> = diagnostics
         .iter()
         .filter(|d| d.severity == Severity::Note)
@@ -119,8 +139,8 @@ pub fn compile(source: &str, options: &CompileOptions) -> Compilation {
         .collect();
     notes.append(&mut ir.report.notes);
     ir.report.notes = notes;
-    Compilation {
+    Ok(Compilation {
         ir: Some(ir),
         diagnostics,
-    }
+    })
 }

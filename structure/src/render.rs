@@ -102,6 +102,12 @@ pub fn written_terms(ir: &Ir) -> BTreeMap<(usize, usize), Vec<&str>> {
 
 /// The full structure report.
 pub fn render(ir: &Ir) -> String {
+    render_except(ir, &[])
+}
+
+/// The structure report without the notes in `shown` (those a caller shows
+/// as rendered diagnostics beside it, so none is said twice).
+pub fn render_except(ir: &Ir, shown: &[&str]) -> String {
     let mut o = String::new();
     render_header(&mut o, ir);
     render_disturbances(&mut o, ir);
@@ -109,7 +115,7 @@ pub fn render(ir: &Ir) -> String {
     render_theta(&mut o, ir);
     render_nuisance(&mut o, ir);
     render_verdict(&mut o, ir);
-    render_groups(&mut o, ir);
+    render_groups(&mut o, ir, shown);
     o
 }
 
@@ -395,7 +401,7 @@ fn render_verdict(o: &mut String, ir: &Ir) {
 }
 
 /// The unidentifiable groups, what separates them, the aggregates and the notes.
-fn render_groups(o: &mut String, ir: &Ir) {
+fn render_groups(o: &mut String, ir: &Ir, shown: &[&str]) {
     let r = &ir.report;
     if !r.unidentifiable.is_empty() {
         let base = r
@@ -424,7 +430,7 @@ fn render_groups(o: &mut String, ir: &Ir) {
             );
         }
     }
-    for n in &r.notes {
+    for n in r.notes.iter().filter(|n| !shown.contains(&n.as_str())) {
         let _ = writeln!(o, "  note: {n}");
     }
 }

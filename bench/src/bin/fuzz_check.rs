@@ -396,30 +396,6 @@ fn malform(rng: &mut ChaCha8Rng, base: &str) -> Vec<u8> {
         .collect();
     let width = rows.first().map_or(1, Vec::len);
     let edits = rng.random_range(1..=3);
-    const CELLS: &[&str] = &[
-        "",
-        "nan",
-        "NaN",
-        "inf",
-        "-inf",
-        "1e300",
-        "-1e308",
-        "1e309",
-        "abc",
-        "\"a,b\"",
-        "\"open",
-        "0x10",
-        "1,5",
-        " 1 ",
-        "--1",
-        "1e",
-        "\u{0}",
-        "é",
-        "99999999999999999999999999999999999",
-        "1e-320",
-        "0",
-        "-0",
-    ];
     for _ in 0..edits {
         if rows.is_empty() {
             rows.push(vec![String::new()]);
@@ -428,91 +404,143 @@ fn malform(rng: &mut ChaCha8Rng, base: &str) -> Vec<u8> {
         let r = rng.random_range(0..n);
         let c = rng.random_range(0..width);
         match rng.random_range(0..14) {
-            0 => {
-                if let Some(x) = rows[r].get_mut(c) {
-                    *x = CELLS[rng.random_range(0..CELLS.len())].to_string();
+            kind @ 0..7 => edit_rows(rng, &mut rows, kind, (r, c)),
+            kind => edit_columns(rng, &mut rows, kind, (r, c)),
+        }
+    }
+    encode(rng, &rows)
+}
+
+/// Cells that break a number or a record.
+const CELLS: &[&str] = &[
+    "",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e300",
+    "-1e308",
+    "1e309",
+    "abc",
+    "\"a,b\"",
+    "\"open",
+    "0x10",
+    "1,5",
+    " 1 ",
+    "--1",
+    "1e",
+    "\u{0}",
+    "é",
+    "99999999999999999999999999999999999",
+    "1e-320",
+    "0",
+    "-0",
+];
+
+/// Edits 0–6: a cell, a row removed, repeated or inserted, a field more or less.
+fn edit_rows(rng: &mut ChaCha8Rng, rows: &mut Vec<Vec<String>>, kind: u32, (r, c): (usize, usize)) {
+    match kind {
+        0 => {
+            if let Some(x) = rows[r].get_mut(c) {
+                *x = CELLS[rng.random_range(0..CELLS.len())].to_string();
+            }
+        }
+        1 => {
+            rows.remove(r);
+        }
+        2 => {
+            let copy = rows[r].clone();
+            rows.insert(r, copy);
+        }
+        3 => rows.insert(r, vec![String::new()]),
+        4 => rows.insert(r, vec!["# a comment, with \"quotes\"".to_string()]),
+        5 => {
+            if let Some(row) = rows.get_mut(r) {
+                row.push("extra".to_string());
+            }
+        }
+        6 => {
+            if let Some(row) = rows.get_mut(r)
+                && row.len() > 1
+            {
+                row.pop();
+            }
+        }
+        _ => {}
+    }
+}
+
+/// Edits 7–13: a column's values, the header, time stamps, experiments, quoting.
+fn edit_columns(
+    rng: &mut ChaCha8Rng,
+    rows: &mut Vec<Vec<String>>,
+    kind: u32,
+    (r, c): (usize, usize),
+) {
+    let n = rows.len();
+    match kind {
+        7 => {
+            // A constant column with one spike.
+            for row in rows.iter_mut().skip(1) {
+                if let Some(x) = row.get_mut(c) {
+                    *x = "10".to_string();
                 }
             }
-            1 => {
-                rows.remove(r);
+            if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(c)) {
+                *x = format!("1e{}", rng.random_range(2..300));
             }
-            2 => {
-                let copy = rows[r].clone();
-                rows.insert(r, copy);
-            }
-            3 => rows.insert(r, vec![String::new()]),
-            4 => rows.insert(r, vec!["# a comment, with \"quotes\"".to_string()]),
-            5 => {
-                if let Some(row) = rows.get_mut(r) {
-                    row.push("extra".to_string());
-                }
-            }
-            6 => {
-                if let Some(row) = rows.get_mut(r)
-                    && row.len() > 1
-                {
-                    row.pop();
-                }
-            }
-            7 => {
-                // A constant column with one spike.
-                for row in rows.iter_mut().skip(1) {
-                    if let Some(x) = row.get_mut(c) {
-                        *x = "10".to_string();
-                    }
-                }
-                if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(c)) {
-                    *x = format!("1e{}", rng.random_range(2..300));
-                }
-            }
-            8 => {
-                // A column scaled (units).
-                let f: f64 = format!("1e{}", rng.random_range(-30..30))
-                    .parse()
-                    .unwrap_or(1.0);
-                for row in rows.iter_mut().skip(1) {
-                    if let Some(x) = row.get_mut(c) {
-                        let v: f64 = x.parse().unwrap_or(0.0);
-                        *x = format!("{:e}", v * f);
-                    }
-                }
-            }
-            9 => {
-                // The header: a name dropped, duplicated or renamed.
-                if let Some(h) = rows.first_mut() {
-                    let k = rng.random_range(0..h.len());
-                    match rng.random_range(0..3) {
-                        0 => h[k] = String::new(),
-                        1 => h[k] = h[(k + 1) % h.len()].clone(),
-                        _ => h[k] = format!("{}x", h[k]),
-                    }
-                }
-            }
-            10 => {
-                // A time stamp out of order or a gap.
-                if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(0)) {
+        }
+        8 => {
+            // A column scaled (units).
+            let f: f64 = format!("1e{}", rng.random_range(-30..30))
+                .parse()
+                .unwrap_or(1.0);
+            for row in rows.iter_mut().skip(1) {
+                if let Some(x) = row.get_mut(c) {
                     let v: f64 = x.parse().unwrap_or(0.0);
-                    *x = format!("{}", v + rng.random_range(-5.0..5.0));
-                }
-            }
-            11 => rows.truncate(rng.random_range(0..n)),
-            12 => {
-                // Experiments interleaved.
-                if let Some(h) = rows.first_mut() {
-                    h.push("experiment".to_string());
-                }
-                for (k, row) in rows.iter_mut().enumerate().skip(1) {
-                    row.push(if (k / 50) % 3 == 1 { "b" } else { "a" }.to_string());
-                }
-            }
-            _ => {
-                // A quoted cell holding a line break.
-                if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(c)) {
-                    *x = format!("\"{x}\n{x}\"");
+                    *x = format!("{:e}", v * f);
                 }
             }
         }
+        9 => {
+            // The header: a name dropped, duplicated or renamed.
+            if let Some(h) = rows.first_mut() {
+                let k = rng.random_range(0..h.len());
+                match rng.random_range(0..3) {
+                    0 => h[k] = String::new(),
+                    1 => h[k] = h[(k + 1) % h.len()].clone(),
+                    _ => h[k] = format!("{}x", h[k]),
+                }
+            }
+        }
+        10 => {
+            // A time stamp out of order or a gap.
+            if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(0)) {
+                let v: f64 = x.parse().unwrap_or(0.0);
+                *x = format!("{}", v + rng.random_range(-5.0..5.0));
+            }
+        }
+        11 => rows.truncate(rng.random_range(0..n)),
+        12 => {
+            // Experiments interleaved.
+            if let Some(h) = rows.first_mut() {
+                h.push("experiment".to_string());
+            }
+            for (k, row) in rows.iter_mut().enumerate().skip(1) {
+                row.push(if (k / 50) % 3 == 1 { "b" } else { "a" }.to_string());
+            }
+        }
+        _ => {
+            // A quoted cell holding a line break.
+            if let Some(x) = rows.get_mut(r.max(1)).and_then(|row| row.get_mut(c)) {
+                *x = format!("\"{x}\n{x}\"");
+            }
+        }
     }
+}
+
+/// The rows as bytes: line ends, a byte-order mark, a cut, a stray byte.
+fn encode(rng: &mut ChaCha8Rng, rows: &[Vec<String>]) -> Vec<u8> {
     let crlf = rng.random_bool(0.2);
     let mut text: String = rows
         .iter()
@@ -562,6 +590,41 @@ fn main() {
         eprintln!("cannot create {}: {e}", scratch.display());
         std::process::exit(2);
     }
+    let seeds = seed_models(&root);
+    let started = Instant::now();
+    let run_ctx = Runner {
+        leeway: &leeway,
+        timeout,
+        scratch: &scratch,
+        keep: &keep,
+    };
+    let models_tally = fuzz_models(&run_ctx, &seeds, seed, from..from + n_models, started);
+    let csv_tally = fuzz_csvs(&run_ctx, &root, seed, n_csvs);
+    println!(
+        "total {:.0} s; failing inputs (if any) in {}",
+        started.elapsed().as_secs_f64(),
+        keep.display()
+    );
+    let failed = models_tally.crashes.len()
+        + models_tally.timeouts.len()
+        + models_tally.unlocated.len()
+        + csv_tally.crashes.len()
+        + csv_tally.timeouts.len()
+        + csv_tally.unlocated.len();
+    std::process::exit(i32::from(failed > 0));
+}
+
+/// How each case is run: the binary, its time limit, where cases are
+/// written and where failing ones are kept.
+struct Runner<'a> {
+    leeway: &'a Path,
+    timeout: Duration,
+    scratch: &'a Path,
+    keep: &'a Path,
+}
+
+/// The example models (valid and broken), the seeds of the mutations.
+fn seed_models(root: &Path) -> Vec<Vec<u8>> {
     let mut seeds: Vec<Vec<u8>> = Vec::new();
     for dir in ["examples/models", "examples/models/broken"] {
         if let Ok(entries) = std::fs::read_dir(root.join(dir)) {
@@ -577,10 +640,20 @@ fn main() {
         eprintln!("no example models under {}; pass --root", root.display());
         std::process::exit(2);
     }
-    let started = Instant::now();
+    seeds
+}
+
+/// `leeway check` on generated and mutated models.
+fn fuzz_models(
+    ctx: &Runner<'_>,
+    seeds: &[Vec<u8>],
+    seed: u64,
+    cases: std::ops::Range<usize>,
+    started: Instant,
+) -> Tally {
     let mut models_tally = Tally::default();
-    let model_path = scratch.join("case.som");
-    for i in from..from + n_models {
+    let model_path = ctx.scratch.join("case.som");
+    for i in cases {
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003).wrapping_add(i as u64));
         let text = match rng.random_range(0..3) {
@@ -602,8 +675,8 @@ fn main() {
         if rng.random_bool(0.3) {
             check.push("--json");
         }
-        let r = run(&leeway, &check, timeout, &scratch);
-        models_tally.record(&format!("model-{seed}-{i}.som"), &model_path, &r, &keep);
+        let r = run(ctx.leeway, &check, ctx.timeout, ctx.scratch);
+        models_tally.record(&format!("model-{seed}-{i}.som"), &model_path, &r, ctx.keep);
         if (i + 1) % 1000 == 0 {
             eprintln!(
                 "{} models in {:.0} s",
@@ -613,6 +686,11 @@ fn main() {
         }
     }
     models_tally.report("check");
+    models_tally
+}
+
+/// `leeway estimate` on malformed logs of the paper's ship.
+fn fuzz_csvs(ctx: &Runner<'_>, root: &Path, seed: u64, n_csvs: usize) -> Tally {
     // A valid log of the paper's ship to malform.
     let ship_src =
         std::fs::read_to_string(root.join("examples/models/ship.som")).unwrap_or_default();
@@ -634,7 +712,7 @@ fn main() {
     let base = String::from_utf8_lossy(&base).into_owned();
     let model_arg = root.join("examples/models/ship.som").display().to_string();
     let mut csv_tally = Tally::default();
-    let csv_path = scratch.join("case.csv");
+    let csv_path = ctx.scratch.join("case.csv");
     for i in 0..n_csvs {
         let mut rng =
             ChaCha8Rng::seed_from_u64(seed.wrapping_mul(7_000_003).wrapping_add(i as u64));
@@ -645,24 +723,13 @@ fn main() {
         let path = csv_path.display().to_string();
         let method = if i % 2 == 0 { "ls" } else { "iv3" };
         let r = run(
-            &leeway,
+            ctx.leeway,
             &["estimate", &model_arg, "--data", &path, "--method", method],
-            timeout,
-            &scratch,
+            ctx.timeout,
+            ctx.scratch,
         );
-        csv_tally.record(&format!("csv-{seed}-{i}.csv"), &csv_path, &r, &keep);
+        csv_tally.record(&format!("csv-{seed}-{i}.csv"), &csv_path, &r, ctx.keep);
     }
     csv_tally.report("estimate");
-    println!(
-        "total {:.0} s; failing inputs (if any) in {}",
-        started.elapsed().as_secs_f64(),
-        keep.display()
-    );
-    let failed = models_tally.crashes.len()
-        + models_tally.timeouts.len()
-        + models_tally.unlocated.len()
-        + csv_tally.crashes.len()
-        + csv_tally.timeouts.len()
-        + csv_tally.unlocated.len();
-    std::process::exit(i32::from(failed > 0));
+    csv_tally
 }
