@@ -1,5 +1,5 @@
 //! leeway-bench: benchmarks that need the whole stack (the facade, its macros
-//! and the runtime), kept out of the facade so that trybuild, which compiles
+//! and the estimator crates), kept out of the facade so that trybuild, which compiles
 //! every dev-dependency of the facade, never builds criterion. See
 //! `benches/` and docs/performance.md. It holds the model generators shared
 //! by the binaries `gen-model` and `fuzz-check` ([`models`]).

@@ -2,7 +2,7 @@
 //! (regressors, nuisance reduction, required experiments) and diagnostics,
 //! or the same as JSON; exit 0 / 1 / 2 (see `main.rs`).
 
-// The document is built in the runtime, which the Python package shares.
+// The document is built in leeway-report, which the Python package shares.
 pub use leeway_report::check as json;
 
 use crate::options::choices;

@@ -1,7 +1,7 @@
 //! `leeway reproduce [--runs M] [--n LIST] [--case low|high|both] [--seed S]
 //! [--out DIR] [--threads T] [--paper-iv]`: the paper's simulation study
 //! (§V, SPEC §6) on the ship compiled into this binary. Runs the Monte Carlo
-//! study of the runtime (`leeway_scenarios::study`), checks the input design
+//! study (`leeway_scenarios::study`), checks the input design
 //! on the true trajectories, prints a table per case, the design margins and
 //! the paper's four claims with their verdicts, and writes `DIR/results.json`
 //! (the contract of docs/json.md) and the figures (SVG and PNG). Exit 0 when

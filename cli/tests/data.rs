@@ -377,7 +377,7 @@ fn validate_compares_several_parameter_files_and_writes_only_when_asked() {
     }
 }
 
-/// The tanker zigzag campaign (`runtime::zigzag`) written as a logger would:
+/// The tanker zigzag campaign (`leeway_scenarios::zigzag`) written as a logger would:
 /// comment lines, jittered time stamps, the rudder in degrees.
 fn tanker_log(dir: &Scratch, noisy: bool) -> (String, Vec<String>, Vec<String>) {
     let source = std::fs::read_to_string(root().join("examples/models/tanker.som"))

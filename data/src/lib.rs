@@ -2,8 +2,8 @@
 //!
 //! An experiment is a time series of the model's declared signals (states,
 //! inputs, heading or rotation columns, measured disturbance components). It
-//! is held column by column in memory ([`Experiment`]) or produced on the fly
-//! by any [`Source`] (e.g. a simulator streaming 10⁷ samples): estimators only
+//! is held column by column in memory ([`Experiment`](leeway_model::Experiment)) or produced on the fly
+//! by any [`Source`](leeway_model::Source) (e.g. a simulator streaming 10⁷ samples): estimators only
 //! ever visit samples in order, so their memory does not grow with N.
 //!
 //! Loading validates everything and names the place of every problem;

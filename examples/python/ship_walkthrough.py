@@ -52,7 +52,7 @@ print("nuisance parameters:", check.nuisance["before"], "->", check.nuisance["af
 
 # %% 3. Data: a true ship, simulated by leeway
 # θ0 of the paper's table plays the true ship. The input design is the study's
-# (runtime/src/study.rs): a thrust offset that holds a steady turn, plus
+# (scenarios/src/study.rs): a thrust offset that holds a steady turn, plus
 # smoothed pulses of random width on every thruster. A current of (0.2, 0.2)
 # m/s pushes the ship (unmeasured: the estimator must account for it); the
 # wind is measured. Measurement noise is added afterwards, as a logger would.

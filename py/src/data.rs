@@ -1,4 +1,4 @@
-//! Frames handed over from Python, read by the runtime's column table
+//! Frames handed over from Python, read by leeway-data's column table
 //! (`leeway_data::Columns`), which feeds the same validating
 //! pass as `leeway estimate --data`: the same header matching, units,
 //! time-step checks, experiment splitting, outlier rules and errors, located

@@ -1,8 +1,8 @@
-//! Estimation past one machine: the two halves of `runtime::estimate` as
+//! Estimation past one machine: the two halves of `leeway_estimate` as
 //! Python sees them. A [`Dataset`] is one data file opened on a worker
 //! (validated once, streamed on every pass); it answers a pass's request
 //! with its experiments' summaries, as bytes. [`estimate_mapped`] is the
-//! driver: it runs `runtime::estimate::estimate_with` with passes that call
+//! driver: it runs `leeway_estimate::estimate_with` with passes that call
 //! back into Python (`leeway.dask` maps them over the cluster), and writes
 //! the same document as `leeway estimate --json`.
 

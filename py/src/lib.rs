@@ -3,7 +3,7 @@
 //! `python/leeway` (numpy float64 arrays, read in place), and answers with the
 //! same JSON documents as `leeway check --json` and `leeway estimate --json`,
 //! built by the same code ([`leeway_report`]); it simulates and
-//! validates with the runtime functions `leeway simulate` and `leeway
+//! validates with the functions `leeway simulate` and `leeway
 //! validate` call (`simulate.rs`), answering with columns and fits. The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.

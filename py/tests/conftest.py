@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[2]
 SHIP = ROOT / "examples" / "models" / "ship.som"
 SHIP_IV2 = ROOT / "examples" / "models" / "ship_iv2.som"
 
-# θ0 of the paper's table (runtime/src/study.rs THETA0), the simulated truth.
+# θ0 of the paper's table (scenarios/src/study.rs THETA0), the simulated truth.
 TRUE = dict(zip(
     "X_u X_vr X_uu W_uu X_tau Y_v Y_ur Y_vv Y_vr W_vv Y_tau N_r N_uv N_vv N_vr W_uv N_tau".split(),
     [-0.05, 1.0, -0.05, -0.0005, 0.02, -0.2, -0.65, -0.2, -0.1, -0.0015, 0.02, -0.1, -0.0015,

@@ -1,7 +1,7 @@
 //! Writes the paper's synthetic ship data as CSV files, to try the command line on:
 //!
 //! ```sh
-//! cargo run -p leeway-runtime --example ship_csv -- DIR [N] [WIND] [SEED]
+//! cargo run -p leeway-scenarios --example ship_csv -- DIR [N] [WIND] [SEED]
 //! leeway estimate examples/models/ship.som --data DIR/estimation.csv --method iv3
 //! ```
 //!

@@ -46,7 +46,7 @@ pub struct Document<'a> {
     pub input_design: Design,
 }
 
-/// One case: the runtime's summary with two figures per estimator added.
+/// One case: the study's summary with two figures per estimator added.
 #[derive(Debug, Serialize)]
 pub struct CaseOut<'a> {
     /// Mean wind, m/s.
@@ -63,7 +63,7 @@ pub struct CaseOut<'a> {
 /// included) their count and median parameter error.
 #[derive(Debug, Serialize)]
 pub struct EstimatorOut<'a> {
-    /// The runtime's summary (fit_mean, fit_std, fit_median, param_error,
+    /// The study's summary (fit_mean, fit_std, fit_median, param_error,
     /// param_error_median, diverged).
     #[serde(flatten)]
     pub summary: &'a EstimatorSummary,
