@@ -4,7 +4,7 @@
 use crate::identify::pattern::patterns_text;
 use crate::identify::report::{CompileOptions, constant_parameters};
 use crate::ir::{Combination, Ir, PredictorKind, Separation, Signal, Term};
-use crate::resolve::Resolved;
+use crate::resolve::decl::Resolved;
 use crate::terms::TermDecl;
 use leeway_grammar::{Diagnostic, Label, MAX_LISTED};
 use std::collections::{BTreeMap, BTreeSet};

@@ -9,7 +9,7 @@ use crate::ir::{
     Arg, Column, ColumnKind, Entry, EvalVar, Pointwise, SignArg, Signal, StructVar, StructuralEntry,
 };
 use crate::poly::{NormalForm, Poly, Var};
-use crate::resolve::{Resolved, RotationDecl};
+use crate::resolve::decl::{Resolved, RotationDecl};
 use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
 use num_traits::One;
 use std::collections::BTreeMap;

@@ -2,7 +2,7 @@
 
 use crate::exact::{fmt_q, to_f64};
 use crate::ir::{self, Ir, Predictors, Report, SignArg};
-use crate::resolve::{Resolved, RotationDecl};
+use crate::resolve::decl::{Resolved, RotationDecl};
 use crate::terms::{ParamDecl, TermDecl, arg_medium, factors_text};
 use leeway_grammar::{Diagnostic, EquationKind};
 use std::collections::{BTreeMap, BTreeSet};

@@ -4,7 +4,8 @@
 
 use crate::exact::{Q, coefficient_fits, decimal, fmt_q};
 use crate::ir::{Arg, Factor, Signal};
-use crate::resolve::{Resolved, Symbol, names};
+use crate::resolve::decl::{Resolved, Symbol};
+use crate::resolve::symbols::{invalid_number, names};
 use leeway_grammar::{BinOp, Diagnostic, Expr, Ident, Path, Span};
 use num_traits::{One, Zero};
 use std::collections::BTreeMap;
@@ -147,7 +148,7 @@ fn sum_of_products(e: &Expr, ctx: &mut Ctx) -> Option<Vec<Product>> {
                 span: n.span,
             }]),
             Err(why) => {
-                ctx.diags.push(crate::resolve::invalid_number(why, n.span));
+                ctx.diags.push(invalid_number(why, n.span));
                 None
             }
         },
