@@ -164,17 +164,34 @@ fn error_codes_in_source() -> BTreeSet<String> {
     codes_in_source(&["Diagnostic::error("])
 }
 
+/// Every `.rs` file under `dir`, its subfolders included, in a fixed order.
+fn rust_files(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    let mut pending = vec![dir.to_path_buf()];
+    while let Some(d) = pending.pop() {
+        for entry in std::fs::read_dir(&d).expect("source dir") {
+            let path = entry.expect("entry").path();
+            if path.is_dir() {
+                pending.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
 /// The string literals right after any of `calls` in the library code.
 fn codes_in_source(calls: &[&str]) -> BTreeSet<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut codes = BTreeSet::new();
     for dir in ["grammar/src", "structure/src"] {
-        for entry in std::fs::read_dir(root.join(dir)).expect("source dir") {
-            let path = entry.expect("entry").path();
-            if path.extension().is_none_or(|e| e != "rs") {
-                continue;
-            }
+        for path in rust_files(&root.join(dir)) {
             let text = std::fs::read_to_string(&path).expect("read source");
+            if text.contains("#![cfg(test)]") {
+                continue; // a module of test helpers
+            }
             let library = text.split("#[cfg(test)]").next().unwrap_or_default();
             for call in calls {
                 for (i, _) in library.match_indices(call) {

@@ -1,6 +1,8 @@
 //! Helpers of the parser's unit tests: the one error a source gives, and the
 //! text its primary label covers.
 
+#![cfg(test)]
+
 use crate::diagnostic::data::Diagnostic;
 use crate::parse::parse;
 
