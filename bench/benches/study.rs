@@ -17,14 +17,15 @@
 //!
 //! `cargo bench -p leeway-bench --bench study` (under a minute).
 
-use criterion::{Criterion, criterion_group, criterion_main};
-use leeway::Model;
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, criterion_group, criterion_main};
 use leeway::estimate::Method;
 use leeway::estimate::estimate;
 use leeway::model::Source;
 use leeway::model::simulate::Disturbances;
 use leeway::model::simulate::fits;
 use leeway::model::simulate::simulate;
+use leeway::{Experiment, Model};
 use leeway_bench::{kept_columns, moment_flops, rate};
 use leeway_scenarios::study;
 use leeway_scenarios::study::StudyConfig;
@@ -66,9 +67,65 @@ fn timed<F: FnMut()>(
     times
 }
 
-fn bench(c: &mut Criterion) {
+/// Every method's estimates at every N, timed, with their passes and FLOP
+/// in `report`; the θ of IV1… estimated on the whole record, for the
+/// validation's timing.
+fn bench_estimates(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    records: &[Experiment],
+    data: &Experiment,
+    config: &StudyConfig,
+    report: &mut Vec<String>,
+) -> Option<Vec<f64>> {
     let model = Ship;
     let ir = model.ir();
+    let mut theta = None;
+    for method in Method::ALL {
+        let options = study::study_options(method, config.max_refinements, config.paper_iv);
+        // Moment passes and FLOP per record, from one untimed estimate each.
+        let kind = method.predictor();
+        let work: Vec<(usize, usize, u64)> = records
+            .iter()
+            .map(|r| {
+                let passes = estimate(&model, &[r as &dyn Source], &options)
+                    .map(|e| e.diagnostics.refinements + 1)
+                    .unwrap_or(0);
+                (
+                    r.len(),
+                    passes,
+                    moment_flops(ir, kind, &kept_columns(ir, kind, r)),
+                )
+            })
+            .collect();
+        if theta.is_none() {
+            theta = estimate(&model, &[data as &dyn Source], &options)
+                .ok()
+                .map(|e| e.theta);
+        }
+        let id = format!("estimate/{}", method.name());
+        let t = timed(group, &id, || {
+            for r in records {
+                black_box(estimate(&model, &[r as &dyn Source], &options).ok());
+            }
+        });
+        if !t.borrow().is_empty() {
+            // One line for the method's estimates at every N.
+            let sample_passes: usize = work.iter().map(|(n, p, _)| n * p).sum();
+            let flop: u64 = work.iter().map(|(n, p, f)| (*n * *p) as u64 * f).sum();
+            let passes: Vec<String> = work.iter().map(|(n, p, _)| format!("{n}:{p}")).collect();
+            report.push(format!(
+                "{id:<16} {sample_passes:>6} samples × passes  {}",
+                rate(flop as f64, median(&t))
+            ));
+            report.push(format!("    passes at each N: {}", passes.join(" ")));
+        }
+    }
+
+    theta
+}
+
+fn bench(c: &mut Criterion) {
+    let model = Ship;
     let config = StudyConfig::default();
     let Some(index) = config.cases.iter().position(|c| c.name == "high") else {
         return;
@@ -114,48 +171,7 @@ fn bench(c: &mut Criterion) {
         report.push(format!("{:<16} {:>8.3} ms", "run", median(&t) * 1e3));
     }
 
-    let mut theta = None;
-    for method in Method::ALL {
-        let options = study::study_options(method, config.max_refinements, config.paper_iv);
-        // Moment passes and FLOP per record, from one untimed estimate each.
-        let kind = method.predictor();
-        let work: Vec<(usize, usize, u64)> = records
-            .iter()
-            .map(|r| {
-                let passes = estimate(&model, &[r as &dyn Source], &options)
-                    .map(|e| e.diagnostics.refinements + 1)
-                    .unwrap_or(0);
-                (
-                    r.len(),
-                    passes,
-                    moment_flops(ir, kind, &kept_columns(ir, kind, r)),
-                )
-            })
-            .collect();
-        if theta.is_none() {
-            theta = estimate(&model, &[&data as &dyn Source], &options)
-                .ok()
-                .map(|e| e.theta);
-        }
-        let id = format!("estimate/{}", method.name());
-        let t = timed(&mut group, &id, || {
-            for r in &records {
-                black_box(estimate(&model, &[r as &dyn Source], &options).ok());
-            }
-        });
-        if !t.borrow().is_empty() {
-            // One line for the method's estimates at every N.
-            let sample_passes: usize = work.iter().map(|(n, p, _)| n * p).sum();
-            let flop: u64 = work.iter().map(|(n, p, f)| (*n * *p) as u64 * f).sum();
-            let passes: Vec<String> = work.iter().map(|(n, p, _)| format!("{n}:{p}")).collect();
-            report.push(format!(
-                "{id:<16} {sample_passes:>6} samples × passes  {}",
-                rate(flop as f64, median(&t))
-            ));
-            report.push(format!("    passes at each N: {}", passes.join(" ")));
-        }
-    }
-
+    let theta = bench_estimates(&mut group, &records, &data, &config, &mut report);
     if let Some(theta) = theta {
         let t = timed(&mut group, "validate", || {
             let sim = simulate(&model, &theta, &validation, Disturbances::None);
