@@ -5,6 +5,7 @@
 use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
 use crate::method::Instruments;
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
+use crate::prefix::{Checkpoint, Wanted};
 use leeway_model::experiment::Source;
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
@@ -18,7 +19,7 @@ use crate::protocol::{
     PrefixInstruments, Summary,
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
-use crate::walk::{Diverged, EquationWalker, REGRESSOR_LIMIT, Reuse, Stopper};
+use crate::walk::{EquationWalker, REGRESSOR_LIMIT, Reuse, Stopper};
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
 struct MomentPass<'a> {
@@ -232,118 +233,55 @@ impl<'a> PassRunner<'a> {
         // estimate (their values are then known to be finite) and read by
         // its later passes — and by other estimates' passes with the same
         // plan; least squares makes one pass, and keeps its rows only for
-        // others. Rows kept over a shorter prefix of the record are the
-        // scanning pass's first rows.
+        // others.
         let keeps = scan && (plan.instruments.is_some() || keep_for_others);
-        let equations = e.len().saturating_sub(2);
-        let prefix = match (keeps, cache.as_deref_mut(), budget.as_deref_mut()) {
-            (true, Some(c), Some(b)) if c.regressors(plan, info).is_none() => {
-                c.take_prefix(plan, info, b)
-            }
-            _ => None,
-        }
-        .filter(|(p, _)| {
-            p.len() == plan.cols.len()
-                && p.iter()
-                    .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
-        });
-        // A pass whose instruments do not depend on θ goes on from where the
-        // pass that kept the prefix's rows stood, if it had these instruments.
-        let instruments_key = (walker.instruments != Some(Instruments::Simulated)).then(|| {
-            let delayed_means = walker.instruments == Some(Instruments::Delayed)
-                && walker.delayed_mean
-                && reads_measured_disturbances(ir, plan.kind);
-            InstrumentsKey {
-                instruments: walker.instruments,
-                means: if delayed_means {
-                    bits(&info.measured_mean)
-                } else {
-                    Vec::new()
-                },
-            }
-        });
-        let headings_known = cache
-            .as_deref()
-            .and_then(RecordCache::headings)
-            .is_some_and(|h| h.len() == e.len());
-        let (prefix, resume) = match prefix {
-            Some((rows, resume)) => {
-                let resume = resume.filter(|r| {
-                    instruments_key.as_ref() == Some(&r.instruments)
-                        && (r.history.continues_headings() || headings_known)
-                        && r.history.equations == rows[0].len()
-                        && r.history.samples == rows[0].len() + 2
-                        && r.sums.len() == rows.len()
-                        && r.sums.iter().zip(&rows).all(|(s, k)| s.continues(k))
-                });
-                (Some(rows), resume)
-            }
-            None => (None, None),
-        };
-        // A warm start's first pass goes on from where the pass over the
-        // shorter record that simulated the same instruments stood.
+        let instruments_key = instruments_key(ir, plan, &walker, info);
         let reads_means = reads_measured_disturbances(ir, plan.kind);
         let means_key = |m: &[f64]| if reads_means { bits(m) } else { Vec::new() };
-        let mut sim_resume = match (
-            prefix_instruments,
-            cache.as_deref_mut(),
-            budget.as_deref_mut(),
-        ) {
-            (Some(p), Some(c), Some(b))
-                if simulates && reference.is_none() && resume.is_none() && headings_known =>
-            {
-                let key = SimulationKey {
-                    theta: theta_sim,
-                    mu,
-                    means: means_key(&p.means),
+        // What this pass takes up from the passes over a prefix of its record.
+        let checkpoint = match (cache.as_deref_mut(), budget.as_deref_mut()) {
+            (Some(c), Some(b)) => {
+                let headings_known = c.headings().is_some_and(|h| h.len() == e.len());
+                let wanted = Wanted {
+                    plan,
+                    info,
+                    samples: e.len(),
+                    n_out: ir.states.len(),
+                    keeps_rows: keeps,
+                    instruments: instruments_key.as_ref(),
+                    headings_known,
+                    simulation: prefix_instruments
+                        .filter(|_| simulates && reference.is_none())
+                        .map(|p| {
+                            let key = SimulationKey {
+                                theta: theta_sim,
+                                mu,
+                                means: means_key(&p.means),
+                            };
+                            (key, p.samples)
+                        }),
                 };
-                c.take_prefix_simulation(plan, info, &key, p.samples, b)
+                Checkpoint::take(c, b, &wanted)
             }
-            _ => None,
+            _ => Checkpoint::default(),
         };
-        // It needs the regressor rows of its first samples: the prefix's, or
-        // the whole record's kept by another pass.
-        sim_resume = sim_resume
-            .filter(|(s, _)| s.walk.fits(e.len(), ir.states.len()))
-            .filter(|(s, _)| match &prefix {
-                Some(rows) => {
-                    rows[0].len() == s.walk.equations
-                        && s.sums.len() == rows.len()
-                        && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
-                }
-                None => cache.as_deref().is_some_and(|c| {
-                    plan.instruments.is_some()
-                        && c.regressors(plan, info).is_some_and(|r| {
-                            r.len() == s.sums.len()
-                                && r.iter().zip(&s.sums).all(|(r, p)| {
-                                    r.len() == equations
-                                        && p.len() == s.walk.equations
-                                        && p.continues_over(r)
-                                })
-                        })
-                }),
-            });
-        let (sim_walk, sim_sums) = match sim_resume {
-            Some((s, states)) => {
-                if let Some(spare) = new_trajectory.replace(states)
-                    && let Some(c) = cache.as_deref_mut()
-                {
-                    c.return_spare(spare);
-                }
-                (Some(s.walk), Some(s.sums))
-            }
-            None => (None, None),
-        };
-        if let Some(r) = &resume {
+        if checkpoint.resumes() {
             // The heading rotations kept so far go on too, or none are kept.
             new_headings = new_headings.and_then(|_| {
                 cache
                     .as_deref_mut()
-                    .and_then(RecordCache::take_prefix_headings)
-                    .filter(|h| h.len() == r.history.samples)
+                    .and_then(|c| checkpoint.take_headings(c))
             });
         }
-        let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
+        let measured_known = checkpoint.measured_known();
+        let resumed = checkpoint.resumed_equations();
+        let from = checkpoint.into_resumption();
+        if let Some(states) = from.states
+            && let Some(spare) = new_trajectory.replace(states)
+            && let Some(c) = cache.as_deref_mut()
+        {
+            c.return_spare(spare);
+        }
         let reserve = cache.as_deref().map_or(0, |c| c.reserve);
         let kept = cache.as_deref();
         let kept_rows = kept.and_then(|c| c.regressors(plan, info));
@@ -352,23 +290,6 @@ impl<'a> PassRunner<'a> {
         // Where this pass stands at the end, for a pass over a longer record.
         let mut history = None;
         let keeps_history = keep_rows && instruments_key.is_some();
-        let resumed = resume
-            .as_ref()
-            .map(|r| r.history.equations)
-            .or(sim_walk.as_ref().map(|s| s.equations))
-            .unwrap_or(0);
-        let (resume_history, resume_sums) = match resume {
-            Some(r) => (Some(r.history), Some(r.sums)),
-            None => (None, None),
-        };
-        // A simulation resumed over kept rows of the whole record goes on
-        // from its instruments' sums; one over the prefix's rows, as a
-        // θ-free pass does, from its rows' too.
-        let (resume_sums, sums_over_kept) = match (resume_sums, sim_sums) {
-            (Some(s), _) => (Some(s), None),
-            (None, Some(s)) if prefix.is_some() => (Some(s), None),
-            (None, s) => (None, s),
-        };
         let mut sim_kept = None;
         let keeps_simulation = simulates && cache.is_some() && e.in_memory().is_some();
         let mut reuse = Reuse {
@@ -381,34 +302,16 @@ impl<'a> PassRunner<'a> {
             },
             keep_trajectory: new_trajectory.as_mut(),
             measured_known,
-            resume: resume_history,
+            resume: from.history,
             keep_history: keeps_history.then_some(&mut history),
-            resume_simulation: sim_walk,
+            resume_simulation: from.simulation,
             keep_simulation: keeps_simulation.then_some(&mut sim_kept),
         };
         // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
         let mut k = 1 + resumed;
         let mut bad = None;
-        let mut prefix = prefix.map(Vec::into_iter);
-        let mut resume_sums = resume_sums.map(Vec::into_iter);
-        let mut acc: Vec<MomentAccumulator> = plan
-            .cols
-            .iter()
-            .map(|c| {
-                let mut a = MomentAccumulator::new(c.len(), c.len());
-                match (
-                    prefix.as_mut().and_then(Iterator::next),
-                    resume_sums.as_mut().and_then(Iterator::next),
-                ) {
-                    (Some(known), Some(from)) => a.keep_rows_resuming(known, from, e.len()),
-                    (Some(known), None) => a.keep_rows_after(known, e.len()),
-                    (None, _) if keep_rows => a.keep_rows(e.len(), reserve),
-                    (None, _) => {}
-                }
-                a
-            })
-            .collect();
-        if let (Some(sums), Some(rows)) = (sums_over_kept, rows) {
+        let mut acc = accumulators(plan, from.rows, from.sums, keep_rows, e.len(), reserve);
+        if let (Some(sums), Some(rows)) = (from.sums_over_kept, rows) {
             for ((a, s), r) in acc.iter_mut().zip(sums).zip(rows) {
                 a.resume_instruments(s, r);
             }
@@ -458,105 +361,89 @@ impl<'a> PassRunner<'a> {
                 what,
             })
         };
-        match walked {
-            Ok(change) => {
-                // Where the simulation's sums stood, for a warm start's pass
-                // over a longer record.
-                let simulation = sim_kept
-                    .and_then(|walk| {
-                        let sums = match rows {
-                            Some(_) => Some(
-                                acc.iter()
-                                    .map(MomentAccumulator::partial_instruments)
-                                    .collect(),
-                            ),
-                            None => acc.iter().map(MomentAccumulator::partial).collect(),
-                        };
-                        sums.map(|s: Vec<PartialSums>| (walk, s))
-                    })
-                    .filter(|_| bad.is_none())
-                    .map(|(walk, sums)| {
-                        let key = SimulationKey {
-                            theta: theta_sim,
-                            mu,
-                            means: means_key(instrument_means),
-                        };
-                        (key, walk, sums)
-                    });
-                let mut partial: Option<Vec<PartialSums>> = None;
-                let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
-                    match rows {
-                        Some(rows) => acc
-                            .into_iter()
-                            .zip(rows)
-                            .map(|(a, r)| (a.finish_with(r), None))
-                            .unzip(),
-                        None => {
-                            // Only a pass that can be gone on from keeps where it stood.
-                            if keeps_history {
-                                partial = acc.iter().map(MomentAccumulator::partial).collect();
-                            }
-                            acc.into_iter()
-                                .map(MomentAccumulator::finish_keeping)
-                                .unzip()
+        let Ok(change) = walked else {
+            if let (Some(c), Some(v)) = (cache, new_trajectory) {
+                c.return_spare(v);
+            }
+            // The simulation stopped the walk early: a bad value further
+            // on is still a data error, not a divergence.
+            if scan && bad.is_none() {
+                bad = self.first_non_finite(e, info, plan);
+            }
+            return Summary::Diverged { bad: located(bad) };
+        };
+        // Where the simulation's sums stood, for a warm start's pass over a
+        // longer record.
+        let simulation = sim_kept
+            .and_then(|walk| Some((walk, simulation_sums(&acc, rows.is_some())?)))
+            .filter(|_| bad.is_none())
+            .map(|(walk, sums)| {
+                let key = SimulationKey {
+                    theta: theta_sim,
+                    mu,
+                    means: means_key(instrument_means),
+                };
+                (key, walk, sums)
+            });
+        let (moments, new_rows, partial) = finish(acc, rows, keeps_history);
+        if let (Some(c), Some(budget)) = (cache, budget) {
+            let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
+            c.keep(
+                plan,
+                info,
+                Kept {
+                    resume: match (instruments_key, history, partial) {
+                        (Some(instruments), Some(history), Some(sums)) if bad.is_none() => {
+                            Some(Resume {
+                                instruments,
+                                history,
+                                sums,
+                            })
                         }
-                    };
-                if let (Some(c), Some(budget)) = (cache, budget) {
-                    let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
-                    c.keep(
-                        plan,
-                        info,
-                        Kept {
-                            resume: match (instruments_key, history, partial) {
-                                (Some(instruments), Some(history), Some(sums)) if bad.is_none() => {
-                                    Some(Resume {
-                                        instruments,
-                                        history,
-                                        sums,
-                                    })
-                                }
-                                _ => None,
-                            },
-                            regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
-                            headings: new_headings,
-                            trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
-                            simulation,
-                        },
-                        budget,
-                    );
-                }
-                Summary::Moments {
-                    moments,
-                    change,
-                    bad: located(bad),
-                }
-            }
-            Err(Diverged) => {
-                if let (Some(c), Some(v)) = (cache, new_trajectory) {
-                    c.return_spare(v);
-                }
-                // The simulation stopped the walk early: a bad value further
-                // on is still a data error, not a divergence.
-                if scan && bad.is_none() {
-                    let mut k = 1usize;
-                    let _ = self.walker(plan, None).walk(
-                        e,
-                        info,
-                        &[],
-                        &[],
-                        None,
-                        &mut Reuse::default(),
-                        |_: &[f64], phi: &[f64], t: &[f64]| {
-                            k += 1;
-                            if bad.is_none() {
-                                bad = non_finite(ir, plan.kind, n, k, phi, t);
-                            }
-                        },
-                    );
-                }
-                Summary::Diverged { bad: located(bad) }
-            }
+                        _ => None,
+                    },
+                    regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
+                    headings: new_headings,
+                    trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
+                    simulation,
+                },
+                budget,
+            );
         }
+        Summary::Moments {
+            moments,
+            change,
+            bad: located(bad),
+        }
+    }
+
+    /// The first measured value a scanning pass would find bad
+    /// ([`non_finite`]), walking the whole record without instruments.
+    fn first_non_finite(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+    ) -> Option<(usize, String)> {
+        let ir = self.model.ir();
+        let n = plan.n_cols;
+        let mut bad = None;
+        let mut k = 1usize;
+        let _ = self.walker(plan, None).walk(
+            e,
+            info,
+            &[],
+            &[],
+            None,
+            &mut Reuse::default(),
+            |_: &[f64], phi: &[f64], t: &[f64]| {
+                k += 1;
+                if bad.is_none() {
+                    bad = non_finite(ir, plan.kind, n, k, phi, t);
+                }
+            },
+        );
+        bad
     }
 
     fn long_run(
@@ -609,6 +496,113 @@ impl<'a> PassRunner<'a> {
             g.transpose().as_slice().to_vec()
         });
         Summary::LongRun { dim: lr.dim, sums }
+    }
+}
+
+/// What a θ-free pass's instruments depend on besides the samples, the
+/// plan and the sign pattern (`None` for simulated instruments).
+fn instruments_key(
+    ir: &Ir,
+    plan: &PassPlan,
+    walker: &EquationWalker,
+    info: &ExperimentInfo,
+) -> Option<InstrumentsKey> {
+    (walker.instruments != Some(Instruments::Simulated)).then(|| {
+        let delayed_means = walker.instruments == Some(Instruments::Delayed)
+            && walker.delayed_mean
+            && reads_measured_disturbances(ir, plan.kind);
+        InstrumentsKey {
+            instruments: walker.instruments,
+            means: if delayed_means {
+                bits(&info.measured_mean)
+            } else {
+                Vec::new()
+            },
+        }
+    })
+}
+
+/// The accumulators of a moment pass, one per output: beginning with the
+/// prefix's `rows` (going on from `sums`, where the pass over them stood),
+/// or keeping every row of the record's `samples` (room for `reserve`), or
+/// keeping none.
+fn accumulators(
+    plan: &PassPlan,
+    rows: Option<Vec<RegressorRows>>,
+    sums: Option<Vec<PartialSums>>,
+    keep_rows: bool,
+    samples: usize,
+    reserve: usize,
+) -> Vec<MomentAccumulator> {
+    let mut prefix = rows.map(Vec::into_iter);
+    let mut resume_sums = sums.map(Vec::into_iter);
+    plan.cols
+        .iter()
+        .map(|c| {
+            let mut a = MomentAccumulator::new(c.len(), c.len());
+            match (
+                prefix.as_mut().and_then(Iterator::next),
+                resume_sums.as_mut().and_then(Iterator::next),
+            ) {
+                (Some(known), Some(from)) => a.keep_rows_resuming(known, from, samples),
+                (Some(known), None) => a.keep_rows_after(known, samples),
+                (None, _) if keep_rows => a.keep_rows(samples, reserve),
+                (None, _) => {}
+            }
+            a
+        })
+        .collect()
+}
+
+/// Where the accumulators of a simulating pass stand, per output (against
+/// kept rows: their instruments' sums), if every one can say.
+fn simulation_sums(acc: &[MomentAccumulator], over_kept: bool) -> Option<Vec<PartialSums>> {
+    if over_kept {
+        Some(
+            acc.iter()
+                .map(MomentAccumulator::partial_instruments)
+                .collect(),
+        )
+    } else {
+        acc.iter().map(MomentAccumulator::partial).collect()
+    }
+}
+
+/// The moments of each output, with the rows each accumulator kept and
+/// (`keeps_history`) where the accumulation stood, for a pass that can be
+/// gone on from; against `kept` rows, neither.
+#[allow(clippy::type_complexity)]
+fn finish(
+    acc: Vec<MomentAccumulator>,
+    kept: Option<&[RegressorRows]>,
+    keeps_history: bool,
+) -> (
+    Vec<CrossMoments>,
+    Vec<Option<RegressorRows>>,
+    Option<Vec<PartialSums>>,
+) {
+    match kept {
+        Some(rows) => {
+            let (moments, new_rows) = acc
+                .into_iter()
+                .zip(rows)
+                .map(|(a, r)| (a.finish_with(r), None))
+                .unzip();
+            (moments, new_rows, None)
+        }
+        None => {
+            // Only a pass that can be gone on from keeps where it stood.
+            let partial = if keeps_history {
+                acc.iter().map(MomentAccumulator::partial).collect()
+            } else {
+                None
+            };
+            let (moments, new_rows) = acc
+                .into_iter()
+                .map(MomentAccumulator::finish_keeping)
+                .unzip();
+            (moments, new_rows, partial)
+        }
     }
 }
 

@@ -138,6 +138,22 @@ impl SimWalk {
     pub(super) fn trajectory_len(&self) -> usize {
         self.samples.saturating_sub(1) * self.x_sim.len()
     }
+
+    /// Where a simulation of `n_out` states stood after `samples` samples
+    /// and `equations` equations (states and sums zero).
+    #[cfg(test)]
+    pub(super) fn after(samples: usize, equations: usize, n_out: usize) -> SimWalk {
+        SimWalk {
+            samples,
+            equations,
+            x_sim: vec![0.0; n_out],
+            rz: [1.0, 0.0],
+            err2: vec![0.0; n_out],
+            y_sum: vec![0.0; n_out],
+            y_sum2: vec![0.0; n_out],
+            y_n: samples.saturating_sub(1),
+        }
+    }
 }
 
 impl History {
@@ -145,6 +161,26 @@ impl History {
     /// advanced the rotation itself over every sample.
     pub(super) fn continues_headings(&self) -> bool {
         self.headings.is_some()
+    }
+
+    /// Where a walk stood after `samples` samples and `equations`
+    /// equations, its heading rotation's state kept or not (history zero).
+    #[cfg(test)]
+    pub(super) fn after(samples: usize, equations: usize, headings: bool) -> History {
+        History {
+            y1: Vec::new(),
+            y2: Vec::new(),
+            u1: Vec::new(),
+            rot1: Vec::new(),
+            rot2: Vec::new(),
+            d1: Vec::new(),
+            d2: Vec::new(),
+            rh1: [1.0, 0.0],
+            rh2: [1.0, 0.0],
+            headings: headings.then(HeadingRotation::default),
+            samples,
+            equations,
+        }
     }
 }
 
