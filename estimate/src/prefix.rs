@@ -51,9 +51,10 @@ pub(super) struct Checkpoint {
     rows: Option<Vec<RegressorRows>>,
     /// Where the θ-free pass that kept `rows` stood after them.
     resume: Option<Resume>,
-    /// Where a pass that simulated the same instruments stood, and its
-    /// simulation's states after each step.
-    simulation: Option<(SimResume, Vec<f64>)>,
+    /// Where a pass that simulated the same instruments stood.
+    simulation: Option<SimResume>,
+    /// That simulation's states after each step (until taken).
+    states: Option<Vec<f64>>,
 }
 
 /// A [`Checkpoint`] taken apart for the walk and the accumulators.
@@ -71,8 +72,6 @@ pub(super) struct Resumption {
     pub(super) history: Option<History>,
     /// Where a simulating walk stood.
     pub(super) simulation: Option<SimWalk>,
-    /// That simulation's states after each step so far.
-    pub(super) states: Option<Vec<f64>>,
 }
 
 impl Checkpoint {
@@ -118,10 +117,12 @@ impl Checkpoint {
                     })
             }
         });
+        let (simulation, states) = simulation.unzip();
         Checkpoint {
             rows,
             resume,
             simulation,
+            states,
         }
     }
 
@@ -135,7 +136,7 @@ impl Checkpoint {
         self.resume
             .as_ref()
             .map(|r| r.history.equations)
-            .or(self.simulation.as_ref().map(|(s, _)| s.walk.equations))
+            .or(self.simulation.as_ref().map(|s| s.walk.equations))
             .unwrap_or(0)
     }
 
@@ -149,6 +150,12 @@ impl Checkpoint {
             .filter(|h| h.len() == resume.history.samples)
     }
 
+    /// The simulation's states after each step so far (taken), if the pass
+    /// goes on from a simulation: the trajectory it keeps goes on from them.
+    pub(super) fn take_states(&mut self) -> Option<Vec<f64>> {
+        self.states.take()
+    }
+
     /// Whether the pass goes on from a θ-free pass.
     pub(super) fn resumes(&self) -> bool {
         self.resume.is_some()
@@ -156,9 +163,9 @@ impl Checkpoint {
 
     /// The pieces the walk and the accumulators go on from.
     pub(super) fn into_resumption(self) -> Resumption {
-        let (simulation, sim_sums, states) = match self.simulation {
-            Some((s, states)) => (Some(s.walk), Some(s.sums), Some(states)),
-            None => (None, None, None),
+        let (simulation, sim_sums) = match self.simulation {
+            Some(s) => (Some(s.walk), Some(s.sums)),
+            None => (None, None),
         };
         let (history, resume_sums) = match self.resume {
             Some(r) => (Some(r.history), Some(r.sums)),
@@ -178,7 +185,6 @@ impl Checkpoint {
             sums_over_kept,
             history,
             simulation,
-            states,
         }
     }
 }
@@ -354,7 +360,6 @@ mod tests {
         let from = taken.into_resumption();
         assert!(from.rows.is_some() && from.sums.is_some() && from.history.is_some());
         assert!(from.sums_over_kept.is_none() && from.simulation.is_none());
-        assert!(from.states.is_none());
         // Taken: a second pass finds nothing.
         let again = Checkpoint::take(&mut cache, &mut budget, &wanted);
         assert_eq!((again.measured_known(), again.resumed_equations()), (0, 0));
@@ -549,15 +554,15 @@ mod tests {
             )),
         };
         let (mut cache, mut budget) = continued(&plan, prefix());
-        let taken = Checkpoint::take(&mut cache, &mut budget, &warm(12, true));
+        let mut taken = Checkpoint::take(&mut cache, &mut budget, &warm(12, true));
         assert_eq!(
             (taken.measured_known(), taken.resumed_equations()),
             (10, 10)
         );
+        assert_eq!(taken.take_states().map(|s| s.len()), Some(11));
         let from = taken.into_resumption();
         assert!(from.simulation.is_some() && from.sums.is_some());
         assert!(from.history.is_none() && from.sums_over_kept.is_none());
-        assert_eq!(from.states.map(|s| s.len()), Some(11));
         // Without the record's heading rotations, or over other samples, not.
         for (samples, known) in [(12, false), (13, true)] {
             let (mut cache, mut budget) = continued(&plan, prefix());

@@ -185,6 +185,12 @@ impl History {
 }
 
 impl EquationWalker<'_> {
+    /// Whether a walk of `theta_sim` simulates its instruments (an empty θ
+    /// simulates nothing).
+    pub(super) fn simulates(&self, theta_sim: &[f64]) -> bool {
+        self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty()
+    }
+
     /// Calls `f(z, φ, t)` on each equation: instruments, regressors
     /// (`n_out × n_cols`) and targets (both empty when the walk skips the
     /// measured side). Generic in `f`, so the sink is inlined into the walk.
