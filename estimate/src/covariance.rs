@@ -25,7 +25,6 @@ impl Estimator<'_> {
         mu: &[f64],
     ) -> Result<Option<ColumnCovariance>, EstimateError> {
         let n = self.n_cols;
-        let n_out = self.ir.states.len();
         let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();
         // ζ rows: the instrument rows of every block, concatenated.
         let mut offsets = Vec::new();
@@ -38,45 +37,8 @@ impl Estimator<'_> {
         let dense: Vec<f64> = (0..n)
             .map(|c| values.get(&c).copied().unwrap_or(0.0))
             .collect();
-        let rows: Vec<Vec<(usize, usize, usize)>> = (0..n_out)
-            .map(|o| {
-                let bi = self.block_of_output[o];
-                let b = &self.blocks[bi];
-                sol[bi]
-                    .rows
-                    .iter()
-                    .enumerate()
-                    .map(|(r, c)| {
-                        let j = b.cols.iter().position(|x| x == c).unwrap_or(0);
-                        (offsets[bi] + r, *c, j)
-                    })
-                    .collect()
-            })
-            .collect();
-        // Centres and mean residuals per experiment and output.
-        let mut centres = Vec::with_capacity(moments.len());
-        let mut mean_res = Vec::with_capacity(moments.len());
-        for i in 0..moments.len() {
-            centres.push(
-                (0..n_out)
-                    .map(|o| self.centre(moments, i, o).iter().copied().collect())
-                    .collect(),
-            );
-            mean_res.push(
-                (0..n_out)
-                    .map(|o| {
-                        let b = &self.blocks[self.block_of_output[o]];
-                        let mp = moments[i][o].mean_phi();
-                        moments[i][o].mean_t()
-                            - b.cols
-                                .iter()
-                                .enumerate()
-                                .map(|(j, c)| mp[j] * values.get(c).copied().unwrap_or(0.0))
-                                .sum::<f64>()
-                    })
-                    .collect(),
-            );
-        }
+        let rows = self.zeta_rows(sol, &offsets);
+        let (centres, mean_res) = self.centres_and_mean_residuals(moments, &values);
         let request = PassRequest {
             plan: self.pass_plan(),
             pass: Pass::LongRun(LongRunPass {
@@ -109,15 +71,7 @@ impl Estimator<'_> {
                 Summary::LongRun { sums: None, .. } => return Ok(None),
                 _ => return Err(mismatched()),
             };
-            // Assemble B_i (kept × rows) over blocks.
-            let mut b_all = DMatrix::zeros(nk, total);
-            let mut row = 0;
-            for (bi, s) in sol.iter().enumerate() {
-                b_all
-                    .view_mut((row, offsets[bi]), (s.kept.len(), s.rows.len()))
-                    .copy_from(&s.b[i]);
-                row += s.kept.len();
-            }
+            let b_all = experiment_map(sol, &offsets, (nk, total), i);
             cov += &b_all * g * b_all.transpose();
         }
         let kept: Vec<usize> = sol.iter().flat_map(|s| s.kept.iter().copied()).collect();
@@ -129,4 +83,83 @@ impl Estimator<'_> {
         }
         Ok(Some(out))
     }
+
+    /// Each output's ζ rows: `(row, column, index within its block)`, the
+    /// rows of block `b` from `offsets[b]` on.
+    fn zeta_rows(
+        &self,
+        sol: &[BlockSolution],
+        offsets: &[usize],
+    ) -> Vec<Vec<(usize, usize, usize)>> {
+        let n_out = self.ir.states.len();
+        (0..n_out)
+            .map(|o| {
+                let bi = self.block_of_output[o];
+                let b = &self.blocks[bi];
+                sol[bi]
+                    .rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, c)| {
+                        let j = b.cols.iter().position(|x| x == c).unwrap_or(0);
+                        (offsets[bi] + r, *c, j)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Centres and mean residuals per experiment and output, at the column
+    /// `values`.
+    #[allow(clippy::type_complexity)]
+    fn centres_and_mean_residuals(
+        &self,
+        moments: &[Vec<CrossMoments>],
+        values: &BTreeMap<usize, f64>,
+    ) -> (Vec<Vec<Vec<f64>>>, Vec<Vec<f64>>) {
+        let n_out = self.ir.states.len();
+        let mut centres = Vec::with_capacity(moments.len());
+        let mut mean_res = Vec::with_capacity(moments.len());
+        for i in 0..moments.len() {
+            centres.push(
+                (0..n_out)
+                    .map(|o| self.centre(moments, i, o).iter().copied().collect())
+                    .collect(),
+            );
+            mean_res.push(
+                (0..n_out)
+                    .map(|o| {
+                        let b = &self.blocks[self.block_of_output[o]];
+                        let mp = moments[i][o].mean_phi();
+                        moments[i][o].mean_t()
+                            - b.cols
+                                .iter()
+                                .enumerate()
+                                .map(|(j, c)| mp[j] * values.get(c).copied().unwrap_or(0.0))
+                                .sum::<f64>()
+                    })
+                    .collect(),
+            );
+        }
+        (centres, mean_res)
+    }
+}
+
+/// `B_i` of experiment `i` over every block (kept × ζ rows: `shape`), the
+/// rows of block `b` from `offsets[b]` on.
+fn experiment_map(
+    sol: &[BlockSolution],
+    offsets: &[usize],
+    shape: (usize, usize),
+    i: usize,
+) -> DMatrix<f64> {
+    let mut b_all = DMatrix::zeros(shape.0, shape.1);
+    let mut row = 0;
+    for (bi, s) in sol.iter().enumerate() {
+        b_all
+            .view_mut((row, offsets[bi]), (s.kept.len(), s.rows.len()))
+            .copy_from(&s.b[i]);
+        row += s.kept.len();
+    }
+    b_all
 }

@@ -28,6 +28,7 @@ mod options;
 mod outcome;
 mod own;
 mod plan;
+mod prefix;
 mod protocol;
 mod record;
 mod refine;

@@ -1163,9 +1163,36 @@ mod tests {
             assert_eq!(format!("{:?}", a.rows), format!("{:?}", b.rows));
             assert_eq!(format!("{:?}", a.s_pp), format!("{:?}", b.s_pp));
         }
-        // Against kept rows: instruments summed over the first samples go on
-        // over the rest of the record's rows (a refinement's simulation
-        // continued), in a keeping accumulation or against the kept rows.
+        // Sums of other rows, or of an accumulation that keeps none, do not continue.
+        let mut other = MomentAccumulator::new(5, 5);
+        other.keep_rows(10, 0);
+        for k in 0..10 {
+            other.push_columns(&dense(k), &dense(k), &cols, target(k));
+        }
+        let partial = other.partial().expect("keeps its rows");
+        let mut longer = MomentAccumulator::new(5, 5);
+        longer.keep_rows(11, 0);
+        for k in 0..11 {
+            longer.push_columns(&dense(k), &dense(k), &cols, target(k));
+        }
+        let (_, longer) = longer.finish_keeping();
+        assert!(!partial.continues(&longer.expect("kept")));
+        assert!(MomentAccumulator::new(5, 5).partial().is_none());
+    }
+
+    #[test]
+    fn instrument_sums_resumed_against_kept_rows_give_the_same_bits() {
+        let dense = |k: usize| -> Vec<f64> {
+            (0..7)
+                .map(|i| 1e2 * (i as f64) + ((k * 3 + i) as f64 * 0.37).sin())
+                .collect()
+        };
+        let cols = [0, 1, 4, 5, 6];
+        let target = |k: usize| (k as f64 * 0.21).cos() * 3.0 - 1.0;
+        let bits = |m: &CrossMoments| format!("{:?}", serde_json::to_string(m).ok());
+        // Instruments summed over the first samples go on over the rest of
+        // the record's rows (a refinement's simulation continued), in a
+        // keeping accumulation or against the kept rows.
         let mut rows_all = MomentAccumulator::new(5, 5);
         rows_all.keep_rows(200, 0);
         for k in 0..200 {
@@ -1211,20 +1238,5 @@ mod tests {
             let (scanned, _) = scanning.finish_keeping();
             assert_eq!(bits(&whole), bits(&scanned), "prefix {prefix}, scanning");
         }
-        // Sums of other rows, or of an accumulation that keeps none, do not continue.
-        let mut other = MomentAccumulator::new(5, 5);
-        other.keep_rows(10, 0);
-        for k in 0..10 {
-            other.push_columns(&dense(k), &dense(k), &cols, target(k));
-        }
-        let partial = other.partial().expect("keeps its rows");
-        let mut longer = MomentAccumulator::new(5, 5);
-        longer.keep_rows(11, 0);
-        for k in 0..11 {
-            longer.push_columns(&dense(k), &dense(k), &cols, target(k));
-        }
-        let (_, longer) = longer.finish_keeping();
-        assert!(!partial.continues(&longer.expect("kept")));
-        assert!(MomentAccumulator::new(5, 5).partial().is_none());
     }
 }

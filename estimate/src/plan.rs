@@ -7,8 +7,8 @@ use leeway_model::signs::ExperimentSigns;
 use leeway_structure::exact::Q;
 use leeway_structure::identify::Centring;
 use leeway_structure::identify::{
-    Analysis, ExperimentStructure, Patterns, constant_parameters, linear_text, patterns_text,
-    verdict,
+    Analysis, ExperimentStructure, Patterns, Reduction, Verdict, constant_parameters, linear_text,
+    patterns_text, verdict,
 };
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind};
 use std::collections::BTreeMap;
@@ -72,41 +72,9 @@ impl StructuralPlan {
         let mut held = Vec::new();
         let mut aggregates = Vec::new();
         if !v.identifiable {
-            let distinct: Vec<Vec<i8>> = {
-                let mut p: Vec<Vec<i8>> = signs.iter().map(|s| s.pattern.clone()).collect();
-                p.sort();
-                p.dedup();
-                p
-            };
-            let combos: Vec<String> = v.combinations.iter().map(|c| c.message.clone()).collect();
-            let remark2 = infos.iter().any(|i| i.frozen.is_some());
-            let constants = constant_parameters(ir);
-            let only_constants = v
-                .combinations
-                .iter()
-                .all(|c| c.parameters.iter().all(|p| constants.contains(p)));
             if !options.aggregate {
-                let required = analysis.required_patterns();
-                let hint = match (&required, remark2) {
-                    _ if only_constants && centring != Centring::None => format!(
-                        "a constant term is estimable with uncentred instruments (--centring none: {}), or with --centring pooled; or remove the term",
-                        Centring::None.reason(ir, kind)
-                    ),
-                    (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
-                    (Some(r), false) if !r.is_empty() => format!(
-                        "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",
-                        patterns_text(ir, r, kind)
-                    ),
-                    _ => "no set of experiments identifies θ with this predictor; estimate the identifiable combinations with --aggregate".to_string(),
-                };
-                return Err(err(
-                    "unidentifiable",
-                    format!(
-                        "θ is not identifiable from these experiments (sign patterns {}): {}",
-                        patterns_text(ir, &distinct, kind),
-                        combos.join("; ")
-                    ),
-                    hint,
+                return Err(unidentifiable(
+                    ir, &analysis, &v, kind, centring, infos, signs,
                 ));
             }
             for a in &v.aggregates {
@@ -123,69 +91,8 @@ impl StructuralPlan {
                 }
             }
         }
-        // What each kept column estimates: itself plus the structurally dropped
-        // columns expressed through it.
-        let mut meaning: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
-        for c in 0..n_cols {
-            if red.pivot[c] {
-                meaning.entry(c).or_default().push((c, 1.0));
-            }
-        }
-        for d in 0..n_cols {
-            if !red.pivot[d] {
-                for (k, q) in &red.combination[d] {
-                    meaning
-                        .entry(*k)
-                        .or_default()
-                        .push((d, leeway_structure::exact::to_f64(q)));
-                }
-            }
-        }
-        // Blocks: outputs connected through shared columns.
-        let n_out = ir.states.len();
-        let mut parent: Vec<usize> = (0..n_out).collect();
-        fn find(p: &mut [usize], x: usize) -> usize {
-            let mut r = x;
-            while p[r] != r {
-                r = p[r];
-            }
-            p[x] = r;
-            r
-        }
-        for col in columns {
-            let outs = col.outputs();
-            for w in outs.windows(2) {
-                let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
-                parent[b] = a;
-            }
-        }
-        let mut blocks: Vec<Block> = Vec::new();
-        let mut block_of_output = vec![0; n_out];
-        for (o, slot) in block_of_output.iter_mut().enumerate() {
-            let root = find(&mut parent, o);
-            let b = match blocks
-                .iter()
-                .position(|b| find(&mut parent, b.outputs[0]) == root)
-            {
-                Some(b) => b,
-                None => {
-                    blocks.push(Block {
-                        outputs: Vec::new(),
-                        cols: Vec::new(),
-                    });
-                    blocks.len() - 1
-                }
-            };
-            blocks[b].outputs.push(o);
-            *slot = b;
-        }
-        for (c, col) in columns.iter().enumerate() {
-            if red.pivot[c]
-                && let Some(o) = col.outputs().first()
-            {
-                blocks[block_of_output[*o]].cols.push(c);
-            }
-        }
+        let meaning = meaning(&red, n_cols);
+        let (blocks, block_of_output) = output_blocks(ir, columns, &red);
         let mut preference = vec![0; n_cols];
         for (rank, c) in analysis.order.iter().enumerate() {
             preference[*c] = rank;
@@ -202,6 +109,130 @@ impl StructuralPlan {
             aggregates,
         })
     }
+}
+
+/// The error for a predictor that does not identify θ from these
+/// experiments (verdict `v`), with a hint of what would.
+fn unidentifiable(
+    ir: &Ir,
+    analysis: &Analysis,
+    v: &Verdict,
+    kind: PredictorKind,
+    centring: Centring,
+    infos: &[ExperimentInfo],
+    signs: &[ExperimentSigns],
+) -> EstimateError {
+    let distinct: Vec<Vec<i8>> = {
+        let mut p: Vec<Vec<i8>> = signs.iter().map(|s| s.pattern.clone()).collect();
+        p.sort();
+        p.dedup();
+        p
+    };
+    let combos: Vec<String> = v.combinations.iter().map(|c| c.message.clone()).collect();
+    let remark2 = infos.iter().any(|i| i.frozen.is_some());
+    let constants = constant_parameters(ir);
+    let only_constants = v
+        .combinations
+        .iter()
+        .all(|c| c.parameters.iter().all(|p| constants.contains(p)));
+    let required = analysis.required_patterns();
+    let hint = match (&required, remark2) {
+                    _ if only_constants && centring != Centring::None => format!(
+                        "a constant term is estimable with uncentred instruments (--centring none: {}), or with --centring pooled; or remove the term",
+                        Centring::None.reason(ir, kind)
+                    ),
+                    (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
+                    (Some(r), false) if !r.is_empty() => format!(
+                        "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",
+                        patterns_text(ir, r, kind)
+                    ),
+                    _ => "no set of experiments identifies θ with this predictor; estimate the identifiable combinations with --aggregate".to_string(),
+                };
+    err(
+        "unidentifiable",
+        format!(
+            "θ is not identifiable from these experiments (sign patterns {}): {}",
+            patterns_text(ir, &distinct, kind),
+            combos.join("; ")
+        ),
+        hint,
+    )
+}
+
+/// What each kept column estimates: itself plus the structurally dropped
+/// columns expressed through it.
+fn meaning(red: &Reduction, n_cols: usize) -> BTreeMap<usize, Vec<(usize, f64)>> {
+    let mut meaning: BTreeMap<usize, Vec<(usize, f64)>> = BTreeMap::new();
+    for c in 0..n_cols {
+        if red.pivot[c] {
+            meaning.entry(c).or_default().push((c, 1.0));
+        }
+    }
+    for d in 0..n_cols {
+        if !red.pivot[d] {
+            for (k, q) in &red.combination[d] {
+                meaning
+                    .entry(*k)
+                    .or_default()
+                    .push((d, leeway_structure::exact::to_f64(q)));
+            }
+        }
+    }
+    meaning
+}
+
+/// Blocks: outputs connected through shared columns, each with its
+/// structurally kept columns; and the block of each output.
+fn output_blocks(
+    ir: &Ir,
+    columns: &[leeway_structure::ir::Column],
+    red: &Reduction,
+) -> (Vec<Block>, Vec<usize>) {
+    let n_out = ir.states.len();
+    let mut parent: Vec<usize> = (0..n_out).collect();
+    fn find(p: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while p[r] != r {
+            r = p[r];
+        }
+        p[x] = r;
+        r
+    }
+    for col in columns {
+        let outs = col.outputs();
+        for w in outs.windows(2) {
+            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            parent[b] = a;
+        }
+    }
+    let mut blocks: Vec<Block> = Vec::new();
+    let mut block_of_output = vec![0; n_out];
+    for (o, slot) in block_of_output.iter_mut().enumerate() {
+        let root = find(&mut parent, o);
+        let b = match blocks
+            .iter()
+            .position(|b| find(&mut parent, b.outputs[0]) == root)
+        {
+            Some(b) => b,
+            None => {
+                blocks.push(Block {
+                    outputs: Vec::new(),
+                    cols: Vec::new(),
+                });
+                blocks.len() - 1
+            }
+        };
+        blocks[b].outputs.push(o);
+        *slot = b;
+    }
+    for (c, col) in columns.iter().enumerate() {
+        if red.pivot[c]
+            && let Some(o) = col.outputs().first()
+        {
+            blocks[block_of_output[*o]].cols.push(c);
+        }
+    }
+    (blocks, block_of_output)
 }
 
 /// What each column estimates, as the report states it: a kept column's

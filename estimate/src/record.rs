@@ -105,7 +105,6 @@ pub(super) fn record_info(
         rot_sq,
     } = sums;
     let n_comp = ir.components.len();
-    let n_rot = ir.rotation_vars.len();
     let nf = n.max(1) as f64;
     let measured_mean: Vec<f64> = (0..n_comp)
         .map(|c| {
@@ -116,7 +115,47 @@ pub(super) fn record_info(
             }
         })
         .collect();
-    let (spread, frozen) = match &ir.rotation {
+    let (spread, frozen) = heading_spread_of(ir, (sc, ss), (&rot_sum, &rot_sq), nf, heading_spread);
+    let fixed_sign_columns = if method.predictor() == PredictorKind::Measured {
+        fixed_sign_columns(ir, s)
+    } else {
+        Vec::new()
+    };
+    // Only the plain arguments whose sign changes need a sign per sample; the
+    // others keep the experiment's (only) sign from the pattern.
+    let varying = plain_sign_args(ir)
+        .into_iter()
+        .filter(|(i, _)| {
+            s.pointwise
+                .iter()
+                .any(|a| a.argument == ir.sign_args[*i].name && a.minority_fraction > 0.0)
+        })
+        .collect();
+    ExperimentInfo {
+        signs: s.pattern.iter().map(|v| f64::from(*v)).collect(),
+        varying,
+        fixed_sign_columns,
+        measured_mean,
+        bound: max_abs.iter().map(|m| 100.0 * (1.0 + m)).collect(),
+        spread,
+        frozen,
+    }
+}
+
+/// How much an experiment's heading varied (the circular spread of a planar
+/// heading from the sums of its cosine and sine, `(sc, ss)`; the largest
+/// standard deviation of measured rotation columns from their sums and
+/// sums of squares), over `nf` samples; and the constant rotation it is
+/// treated with when below `heading_spread` (paper Remark 2).
+fn heading_spread_of(
+    ir: &Ir,
+    (sc, ss): (f64, f64),
+    (rot_sum, rot_sq): (&[f64], &[f64]),
+    nf: f64,
+    heading_spread: f64,
+) -> (f64, Option<Vec<f64>>) {
+    let n_rot = ir.rotation_vars.len();
+    match &ir.rotation {
         Rotation::Planar { .. } => {
             let (mc, ms) = (sc / nf, ss / nf);
             let r = (mc * mc + ms * ms).sqrt().min(1.0);
@@ -138,66 +177,50 @@ pub(super) fn record_info(
             )
         }
         Rotation::None => (f64::INFINITY, None),
-    };
-    // Φ2 columns whose modulus arguments never change sign in these data.
+    }
+}
+
+/// The Φ2 columns whose modulus arguments never change sign in the data of
+/// sign pattern `s`, with each term's fixed signs.
+fn fixed_sign_columns(ir: &Ir, s: &ExperimentSigns) -> Vec<FixedSignColumn> {
     let mut fixed_sign_columns = Vec::new();
-    if method.predictor() == PredictorKind::Measured {
-        let sign_of = |arg: &leeway_structure::ir::Arg| -> Option<f64> {
-            let i = ir.sign_args.iter().position(|a| a.arg == *arg)?;
-            let found = s
-                .pointwise
-                .iter()
-                .find(|a| a.argument == ir.sign_args[i].name)?;
-            (found.minority_fraction == 0.0).then_some(f64::from(found.sign))
-        };
-        for (c, col) in ir.predictors.measured.iter().enumerate() {
-            let mut terms = Vec::new();
-            let mut ok = !col.entries.is_empty();
-            for e in &col.entries {
-                match e {
-                    leeway_structure::ir::Entry::Term { term, output, .. } => {
-                        let t = &ir.terms[*term];
-                        let signs: Option<Vec<f64>> = t
-                            .factors
-                            .iter()
-                            .map(|f| {
-                                if f.modulus {
-                                    sign_of(&f.arg)
-                                } else {
-                                    Some(1.0)
-                                }
-                            })
-                            .collect();
-                        match signs {
-                            Some(v) => terms.push((*term, *output, v)),
-                            None => ok = false,
-                        }
+    let sign_of = |arg: &leeway_structure::ir::Arg| -> Option<f64> {
+        let i = ir.sign_args.iter().position(|a| a.arg == *arg)?;
+        let found = s
+            .pointwise
+            .iter()
+            .find(|a| a.argument == ir.sign_args[i].name)?;
+        (found.minority_fraction == 0.0).then_some(f64::from(found.sign))
+    };
+    for (c, col) in ir.predictors.measured.iter().enumerate() {
+        let mut terms = Vec::new();
+        let mut ok = !col.entries.is_empty();
+        for e in &col.entries {
+            match e {
+                leeway_structure::ir::Entry::Term { term, output, .. } => {
+                    let t = &ir.terms[*term];
+                    let signs: Option<Vec<f64>> = t
+                        .factors
+                        .iter()
+                        .map(|f| {
+                            if f.modulus {
+                                sign_of(&f.arg)
+                            } else {
+                                Some(1.0)
+                            }
+                        })
+                        .collect();
+                    match signs {
+                        Some(v) => terms.push((*term, *output, v)),
+                        None => ok = false,
                     }
-                    leeway_structure::ir::Entry::Poly { .. } => ok = false,
                 }
-            }
-            if ok {
-                fixed_sign_columns.push(FixedSignColumn { column: c, terms });
+                leeway_structure::ir::Entry::Poly { .. } => ok = false,
             }
         }
+        if ok {
+            fixed_sign_columns.push(FixedSignColumn { column: c, terms });
+        }
     }
-    // Only the plain arguments whose sign changes need a sign per sample; the
-    // others keep the experiment's (only) sign from the pattern.
-    let varying = plain_sign_args(ir)
-        .into_iter()
-        .filter(|(i, _)| {
-            s.pointwise
-                .iter()
-                .any(|a| a.argument == ir.sign_args[*i].name && a.minority_fraction > 0.0)
-        })
-        .collect();
-    ExperimentInfo {
-        signs: s.pattern.iter().map(|v| f64::from(*v)).collect(),
-        varying,
-        fixed_sign_columns,
-        measured_mean,
-        bound: max_abs.iter().map(|m| 100.0 * (1.0 + m)).collect(),
-        spread,
-        frozen,
-    }
+    fixed_sign_columns
 }

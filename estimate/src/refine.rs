@@ -41,113 +41,34 @@ impl Estimator<'_> {
         &mut self,
         sign_patterns: Vec<ExperimentSigns>,
     ) -> Result<Estimate, EstimateError> {
-        let n_comp = self.ir.components.len();
-        let mut theta_sim = self.nominal.clone();
-        let mut mu = vec![0.0; n_comp];
         let refine =
             self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
+        let (mut theta_sim, mut mu, prefix) = self.starting_instruments(refine);
+        // The current iterate: its estimate, the simulation that produced its
+        // instruments, and (once simulated itself) how well it tracks the data.
+        let mut cur = self.first_iterate(refine, &theta_sim, &mu, prefix)?;
         let mut refinements = 0usize;
         let mut converged = !refine;
         let mut stopped = false;
-        // A warm start that carries the simulation its own instruments came
-        // from begins with those instruments over the samples it settled on
-        // (continued over the new ones): the same fixed point within the
-        // tolerance, and the passes there need not be summed again.
-        let mut prefix = Vec::new();
-        if let (true, Some(start)) = (refine, &self.options.start) {
-            theta_sim.clone_from(&start.theta);
-            mu.clone_from(&start.means);
-            if let Some(sim) = &start.instruments
-                && sim.theta.len() == start.theta.len()
-                && sim.means.len() == start.means.len()
-                && sim.experiments.len() == self.facts.len()
-            {
-                theta_sim.clone_from(&sim.theta);
-                mu.clone_from(&sim.means);
-                prefix = sim
-                    .experiments
-                    .iter()
-                    .zip(&self.facts)
-                    .map(|((samples, means), f)| {
-                        (*samples <= f.len && means.len() == n_comp).then(|| PrefixInstruments {
-                            samples: *samples,
-                            means: means.clone(),
-                        })
-                    })
-                    .collect();
-            }
-        }
-        let bootstrap =
-            refine && self.options.start.is_none() && self.options.initial == Initial::Delayed;
-        let first: Vec<f64> = if bootstrap {
-            Vec::new()
-        } else {
-            theta_sim.clone()
-        };
-        let moments = match self.accumulate(&first, &mu, None, true, prefix)? {
-            Accumulated::Done(m, _, _) => m,
-            Accumulated::Bad(i, bad) => return Err(self.non_finite_error(i, &bad)),
-            Accumulated::Diverged => {
-                return Err(err(
-                    "nominal-diverges",
-                    "the simulation of the nominal model diverges on the input of these experiments",
-                    "give nominal values closer to the craft (nominal { } in the model, or --nominal FILE)",
-                ));
-            }
-        };
-        let sol = self.solve(&moments, !refine)?;
-        // The current iterate: its estimate, the simulation that produced its
-        // instruments, and (once simulated itself) how well it tracks the data.
-        let mut cur = Iterate {
-            theta: self.theta_of(&sol),
-            sol,
-            theta_sim: first,
-            mu: mu.clone(),
-            moments,
-            fit: None,
-        };
         let mut best: Option<Iterate> = None;
         // The previous full-step refinement's move of the simulation.
         let mut previous_change: Option<f64> = None;
         while refine && refinements < self.options.max_refinements {
-            // Re-simulate with the estimate (and the disturbance means it implies),
-            // damping towards the previous simulation if it diverges. The new
-            // simulation is compared with the previous one in the same pass:
-            // once the instruments stop moving, so does the estimate.
-            let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
-            let new_mu = self.mean_vector(&values, &cur.theta);
-            let mut step = 1.0;
-            let mut accepted = None;
             // A full step whose simulation diverges means the refinement is
             // not contracting here; with the runaway guard it stops rather
             // than damping: damped steps near an unstable simulation amplify
             // round-off into a different estimate (the paper's plain refined
             // IV damps, at most five times).
             let tries = if self.options.runaway_guard { 1 } else { 6 };
-            for _ in 0..tries {
-                let trial: Vec<f64> = theta_sim
-                    .iter()
-                    .zip(&cur.theta)
-                    .map(|(a, b)| a + step * (b - a))
-                    .collect();
-                let trial_mu: Vec<f64> = mu
-                    .iter()
-                    .zip(&new_mu)
-                    .map(|(a, b)| a + step * (b - a))
-                    .collect();
-                if let Accumulated::Done(m, change, fit) = self.accumulate(
-                    &trial,
-                    &trial_mu,
-                    Some((&theta_sim, &mu)),
-                    false,
-                    Vec::new(),
-                )? {
-                    accepted = Some((trial, trial_mu, (m, change, fit)));
-                    break;
-                }
-                step *= 0.5;
-            }
-            let Some((trial, trial_mu, (m, change, fit))) = accepted else {
+            let Some(Resimulated {
+                theta: trial,
+                mu: trial_mu,
+                moments: m,
+                change,
+                fit,
+                step,
+            }) = self.resimulate(&cur, &theta_sim, &mu, tries)?
+            else {
                 self.warnings.push(format!(
                     "refinement stopped after {refinements}: the simulation with the refined estimate diverges{}; the iterate whose simulation fits the data best is reported",
                     if tries > 1 { " even when damped" } else { "" }
@@ -184,30 +105,13 @@ impl Estimator<'_> {
             if std::env::var("LEEWAY_DEBUG").is_ok() {
                 eprintln!("refinement {refinements}: change {change:.3e} simulation fit {fit:.1}");
             }
-            // Settled when this simulation moved less than the tolerance, or
-            // when the refinement contracts so that the next one would: its
-            // estimate would differ from this one by less than the tolerance
-            // moves the instruments, and a pass is saved.
-            let predicted = previous_change
-                .filter(|p| step == 1.0 && change < CONTRACTION * p)
-                .map(|p| change * (change / p));
-            if change < self.options.tolerance
-                || predicted.is_some_and(|p| p < self.options.tolerance)
-            {
+            if self.settles(change, step, previous_change) {
                 converged = true;
                 cur = next;
                 break;
             }
             previous_change = (step == 1.0).then_some(change);
-            // A refinement whose simulation tracks the data markedly worse than
-            // an earlier iterate is running away (small samples): stop there.
-            if let (true, Some(b), Some(f)) = (self.options.runaway_guard, &best, cur.fit)
-                && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
-            {
-                self.warnings.push(format!(
-                    "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported",
-                    b.fit.unwrap_or(f) - f
-                ));
+            if self.runs_away(best.as_ref(), cur.fit, refinements) {
                 cur = next;
                 stopped = true;
                 break;
@@ -215,19 +119,208 @@ impl Estimator<'_> {
             cur = next;
         }
         if refine && !converged {
-            // Report the iterate whose own simulation tracks the data best.
-            if let (true, Some(b)) = (self.options.runaway_guard, best)
-                && cur.fit.is_none_or(|f| f + FIT_TIE < b.fit.unwrap_or(f))
+            cur = self.unsettled(cur, best, stopped, refinements);
+        }
+        let settled = Settled {
+            refine,
+            converged,
+            stopped,
+            refinements,
+        };
+        self.report_iterate(cur, settled, sign_patterns)
+    }
+
+    /// The instruments a refinement begins with: the nominal model's, or a
+    /// warm start's, continuing (`prefix`, per experiment) the simulation
+    /// its own instruments came from over the samples it settled on.
+    fn starting_instruments(
+        &self,
+        refine: bool,
+    ) -> (Vec<f64>, Vec<f64>, Vec<Option<PrefixInstruments>>) {
+        let n_comp = self.ir.components.len();
+        let mut theta_sim = self.nominal.clone();
+        let mut mu = vec![0.0; n_comp];
+        // A warm start that carries the simulation its own instruments came
+        // from begins with those instruments over the samples it settled on
+        // (continued over the new ones): the same fixed point within the
+        // tolerance, and the passes there need not be summed again.
+        let mut prefix = Vec::new();
+        if let (true, Some(start)) = (refine, &self.options.start) {
+            theta_sim.clone_from(&start.theta);
+            mu.clone_from(&start.means);
+            if let Some(sim) = &start.instruments
+                && sim.theta.len() == start.theta.len()
+                && sim.means.len() == start.means.len()
+                && sim.experiments.len() == self.facts.len()
             {
-                cur = b;
-            }
-            if !stopped {
-                self.warnings.push(format!(
-                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
-                    refinements, self.options.tolerance
-                ));
+                theta_sim.clone_from(&sim.theta);
+                mu.clone_from(&sim.means);
+                prefix = sim
+                    .experiments
+                    .iter()
+                    .zip(&self.facts)
+                    .map(|((samples, means), f)| {
+                        (*samples <= f.len && means.len() == n_comp).then(|| PrefixInstruments {
+                            samples: *samples,
+                            means: means.clone(),
+                        })
+                    })
+                    .collect();
             }
         }
+        (theta_sim, mu, prefix)
+    }
+
+    /// The first iterate: from the instruments of `(θ, μ)`, or the delayed
+    /// bootstrap (refined IV from delayed instruments without a warm start).
+    fn first_iterate(
+        &mut self,
+        refine: bool,
+        theta_sim: &[f64],
+        mu: &[f64],
+        prefix: Vec<Option<PrefixInstruments>>,
+    ) -> Result<Iterate, EstimateError> {
+        let bootstrap =
+            refine && self.options.start.is_none() && self.options.initial == Initial::Delayed;
+        let first: Vec<f64> = if bootstrap {
+            Vec::new()
+        } else {
+            theta_sim.to_vec()
+        };
+        let moments = match self.accumulate(&first, mu, None, true, prefix)? {
+            Accumulated::Done(m, _, _) => m,
+            Accumulated::Bad(i, bad) => return Err(self.non_finite_error(i, &bad)),
+            Accumulated::Diverged => {
+                return Err(err(
+                    "nominal-diverges",
+                    "the simulation of the nominal model diverges on the input of these experiments",
+                    "give nominal values closer to the craft (nominal { } in the model, or --nominal FILE)",
+                ));
+            }
+        };
+        let sol = self.solve(&moments, !refine)?;
+        Ok(Iterate {
+            theta: self.theta_of(&sol),
+            sol,
+            theta_sim: first,
+            mu: mu.to_vec(),
+            moments,
+            fit: None,
+        })
+    }
+
+    /// Re-simulates with the estimate of `cur` (and the disturbance means it
+    /// implies), damping towards the previous simulation `(θ, μ)` if it
+    /// diverges, in at most `tries` steps; the new simulation is compared
+    /// with the previous one in the same pass: once the instruments stop
+    /// moving, so does the estimate. `None` when every step diverged.
+    fn resimulate(
+        &mut self,
+        cur: &Iterate,
+        theta_sim: &[f64],
+        mu: &[f64],
+        tries: usize,
+    ) -> Result<Option<Resimulated>, EstimateError> {
+        let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
+        let new_mu = self.mean_vector(&values, &cur.theta);
+        let mut step = 1.0;
+        for _ in 0..tries {
+            let trial: Vec<f64> = theta_sim
+                .iter()
+                .zip(&cur.theta)
+                .map(|(a, b)| a + step * (b - a))
+                .collect();
+            let trial_mu: Vec<f64> = mu
+                .iter()
+                .zip(&new_mu)
+                .map(|(a, b)| a + step * (b - a))
+                .collect();
+            if let Accumulated::Done(m, change, fit) =
+                self.accumulate(&trial, &trial_mu, Some((theta_sim, mu)), false, Vec::new())?
+            {
+                return Ok(Some(Resimulated {
+                    theta: trial,
+                    mu: trial_mu,
+                    moments: m,
+                    change,
+                    fit,
+                    step,
+                }));
+            }
+            step *= 0.5;
+        }
+        Ok(None)
+    }
+
+    /// Whether a refinement whose simulation moved by `change` (a damped
+    /// `step`, or a full one after a move of `previous_change`) settles:
+    /// it moved less than the tolerance, or the refinement contracts so
+    /// that the next one would: its estimate would differ from this one by
+    /// less than the tolerance moves the instruments, and a pass is saved.
+    fn settles(&self, change: f64, step: f64, previous_change: Option<f64>) -> bool {
+        let predicted = previous_change
+            .filter(|p| step == 1.0 && change < CONTRACTION * p)
+            .map(|p| change * (change / p));
+        change < self.options.tolerance || predicted.is_some_and(|p| p < self.options.tolerance)
+    }
+
+    /// Whether the refinement is running away (small samples; with the
+    /// runaway guard): the simulation of the iterate before it (`fit`)
+    /// tracks the data markedly worse than an earlier iterate (`best`).
+    /// Its warning, if so.
+    fn runs_away(&mut self, best: Option<&Iterate>, fit: Option<f64>, refinements: usize) -> bool {
+        if let (true, Some(b), Some(f)) = (self.options.runaway_guard, best, fit)
+            && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
+        {
+            self.warnings.push(format!(
+                "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported",
+                b.fit.unwrap_or(f) - f
+            ));
+            return true;
+        }
+        false
+    }
+
+    /// The iterate reported by a refinement that did not settle (`cur`,
+    /// or the `best` one), with its warning.
+    fn unsettled(
+        &mut self,
+        cur: Iterate,
+        best: Option<Iterate>,
+        stopped: bool,
+        refinements: usize,
+    ) -> Iterate {
+        let mut cur = cur;
+        // Report the iterate whose own simulation tracks the data best.
+        if let (true, Some(b)) = (self.options.runaway_guard, best)
+            && cur.fit.is_none_or(|f| f + FIT_TIE < b.fit.unwrap_or(f))
+        {
+            cur = b;
+        }
+        if !stopped {
+            self.warnings.push(format!(
+                "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
+                refinements, self.options.tolerance
+            ));
+        }
+        cur
+    }
+
+    /// The estimate of the reported iterate `cur`: its recorded solve, its
+    /// own simulation, its covariance, and (a settled refinement) the
+    /// instruments a warm start continues.
+    fn report_iterate(
+        &mut self,
+        cur: Iterate,
+        settled: Settled,
+        sign_patterns: Vec<ExperimentSigns>,
+    ) -> Result<Estimate, EstimateError> {
+        let Settled {
+            refine,
+            mut converged,
+            stopped,
+            refinements,
+        } = settled;
         let theta_sim = cur.theta_sim.clone();
         let mu = cur.mu.clone();
         let moments = cur.moments;
@@ -301,4 +394,26 @@ impl Estimator<'_> {
         }
         Ok(estimate)
     }
+}
+
+/// A refinement's new simulation: its `(θ, μ)` (the estimate's, or a
+/// damped `step` towards it), the moments of its instruments, how far it
+/// moved from the previous one and how well it fits the data.
+struct Resimulated {
+    theta: Vec<f64>,
+    mu: Vec<f64>,
+    moments: Vec<Vec<CrossMoments>>,
+    change: f64,
+    fit: f64,
+    step: f64,
+}
+
+/// How the refinement ended.
+struct Settled {
+    /// The estimate refines at all (a refined IV).
+    refine: bool,
+    converged: bool,
+    /// Stopped early (divergence, runaway).
+    stopped: bool,
+    refinements: usize,
 }

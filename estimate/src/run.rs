@@ -8,6 +8,7 @@ use crate::outcome::{Estimate, EstimateError, err};
 use crate::protocol::{FactsRequest, Passes};
 use leeway_model::experiment::Source;
 use leeway_model::model::Model;
+use leeway_model::signs::ExperimentSigns;
 use leeway_structure::ir::Ir;
 
 /// The largest nominal value accepted: with a regressor within
@@ -64,37 +65,8 @@ pub fn estimate_with(
     options: &EstimateOptions,
 ) -> Result<Estimate, EstimateError> {
     let ir = model.ir();
-    let nominal = match &options.nominal {
-        Some(v) if v.len() == ir.parameters.len() => v.clone(),
-        Some(v) => {
-            return Err(err(
-                "invalid-nominal",
-                format!(
-                    "the nominal model has {} values, the model {} parameters",
-                    v.len(),
-                    ir.parameters.len()
-                ),
-                "give one value per parameter",
-            ));
-        }
-        None => ir.parameters.iter().map(|p| p.nominal).collect(),
-    };
-    check_nominal(ir, &nominal, options.nominal.is_some())?;
-    if let Some(start) = &options.start
-        && (start.theta.len() != ir.parameters.len() || start.means.len() != ir.components.len())
-    {
-        return Err(err(
-            "invalid-start",
-            format!(
-                "the warm start has {} θ values and {} disturbance means, the model {} parameters and {} disturbance components",
-                start.theta.len(),
-                start.means.len(),
-                ir.parameters.len(),
-                ir.components.len()
-            ),
-            "build the start from an estimate of the same model (Start::from_estimate)",
-        ));
-    }
+    let nominal = nominal_values(ir, options)?;
+    check_start(ir, options)?;
     stop_if_interrupted(options)?;
     let facts = passes.facts(&FactsRequest::new(options))?;
     stop_if_interrupted(options)?;
@@ -124,53 +96,8 @@ pub fn estimate_with(
                 "record a longer experiment",
             ));
         };
-        for a in &s.arguments {
-            if a.minority_fraction > 0.0 {
-                let msg = format!(
-                    "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
-                    s.experiment,
-                    a.argument,
-                    if a.sign > 0 { "+" } else { "-" },
-                    100.0 * (1.0 - a.minority_fraction),
-                    100.0 * a.minority_fraction
-                );
-                if options.strict {
-                    return Err(err(
-                        "sign-violation",
-                        msg,
-                        "run experiments with a static offset large enough that the argument keeps its sign, or drop --strict to estimate anyway",
-                    ));
-                }
-                warnings.push(msg);
-            }
-        }
-        let crossing: Vec<String> = s
-            .pointwise
-            .iter()
-            .zip(&s.crossings)
-            .filter(|(a, _)| {
-                a.minority_fraction > 0.0
-                    && ir
-                        .sign_args
-                        .iter()
-                        .any(|x| x.pointwise && x.name == a.argument)
-            })
-            .map(|(a, n)| {
-                format!(
-                    "{} ({n} sign change{}, {:.1}% of the samples of the minority sign)",
-                    a.argument,
-                    if *n == 1 { "" } else { "s" },
-                    100.0 * a.minority_fraction
-                )
-            })
-            .collect();
-        if !crossing.is_empty() {
-            notes.push(format!(
-                "experiment `{}`: {} cross zero; their moduli are evaluated pointwise, as the simulation does (within the noise of zero, measurement noise biases |x| slightly upwards)",
-                s.experiment,
-                crossing.join(", ")
-            ));
-        }
+        warnings.extend(sign_violations(&s, options.strict)?);
+        notes.extend(crossing_note(ir, &s));
         infos.push(info);
         sign_patterns.push(s);
     }
@@ -198,4 +125,104 @@ pub fn estimate_with(
     let mut estimate = est.run(sign_patterns)?;
     estimate.notes = notes;
     Ok(estimate)
+}
+
+/// The nominal θ: the options' (one value per parameter), else the model's;
+/// every value checked ([`check_nominal`]).
+fn nominal_values(ir: &Ir, options: &EstimateOptions) -> Result<Vec<f64>, EstimateError> {
+    let nominal = match &options.nominal {
+        Some(v) if v.len() == ir.parameters.len() => v.clone(),
+        Some(v) => {
+            return Err(err(
+                "invalid-nominal",
+                format!(
+                    "the nominal model has {} values, the model {} parameters",
+                    v.len(),
+                    ir.parameters.len()
+                ),
+                "give one value per parameter",
+            ));
+        }
+        None => ir.parameters.iter().map(|p| p.nominal).collect(),
+    };
+    check_nominal(ir, &nominal, options.nominal.is_some())?;
+    Ok(nominal)
+}
+
+/// A warm start, if any, has one value per parameter and disturbance component.
+fn check_start(ir: &Ir, options: &EstimateOptions) -> Result<(), EstimateError> {
+    if let Some(start) = &options.start
+        && (start.theta.len() != ir.parameters.len() || start.means.len() != ir.components.len())
+    {
+        return Err(err(
+            "invalid-start",
+            format!(
+                "the warm start has {} θ values and {} disturbance means, the model {} parameters and {} disturbance components",
+                start.theta.len(),
+                start.means.len(),
+                ir.parameters.len(),
+                ir.components.len()
+            ),
+            "build the start from an estimate of the same model (Start::from_estimate)",
+        ));
+    }
+    Ok(())
+}
+
+/// The warnings of an experiment whose sign arguments do not keep one sign
+/// (paper A7), or (`strict`) the error of the first.
+fn sign_violations(s: &ExperimentSigns, strict: bool) -> Result<Vec<String>, EstimateError> {
+    let mut warnings = Vec::new();
+    for a in &s.arguments {
+        if a.minority_fraction > 0.0 {
+            let msg = format!(
+                "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
+                s.experiment,
+                a.argument,
+                if a.sign > 0 { "+" } else { "-" },
+                100.0 * (1.0 - a.minority_fraction),
+                100.0 * a.minority_fraction
+            );
+            if strict {
+                return Err(err(
+                    "sign-violation",
+                    msg,
+                    "run experiments with a static offset large enough that the argument keeps its sign, or drop --strict to estimate anyway",
+                ));
+            }
+            warnings.push(msg);
+        }
+    }
+    Ok(warnings)
+}
+
+/// The note on an experiment's pointwise sign arguments that cross zero, if any.
+fn crossing_note(ir: &Ir, s: &ExperimentSigns) -> Option<String> {
+    let crossing: Vec<String> = s
+        .pointwise
+        .iter()
+        .zip(&s.crossings)
+        .filter(|(a, _)| {
+            a.minority_fraction > 0.0
+                && ir
+                    .sign_args
+                    .iter()
+                    .any(|x| x.pointwise && x.name == a.argument)
+        })
+        .map(|(a, n)| {
+            format!(
+                "{} ({n} sign change{}, {:.1}% of the samples of the minority sign)",
+                a.argument,
+                if *n == 1 { "" } else { "s" },
+                100.0 * a.minority_fraction
+            )
+        })
+        .collect();
+    (!crossing.is_empty()).then(|| {
+        format!(
+            "experiment `{}`: {} cross zero; their moduli are evaluated pointwise, as the simulation does (within the noise of zero, measurement noise biases |x| slightly upwards)",
+            s.experiment,
+            crossing.join(", ")
+        )
+    })
 }

@@ -5,6 +5,7 @@
 use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
 use crate::method::Instruments;
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
+use crate::prefix::{Checkpoint, Wanted};
 use leeway_model::experiment::Source;
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
@@ -18,7 +19,7 @@ use crate::protocol::{
     PrefixInstruments, Summary,
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
-use crate::walk::{Diverged, EquationWalker, REGRESSOR_LIMIT, Reuse, Stopper};
+use crate::walk::{EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper};
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
 struct MomentPass<'a> {
@@ -27,6 +28,342 @@ struct MomentPass<'a> {
     reference: Option<(&'a [f64], &'a [f64])>,
     scan: bool,
     prefix: Option<&'a PrefixInstruments>,
+}
+
+/// The sink of a moment pass's walk: each equation's instruments,
+/// regressors and targets into the accumulators of its outputs.
+struct MomentSink<'a> {
+    ir: &'a Ir,
+    plan: &'a PassPlan,
+    /// Look for non-finite measured values.
+    scan: bool,
+    /// The record's kept regressor rows, per output: the walk gives the
+    /// instruments only.
+    rows: Option<&'a [RegressorRows]>,
+    /// The first equations whose rows the accumulators begin with.
+    measured_known: usize,
+    /// The equation given last (equation k = 2, 3, …: regressors at
+    /// k − 1, target at k).
+    k: usize,
+    acc: Vec<MomentAccumulator>,
+    /// The first bad measured value (scanning passes).
+    bad: Option<(usize, String)>,
+}
+
+impl<'a> MomentSink<'a> {
+    /// The sink of a pass with `plan` (that `scan`s for bad values) into
+    /// `acc`, which know the `rows` of the whole record or the regressors
+    /// of its first `measured_known` equations, and go on after the first
+    /// `resumed` equations.
+    fn new(
+        ir: &'a Ir,
+        plan: &'a PassPlan,
+        scan: bool,
+        rows: Option<&'a [RegressorRows]>,
+        measured_known: usize,
+        resumed: usize,
+        acc: Vec<MomentAccumulator>,
+    ) -> MomentSink<'a> {
+        MomentSink {
+            ir,
+            plan,
+            scan,
+            rows,
+            measured_known,
+            k: 1 + resumed,
+            acc,
+            bad: None,
+        }
+    }
+
+    /// Adds equation `k + 1`: instruments `z`, regressors `phi`
+    /// (`n_out × n_cols` each) and targets `t`.
+    #[inline(always)]
+    fn push(&mut self, z: &[f64], phi: &[f64], t: &[f64]) {
+        let plan = self.plan;
+        let n = plan.n_cols;
+        self.k += 1;
+        let k = self.k;
+        if let Some(rows) = self.rows {
+            for ((o, a), r) in self.acc.iter_mut().enumerate().zip(rows) {
+                a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
+            }
+            return;
+        }
+        if k - 2 < self.measured_known {
+            for (o, a) in self.acc.iter_mut().enumerate() {
+                let z = z.get(o * n..(o + 1) * n).unwrap_or(&[]);
+                a.push_over_kept_row(z, &plan.cols[o]);
+            }
+            return;
+        }
+        if self.scan && self.bad.is_none() {
+            self.bad = non_finite(self.ir, plan.kind, n, k, phi, t);
+        }
+        for (o, a) in self.acc.iter_mut().enumerate() {
+            let mut target = t[o];
+            for (c, v) in &plan.held {
+                target -= phi[o * n + c] * v;
+            }
+            a.push_columns(
+                &z[o * n..(o + 1) * n],
+                &phi[o * n..(o + 1) * n],
+                &plan.cols[o],
+                target,
+            );
+        }
+    }
+}
+
+/// What a moment pass over an in-memory record keeps for later passes
+/// over it: filled by its walk, offered to the record's cache when the
+/// pass completes.
+#[derive(Default)]
+struct Keeping {
+    /// Every sample's heading rotation (when none are kept yet).
+    headings: Option<Vec<[f64; 2]>>,
+    /// The instrument simulation's states after each step.
+    trajectory: Option<Vec<f64>>,
+    /// The record's regressor rows (a scanning pass, none kept yet).
+    rows: bool,
+    /// Where a θ-free walk stood at the end.
+    wants_history: bool,
+    history: Option<History>,
+    /// Where a simulating walk stood at the end.
+    wants_simulation: bool,
+    simulation: Option<SimWalk>,
+}
+
+/// A completed moment pass, as what it keeps is offered.
+struct Completed<'a> {
+    /// The `(θ, μ)` simulated.
+    theta: &'a [f64],
+    mu: &'a [f64],
+    /// What its instruments are, if they do not depend on θ.
+    instruments: Option<InstrumentsKey>,
+    /// What its simulated instruments are, if it kept where its simulation stood.
+    simulated: Option<SimulationKey<'a>>,
+    /// No bad value met: its sums may be gone on from.
+    clean: bool,
+}
+
+impl Keeping {
+    /// What a pass that `simulates` over a record of `samples` samples
+    /// keeps, with `cache` (nothing without one).
+    fn new(cache: Option<&mut RecordCache>, simulates: bool, samples: usize) -> Keeping {
+        let Some(c) = cache else {
+            return Keeping::default();
+        };
+        Keeping {
+            headings: c.headings().is_none().then(|| Vec::with_capacity(samples)),
+            trajectory: simulates.then(|| c.take_spare()),
+            ..Keeping::default()
+        }
+    }
+
+    /// The [`Checkpoint`] a pass `wanted` goes on from (nothing without a
+    /// cache); the simulation's states and heading rotations it goes on
+    /// with become the ones this pass keeps.
+    fn take_checkpoint(
+        &mut self,
+        cache: Option<&mut RecordCache>,
+        budget: Option<&mut usize>,
+        wanted: &Wanted,
+    ) -> Checkpoint {
+        let (Some(c), Some(b)) = (cache, budget) else {
+            return Checkpoint::default();
+        };
+        let mut checkpoint = Checkpoint::take(c, b, wanted);
+        if let Some(states) = checkpoint.take_states()
+            && let Some(spare) = self.trajectory.replace(states)
+        {
+            c.return_spare(spare);
+        }
+        if checkpoint.resumes() {
+            // The heading rotations kept so far go on too, or none are kept.
+            self.headings = self
+                .headings
+                .take()
+                .and_then(|_| checkpoint.take_headings(c));
+        }
+        checkpoint
+    }
+
+    /// `reuse` with the places this pass keeps into.
+    fn reuse<'k>(&'k mut self, reuse: Reuse<'k>) -> Reuse<'k> {
+        Reuse {
+            keep_headings: self.headings.as_mut(),
+            keep_trajectory: self.trajectory.as_mut(),
+            keep_history: self.wants_history.then_some(&mut self.history),
+            keep_simulation: self.wants_simulation.then_some(&mut self.simulation),
+            ..reuse
+        }
+    }
+
+    /// The moments of a completed pass from its accumulators (against the
+    /// record's `kept` rows, if any), and what the pass offers to keep.
+    fn finish<'a>(
+        mut self,
+        acc: Vec<MomentAccumulator>,
+        kept: Option<&[RegressorRows]>,
+        pass: Completed<'a>,
+    ) -> (Vec<CrossMoments>, Kept<'a>) {
+        // Where the simulation's sums stood, for a warm start's pass over a
+        // longer record.
+        let simulation = self
+            .simulation
+            .take()
+            .and_then(|walk| Some((walk, simulation_sums(&acc, kept.is_some())?)))
+            .filter(|_| pass.clean)
+            .and_then(|(walk, sums)| Some((pass.simulated?, walk, sums)));
+        let (moments, new_rows, partial) = finish(acc, kept, self.wants_history);
+        let clean = pass.clean;
+        let offered = Kept {
+            resume: match (pass.instruments, self.history, partial) {
+                (Some(instruments), Some(history), Some(sums)) if clean => Some(Resume {
+                    instruments,
+                    history,
+                    sums,
+                }),
+                _ => None,
+            },
+            regressors: new_rows
+                .into_iter()
+                .collect::<Option<Vec<_>>>()
+                .filter(|_| self.rows && clean),
+            headings: self.headings,
+            trajectory: self.trajectory.map(|states| (pass.theta, pass.mu, states)),
+            simulation,
+        };
+        (moments, offered)
+    }
+}
+
+/// What a moment pass begins with.
+struct Begun {
+    /// What it will keep.
+    keeping: Keeping,
+    /// What it takes up from the passes over a prefix of its record.
+    checkpoint: Checkpoint,
+    /// It keeps its regressor rows (a scanning pass of an instrumental
+    /// estimate, or one serving others).
+    keeps: bool,
+    /// What its instruments are, if they do not depend on θ.
+    instruments_key: Option<InstrumentsKey>,
+    /// Its regressors read the measured disturbances.
+    reads_means: bool,
+}
+
+impl<'a> MomentPass<'a> {
+    /// How this pass, walked by `walker` over `e`, begins: what it takes
+    /// from `cache` (with the bytes it may still keep) and what it will
+    /// keep there.
+    fn begin(
+        &self,
+        walker: &EquationWalker,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        cache: Option<(&mut RecordCache, &mut usize)>,
+        keep_for_others: bool,
+    ) -> Begun {
+        let ir = walker.ir;
+        let simulates = walker.simulates(self.theta_sim);
+        // Regressor rows are kept by the scanning pass of an instrumental
+        // estimate (their values are then known to be finite) and read by
+        // its later passes — and by other estimates' passes with the same
+        // plan; least squares makes one pass, and keeps its rows only for
+        // others.
+        let keeps = self.scan && (plan.instruments.is_some() || keep_for_others);
+        let instruments_key = instruments_key(ir, plan, walker, info);
+        let reads_means = reads_measured_disturbances(ir, plan.kind);
+        let (cache, budget) = cache.unzip();
+        // What this pass takes up from the passes over a prefix of its record.
+        let wanted = Wanted {
+            plan,
+            info,
+            samples: e.len(),
+            n_out: ir.states.len(),
+            keeps_rows: keeps,
+            instruments: instruments_key.as_ref(),
+            headings_known: cache
+                .as_deref()
+                .and_then(RecordCache::headings)
+                .is_some_and(|h| h.len() == e.len()),
+            simulation: self.continued_simulation(simulates, reads_means),
+        };
+        let mut cache = cache;
+        let mut keeping = Keeping::new(cache.as_deref_mut(), simulates, e.len());
+        let checkpoint = keeping.take_checkpoint(cache, budget, &wanted);
+        Begun {
+            keeping,
+            checkpoint,
+            keeps,
+            instruments_key,
+            reads_means,
+        }
+    }
+
+    /// The simulation a warm start's first pass continues: the one of its
+    /// instruments (when it `simulates` them, without a reference) over the
+    /// samples of the shorter record it settled on.
+    fn continued_simulation(
+        &self,
+        simulates: bool,
+        reads_means: bool,
+    ) -> Option<(SimulationKey<'a>, usize)> {
+        let p = self
+            .prefix
+            .filter(|_| simulates && self.reference.is_none())?;
+        let key = SimulationKey {
+            theta: self.theta_sim,
+            mu: self.mu,
+            means: means_key(reads_means, &p.means),
+        };
+        Some((key, p.samples))
+    }
+}
+
+impl<'a> MomentPass<'a> {
+    /// This pass completed (`clean`: no bad value met), with its
+    /// `instruments`; `simulated`, the predictor reading measured means or
+    /// not (`Some(true)` or `Some(false)`), if it kept where its simulation
+    /// stood.
+    fn completed(
+        &self,
+        info: &'a ExperimentInfo,
+        instruments: Option<InstrumentsKey>,
+        simulated: Option<bool>,
+        clean: bool,
+    ) -> Completed<'a> {
+        // The measured means the instruments take.
+        let instrument_means = self.prefix.map_or(&info.measured_mean, |p| &p.means);
+        Completed {
+            theta: self.theta_sim,
+            mu: self.mu,
+            instruments,
+            simulated: simulated.map(|reads_means| SimulationKey {
+                theta: self.theta_sim,
+                mu: self.mu,
+                means: means_key(reads_means, instrument_means),
+            }),
+            clean,
+        }
+    }
+}
+
+/// What simulated instruments' measured `means` are, as kept: their bits,
+/// or nothing where the predictor `reads_means` not.
+fn means_key(reads_means: bool, means: &[f64]) -> Vec<u64> {
+    if reads_means { bits(means) } else { Vec::new() }
+}
+
+/// A bad value's `what`, at its `sample` of `e`.
+fn located(e: &dyn Source, sample: usize, what: String) -> BadValue {
+    BadValue {
+        location: e.locate(sample),
+        what,
+    }
 }
 
 /// A model ready to run passes over experiments (its term plans built once).
@@ -138,6 +475,17 @@ impl<'a> PassRunner<'a> {
         }
     }
 
+    /// The walker of a pass with the plan's instruments, or (`bootstrap`)
+    /// the delayed ones of the refined IV's bootstrap pass.
+    fn pass_walker(&self, plan: &PassPlan, bootstrap: bool) -> EquationWalker<'_> {
+        let instruments = if bootstrap {
+            Some(Instruments::Delayed)
+        } else {
+            plan.instruments
+        };
+        self.walker(plan, instruments)
+    }
+
     /// What experiment `index` (`e`) contributes to the pass.
     pub fn pass(&self, e: &dyn Source, index: usize, request: &PassRequest) -> PassSummary {
         self.pass_keeping(e, index, request, None)
@@ -200,363 +548,138 @@ impl<'a> PassRunner<'a> {
             Some((c, b, o)) => (Some(c), Some(b), o),
             None => (None, None, false),
         };
-        let MomentPass {
-            theta_sim,
-            mu,
-            reference,
-            scan,
-            prefix: prefix_instruments,
-        } = pass;
         let ir = self.model.ir();
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
-        let mut walker = if theta_sim.is_empty() {
-            self.walker(plan, Some(Instruments::Delayed))
-        } else {
-            self.walker(plan, plan.instruments)
-        };
-        walker.instrument_means = prefix_instruments.map(|p| p.means.as_slice());
-        // The measured means the instruments take.
-        let instrument_means = prefix_instruments.map_or(&info.measured_mean, |p| &p.means);
-        let simulates = walker.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
-        let n = plan.n_cols;
-        // What this pass keeps for later ones.
-        let mut new_headings = cache
-            .as_deref()
-            .is_some_and(|c| c.headings().is_none())
-            .then(|| Vec::with_capacity(e.len()));
-        let mut new_trajectory = match cache.as_deref_mut() {
-            Some(c) if simulates => Some(c.take_spare()),
-            _ => None,
-        };
-        // Regressor rows are kept by the scanning pass of an instrumental
-        // estimate (their values are then known to be finite) and read by
-        // its later passes — and by other estimates' passes with the same
-        // plan; least squares makes one pass, and keeps its rows only for
-        // others. Rows kept over a shorter prefix of the record are the
-        // scanning pass's first rows.
-        let keeps = scan && (plan.instruments.is_some() || keep_for_others);
-        let equations = e.len().saturating_sub(2);
-        let prefix = match (keeps, cache.as_deref_mut(), budget.as_deref_mut()) {
-            (true, Some(c), Some(b)) if c.regressors(plan, info).is_none() => {
-                c.take_prefix(plan, info, b)
-            }
-            _ => None,
-        }
-        .filter(|(p, _)| {
-            p.len() == plan.cols.len()
-                && p.iter()
-                    .all(|r| r.len() == p[0].len() && !r.is_empty() && r.len() <= equations)
-        });
-        // A pass whose instruments do not depend on θ goes on from where the
-        // pass that kept the prefix's rows stood, if it had these instruments.
-        let instruments_key = (walker.instruments != Some(Instruments::Simulated)).then(|| {
-            let delayed_means = walker.instruments == Some(Instruments::Delayed)
-                && walker.delayed_mean
-                && reads_measured_disturbances(ir, plan.kind);
-            InstrumentsKey {
-                instruments: walker.instruments,
-                means: if delayed_means {
-                    bits(&info.measured_mean)
-                } else {
-                    Vec::new()
-                },
-            }
-        });
-        let headings_known = cache
-            .as_deref()
-            .and_then(RecordCache::headings)
-            .is_some_and(|h| h.len() == e.len());
-        let (prefix, resume) = match prefix {
-            Some((rows, resume)) => {
-                let resume = resume.filter(|r| {
-                    instruments_key.as_ref() == Some(&r.instruments)
-                        && (r.history.continues_headings() || headings_known)
-                        && r.history.equations == rows[0].len()
-                        && r.history.samples == rows[0].len() + 2
-                        && r.sums.len() == rows.len()
-                        && r.sums.iter().zip(&rows).all(|(s, k)| s.continues(k))
-                });
-                (Some(rows), resume)
-            }
-            None => (None, None),
-        };
-        // A warm start's first pass goes on from where the pass over the
-        // shorter record that simulated the same instruments stood.
-        let reads_means = reads_measured_disturbances(ir, plan.kind);
-        let means_key = |m: &[f64]| if reads_means { bits(m) } else { Vec::new() };
-        let mut sim_resume = match (
-            prefix_instruments,
-            cache.as_deref_mut(),
-            budget.as_deref_mut(),
-        ) {
-            (Some(p), Some(c), Some(b))
-                if simulates && reference.is_none() && resume.is_none() && headings_known =>
-            {
-                let key = SimulationKey {
-                    theta: theta_sim,
-                    mu,
-                    means: means_key(&p.means),
-                };
-                c.take_prefix_simulation(plan, info, &key, p.samples, b)
-            }
-            _ => None,
-        };
-        // It needs the regressor rows of its first samples: the prefix's, or
-        // the whole record's kept by another pass.
-        sim_resume = sim_resume
-            .filter(|(s, _)| s.walk.fits(e.len(), ir.states.len()))
-            .filter(|(s, _)| match &prefix {
-                Some(rows) => {
-                    rows[0].len() == s.walk.equations
-                        && s.sums.len() == rows.len()
-                        && s.sums.iter().zip(rows).all(|(p, r)| p.continues(r))
-                }
-                None => cache.as_deref().is_some_and(|c| {
-                    plan.instruments.is_some()
-                        && c.regressors(plan, info).is_some_and(|r| {
-                            r.len() == s.sums.len()
-                                && r.iter().zip(&s.sums).all(|(r, p)| {
-                                    r.len() == equations
-                                        && p.len() == s.walk.equations
-                                        && p.continues_over(r)
-                                })
-                        })
-                }),
-            });
-        let (sim_walk, sim_sums) = match sim_resume {
-            Some((s, states)) => {
-                if let Some(spare) = new_trajectory.replace(states)
-                    && let Some(c) = cache.as_deref_mut()
-                {
-                    c.return_spare(spare);
-                }
-                (Some(s.walk), Some(s.sums))
-            }
-            None => (None, None),
-        };
-        if let Some(r) = &resume {
-            // The heading rotations kept so far go on too, or none are kept.
-            new_headings = new_headings.and_then(|_| {
-                cache
-                    .as_deref_mut()
-                    .and_then(RecordCache::take_prefix_headings)
-                    .filter(|h| h.len() == r.history.samples)
-            });
-        }
-        let measured_known = prefix.as_ref().map_or(0, |p| p[0].len());
-        let reserve = cache.as_deref().map_or(0, |c| c.reserve);
+        let mut walker = self.pass_walker(plan, pass.theta_sim.is_empty());
+        walker.instrument_means = pass.prefix.map(|p| p.means.as_slice());
+        let simulates = walker.simulates(pass.theta_sim);
+        let Begun {
+            mut keeping,
+            checkpoint,
+            keeps,
+            instruments_key,
+            reads_means,
+        } = pass.begin(
+            &walker,
+            e,
+            info,
+            plan,
+            cache.as_deref_mut().zip(budget.as_deref_mut()),
+            keep_for_others,
+        );
         let kept = cache.as_deref();
         let kept_rows = kept.and_then(|c| c.regressors(plan, info));
         let rows = kept_rows.filter(|_| plan.instruments.is_some());
-        let keep_rows = keeps && kept.is_some() && kept_rows.is_none();
+        keeping.rows = keeps && kept.is_some() && kept_rows.is_none();
         // Where this pass stands at the end, for a pass over a longer record.
-        let mut history = None;
-        let keeps_history = keep_rows && instruments_key.is_some();
-        let resumed = resume
-            .as_ref()
-            .map(|r| r.history.equations)
-            .or(sim_walk.as_ref().map(|s| s.equations))
-            .unwrap_or(0);
-        let (resume_history, resume_sums) = match resume {
-            Some(r) => (Some(r.history), Some(r.sums)),
-            None => (None, None),
-        };
-        // A simulation resumed over kept rows of the whole record goes on
-        // from its instruments' sums; one over the prefix's rows, as a
-        // θ-free pass does, from its rows' too.
-        let (resume_sums, sums_over_kept) = match (resume_sums, sim_sums) {
-            (Some(s), _) => (Some(s), None),
-            (None, Some(s)) if prefix.is_some() => (Some(s), None),
-            (None, s) => (None, s),
-        };
-        let mut sim_kept = None;
-        let keeps_simulation = simulates && cache.is_some() && e.in_memory().is_some();
-        let mut reuse = Reuse {
+        keeping.wants_history = keeping.rows && instruments_key.is_some();
+        keeping.wants_simulation = simulates && kept.is_some() && e.in_memory().is_some();
+        let (measured_known, resumed) =
+            (checkpoint.measured_known(), checkpoint.resumed_equations());
+        let from = checkpoint.into_resumption();
+        let reserve = kept.map_or(0, |c| c.reserve);
+        let acc = accumulators(
+            plan,
+            (from.rows, from.sums),
+            from.sums_over_kept.zip(rows),
+            keeping.rows,
+            e.len(),
+            reserve,
+        );
+        let mut reuse = keeping.reuse(Reuse {
             headings: kept.and_then(RecordCache::headings),
-            keep_headings: new_headings.as_mut(),
             skip_measured: rows.is_some(),
-            reference: match (kept, reference) {
-                (Some(c), Some((t, m))) => c.trajectory_of(t, m),
-                _ => None,
-            },
-            keep_trajectory: new_trajectory.as_mut(),
+            reference: kept
+                .zip(pass.reference)
+                .and_then(|(c, (t, m))| c.trajectory_of(t, m)),
             measured_known,
-            resume: resume_history,
-            keep_history: keeps_history.then_some(&mut history),
-            resume_simulation: sim_walk,
-            keep_simulation: keeps_simulation.then_some(&mut sim_kept),
-        };
-        // The sink sees equation k = 2, 3, …: regressors at k − 1, target at k.
-        let mut k = 1 + resumed;
-        let mut bad = None;
-        let mut prefix = prefix.map(Vec::into_iter);
-        let mut resume_sums = resume_sums.map(Vec::into_iter);
-        let mut acc: Vec<MomentAccumulator> = plan
-            .cols
-            .iter()
-            .map(|c| {
-                let mut a = MomentAccumulator::new(c.len(), c.len());
-                match (
-                    prefix.as_mut().and_then(Iterator::next),
-                    resume_sums.as_mut().and_then(Iterator::next),
-                ) {
-                    (Some(known), Some(from)) => a.keep_rows_resuming(known, from, e.len()),
-                    (Some(known), None) => a.keep_rows_after(known, e.len()),
-                    (None, _) if keep_rows => a.keep_rows(e.len(), reserve),
-                    (None, _) => {}
-                }
-                a
-            })
-            .collect();
-        if let (Some(sums), Some(rows)) = (sums_over_kept, rows) {
-            for ((a, s), r) in acc.iter_mut().zip(sums).zip(rows) {
-                a.resume_instruments(s, r);
-            }
-        }
+            resume: from.history,
+            resume_simulation: from.simulation,
+            ..Reuse::default()
+        });
+        let mut sink = MomentSink::new(ir, plan, pass.scan, rows, measured_known, resumed, acc);
+        let (theta_sim, mu) = (pass.theta_sim, pass.mu);
         let walked = walker.walk(
             e,
             info,
             theta_sim,
             mu,
-            reference,
+            pass.reference,
             &mut reuse,
-            |z: &[f64], phi: &[f64], t: &[f64]| {
+            |z, phi, t| sink.push(z, phi, t),
+        );
+        drop(reuse);
+        let MomentSink { acc, bad, .. } = sink;
+        let Ok(change) = walked else {
+            if let (Some(c), Some(v)) = (cache, keeping.trajectory) {
+                c.return_spare(v);
+            }
+            return self.diverged(e, info, plan, pass.scan, bad);
+        };
+        let simulated = keeping.simulation.is_some();
+        let completed = pass.completed(
+            info,
+            instruments_key,
+            simulated.then_some(reads_means),
+            bad.is_none(),
+        );
+        let (moments, offered) = keeping.finish(acc, rows, completed);
+        if let (Some(c), Some(budget)) = (cache, budget) {
+            c.keep(plan, info, offered, budget);
+        }
+        Summary::Moments {
+            moments,
+            change,
+            bad: bad.map(|(sample, what)| located(e, sample, what)),
+        }
+    }
+
+    /// The summary of a pass whose simulation diverged, with the `bad`
+    /// value a scanning pass met: the simulation stopped the walk early,
+    /// and a bad value further on is still a data error, not a divergence.
+    fn diverged(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+        scan: bool,
+        mut bad: Option<(usize, String)>,
+    ) -> Summary {
+        if scan && bad.is_none() {
+            bad = self.first_non_finite(e, info, plan);
+        }
+        Summary::Diverged {
+            bad: bad.map(|(sample, what)| located(e, sample, what)),
+        }
+    }
+
+    /// The first measured value a scanning pass would find bad
+    /// ([`non_finite`]), walking the whole record without instruments.
+    fn first_non_finite(
+        &self,
+        e: &dyn Source,
+        info: &ExperimentInfo,
+        plan: &PassPlan,
+    ) -> Option<(usize, String)> {
+        let ir = self.model.ir();
+        let n = plan.n_cols;
+        let mut bad = None;
+        let mut k = 1usize;
+        let _ = self.walker(plan, None).walk(
+            e,
+            info,
+            &[],
+            &[],
+            None,
+            &mut Reuse::default(),
+            |_: &[f64], phi: &[f64], t: &[f64]| {
                 k += 1;
-                if let Some(rows) = rows {
-                    for ((o, a), r) in acc.iter_mut().enumerate().zip(rows) {
-                        a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
-                    }
-                    return;
-                }
-                if k - 2 < measured_known {
-                    for (o, a) in acc.iter_mut().enumerate() {
-                        let z = z.get(o * n..(o + 1) * n).unwrap_or(&[]);
-                        a.push_over_kept_row(z, &plan.cols[o]);
-                    }
-                    return;
-                }
-                if scan && bad.is_none() {
+                if bad.is_none() {
                     bad = non_finite(ir, plan.kind, n, k, phi, t);
-                }
-                for (o, a) in acc.iter_mut().enumerate() {
-                    let mut target = t[o];
-                    for (c, v) in &plan.held {
-                        target -= phi[o * n + c] * v;
-                    }
-                    a.push_columns(
-                        &z[o * n..(o + 1) * n],
-                        &phi[o * n..(o + 1) * n],
-                        &plan.cols[o],
-                        target,
-                    );
                 }
             },
         );
-        let located = |bad: Option<(usize, String)>| {
-            bad.map(|(sample, what)| BadValue {
-                location: e.locate(sample),
-                what,
-            })
-        };
-        match walked {
-            Ok(change) => {
-                // Where the simulation's sums stood, for a warm start's pass
-                // over a longer record.
-                let simulation = sim_kept
-                    .and_then(|walk| {
-                        let sums = match rows {
-                            Some(_) => Some(
-                                acc.iter()
-                                    .map(MomentAccumulator::partial_instruments)
-                                    .collect(),
-                            ),
-                            None => acc.iter().map(MomentAccumulator::partial).collect(),
-                        };
-                        sums.map(|s: Vec<PartialSums>| (walk, s))
-                    })
-                    .filter(|_| bad.is_none())
-                    .map(|(walk, sums)| {
-                        let key = SimulationKey {
-                            theta: theta_sim,
-                            mu,
-                            means: means_key(instrument_means),
-                        };
-                        (key, walk, sums)
-                    });
-                let mut partial: Option<Vec<PartialSums>> = None;
-                let (moments, new_rows): (Vec<CrossMoments>, Vec<Option<RegressorRows>>) =
-                    match rows {
-                        Some(rows) => acc
-                            .into_iter()
-                            .zip(rows)
-                            .map(|(a, r)| (a.finish_with(r), None))
-                            .unzip(),
-                        None => {
-                            // Only a pass that can be gone on from keeps where it stood.
-                            if keeps_history {
-                                partial = acc.iter().map(MomentAccumulator::partial).collect();
-                            }
-                            acc.into_iter()
-                                .map(MomentAccumulator::finish_keeping)
-                                .unzip()
-                        }
-                    };
-                if let (Some(c), Some(budget)) = (cache, budget) {
-                    let new_rows = new_rows.into_iter().collect::<Option<Vec<_>>>();
-                    c.keep(
-                        plan,
-                        info,
-                        Kept {
-                            resume: match (instruments_key, history, partial) {
-                                (Some(instruments), Some(history), Some(sums)) if bad.is_none() => {
-                                    Some(Resume {
-                                        instruments,
-                                        history,
-                                        sums,
-                                    })
-                                }
-                                _ => None,
-                            },
-                            regressors: new_rows.filter(|_| keep_rows && bad.is_none()),
-                            headings: new_headings,
-                            trajectory: new_trajectory.map(|states| (theta_sim, mu, states)),
-                            simulation,
-                        },
-                        budget,
-                    );
-                }
-                Summary::Moments {
-                    moments,
-                    change,
-                    bad: located(bad),
-                }
-            }
-            Err(Diverged) => {
-                if let (Some(c), Some(v)) = (cache, new_trajectory) {
-                    c.return_spare(v);
-                }
-                // The simulation stopped the walk early: a bad value further
-                // on is still a data error, not a divergence.
-                if scan && bad.is_none() {
-                    let mut k = 1usize;
-                    let _ = self.walker(plan, None).walk(
-                        e,
-                        info,
-                        &[],
-                        &[],
-                        None,
-                        &mut Reuse::default(),
-                        |_: &[f64], phi: &[f64], t: &[f64]| {
-                            k += 1;
-                            if bad.is_none() {
-                                bad = non_finite(ir, plan.kind, n, k, phi, t);
-                            }
-                        },
-                    );
-                }
-                Summary::Diverged { bad: located(bad) }
-            }
-        }
+        bad
     }
 
     fn long_run(
@@ -569,11 +692,7 @@ impl<'a> PassRunner<'a> {
         mean_res: &[f64],
     ) -> Summary {
         // The instruments of the reported iterate (empty θ: the delayed bootstrap).
-        let walker = if lr.theta_sim.is_empty() && !lr.own {
-            self.walker(plan, Some(Instruments::Delayed))
-        } else {
-            self.walker(plan, plan.instruments)
-        };
+        let walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
         let n = plan.n_cols;
         let mut sums = LongRun::new(lr.dim, lr.lags);
         let mut zeta = DVector::zeros(lr.dim);
@@ -609,6 +728,122 @@ impl<'a> PassRunner<'a> {
             g.transpose().as_slice().to_vec()
         });
         Summary::LongRun { dim: lr.dim, sums }
+    }
+}
+
+/// What a θ-free pass's instruments depend on besides the samples, the
+/// plan and the sign pattern (`None` for simulated instruments).
+fn instruments_key(
+    ir: &Ir,
+    plan: &PassPlan,
+    walker: &EquationWalker,
+    info: &ExperimentInfo,
+) -> Option<InstrumentsKey> {
+    (walker.instruments != Some(Instruments::Simulated)).then(|| {
+        let delayed_means = walker.instruments == Some(Instruments::Delayed)
+            && walker.delayed_mean
+            && reads_measured_disturbances(ir, plan.kind);
+        InstrumentsKey {
+            instruments: walker.instruments,
+            means: if delayed_means {
+                bits(&info.measured_mean)
+            } else {
+                Vec::new()
+            },
+        }
+    })
+}
+
+/// The accumulators of a moment pass, one per output: beginning with the
+/// prefix's `rows` (going on from `sums`, where the pass over them stood),
+/// or keeping every row of the record's `samples` (room for `reserve`), or
+/// keeping none; going on from the instruments' `sums` `over_kept` rows of
+/// the whole record.
+#[allow(clippy::type_complexity)]
+fn accumulators(
+    plan: &PassPlan,
+    (rows, sums): (Option<Vec<RegressorRows>>, Option<Vec<PartialSums>>),
+    over_kept: Option<(Vec<PartialSums>, &[RegressorRows])>,
+    keep_rows: bool,
+    samples: usize,
+    reserve: usize,
+) -> Vec<MomentAccumulator> {
+    let mut prefix = rows.map(Vec::into_iter);
+    let mut resume_sums = sums.map(Vec::into_iter);
+    let mut acc: Vec<MomentAccumulator> = plan
+        .cols
+        .iter()
+        .map(|c| {
+            let mut a = MomentAccumulator::new(c.len(), c.len());
+            match (
+                prefix.as_mut().and_then(Iterator::next),
+                resume_sums.as_mut().and_then(Iterator::next),
+            ) {
+                (Some(known), Some(from)) => a.keep_rows_resuming(known, from, samples),
+                (Some(known), None) => a.keep_rows_after(known, samples),
+                (None, _) if keep_rows => a.keep_rows(samples, reserve),
+                (None, _) => {}
+            }
+            a
+        })
+        .collect();
+    if let Some((sums, rows)) = over_kept {
+        for ((a, s), r) in acc.iter_mut().zip(sums).zip(rows) {
+            a.resume_instruments(s, r);
+        }
+    }
+    acc
+}
+
+/// Where the accumulators of a simulating pass stand, per output (against
+/// kept rows: their instruments' sums), if every one can say.
+fn simulation_sums(acc: &[MomentAccumulator], over_kept: bool) -> Option<Vec<PartialSums>> {
+    if over_kept {
+        Some(
+            acc.iter()
+                .map(MomentAccumulator::partial_instruments)
+                .collect(),
+        )
+    } else {
+        acc.iter().map(MomentAccumulator::partial).collect()
+    }
+}
+
+/// The moments of each output, with the rows each accumulator kept and
+/// (`keeps_history`) where the accumulation stood, for a pass that can be
+/// gone on from; against `kept` rows, neither.
+#[allow(clippy::type_complexity)]
+fn finish(
+    acc: Vec<MomentAccumulator>,
+    kept: Option<&[RegressorRows]>,
+    keeps_history: bool,
+) -> (
+    Vec<CrossMoments>,
+    Vec<Option<RegressorRows>>,
+    Option<Vec<PartialSums>>,
+) {
+    match kept {
+        Some(rows) => {
+            let (moments, new_rows) = acc
+                .into_iter()
+                .zip(rows)
+                .map(|(a, r)| (a.finish_with(r), None))
+                .unzip();
+            (moments, new_rows, None)
+        }
+        None => {
+            // Only a pass that can be gone on from keeps where it stood.
+            let partial = if keeps_history {
+                acc.iter().map(MomentAccumulator::partial).collect()
+            } else {
+                None
+            };
+            let (moments, new_rows) = acc
+                .into_iter()
+                .map(MomentAccumulator::finish_keeping)
+                .unzip();
+            (moments, new_rows, partial)
+        }
     }
 }
 

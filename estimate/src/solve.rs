@@ -62,313 +62,326 @@ impl Estimator<'_> {
         let mut out = Vec::with_capacity(self.blocks.len());
         let mut errors = Vec::new();
         for b in 0..self.blocks.len() {
-            let cols = self.blocks[b].cols.clone();
-            let m = cols.len();
-            let e_count = moments.len();
-            // The summed system (Σ H_i) ϑ = Σ g_i (IV by default, and LS's
-            // normal equations), or the stacked one [H_i/n_i] ϑ = [g_i/n_i].
-            let summed = self.options.method == Method::Ls || self.combine() == Combine::Summed;
-            let (mut mat, rhs, scale_rows, bound): (
-                DMatrix<f64>,
-                DVector<f64>,
-                Vec<f64>,
-                Vec<f64>,
-            ) = if summed {
-                let mut a = DMatrix::zeros(m, m);
-                let mut g = DVector::zeros(m);
-                let mut bound = vec![0.0; m];
-                for i in 0..e_count {
-                    let (h, gi, bi) = self.equations(moments, i, b);
-                    a += h;
-                    g += gi;
-                    for (s, v) in bound.iter_mut().zip(bi) {
-                        *s += v;
-                    }
-                }
-                if self.options.method == Method::Ls {
-                    (a, g, vec![1.0; e_count], bound)
-                } else {
-                    // Divided by the total count, the summed system of one
-                    // experiment is the stacked one bit for bit.
-                    let total: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
-                    let n = total.max(1) as f64;
-                    for v in &mut bound {
-                        *v /= n;
-                    }
-                    (a / n, g / n, vec![1.0 / n; e_count], bound)
-                }
-            } else {
-                let mut a = DMatrix::zeros(m * e_count, m);
-                let mut g = DVector::zeros(m * e_count);
-                let mut scales = Vec::new();
-                let mut bound = vec![0.0; m];
-                for i in 0..e_count {
-                    let (h, gi, bi) = self.equations(moments, i, b);
-                    let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
-                    a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
-                    g.rows_mut(i * m, m).copy_from(&(gi / n));
-                    scales.push(1.0 / n);
-                    for (s, v) in bound.iter_mut().zip(bi) {
-                        *s += v / n;
-                    }
-                }
-                (a, g, scales, bound)
-            };
-            // A simulation that overflowed (or a sum that did) leaves a
-            // non-finite moment: no decomposition may see it.
-            if !(mat.iter().chain(rhs.iter()).chain(&bound)).all(|v| v.is_finite()) {
-                return Err(self.non_finite_moments(b));
-            }
-            // Scale-aware residue test over the whole system: a column whose
-            // moments are at the rounding level of its own scale carries no
-            // information, whatever the units (equilibration would otherwise
-            // blow the residue up into a column).
-            let equations: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
-            let residue = RESIDUE_EPSILONS * f64::EPSILON * (equations.max(1) as f64);
-            for (j, bj) in bound.iter().enumerate() {
-                if mat.column(j).norm() <= residue * bj {
-                    mat.column_mut(j).fill(0.0);
-                }
-            }
-            // Rows equilibrated too (each instrument's equation to unit norm):
-            // an instrument in large units must not drown the others, so the
-            // rank decision and the conditioning do not depend on the units.
-            // One scale per instrument, the same in every experiment's rows
-            // (stacked), so the experiments keep their relative weights.
-            let instrument_norm: Vec<f64> = (0..m)
-                .map(|r| {
-                    (0..mat.nrows() / m)
-                        .map(|i| mat.row(i * m + r).norm_squared())
-                        .sum::<f64>()
-                        .sqrt()
-                })
-                .collect();
-            let row_scale: Vec<f64> = (0..mat.nrows())
-                .map(|r| {
-                    let norm = instrument_norm[r % m];
-                    if norm > 0.0 && norm.is_finite() {
-                        1.0 / norm
-                    } else {
-                        1.0
-                    }
-                })
-                .collect();
-            let mut scaled = mat.clone();
-            for (r, d) in row_scale.iter().enumerate() {
-                scaled.row_mut(r).scale_mut(*d);
-            }
-            let mut order: Vec<usize> = (0..m).collect();
-            order.sort_by_key(|j| self.preference[cols[*j]]);
-            // A dropped column's combination of the kept ones is only read in
-            // messages: the recorded solve's, or the error without --aggregate.
-            let explain = record || !self.options.aggregate;
-            let sel = select_columns(&scaled, &order, self.options.rank_tolerance, explain);
-            // The square summed system is solved equilibrated (its solution
-            // does not depend on row scaling); the stacked one as the paper
-            // writes it, by unweighted least squares over the rows.
-            let (mat, rhs, row_scale) = if summed {
-                let mut rhs = rhs;
-                for (r, d) in row_scale.iter().enumerate() {
-                    rhs[r] *= d;
-                }
-                (scaled.clone(), rhs, row_scale)
-            } else {
-                (mat, rhs, vec![1.0; row_scale.len()])
-            };
-            let mut held = Vec::new();
-            for (j, combo) in &sel.dropped {
-                let c = cols[*j];
-                let col = &self.ir.predictors.get(self.kind)[c];
-                // Formatted only where it is reported (a recorded solve,
-                // or an error): exact rationals are not cheap.
-                let text = || {
-                    if combo.is_empty() {
-                        format!(
-                            "{} is not excited by these data (its moments vanish)",
-                            col.name
-                        )
-                    } else {
-                        let mut items: Vec<(String, Q)> = vec![];
-                        for (k, a) in combo {
-                            items.push((
-                                self.ir.predictors.get(self.kind)[cols[*k]].name.clone(),
-                                Q::from_float(round_sig(*a)).unwrap_or_default(),
-                            ));
-                        }
-                        format!(
-                            "{} is not separately excited: its column equals {}",
-                            col.name,
-                            linear_text_f(&items)
-                        )
-                    }
-                };
-                match col.kind {
-                    ColumnKind::Theta { parameter } => {
-                        let p = &self.ir.parameters[parameter];
-                        let value = self.nominal[parameter];
-                        if p.measured && self.kind == PredictorKind::Measured {
-                            if record {
-                                let text = text();
-                                self.warnings.push(format!(
-                                    "{}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
-                                    text,
-                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
-                                    p.name,
-                                    self.ir.disturbances[p.medium.unwrap_or(0)].name,
-                                    p.name,
-                                    value
-                                ));
-                                self.unexcited.push(text);
-                                for (k, a) in combo {
-                                    let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
-                                    let held = if value == 0.0 {
-                                        p.name.clone()
-                                    } else {
-                                        format!("({} - {value})", p.name)
-                                    };
-                                    let coef = round_sig(*a);
-                                    self.aggregates.push(format!(
-                                        "{kept} estimates {kept} {} {}*{held}",
-                                        if coef < 0.0 { "-" } else { "+" },
-                                        coef.abs()
-                                    ));
-                                }
-                            }
-                            held.push((c, value));
-                        } else if self.options.aggregate {
-                            if record {
-                                let text = text();
-                                self.warnings.push(format!(
-                                    "{text}; held at its nominal value {value} (--aggregate)"
-                                ));
-                                self.unexcited.push(text);
-                            }
-                            held.push((c, value));
-                        } else {
-                            errors.push(text());
-                        }
-                    }
-                    _ => {
-                        if record {
-                            self.unexcited
-                                .push(format!("{} (nuisance; held at 0)", text()));
-                        }
-                        held.push((c, 0.0));
-                    }
-                }
-            }
-            let kept: Vec<usize> = sel.kept.iter().map(|j| cols[*j]).collect();
-            // Right-hand side without the held columns' contribution.
-            let mut g = rhs.clone();
-            for (c, v) in &held {
-                if let Some(j) = cols.iter().position(|x| x == c) {
-                    g -= mat.column(j) * *v;
-                }
-            }
-            let kj: Vec<usize> = sel.kept.clone();
-            let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
-            // A refinement's iterate needs only ϑ: the columns kept are
-            // independent, so a QR factorisation solves it; the recorded
-            // solve (the estimate reported, its covariance map and
-            // conditioning) takes the SVD.
-            // Without a covariance, the recorded solve needs only the
-            // singular values besides ϑ (the conditioning of the summed,
-            // equilibrated system), not the pseudo-inverse.
-            let values_only = !record || (summed && !self.options.covariance);
-            if values_only && let Some(values) = solve_independent(&mk, &g) {
-                let (condition, weak) = if record {
-                    let condition = condition_number(&mk);
-                    let weak = if condition > CONDITION_WARNING {
-                        weakest_direction(&mk)
-                            .into_iter()
-                            .map(|k| kept[k])
-                            .collect()
-                    } else {
-                        Vec::new()
-                    };
-                    (condition, weak)
-                } else {
-                    (f64::NAN, Vec::new())
-                };
-                out.push(BlockSolution {
-                    kept,
-                    held,
-                    values: values.iter().copied().collect(),
-                    b: Vec::new(),
-                    rows: Vec::new(),
-                    condition,
-                    weak,
-                });
-                continue;
-            }
-            let (values, mut pinv, condition) = solve_equilibrated(&mk, &g);
-            // The map from the unscaled moment sums to ϑ includes the row scaling.
-            for (c, d) in row_scale.iter().enumerate() {
-                pinv.column_mut(c).scale_mut(*d);
-            }
-            // Conditioning judged on the equilibrated system, whatever the units.
-            let condition = if summed {
-                condition
-            } else {
-                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
-                solve_equilibrated(&ks, &DVector::zeros(scaled.nrows())).2
-            };
-            let weak = if condition > CONDITION_WARNING {
-                let ks = DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
-                weakest_direction(&ks)
-                    .into_iter()
-                    .map(|k| kept[k])
-                    .collect()
-            } else {
-                Vec::new()
-            };
-            // B_i: ϑ_K = pinv · g, with g's experiment-i rows = (Σ_k ζ_k)·scale_i.
-            let b_list = if self.options.method == Method::Ls {
-                // ϑ = A⁻¹ Σ ζ restricted to the kept rows.
-                let rows_idx = kj.clone();
-                let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
-                vec![sub; e_count]
-            } else if summed {
-                (0..e_count).map(|i| &pinv * scale_rows[i]).collect()
-            } else {
-                (0..e_count)
-                    .map(|i| pinv.columns(i * m, m) * scale_rows[i])
-                    .collect()
-            };
-            let rows = if self.options.method == Method::Ls {
-                kept.clone()
-            } else {
-                cols.clone()
-            };
-            out.push(BlockSolution {
-                kept,
-                held,
-                values: values.iter().copied().collect(),
-                b: b_list,
-                rows,
-                condition,
-                weak,
-            });
+            out.push(self.solve_block(moments, b, record, &mut errors)?);
         }
         if !errors.is_empty() {
-            let remark2 = self
-                .infos
-                .iter()
-                .any(|i| i.spread < 4.0 * self.options.heading_spread);
-            return Err(err(
-                "rank-deficient",
-                format!(
-                    "the data did not excite every parameter: {}",
-                    errors.join("; ")
-                ),
-                if remark2 {
-                    "the heading barely varied, which leaves the disturbance terms collinear with the others (paper Remark 2): turn the craft during the experiment; or estimate the identifiable combinations with --aggregate".to_string()
-                } else {
-                    "excite the named terms (richer input, experiments with other sign patterns), or estimate the identifiable combinations with --aggregate".to_string()
-                },
-            ));
+            return Err(self.rank_deficient(&errors));
         }
         Ok(out)
+    }
+
+    /// Solves block `b`: its system assembled, residue columns zeroed,
+    /// rows equilibrated, columns selected (those not excited held, or
+    /// reported in `errors`), then solved.
+    fn solve_block(
+        &mut self,
+        moments: &[Vec<CrossMoments>],
+        b: usize,
+        record: bool,
+        errors: &mut Vec<String>,
+    ) -> Result<BlockSolution, EstimateError> {
+        let cols = self.blocks[b].cols.clone();
+        let m = cols.len();
+        // The summed system (Σ H_i) ϑ = Σ g_i (IV by default, and LS's
+        // normal equations), or the stacked one [H_i/n_i] ϑ = [g_i/n_i].
+        let summed = self.options.method == Method::Ls || self.combine() == Combine::Summed;
+        let System {
+            mut mat,
+            rhs,
+            scale_rows,
+            bound,
+        } = self.block_system(moments, b, summed);
+        // A simulation that overflowed (or a sum that did) leaves a
+        // non-finite moment: no decomposition may see it.
+        if !(mat.iter().chain(rhs.iter()).chain(&bound)).all(|v| v.is_finite()) {
+            return Err(self.non_finite_moments(b));
+        }
+        let equations: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
+        zero_residue_columns(&mut mat, &bound, equations);
+        let (scaled, row_scale) = equilibrate_rows(&mat, m);
+        let mut order: Vec<usize> = (0..m).collect();
+        order.sort_by_key(|j| self.preference[cols[*j]]);
+        // A dropped column's combination of the kept ones is only read in
+        // messages: the recorded solve's, or the error without --aggregate.
+        let explain = record || !self.options.aggregate;
+        let sel = select_columns(&scaled, &order, self.options.rank_tolerance, explain);
+        // The square summed system is solved equilibrated (its solution
+        // does not depend on row scaling); the stacked one as the paper
+        // writes it, by unweighted least squares over the rows.
+        let (mat, rhs, row_scale) = if summed {
+            (scaled.clone(), scaled_rhs(rhs, &row_scale), row_scale)
+        } else {
+            (mat, rhs, vec![1.0; row_scale.len()])
+        };
+        let held = self.hold_dropped(&cols, &sel.dropped, record, errors);
+        let kept: Vec<usize> = sel.kept.iter().map(|j| cols[*j]).collect();
+        let g = without_held(&rhs, &mat, &cols, &held);
+        let kj: Vec<usize> = sel.kept.clone();
+        let mk = DMatrix::from_fn(mat.nrows(), kj.len(), |r, k| mat[(r, kj[k])]);
+        // A refinement's iterate needs only ϑ: the columns kept are
+        // independent, so a QR factorisation solves it; the recorded
+        // solve (the estimate reported, its covariance map and
+        // conditioning) takes the SVD.
+        // Without a covariance, the recorded solve needs only the
+        // singular values besides ϑ (the conditioning of the summed,
+        // equilibrated system), not the pseudo-inverse.
+        let values_only = !record || (summed && !self.options.covariance);
+        if values_only && let Some(values) = solve_independent(&mk, &g) {
+            return Ok(independent_solution(&mk, kept, held, &values, record));
+        }
+        let (values, mut pinv, condition) = solve_equilibrated(&mk, &g);
+        // The map from the unscaled moment sums to ϑ includes the row scaling.
+        for (c, d) in row_scale.iter().enumerate() {
+            pinv.column_mut(c).scale_mut(*d);
+        }
+        // Conditioning judged on the equilibrated system, whatever the units.
+        let ks = || DMatrix::from_fn(scaled.nrows(), kj.len(), |r, k| scaled[(r, kj[k])]);
+        let condition = if summed {
+            condition
+        } else {
+            solve_equilibrated(&ks(), &DVector::zeros(scaled.nrows())).2
+        };
+        let weak = if condition > CONDITION_WARNING {
+            weak_columns(condition, &ks(), &kept)
+        } else {
+            Vec::new()
+        };
+        let b_list = self.moment_maps(&pinv, &kj, &scale_rows, summed, m);
+        let rows = if self.options.method == Method::Ls {
+            kept.clone()
+        } else {
+            cols.clone()
+        };
+        Ok(BlockSolution {
+            kept,
+            held,
+            values: values.iter().copied().collect(),
+            b: b_list,
+            rows,
+            condition,
+            weak,
+        })
+    }
+
+    /// Block `b`'s moment equations over every experiment: summed, or
+    /// stacked with each experiment's rows divided by its count.
+    fn block_system(&self, moments: &[Vec<CrossMoments>], b: usize, summed: bool) -> System {
+        let m = self.blocks[b].cols.len();
+        let e_count = moments.len();
+        if summed {
+            let mut a = DMatrix::zeros(m, m);
+            let mut g = DVector::zeros(m);
+            let mut bound = vec![0.0; m];
+            for i in 0..e_count {
+                let (h, gi, bi) = self.equations(moments, i, b);
+                a += h;
+                g += gi;
+                for (s, v) in bound.iter_mut().zip(bi) {
+                    *s += v;
+                }
+            }
+            if self.options.method == Method::Ls {
+                System {
+                    mat: a,
+                    rhs: g,
+                    scale_rows: vec![1.0; e_count],
+                    bound,
+                }
+            } else {
+                // Divided by the total count, the summed system of one
+                // experiment is the stacked one bit for bit.
+                let total: usize = moments.iter().map(|e| e[self.blocks[b].outputs[0]].n).sum();
+                let n = total.max(1) as f64;
+                for v in &mut bound {
+                    *v /= n;
+                }
+                System {
+                    mat: a / n,
+                    rhs: g / n,
+                    scale_rows: vec![1.0 / n; e_count],
+                    bound,
+                }
+            }
+        } else {
+            let mut a = DMatrix::zeros(m * e_count, m);
+            let mut g = DVector::zeros(m * e_count);
+            let mut scales = Vec::new();
+            let mut bound = vec![0.0; m];
+            for i in 0..e_count {
+                let (h, gi, bi) = self.equations(moments, i, b);
+                let n = moments[i][self.blocks[b].outputs[0]].n.max(1) as f64;
+                a.view_mut((i * m, 0), (m, m)).copy_from(&(h / n));
+                g.rows_mut(i * m, m).copy_from(&(gi / n));
+                scales.push(1.0 / n);
+                for (s, v) in bound.iter_mut().zip(bi) {
+                    *s += v / n;
+                }
+            }
+            System {
+                mat: a,
+                rhs: g,
+                scale_rows: scales,
+                bound,
+            }
+        }
+    }
+
+    /// What the numerically dropped columns (`dropped`, indices into
+    /// `cols`, with their combinations of the kept ones) are held at: θ
+    /// columns at nominal where that is allowed (else an entry of
+    /// `errors`), nuisance columns at 0; a `record`ed solve reports them.
+    fn hold_dropped(
+        &mut self,
+        cols: &[usize],
+        dropped: &[(usize, Vec<(usize, f64)>)],
+        record: bool,
+        errors: &mut Vec<String>,
+    ) -> Vec<(usize, f64)> {
+        let mut held = Vec::new();
+        for (j, combo) in dropped {
+            let c = cols[*j];
+            let col = &self.ir.predictors.get(self.kind)[c];
+            // Formatted only where it is reported (a recorded solve,
+            // or an error): exact rationals are not cheap.
+            let text = || self.dropped_text(cols, c, combo);
+            match col.kind {
+                ColumnKind::Theta { parameter } => {
+                    let p = &self.ir.parameters[parameter];
+                    let value = self.nominal[parameter];
+                    if p.measured && self.kind == PredictorKind::Measured {
+                        if record {
+                            let text = text();
+                            self.report_measured_held(text, parameter, cols, combo);
+                        }
+                        held.push((c, value));
+                    } else if self.options.aggregate {
+                        if record {
+                            let text = text();
+                            self.warnings.push(format!(
+                                "{text}; held at its nominal value {value} (--aggregate)"
+                            ));
+                            self.unexcited.push(text);
+                        }
+                        held.push((c, value));
+                    } else {
+                        errors.push(text());
+                    }
+                }
+                _ => {
+                    if record {
+                        self.unexcited
+                            .push(format!("{} (nuisance; held at 0)", text()));
+                    }
+                    held.push((c, 0.0));
+                }
+            }
+        }
+        held
+    }
+
+    /// Why column `c` was dropped: not excited, or (`combo`, indices into
+    /// `cols`) a combination of the kept ones.
+    fn dropped_text(&self, cols: &[usize], c: usize, combo: &[(usize, f64)]) -> String {
+        let predictors = self.ir.predictors.get(self.kind);
+        let col = &predictors[c];
+        if combo.is_empty() {
+            format!(
+                "{} is not excited by these data (its moments vanish)",
+                col.name
+            )
+        } else {
+            let mut items: Vec<(String, Q)> = vec![];
+            for (k, a) in combo {
+                items.push((
+                    predictors[cols[*k]].name.clone(),
+                    Q::from_float(round_sig(*a)).unwrap_or_default(),
+                ));
+            }
+            format!(
+                "{} is not separately excited: its column equals {}",
+                col.name,
+                linear_text_f(&items)
+            )
+        }
+    }
+
+    /// Reports a measured-medium parameter held at its nominal value
+    /// (`text` says why), and the aggregates the columns it is combined
+    /// with (`combo`) estimate.
+    fn report_measured_held(
+        &mut self,
+        text: String,
+        parameter: usize,
+        cols: &[usize],
+        combo: &[(usize, f64)],
+    ) {
+        let p = &self.ir.parameters[parameter];
+        let value = self.nominal[parameter];
+        let medium = &self.ir.disturbances[p.medium.unwrap_or(0)].name;
+        self.warnings.push(format!(
+            "{}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
+            text, medium, p.name, medium, p.name, value
+        ));
+        self.unexcited.push(text);
+        for (k, a) in combo {
+            let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
+            let held = if value == 0.0 {
+                p.name.clone()
+            } else {
+                format!("({} - {value})", p.name)
+            };
+            let coef = round_sig(*a);
+            self.aggregates.push(format!(
+                "{kept} estimates {kept} {} {}*{held}",
+                if coef < 0.0 { "-" } else { "+" },
+                coef.abs()
+            ));
+        }
+    }
+
+    /// `B_i` of each experiment: `ϑ_K = pinv · g`, with g's experiment-i
+    /// rows = `(Σ_k ζ_k)·scale_i` (`kj`: the kept columns, `m` per block).
+    fn moment_maps(
+        &self,
+        pinv: &DMatrix<f64>,
+        kj: &[usize],
+        scale_rows: &[f64],
+        summed: bool,
+        m: usize,
+    ) -> Vec<DMatrix<f64>> {
+        let e_count = scale_rows.len();
+        if self.options.method == Method::Ls {
+            // ϑ = A⁻¹ Σ ζ restricted to the kept rows.
+            let rows_idx = kj.to_vec();
+            let sub = DMatrix::from_fn(kj.len(), rows_idx.len(), |r, k| pinv[(r, rows_idx[k])]);
+            vec![sub; e_count]
+        } else if summed {
+            (0..e_count).map(|i| pinv * scale_rows[i]).collect()
+        } else {
+            (0..e_count)
+                .map(|i| pinv.columns(i * m, m) * scale_rows[i])
+                .collect()
+        }
+    }
+
+    /// The error for columns the data did not excite (`errors`).
+    fn rank_deficient(&self, errors: &[String]) -> EstimateError {
+        let remark2 = self
+            .infos
+            .iter()
+            .any(|i| i.spread < 4.0 * self.options.heading_spread);
+        err(
+            "rank-deficient",
+            format!(
+                "the data did not excite every parameter: {}",
+                errors.join("; ")
+            ),
+            if remark2 {
+                "the heading barely varied, which leaves the disturbance terms collinear with the others (paper Remark 2): turn the craft during the experiment; or estimate the identifiable combinations with --aggregate".to_string()
+            } else {
+                "excite the named terms (richer input, experiments with other sign patterns), or estimate the identifiable combinations with --aggregate".to_string()
+            },
+        )
     }
 
     /// θ from block solutions (held parameters at nominal).
@@ -391,6 +404,123 @@ impl Estimator<'_> {
         }
         v.sort_by_key(|(c, _)| *c);
         v
+    }
+}
+
+/// One block's moment equations, as solved.
+struct System {
+    mat: DMatrix<f64>,
+    rhs: DVector<f64>,
+    /// The scale of each experiment's rows.
+    scale_rows: Vec<f64>,
+    /// Each column's Cauchy–Schwarz scale, for the residue test.
+    bound: Vec<f64>,
+}
+
+/// Scale-aware residue test over the whole system: a column whose moments
+/// are at the rounding level of its own scale (`bound`, over `equations`
+/// equations) carries no information, whatever the units (equilibration
+/// would otherwise blow the residue up into a column): it is zeroed.
+fn zero_residue_columns(mat: &mut DMatrix<f64>, bound: &[f64], equations: usize) {
+    let residue = RESIDUE_EPSILONS * f64::EPSILON * (equations.max(1) as f64);
+    for (j, bj) in bound.iter().enumerate() {
+        if mat.column(j).norm() <= residue * bj {
+            mat.column_mut(j).fill(0.0);
+        }
+    }
+}
+
+/// `mat` with its rows equilibrated (each instrument's equation to unit
+/// norm, `m` instruments), and the scale of each row: an instrument in
+/// large units must not drown the others, so the rank decision and the
+/// conditioning do not depend on the units. One scale per instrument, the
+/// same in every experiment's rows (stacked), so the experiments keep their
+/// relative weights.
+fn equilibrate_rows(mat: &DMatrix<f64>, m: usize) -> (DMatrix<f64>, Vec<f64>) {
+    let instrument_norm: Vec<f64> = (0..m)
+        .map(|r| {
+            (0..mat.nrows() / m)
+                .map(|i| mat.row(i * m + r).norm_squared())
+                .sum::<f64>()
+                .sqrt()
+        })
+        .collect();
+    let row_scale: Vec<f64> = (0..mat.nrows())
+        .map(|r| {
+            let norm = instrument_norm[r % m];
+            if norm > 0.0 && norm.is_finite() {
+                1.0 / norm
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let mut scaled = mat.clone();
+    for (r, d) in row_scale.iter().enumerate() {
+        scaled.row_mut(r).scale_mut(*d);
+    }
+    (scaled, row_scale)
+}
+
+/// The solution `values` of the `kept` columns' independent system `mk`,
+/// with `held` ones, and without a map for the covariance: a `record`ed
+/// one with its conditioning.
+fn independent_solution(
+    mk: &DMatrix<f64>,
+    kept: Vec<usize>,
+    held: Vec<(usize, f64)>,
+    values: &DVector<f64>,
+    record: bool,
+) -> BlockSolution {
+    let (condition, weak) = if record {
+        let condition = condition_number(mk);
+        (condition, weak_columns(condition, mk, &kept))
+    } else {
+        (f64::NAN, Vec::new())
+    };
+    BlockSolution {
+        kept,
+        held,
+        values: values.iter().copied().collect(),
+        b: Vec::new(),
+        rows: Vec::new(),
+        condition,
+        weak,
+    }
+}
+
+/// `rhs` with its rows scaled by `row_scale`.
+fn scaled_rhs(mut rhs: DVector<f64>, row_scale: &[f64]) -> DVector<f64> {
+    for (r, d) in row_scale.iter().enumerate() {
+        rhs[r] *= d;
+    }
+    rhs
+}
+
+/// The right-hand side `rhs` without the contribution of the `held`
+/// columns (of `cols`, the columns of `mat`).
+fn without_held(
+    rhs: &DVector<f64>,
+    mat: &DMatrix<f64>,
+    cols: &[usize],
+    held: &[(usize, f64)],
+) -> DVector<f64> {
+    let mut g = rhs.clone();
+    for (c, v) in held {
+        if let Some(j) = cols.iter().position(|x| x == c) {
+            g -= mat.column(j) * *v;
+        }
+    }
+    g
+}
+
+/// The kept columns (`kept`, by column of `mk`) that dominate the weakest
+/// direction of `mk` when its `condition` is above [`CONDITION_WARNING`].
+fn weak_columns(condition: f64, mk: &DMatrix<f64>, kept: &[usize]) -> Vec<usize> {
+    if condition > CONDITION_WARNING {
+        weakest_direction(mk).into_iter().map(|k| kept[k]).collect()
+    } else {
+        Vec::new()
     }
 }
 

@@ -4,8 +4,9 @@ use crate::estimator::Estimator;
 use crate::method::{Instruments, Method};
 use crate::outcome::{EstimateError, err};
 use crate::protocol::{BadValue, PassPlan, SimChange};
-use crate::record::ExperimentInfo;
+use crate::record::{ExperimentInfo, FixedSignColumn};
 use leeway_model::experiment::Source;
+use leeway_model::interp::{ArgPlan, TermPlan};
 use leeway_model::interrupt::Interrupt;
 use leeway_model::model::{HeadingRotation, Model, Signals, planar_rotation, rotated};
 use leeway_model::signs::set_pointwise_signs;
@@ -17,7 +18,7 @@ use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 pub(super) struct EquationWalker<'a> {
     pub(super) model: &'a dyn Model,
     pub(super) ir: &'a Ir,
-    pub(super) terms: &'a [leeway_model::interp::TermPlan],
+    pub(super) terms: &'a [TermPlan],
     pub(super) kind: PredictorKind,
     pub(super) instruments: Option<Instruments>,
     /// Delayed instruments take measured disturbances at their experiment
@@ -138,6 +139,22 @@ impl SimWalk {
     pub(super) fn trajectory_len(&self) -> usize {
         self.samples.saturating_sub(1) * self.x_sim.len()
     }
+
+    /// Where a simulation of `n_out` states stood after `samples` samples
+    /// and `equations` equations (states and sums zero).
+    #[cfg(test)]
+    pub(super) fn after(samples: usize, equations: usize, n_out: usize) -> SimWalk {
+        SimWalk {
+            samples,
+            equations,
+            x_sim: vec![0.0; n_out],
+            rz: [1.0, 0.0],
+            err2: vec![0.0; n_out],
+            y_sum: vec![0.0; n_out],
+            y_sum2: vec![0.0; n_out],
+            y_n: samples.saturating_sub(1),
+        }
+    }
 }
 
 impl History {
@@ -146,9 +163,35 @@ impl History {
     pub(super) fn continues_headings(&self) -> bool {
         self.headings.is_some()
     }
+
+    /// Where a walk stood after `samples` samples and `equations`
+    /// equations, its heading rotation's state kept or not (history zero).
+    #[cfg(test)]
+    pub(super) fn after(samples: usize, equations: usize, headings: bool) -> History {
+        History {
+            y1: Vec::new(),
+            y2: Vec::new(),
+            u1: Vec::new(),
+            rot1: Vec::new(),
+            rot2: Vec::new(),
+            d1: Vec::new(),
+            d2: Vec::new(),
+            rh1: [1.0, 0.0],
+            rh2: [1.0, 0.0],
+            headings: headings.then(HeadingRotation::default),
+            samples,
+            equations,
+        }
+    }
 }
 
 impl EquationWalker<'_> {
+    /// Whether a walk of `theta_sim` simulates its instruments (an empty θ
+    /// simulates nothing).
+    pub(super) fn simulates(&self, theta_sim: &[f64]) -> bool {
+        self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty()
+    }
+
     /// Calls `f(z, φ, t)` on each equation: instruments, regressors
     /// (`n_out × n_cols`) and targets (both empty when the walk skips the
     /// measured side). Generic in `f`, so the sink is inlined into the walk.
@@ -164,6 +207,8 @@ impl EquationWalker<'_> {
         mut f: F,
     ) -> Result<SimChange, Diverged> {
         let ir = self.ir;
+        let shape = Shape::of(ir);
+        let n_out = shape.n_out;
         // Only instruments of their own can leave the regressors out.
         let skip_measured = reuse.skip_measured && self.instruments.is_some();
         let measured_known = reuse.measured_known;
@@ -171,31 +216,122 @@ impl EquationWalker<'_> {
         // targets and delayed instruments: none of them in a walk that
         // skips the measured side and simulates its instruments.
         let keeps_states = !(skip_measured && self.instruments == Some(Instruments::Simulated));
-        let n_out = ir.states.len();
         // A kept reference simulation is used whole (one state per step) or not at all.
         let known_reference = reuse
             .reference
             .filter(|r| r.len() == e.len().saturating_sub(1) * n_out);
         let known_headings = reuse.headings.filter(|r| r.len() == e.len());
-        let n_in = ir.inputs.len();
-        // Measured rotation columns travel with the data; a planar heading does not.
-        let n_rot = if matches!(ir.rotation, Rotation::Measured { .. }) {
-            ir.rotation_vars.len()
-        } else {
-            0
-        };
-        let n_comp = ir.components.len();
-        let planar = match &ir.rotation {
-            Rotation::Planar { integrates, .. } => Some(*integrates),
-            _ => None,
-        };
         let h = e.step();
-        let len = n_out * self.n_cols;
-        // Zeroed once: `regressors_update` then writes only the structurally
-        // nonzero slots, sample after sample.
-        let mut phi = vec![0.0; len];
-        let mut z = vec![0.0; len];
-        let mut t = vec![0.0; n_out];
+        let mut eq = EquationBuffers::new(self, info);
+        let (resume, resume_sim) = self.resumed(e, theta_sim, reference, reuse, known_headings);
+        let replay_until = resume_sim.as_ref().map_or(0, |s| s.samples);
+        let start = resume
+            .as_ref()
+            .map_or(replay_until.saturating_sub(2), |h| h.samples);
+        let mut hist = resume.unwrap_or_else(|| History::start(&shape));
+        // Rotations read from a kept copy leave the running rotation behind.
+        hist.headings = hist.headings.take().filter(|_| known_headings.is_none());
+        let simulated = (theta_sim, mu, reference, known_reference);
+        let mut sims = Simulations::new(self, info, simulated, h, resume_sim, &mut hist.equations);
+        let mut k = start;
+        let mut diverged = false;
+        let simulates = self.simulates(theta_sim);
+        let mut stop = Stopper::new(self.interrupt);
+        let mut sample = |row: &leeway_model::experiment::Row| {
+            if diverged || stop.now() {
+                return;
+            }
+            if k < replay_until {
+                // Walked again for the history only.
+            } else if k == 0 {
+                sims.begin(row);
+            } else {
+                if simulates {
+                    sims.set_disturbances(&hist);
+                }
+                if k >= 2 {
+                    let skip_measured = skip_measured || hist.equations < measured_known;
+                    self.equation(
+                        info,
+                        row,
+                        &hist,
+                        &sims.sim,
+                        (&shape, h),
+                        &mut eq,
+                        skip_measured,
+                        &mut f,
+                    );
+                    hist.equations += 1;
+                }
+                // Advance the instrument simulation from k−1 to k (its
+                // disturbances set at the sample's start).
+                if simulates
+                    && sims
+                        .step(&hist, row.states, reuse.keep_trajectory.as_deref_mut())
+                        .is_err()
+                {
+                    diverged = true;
+                    return;
+                }
+            }
+            let keep_headings = reuse.keep_headings.as_deref_mut();
+            hist.shift(row, k, keeps_states, &shape, known_headings, keep_headings);
+            k += 1;
+        };
+        // In-memory columns are walked by a loop the sample is inlined into.
+        match e.in_memory() {
+            Some(x) => x.rows_from(start, &mut sample),
+            None => e.visit(&mut sample),
+        }
+        if diverged {
+            return Err(Diverged);
+        }
+        hist.samples = k;
+        Ok(self.keep_where(reuse, theta_sim, hist, sims))
+    }
+
+    /// Keeps where a completed walk stood after the record's samples
+    /// (`hist`, `sims`) into `reuse`, for a walk over a longer record: a
+    /// θ-free walk's history, or a simulation's; its change and fit sums.
+    fn keep_where(
+        &self,
+        reuse: &mut Reuse,
+        theta_sim: &[f64],
+        hist: History,
+        sims: Simulations,
+    ) -> SimChange {
+        if let Some(kept) = reuse.keep_history.as_deref_mut()
+            && self.instruments != Some(Instruments::Simulated)
+        {
+            *kept = Some(hist);
+        } else if let Some(kept) = reuse.keep_simulation.as_deref_mut()
+            && self.simulates(theta_sim)
+        {
+            *kept = Some(SimWalk {
+                samples: hist.samples,
+                equations: hist.equations,
+                x_sim: sims.sim.x,
+                rz: sims.sim.rz,
+                err2: sims.change.err2.clone(),
+                y_sum: sims.change.y_sum.clone(),
+                y_sum2: sims.change.y_sum2.clone(),
+                y_n: sims.change.y_n,
+            });
+        }
+        sims.change
+    }
+
+    /// What a walk goes on from: where a θ-free walk over the record's
+    /// first samples stood, or else where a simulation of the same
+    /// instruments did (each only where it can: see [`Reuse`]).
+    fn resumed(
+        &self,
+        e: &dyn Source,
+        theta_sim: &[f64],
+        reference: Option<(&[f64], &[f64])>,
+        reuse: &mut Reuse,
+        known_headings: Option<&[[f64; 2]]>,
+    ) -> (Option<History>, Option<SimWalk>) {
         // A walk that simulates goes on from nothing kept (its simulation's
         // state is not part of a history), nor does a streamed record's.
         let resume = reuse.resume.take().filter(|_| {
@@ -210,104 +346,201 @@ impl EquationWalker<'_> {
                 && reference.is_none()
                 && e.in_memory().is_some()
                 && known_headings.is_some()
-                && s.fits(e.len(), n_out)
+                && s.fits(e.len(), self.ir.states.len())
         });
-        let replay_until = resume_sim.as_ref().map_or(0, |s| s.samples);
-        let start = resume
-            .as_ref()
-            .map_or(replay_until.saturating_sub(2), |h| h.samples);
-        let History {
-            mut y1,
-            mut y2,
-            mut u1,
-            mut rot1,
-            mut rot2,
-            mut d1,
-            mut d2,
-            mut rh1,
-            mut rh2,
-            headings,
-            samples: _,
-            mut equations,
-        } = resume.unwrap_or_else(|| History {
-            y1: vec![0.0; n_out],
-            y2: vec![0.0; n_out],
-            u1: vec![0.0; n_in],
-            rot1: vec![0.0; n_rot],
-            rot2: vec![0.0; n_rot],
-            d1: vec![0.0; n_comp],
-            d2: vec![0.0; n_comp],
-            rh1: [1.0, 0.0],
-            rh2: [1.0, 0.0],
-            headings: Some(HeadingRotation::default()),
-            samples: 0,
-            equations: 0,
-        });
-        // Rotations read from a kept copy leave the running rotation behind.
-        let mut headings = headings.filter(|_| known_headings.is_none());
-        let mut x_sim = vec![0.0; n_out];
-        let mut x_next = vec![0.0; n_out];
-        if let Some(s) = &resume_sim {
-            x_sim.copy_from_slice(&s.x_sim);
-            equations = s.equations;
+        (resume, resume_sim)
+    }
+
+    /// Gives equation k (sample `row`) to the sink `f`: its regressors
+    /// (unless `skip_measured`) and instruments evaluated into `eq` at the
+    /// history `hist` (samples k − 1 and k − 2) and the instrument
+    /// simulation `sim`, and its targets (step `h`).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn equation<F: FnMut(&[f64], &[f64], &[f64])>(
+        &self,
+        info: &ExperimentInfo,
+        row: &leeway_model::experiment::Row,
+        hist: &History,
+        sim: &Simulation,
+        (shape, h): (&Shape, f64),
+        eq: &mut EquationBuffers,
+        skip_measured: bool,
+        f: &mut F,
+    ) {
+        self.regressors_and_instruments(info, hist, sim, shape, eq, skip_measured);
+        if skip_measured {
+            // Least squares has no instruments of its own.
+            f(
+                if self.instruments.is_some() {
+                    &eq.z
+                } else {
+                    &[]
+                },
+                &[],
+                &[],
+            );
+        } else {
+            targets(self.ir, row.states, &hist.y1, h, &mut eq.t);
+            let instruments = if self.instruments.is_some() {
+                &eq.z
+            } else {
+                &eq.phi
+            };
+            f(instruments, &eq.phi, &eq.t);
         }
-        let mut fbuf = vec![0.0; n_out];
-        // The anchored heading's rotation `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`,
-        // rotated from the measured one by the small simulated step.
-        let mut rz = resume_sim.as_ref().map_or([1.0, 0.0], |s| s.rz);
-        let mut sim_dist = vec![0.0; n_comp];
-        // The step's copy of `rz`, written with its disturbances.
-        let mut rz_step = vec![0.0; 2];
-        let measured: Vec<bool> = ir
-            .components
-            .iter()
-            .map(|c| ir.disturbances[c.disturbance].measured)
-            .collect();
-        let mut k = start;
-        let mut diverged = false;
-        // The reference simulation (previous instruments), stepped in lockstep.
-        let mut x_ref = vec![0.0; n_out];
-        let mut x_ref_next = vec![0.0; n_out];
-        let mut rref = [1.0, 0.0];
-        let mut ref_dist = vec![0.0; n_comp];
-        let mut change = SimChange {
-            diff2: vec![0.0; n_out],
-            sum: vec![0.0; n_out],
-            sum2: vec![0.0; n_out],
-            n: 0,
-            err2: vec![0.0; n_out],
-            y_sum: vec![0.0; n_out],
-            y_sum2: vec![0.0; n_out],
-            y_n: 0,
-        };
-        if let Some(s) = resume_sim {
-            change.err2 = s.err2;
-            change.y_sum = s.y_sum;
-            change.y_sum2 = s.y_sum2;
-            change.y_n = s.y_n;
+    }
+
+    /// Evaluates one equation's regressors (unless `skip_measured`) and
+    /// instruments into `eq`, at the history `hist` (samples k − 1 and
+    /// k − 2) and the instrument simulation `sim`.
+    #[inline(always)]
+    fn regressors_and_instruments(
+        &self,
+        info: &ExperimentInfo,
+        hist: &History,
+        sim: &Simulation,
+        shape: &Shape,
+        eq: &mut EquationBuffers,
+        skip_measured: bool,
+    ) {
+        let planar = shape.planar.is_some();
+        if !skip_measured {
+            let sig = Signals {
+                states: &hist.y1,
+                inputs: &hist.u1,
+                rotation: if planar { &hist.rh1 } else { &hist.rot1 },
+                disturbances: &hist.d1,
+            };
+            set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y1);
+            self.model
+                .regressors_update(self.kind, &sig, &eq.signs, &mut eq.phi);
         }
-        // Buffers for the fixed-sign Φ2 instruments: nothing allocated per sample.
-        let mut fix_acc = vec![0.0; n_out];
-        let mut fix_set = vec![false; n_out];
-        // Their distinct arguments (the same few across columns), each
-        // evaluated once a sample: `fixed_slots[column][term][factor]`.
-        let mut fixed_args: Vec<&leeway_model::interp::ArgPlan> = Vec::new();
-        let fixed_slots: Vec<Vec<Vec<usize>>> = info
-            .fixed_sign_columns
+        match self.instruments {
+            // Least squares: the regressors are their own instruments.
+            None => {}
+            Some(Instruments::Simulated) => {
+                let means = self.instrument_means.unwrap_or(&info.measured_mean);
+                let sig = Signals {
+                    states: &sim.x,
+                    inputs: &hist.u1,
+                    rotation: if planar { &sim.rz } else { &hist.rot2 },
+                    disturbances: means,
+                };
+                set_pointwise_signs(&mut eq.signs, &info.varying, &sim.x);
+                self.model
+                    .regressors_update(self.kind, &sig, &eq.signs, &mut eq.z);
+                eq.fixed
+                    .write(self, &info.fixed_sign_columns, &sig, &mut eq.z);
+            }
+            Some(Instruments::Delayed) => {
+                let dist: &[f64] = if self.delayed_mean {
+                    &info.measured_mean
+                } else {
+                    &hist.d2
+                };
+                let sig = Signals {
+                    states: &hist.y2,
+                    inputs: &hist.u1,
+                    rotation: if planar { &hist.rh2 } else { &hist.rot2 },
+                    disturbances: dist,
+                };
+                set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y2);
+                self.model
+                    .regressors_update(self.kind, &sig, &eq.signs, &mut eq.z);
+            }
+        }
+    }
+}
+
+/// The sizes of one sample's signals.
+struct Shape {
+    n_out: usize,
+    n_in: usize,
+    /// Measured rotation columns (they travel with the data; a planar
+    /// heading does not).
+    n_rot: usize,
+    n_comp: usize,
+    /// A planar model's yaw-rate state (its heading integrates it).
+    planar: Option<usize>,
+}
+
+impl Shape {
+    fn of(ir: &Ir) -> Shape {
+        Shape {
+            n_out: ir.states.len(),
+            n_in: ir.inputs.len(),
+            n_rot: if matches!(ir.rotation, Rotation::Measured { .. }) {
+                ir.rotation_vars.len()
+            } else {
+                0
+            },
+            n_comp: ir.components.len(),
+            planar: match &ir.rotation {
+                Rotation::Planar { integrates, .. } => Some(*integrates),
+                _ => None,
+            },
+        }
+    }
+}
+
+/// One equation's dense buffers (`n_out × n_cols`) of regressors and
+/// instruments and its targets, with what evaluating them needs.
+struct EquationBuffers<'a> {
+    phi: Vec<f64>,
+    z: Vec<f64>,
+    t: Vec<f64>,
+    /// Signs of the pointwise moduli, sample by sample where they change.
+    signs: Vec<f64>,
+    fixed: FixedSigns<'a>,
+}
+
+impl<'a> EquationBuffers<'a> {
+    fn new(walker: &EquationWalker<'a>, info: &ExperimentInfo) -> EquationBuffers<'a> {
+        let n_out = walker.ir.states.len();
+        let len = n_out * walker.n_cols;
+        // Zeroed once: `regressors_update` then writes only the structurally
+        // nonzero slots, sample after sample.
+        EquationBuffers {
+            phi: vec![0.0; len],
+            z: vec![0.0; len],
+            t: vec![0.0; n_out],
+            signs: info.signs.clone(),
+            fixed: FixedSigns::new(walker.terms, &info.fixed_sign_columns, n_out),
+        }
+    }
+}
+
+/// The fixed-sign Φ2 instruments' distinct arguments (the same few across
+/// columns), each evaluated once a sample, and their buffers: nothing
+/// allocated per sample.
+struct FixedSigns<'a> {
+    args: Vec<&'a ArgPlan>,
+    /// The argument of each factor: `slots[column][term][factor]`.
+    slots: Vec<Vec<Vec<usize>>>,
+    values: Vec<f64>,
+    acc: Vec<f64>,
+    set: Vec<bool>,
+}
+
+impl<'a> FixedSigns<'a> {
+    fn new(terms: &'a [TermPlan], columns: &[FixedSignColumn], n_out: usize) -> FixedSigns<'a> {
+        let mut args: Vec<&ArgPlan> = Vec::new();
+        let slots: Vec<Vec<Vec<usize>>> = columns
             .iter()
             .map(|fixed| {
                 fixed
                     .terms
                     .iter()
                     .map(|(term, _, _)| {
-                        self.terms[*term]
+                        terms[*term]
                             .factors
                             .iter()
-                            .map(|(arg, _)| match fixed_args.iter().position(|a| *a == arg) {
+                            .map(|(arg, _)| match args.iter().position(|a| *a == arg) {
                                 Some(slot) => slot,
                                 None => {
-                                    fixed_args.push(arg);
-                                    fixed_args.len() - 1
+                                    args.push(arg);
+                                    args.len() - 1
                                 }
                             })
                             .collect()
@@ -315,253 +548,442 @@ impl EquationWalker<'_> {
                     .collect()
             })
             .collect();
-        let mut arg_values = vec![0.0; fixed_args.len()];
-        // Signs of the pointwise moduli, sample by sample where they change.
-        let mut signs = info.signs.clone();
-        let simulates = self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty();
-        let mut stop = Stopper::new(self.interrupt);
-        let mut sample = |row: &leeway_model::experiment::Row| {
-            if diverged || stop.now() {
-                return;
-            }
-            if k < replay_until {
-                // Walked again for the history only.
-            } else if k == 0 {
-                x_sim.copy_from_slice(row.states);
-                x_ref.copy_from_slice(row.states);
-                if planar.is_some() {
-                    rz = planar_rotation(row.heading);
-                    rref = rz;
-                }
-            } else {
-                if simulates {
-                    // The step's disturbances and rotation, written well
-                    // before it reads them: values stored one by one just
-                    // before they are read as a vector stall on store
-                    // forwarding (measured: about 5 % of one study run).
-                    simulation_disturbances(&measured, &d1, mu, &mut sim_dist);
-                    rz_step.copy_from_slice(&rz);
-                    if let Some((_, mu_ref)) = reference
-                        && known_reference.is_none()
-                    {
-                        simulation_disturbances(&measured, &d1, mu_ref, &mut ref_dist);
-                    }
-                }
-                if k >= 2 {
-                    let skip_measured = skip_measured || equations < measured_known;
-                    if !skip_measured {
-                        let sig = Signals {
-                            states: &y1,
-                            inputs: &u1,
-                            rotation: if planar.is_some() { &rh1 } else { &rot1 },
-                            disturbances: &d1,
-                        };
-                        set_pointwise_signs(&mut signs, &info.varying, &y1);
-                        self.model
-                            .regressors_update(self.kind, &sig, &signs, &mut phi);
-                    }
-                    match self.instruments {
-                        // Least squares: the regressors are their own instruments.
-                        None => {}
-                        Some(Instruments::Simulated) => {
-                            let means = self.instrument_means.unwrap_or(&info.measured_mean);
-                            let sig = Signals {
-                                states: &x_sim,
-                                inputs: &u1,
-                                rotation: if planar.is_some() { &rz } else { &rot2 },
-                                disturbances: means,
-                            };
-                            set_pointwise_signs(&mut signs, &info.varying, &x_sim);
-                            self.model
-                                .regressors_update(self.kind, &sig, &signs, &mut z);
-                            for (v, arg) in arg_values.iter_mut().zip(&fixed_args) {
-                                *v = arg.eval(&sig, true);
-                            }
-                            for (fixed, slots) in info.fixed_sign_columns.iter().zip(&fixed_slots) {
-                                fix_set.fill(false);
-                                for ((term, o, signs), slots) in fixed.terms.iter().zip(slots) {
-                                    let plan = &self.terms[*term];
-                                    let mut t = plan.coefficient;
-                                    for (((_, modulus), s), slot) in
-                                        plan.factors.iter().zip(signs).zip(slots)
-                                    {
-                                        let v = arg_values[*slot];
-                                        t *= if *modulus { s * v } else { v };
-                                    }
-                                    fix_acc[*o] = if fix_set[*o] { fix_acc[*o] + t } else { t };
-                                    fix_set[*o] = true;
-                                }
-                                for o in 0..n_out {
-                                    if fix_set[o] {
-                                        z[o * self.n_cols + fixed.column] = fix_acc[o];
-                                    }
-                                }
-                            }
-                        }
-                        Some(Instruments::Delayed) => {
-                            let dist: &[f64] = if self.delayed_mean {
-                                &info.measured_mean
-                            } else {
-                                &d2
-                            };
-                            let sig = Signals {
-                                states: &y2,
-                                inputs: &u1,
-                                rotation: if planar.is_some() { &rh2 } else { &rot2 },
-                                disturbances: dist,
-                            };
-                            set_pointwise_signs(&mut signs, &info.varying, &y2);
-                            self.model
-                                .regressors_update(self.kind, &sig, &signs, &mut z);
-                        }
-                    }
-                    if skip_measured {
-                        // Least squares has no instruments of its own.
-                        f(if self.instruments.is_some() { &z } else { &[] }, &[], &[]);
-                    } else {
-                        for (o, eq) in ir.equations.iter().enumerate() {
-                            t[o] = match eq.kind {
-                                EquationKind::Der => (row.states[o] - y1[o]) / h,
-                                EquationKind::Next => row.states[o],
-                            };
-                        }
-                        let instruments = if self.instruments.is_some() { &z } else { &phi };
-                        f(instruments, &phi, &t);
-                    }
-                    equations += 1;
-                }
-                if simulates {
-                    // Advance the instrument simulation from k−1 to k
-                    // (its disturbances set at the sample's start).
-                    let sig = Signals {
-                        states: &x_sim,
-                        inputs: &u1,
-                        rotation: if planar.is_some() { &rz_step } else { &rot1 },
-                        disturbances: &sim_dist,
-                    };
-                    self.model.step(theta_sim, h, &sig, &mut fbuf, &mut x_next);
-                    if x_next
-                        .iter()
-                        .zip(&info.bound)
-                        .any(|(x, b)| !x.is_finite() || x.abs() > *b)
-                    {
-                        diverged = true;
-                        return;
-                    }
-                    if let Some(yaw) = planar {
-                        rz = rotated(rh1, h * x_sim[yaw]);
-                    }
-                    std::mem::swap(&mut x_sim, &mut x_next);
-                    if let Some(kept) = reuse.keep_trajectory.as_deref_mut() {
-                        extend_few(kept, &x_sim);
-                    }
-                    for (o, (&y, &x)) in row.states.iter().zip(&x_sim).enumerate() {
-                        change.err2[o] += (y - x) * (y - x);
-                        change.y_sum[o] += y;
-                        change.y_sum2[o] += y * y;
-                    }
-                    change.y_n += 1;
-                    if let Some((theta_ref, _)) = reference {
-                        let stepped = change.y_n - 1;
-                        let x_ref: &[f64] = if let Some(known) = known_reference {
-                            &known[stepped * n_out..(stepped + 1) * n_out]
-                        } else {
-                            let sig = Signals {
-                                states: &x_ref,
-                                inputs: &u1,
-                                rotation: if planar.is_some() { &rref } else { &rot1 },
-                                disturbances: &ref_dist,
-                            };
-                            self.model
-                                .step(theta_ref, h, &sig, &mut fbuf, &mut x_ref_next);
-                            if let Some(yaw) = planar {
-                                rref = rotated(rh1, h * x_ref[yaw]);
-                            }
-                            std::mem::swap(&mut x_ref, &mut x_ref_next);
-                            &x_ref
-                        };
-                        for o in 0..n_out {
-                            let d = x_sim[o] - x_ref[o];
-                            change.diff2[o] += d * d;
-                            change.sum[o] += x_ref[o];
-                            change.sum2[o] += x_ref[o] * x_ref[o];
-                        }
-                        change.n += 1;
-                    }
-                }
-            }
-            // Shift the history: (k−2) ← (k−1) ← k.
-            // (Swaps, and no copy of an empty slice: copies of a few values
-            // cost a `memcpy` call each.)
-            if keeps_states {
-                std::mem::swap(&mut y2, &mut y1);
-                copy_few(&mut y1, row.states);
-            }
-            copy_few(&mut u1, row.inputs);
-            if n_rot > 0 {
-                std::mem::swap(&mut rot2, &mut rot1);
-                copy_few(&mut rot1, row.rotation);
-            }
-            if n_comp > 0 {
-                std::mem::swap(&mut d2, &mut d1);
-                copy_few(&mut d1, row.disturbances);
-            }
-            if planar.is_some() {
-                rh2 = rh1;
-                rh1 = match (known_headings, headings.as_mut()) {
-                    (Some(r), _) => r[k],
-                    (None, Some(h)) => h.next(row.heading),
-                    // A resumed walk without its rotation state is only
-                    // offered kept rotations (`History::continues_headings`).
-                    (None, None) => planar_rotation(row.heading),
-                };
-                if let Some(kept) = reuse.keep_headings.as_deref_mut() {
-                    kept.push(rh1);
-                }
-            }
-            k += 1;
-        };
-        // In-memory columns are walked by a loop the sample is inlined into.
-        match e.in_memory() {
-            Some(x) => x.rows_from(start, &mut sample),
-            None => e.visit(&mut sample),
+        FixedSigns {
+            values: vec![0.0; args.len()],
+            args,
+            slots,
+            acc: vec![0.0; n_out],
+            set: vec![false; n_out],
         }
-        if let Some(kept) = reuse.keep_history.as_deref_mut()
-            && !diverged
-            && self.instruments != Some(Instruments::Simulated)
-        {
-            *kept = Some(History {
-                y1,
-                y2,
-                u1,
-                rot1,
-                rot2,
-                d1,
-                d2,
-                rh1,
-                rh2,
-                headings,
-                samples: k,
-                equations,
-            });
-        } else if let Some(kept) = reuse.keep_simulation.as_deref_mut()
-            && !diverged
-            && self.instruments == Some(Instruments::Simulated)
-            && !theta_sim.is_empty()
-        {
-            *kept = Some(SimWalk {
-                samples: k,
-                equations,
-                x_sim,
-                rz,
-                err2: change.err2.clone(),
-                y_sum: change.y_sum.clone(),
-                y_sum2: change.y_sum2.clone(),
-                y_n: change.y_n,
-            });
-        }
-        if diverged { Err(Diverged) } else { Ok(change) }
     }
+
+    /// Writes the instruments of the fixed-sign `columns` at the signals
+    /// `sig` into `z` (`n_out × n_cols`).
+    #[inline(always)]
+    fn write(
+        &mut self,
+        walker: &EquationWalker,
+        columns: &[FixedSignColumn],
+        sig: &Signals,
+        z: &mut [f64],
+    ) {
+        for (v, arg) in self.values.iter_mut().zip(&self.args) {
+            *v = arg.eval(sig, true);
+        }
+        for (fixed, slots) in columns.iter().zip(&self.slots) {
+            self.set.fill(false);
+            for ((term, o, signs), slots) in fixed.terms.iter().zip(slots) {
+                let plan = &walker.terms[*term];
+                let mut t = plan.coefficient;
+                for (((_, modulus), s), slot) in plan.factors.iter().zip(signs).zip(slots) {
+                    let v = self.values[*slot];
+                    t *= if *modulus { s * v } else { v };
+                }
+                self.acc[*o] = if self.set[*o] { self.acc[*o] + t } else { t };
+                self.set[*o] = true;
+            }
+            for o in 0..self.acc.len() {
+                if self.set[o] {
+                    z[o * walker.n_cols + fixed.column] = self.acc[o];
+                }
+            }
+        }
+    }
+}
+
+/// The simulations a walk steps: the instruments' of `θ` and `μ`, and a
+/// reference one (the previous instruments), in lockstep, with the sums of
+/// their change and fit.
+struct Simulations<'a> {
+    model: &'a dyn Model,
+    theta: &'a [f64],
+    mu: &'a [f64],
+    /// The reference's `(θ, μ)`.
+    reference: Option<(&'a [f64], &'a [f64])>,
+    /// The reference's states after each step, kept by an earlier walk.
+    known_reference: Option<&'a [f64]>,
+    /// Beyond these magnitudes a simulation has diverged.
+    bound: &'a [f64],
+    /// The step.
+    h: f64,
+    planar: Option<usize>,
+    sim: Simulation,
+    reference_sim: Reference,
+    fbuf: Vec<f64>,
+    /// Which disturbance components are measured.
+    measured: Vec<bool>,
+    change: SimChange,
+}
+
+/// What a walk simulates: `(θ, μ)`, the reference's `(θ, μ)`, and the
+/// reference's states after each step if kept.
+type Simulated<'a> = (
+    &'a [f64],
+    &'a [f64],
+    Option<(&'a [f64], &'a [f64])>,
+    Option<&'a [f64]>,
+);
+
+impl<'a> Simulations<'a> {
+    /// The simulations of `walker` over an experiment (`info`, step `h`),
+    /// going on from where the instrument simulation `resumed` stood (its
+    /// equations then counted in `equations`).
+    fn new(
+        walker: &EquationWalker<'a>,
+        info: &'a ExperimentInfo,
+        (theta, mu, reference, known_reference): Simulated<'a>,
+        h: f64,
+        resumed: Option<SimWalk>,
+        equations: &mut usize,
+    ) -> Simulations<'a> {
+        let ir = walker.ir;
+        let shape = Shape::of(ir);
+        Simulations {
+            model: walker.model,
+            theta,
+            mu,
+            reference,
+            known_reference,
+            bound: &info.bound,
+            h,
+            planar: shape.planar,
+            sim: Simulation::start(&shape, resumed.as_ref()),
+            reference_sim: Reference::start(&shape),
+            fbuf: vec![0.0; shape.n_out],
+            measured: ir
+                .components
+                .iter()
+                .map(|c| ir.disturbances[c.disturbance].measured)
+                .collect(),
+            change: change_from(shape.n_out, resumed, equations),
+        }
+    }
+
+    /// Both begin at the measured first sample.
+    #[inline(always)]
+    fn begin(&mut self, row: &leeway_model::experiment::Row) {
+        self.sim.begin(row, self.planar);
+        self.reference_sim
+            .begin(row, &self.sim, self.planar.is_some());
+    }
+
+    /// The step's disturbances and rotation, written well before it reads
+    /// them: values stored one by one just before they are read as a
+    /// vector stall on store forwarding (measured: about 5 % of one study
+    /// run).
+    #[inline(always)]
+    fn set_disturbances(&mut self, hist: &History) {
+        simulation_disturbances(&self.measured, &hist.d1, self.mu, &mut self.sim.dist);
+        self.sim.rz_step.copy_from_slice(&self.sim.rz);
+        if let Some((_, mu_ref)) = self.reference
+            && self.known_reference.is_none()
+        {
+            simulation_disturbances(
+                &self.measured,
+                &hist.d1,
+                mu_ref,
+                &mut self.reference_sim.dist,
+            );
+        }
+    }
+
+    /// Steps both from k − 1 to k (history `hist`, measured states `y` at
+    /// k), the instrument simulation's new state kept into `keep`.
+    #[inline(always)]
+    fn step(
+        &mut self,
+        hist: &History,
+        y: &[f64],
+        keep: Option<&mut Vec<f64>>,
+    ) -> Result<(), Diverged> {
+        let (h, planar) = (self.h, self.planar);
+        self.sim
+            .step(self.model, self.theta, h, hist, planar, &mut self.fbuf);
+        if self.sim.beyond(self.bound) {
+            return Err(Diverged);
+        }
+        self.sim.advance(h, hist, planar);
+        if let Some(kept) = keep {
+            extend_few(kept, &self.sim.x);
+        }
+        add_fit(&mut self.change, y, &self.sim.x);
+        if let Some((theta_ref, _)) = self.reference {
+            let n_out = self.sim.x.len();
+            let stepped = self.change.y_n - 1;
+            let x_ref: &[f64] = if let Some(known) = self.known_reference {
+                &known[stepped * n_out..(stepped + 1) * n_out]
+            } else {
+                self.reference_sim
+                    .step(self.model, theta_ref, h, hist, planar, &mut self.fbuf);
+                &self.reference_sim.x
+            };
+            add_reference(&mut self.change, &self.sim.x, x_ref);
+        }
+        Ok(())
+    }
+}
+
+/// The instrument simulation, stepped along the walk.
+struct Simulation {
+    /// Its state.
+    x: Vec<f64>,
+    next: Vec<f64>,
+    /// The anchored heading's rotation `ψ_z(k) = y_ψ(k−1) + h·r_sim(k−1)`,
+    /// rotated from the measured one by the small simulated step.
+    rz: [f64; 2],
+    /// The step's copy of `rz`, written with its disturbances.
+    rz_step: Vec<f64>,
+    /// The step's disturbances.
+    dist: Vec<f64>,
+}
+
+impl Simulation {
+    /// A simulation to begin at the first sample, or going on from `resumed`.
+    fn start(shape: &Shape, resumed: Option<&SimWalk>) -> Simulation {
+        let mut x = vec![0.0; shape.n_out];
+        if let Some(s) = resumed {
+            x.copy_from_slice(&s.x_sim);
+        }
+        Simulation {
+            x,
+            next: vec![0.0; shape.n_out],
+            rz: resumed.map_or([1.0, 0.0], |s| s.rz),
+            rz_step: vec![0.0; 2],
+            dist: vec![0.0; shape.n_comp],
+        }
+    }
+
+    /// Begins at the measured first sample.
+    #[inline(always)]
+    fn begin(&mut self, row: &leeway_model::experiment::Row, planar: Option<usize>) {
+        self.x.copy_from_slice(row.states);
+        if planar.is_some() {
+            self.rz = planar_rotation(row.heading);
+        }
+    }
+
+    /// Steps from k − 1 into `next` (not yet taken: see
+    /// [`Simulation::advance`]), with the inputs and rotation at k − 1.
+    #[inline(always)]
+    fn step(
+        &mut self,
+        model: &dyn Model,
+        theta: &[f64],
+        h: f64,
+        hist: &History,
+        planar: Option<usize>,
+        fbuf: &mut [f64],
+    ) {
+        let sig = Signals {
+            states: &self.x,
+            inputs: &hist.u1,
+            rotation: if planar.is_some() {
+                &self.rz_step
+            } else {
+                &hist.rot1
+            },
+            disturbances: &self.dist,
+        };
+        model.step(theta, h, &sig, fbuf, &mut self.next);
+    }
+
+    /// Whether the state stepped to is not finite or beyond `bound`.
+    #[inline(always)]
+    fn beyond(&self, bound: &[f64]) -> bool {
+        self.next
+            .iter()
+            .zip(bound)
+            .any(|(x, b)| !x.is_finite() || x.abs() > *b)
+    }
+
+    /// Takes the state stepped to, the anchored heading rotated by the step.
+    #[inline(always)]
+    fn advance(&mut self, h: f64, hist: &History, planar: Option<usize>) {
+        if let Some(yaw) = planar {
+            self.rz = rotated(hist.rh1, h * self.x[yaw]);
+        }
+        std::mem::swap(&mut self.x, &mut self.next);
+    }
+}
+
+/// The reference simulation (the previous instruments), stepped in
+/// lockstep with the instrument simulation.
+struct Reference {
+    x: Vec<f64>,
+    next: Vec<f64>,
+    rz: [f64; 2],
+    dist: Vec<f64>,
+}
+
+impl Reference {
+    fn start(shape: &Shape) -> Reference {
+        Reference {
+            x: vec![0.0; shape.n_out],
+            next: vec![0.0; shape.n_out],
+            rz: [1.0, 0.0],
+            dist: vec![0.0; shape.n_comp],
+        }
+    }
+
+    /// Begins where the instrument simulation `sim` begins.
+    #[inline(always)]
+    fn begin(&mut self, row: &leeway_model::experiment::Row, sim: &Simulation, planar: bool) {
+        self.x.copy_from_slice(row.states);
+        if planar {
+            self.rz = sim.rz;
+        }
+    }
+
+    /// Steps from k − 1 to k, with the inputs and rotation at k − 1.
+    #[inline(always)]
+    fn step(
+        &mut self,
+        model: &dyn Model,
+        theta: &[f64],
+        h: f64,
+        hist: &History,
+        planar: Option<usize>,
+        fbuf: &mut [f64],
+    ) {
+        let sig = Signals {
+            states: &self.x,
+            inputs: &hist.u1,
+            rotation: if planar.is_some() {
+                &self.rz
+            } else {
+                &hist.rot1
+            },
+            disturbances: &self.dist,
+        };
+        model.step(theta, h, &sig, fbuf, &mut self.next);
+        if let Some(yaw) = planar {
+            self.rz = rotated(hist.rh1, h * self.x[yaw]);
+        }
+        std::mem::swap(&mut self.x, &mut self.next);
+    }
+}
+
+impl History {
+    /// Where a walk stands before the first sample.
+    fn start(shape: &Shape) -> History {
+        History {
+            y1: vec![0.0; shape.n_out],
+            y2: vec![0.0; shape.n_out],
+            u1: vec![0.0; shape.n_in],
+            rot1: vec![0.0; shape.n_rot],
+            rot2: vec![0.0; shape.n_rot],
+            d1: vec![0.0; shape.n_comp],
+            d2: vec![0.0; shape.n_comp],
+            rh1: [1.0, 0.0],
+            rh2: [1.0, 0.0],
+            headings: Some(HeadingRotation::default()),
+            samples: 0,
+            equations: 0,
+        }
+    }
+
+    /// Shifts the history: (k−2) ← (k−1) ← k, sample `k` being `row` (its
+    /// measured states only if the walk `keeps_states`); a planar model's
+    /// heading rotation read from the `known` ones, or advanced, and kept
+    /// into `keep`.
+    /// (Swaps, and no copy of an empty slice: copies of a few values cost
+    /// a `memcpy` call each.)
+    #[inline(always)]
+    fn shift(
+        &mut self,
+        row: &leeway_model::experiment::Row,
+        k: usize,
+        keeps_states: bool,
+        shape: &Shape,
+        known: Option<&[[f64; 2]]>,
+        keep: Option<&mut Vec<[f64; 2]>>,
+    ) {
+        if keeps_states {
+            std::mem::swap(&mut self.y2, &mut self.y1);
+            copy_few(&mut self.y1, row.states);
+        }
+        copy_few(&mut self.u1, row.inputs);
+        if shape.n_rot > 0 {
+            std::mem::swap(&mut self.rot2, &mut self.rot1);
+            copy_few(&mut self.rot1, row.rotation);
+        }
+        if shape.n_comp > 0 {
+            std::mem::swap(&mut self.d2, &mut self.d1);
+            copy_few(&mut self.d1, row.disturbances);
+        }
+        if shape.planar.is_some() {
+            self.rh2 = self.rh1;
+            self.rh1 = match (known, self.headings.as_mut()) {
+                (Some(r), _) => r[k],
+                (None, Some(h)) => h.next(row.heading),
+                // A resumed walk without its rotation state is only
+                // offered kept rotations (`History::continues_headings`).
+                (None, None) => planar_rotation(row.heading),
+            };
+            if let Some(kept) = keep {
+                kept.push(self.rh1);
+            }
+        }
+    }
+}
+
+/// The simulation's change and fit sums of a walk, zero or going on from
+/// where the simulation `resumed` stood (its equations then counted in
+/// `equations`).
+fn change_from(n_out: usize, resumed: Option<SimWalk>, equations: &mut usize) -> SimChange {
+    let mut change = SimChange {
+        diff2: vec![0.0; n_out],
+        sum: vec![0.0; n_out],
+        sum2: vec![0.0; n_out],
+        n: 0,
+        err2: vec![0.0; n_out],
+        y_sum: vec![0.0; n_out],
+        y_sum2: vec![0.0; n_out],
+        y_n: 0,
+    };
+    if let Some(s) = resumed {
+        *equations = s.equations;
+        change.err2 = s.err2;
+        change.y_sum = s.y_sum;
+        change.y_sum2 = s.y_sum2;
+        change.y_n = s.y_n;
+    }
+    change
+}
+
+/// Each equation's target: the difference quotient of the measured states
+/// `y` from `y1` one step `h` back, or the states themselves.
+#[inline(always)]
+fn targets(ir: &Ir, y: &[f64], y1: &[f64], h: f64, t: &mut [f64]) {
+    for (o, eq) in ir.equations.iter().enumerate() {
+        t[o] = match eq.kind {
+            EquationKind::Der => (y[o] - y1[o]) / h,
+            EquationKind::Next => y[o],
+        };
+    }
+}
+
+/// Adds how the simulated `x` tracks the measured `y` to `change`.
+#[inline(always)]
+fn add_fit(change: &mut SimChange, y: &[f64], x: &[f64]) {
+    for (o, (&y, &x)) in y.iter().zip(x).enumerate() {
+        change.err2[o] += (y - x) * (y - x);
+        change.y_sum[o] += y;
+        change.y_sum2[o] += y * y;
+    }
+    change.y_n += 1;
+}
+
+/// Adds how the simulated `x` differs from the reference `x_ref` to `change`.
+#[inline(always)]
+fn add_reference(change: &mut SimChange, x: &[f64], x_ref: &[f64]) {
+    for o in 0..x.len() {
+        let d = x[o] - x_ref[o];
+        change.diff2[o] += d * d;
+        change.sum[o] += x_ref[o];
+        change.sum2[o] += x_ref[o] * x_ref[o];
+    }
+    change.n += 1;
 }
 
 /// `dst.copy_from_slice(src)` for the few values of one sample: copies of
