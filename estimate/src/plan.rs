@@ -30,7 +30,7 @@ pub struct PlanKey {
 /// the blocks of outputs and their structurally kept columns, the columns
 /// held and what the kept ones estimate. The same key gives the same plan,
 /// so runners that serve several estimates keep it
-/// ([`Passes::known_plan`]).
+/// ([`Passes::known_plan`](crate::protocol::Passes::known_plan)).
 #[derive(Clone, Debug)]
 pub struct StructuralPlan {
     pub(crate) constant_cols: Vec<bool>,

@@ -153,8 +153,8 @@ pub(super) struct BadValue {
 
 /// Runs the passes of an estimate over the experiments. Implementations
 /// return one result per experiment, in experiment order, each exactly what
-/// [`PassRunner::facts`] / [`PassRunner::pass`] compute for it: on this
-/// machine ([`LocalPasses`]) or mapped over workers that each read their own
+/// [`PassRunner::facts`](crate::runner::PassRunner::facts) / [`PassRunner::pass`](crate::runner::PassRunner::pass) compute for it: on this
+/// machine ([`LocalPasses`](crate::local::LocalPasses)) or mapped over workers that each read their own
 /// experiments.
 pub trait Passes {
     /// The facts of every experiment.

@@ -12,7 +12,7 @@ use leeway_model::signs::ExperimentSigns;
 use leeway_structure::ir::Ir;
 
 /// The largest nominal value accepted: with a regressor within
-/// [`REGRESSOR_LIMIT`] their product stays far inside `f64`'s range, so a
+/// [`REGRESSOR_LIMIT`](crate::walk::REGRESSOR_LIMIT) their product stays far inside `f64`'s range, so a
 /// first simulation cannot overflow from θ alone.
 pub const NOMINAL_LIMIT: f64 = 1e145;
 
@@ -57,7 +57,7 @@ pub fn estimate(
 /// `passes`: each pass is mapped over the experiments (their summaries are
 /// small and independent of the experiments' lengths), and this driver
 /// combines them in experiment order, solves and broadcasts the next θ. An
-/// implementation that computes each summary as [`PassRunner`] does gives
+/// implementation that computes each summary as [`PassRunner`](crate::runner::PassRunner) does gives
 /// the same bits as [`estimate`], wherever it runs.
 pub fn estimate_with(
     model: &dyn Model,
