@@ -21,6 +21,9 @@
 //! or, after the same validating pass, visited in passes from a binary copy
 //! of its validated samples ([`open_csv`], [`open_file`], [`FileSource`]) so
 //! that memory stays flat in N and no pass parses the file again.
+//!
+//! The only IO is reading data files and their spill files. The feature
+//! `parquet` is on in leeway-cli and the Python package.
 
 mod checks;
 pub mod columns;
