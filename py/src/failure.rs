@@ -87,7 +87,7 @@ impl Failure {
         }))
     }
 
-    /// A data problem of the runtime's loader, located in the frame.
+    /// A data problem of leeway-data's loader, located in the frame.
     pub fn data(e: &DataError) -> Failure {
         Failure(Box::new(Details {
             class: "DataError",

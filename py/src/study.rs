@@ -1,7 +1,7 @@
 //! The paper's Monte Carlo study (`leeway reproduce`) in pieces a cluster
 //! can run: [`study_run`] computes one run of one case (a pure function of
 //! the configuration and its indices), [`study_summary`] summarises the
-//! runs, taken in the order of `runtime::study::study_tasks`, into the
+//! runs, taken in the order of `leeway_scenarios::study::study_tasks`, into the
 //! study's tables and claims — the same figures as `reproduce`'s
 //! `results.json`, however the runs were spread.
 
