@@ -1,5 +1,8 @@
 //! Samples as estimators read them ([`Row`], [`Source`]) and experiments
-//! held in memory ([`Experiment`]).
+//! held in memory ([`Experiment`]). A source is anything visited in order —
+//! held in memory, generated, or streamed from a file — and names where each
+//! sample came from ([`Source::locate`]); samples are visited, never
+//! collected.
 
 use leeway_structure::ir::{Ir, Rotation};
 
