@@ -212,7 +212,7 @@
 //!
 //! # Estimating
 //!
-//! [`estimate`] takes a model, the experiments (`&[&dyn Source]`: held,
+//! [`estimate()`] takes a model, the experiments (`&[&dyn Source]`: held,
 //! streamed or generated, in any mix) and [`EstimateOptions`] — by default the
 //! refined IV3 ([`Method::Iv3`]) with simulated instruments, experiments'
 //! moment equations summed, standard errors computed. It returns an

@@ -36,7 +36,7 @@ pub fn with_table<T>(
 }
 
 /// Loads a data file, CSV or Parquet (see [`with_table`]), into memory with
-/// what was noted ([`load_csv_noted`] for CSV).
+/// what was noted ([`load_csv_noted`](crate::csv::load_csv_noted) for CSV).
 pub fn load_file_noted(
     path: &Path,
     ir: &Ir,
@@ -46,7 +46,7 @@ pub fn load_file_noted(
 }
 
 /// Opens a data file, CSV or Parquet (see [`with_table`]), for streaming
-/// ([`open_csv`] for CSV).
+/// ([`open_csv`](crate::csv::open_csv) for CSV).
 pub fn open_file(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
     with_table(path, "--data", |t| open_table(t, ir, options))
 }
