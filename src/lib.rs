@@ -322,6 +322,16 @@
 //! numbers and threads, so that a model compiled with [`include_model!`]
 //! builds neither.
 //!
+//! Each section of this guide is a doc test on data it simulates itself
+//! (the paper's ship through `leeway_scenarios::study`, a dev-dependency),
+//! asserting what the section claims. No two public types in these docs
+//! share a name: the compiler's options are [`CompileOptions`], the
+//! estimator's [`EstimateOptions`]; the syntax tree is
+//! `structure::grammar::ModelSyntax`, the trait [`Model`]. The facade's
+//! dev-dependencies stay small, since trybuild compiles them all for the ui
+//! tests: benchmarks live in the unpublished `leeway-bench` (`bench/`; how to
+//! run, compare and profile them: `docs/performance.md`).
+//!
 //! Past one machine, the estimator's passes over the data are its map half:
 //! [`estimate::PassRunner`] computes what one experiment
 //! contributes to a pass (a small summary that serialises exactly,
@@ -372,7 +382,8 @@ pub mod diagnostics {
     pub use leeway_structure::grammar::{Diagnostic, Label, RenderStyle, Severity, render};
 }
 
-/// The `.som` language reference (`docs/language.md`).
+/// The `.som` language reference (`docs/language.md`), included whole, so
+/// its code fences are marked `text`.
 pub mod language {
     #![doc = include_str!("../docs/language.md")]
 }

@@ -2,7 +2,7 @@
 //! same IR agree bit for bit (`f64::to_bits`) on every regressor of every
 //! predictor, on `rhs` and on `step`, over thousands of random samples
 //! (states, inputs, heading or rotation entries, disturbances, θ) and random
-//! sign patterns, for every example model.
+//! sign patterns, for every example model and the fixtures in `tests/models/`.
 //!
 //! To add a model: `include_model!` it in `models` below and list it in
 //! `cases()`. `every_example_model_is_covered` fails until every

@@ -1,4 +1,6 @@
 //! Data files for a command: loaded or streamed, every failing file reported, and what loading noted.
+//! `estimate` streams them ([`DataSet::Streamed`], or [`DataSet::Held`] under
+//! `--resample`); `validate` loads them.
 
 use crate::problem::{Failure, Problem};
 use leeway_data::{FileNotes, FileSource, LoadOptions, load_file_noted, open_file};

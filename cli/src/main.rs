@@ -10,7 +10,19 @@
 //! `validate`: the simulation diverges); 2 a usage, input/output, syntax,
 //! semantic, data or parameter-file error (for `reproduce`: an option error
 //! or a result file that cannot be written; the verdicts on the paper's
-//! claims never change the exit code).
+//! claims never change the exit code). Never a panic.
+//!
+//! Computation stays in the libraries: this crate reads, validates its own
+//! arguments, calls them and prints. Every numeric option is bounded before
+//! any work, with clap's error naming the option (`reproduce`'s runs, sample
+//! counts, their product and threads; the estimator's lags and refinements;
+//! sample times and resampling; given values). `check --json` and
+//! `estimate --json` print their documents for every outcome, errors
+//! included; like `reproduce`'s `results.json`, their fields may grow but
+//! are never renamed or removed. `cli/tests/` holds the shapes, every
+//! malformed-CSV class, the round trips estimate → validate and simulate →
+//! validate, the data reproducers (physical rows, outliers, overflow,
+//! units, option bounds) and a proptest of CSV layouts (`csv_layouts.rs`).
 
 // Estimates allocate and free record-sized buffers many times a second
 // (the study: thousands of estimates); mimalloc reuses freed pages where

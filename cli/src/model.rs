@@ -1,5 +1,6 @@
 //! What `estimate`, `simulate` and `validate` share: reading and compiling
-//! the model, its data files and parameter files, with every problem located.
+//! the model, with every problem located (data files are `data.rs`,
+//! parameter files `params.rs`).
 
 use crate::files::io_reason;
 use crate::files::read_model;

@@ -1,5 +1,6 @@
-//! What every subcommand shares: exit statuses and the terminal checks that
-//! decide on colour.
+//! What every subcommand shares: exit statuses, the terminal checks that
+//! decide on colour (ANSI only on a terminal and without `NO_COLOR`),
+//! writers that tolerate a closed pipe, tables and number formatting.
 
 use leeway_structure::grammar::RenderStyle;
 use std::io::IsTerminal;

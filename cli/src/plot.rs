@@ -1,6 +1,8 @@
 //! Plots of measured against simulated signals (plotters, no system fonts:
 //! DejaVu Sans is compiled in and registered before drawing). The backend
-//! follows the file's extension: `.png` a bitmap, anything else SVG.
+//! follows the file's extension: `.png` a bitmap, anything else SVG. Any
+//! figure implements [`Figure`]; [`clip_band`] cuts a polyline at the edge of
+//! an axis's band.
 
 use plotters::chart::MeshStyle;
 use plotters::coord::Shift;

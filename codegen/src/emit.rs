@@ -1,6 +1,8 @@
 //! The expansion of a valid model: a unit struct named as the model that
 //! implements `leeway::Model` with straight-line code, its typed parameter
-//! struct `<Model>Params`, typed constants, and the IR embedded as data.
+//! struct `<Model>Params`, typed constants, and the IR embedded as data: a
+//! JSON literal, checked at expansion to read back to the identical IR, read
+//! once into a `LazyLock`.
 
 use crate::eval;
 use crate::tokens::{doc, doc_escape, float, index, rust_ident, str_array};

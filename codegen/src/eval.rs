@@ -9,7 +9,10 @@
 //! `x − ((p0 + p1) + …)`; a slot is `((e0 + e1) + e2) + …`; `rhs` is
 //! `θ_p * term + …` in term order. Rust neither reassociates nor contracts
 //! floating-point operations, so the generated code and the interpreter agree
-//! bit for bit. Nothing here allocates or loops at run time.
+//! bit for bit; the disturbance shares of an argument come from one function,
+//! `Ir::arg_shares`, used by both. Nothing here allocates or loops at run
+//! time. `regressors_update` writes only the structurally nonzero slots; each
+//! predictor's method fills its buffer with zeros and then runs it.
 
 use crate::tokens::index;
 use leeway_structure::grammar::EquationKind;

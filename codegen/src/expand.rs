@@ -1,5 +1,7 @@
 //! One model source → the macro's items: the model's, or the fallback's
 //! beside a `compile_error!` per error; warnings go into the documentation.
+//! For a model file, `const _: &str = include_str!("<absolute path>")` makes
+//! editing the model rebuild the crate.
 
 use crate::emit;
 use crate::fallback;

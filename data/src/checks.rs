@@ -2,6 +2,11 @@
 //! gross outliers from the most extreme values of each column
 //! ([`Extremes`]), and the time steps from the smallest and largest step
 //! ([`TimeScan`], [`sample_time`]) — both in one pass and flat memory.
+//!
+//! An outlier is judged against the spread of the bulk (a column without
+//! its 17 most extreme values at either end); a column constant but for a
+//! few samples against its value or, when that value is 0, against an
+//! absolute bound in base units.
 
 use crate::error::DataError;
 use crate::options::LoadOptions;

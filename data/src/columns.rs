@@ -1,7 +1,9 @@
 //! Columns in memory (what the Python package hands over from a DataFrame
 //! or an Arrow table): read as a [`Table`] by the same validating pass as a
 //! file, without a text pass, and located by positional row (from 0, as
-//! pandas' `iloc`): `frame: row R, column `c``.
+//! pandas' `iloc`): `frame: row R, column `c``. The values are bit for bit
+//! those a CSV file of the same numbers gives; a frame is loaded
+//! ([`load_columns`]) or streamed through the spill ([`open_columns`]).
 
 use crate::error::DataError;
 use crate::notes::LoadedFile;

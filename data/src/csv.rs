@@ -1,6 +1,13 @@
 //! CSV text: the line filter (comment and blank lines dropped and
 //! counted, CRLF folded, physical lines kept), [`Records`] (a [`Table`] of
 //! the file's records) and the CSV entry points.
+//!
+//! The filter drops comment and blank lines outside quoted cells and keeps
+//! one entry per run of dropped lines, so the csv crate's positions map back
+//! to physical lines and bytes: every error names the line an editor shows.
+//! CRLF outside quotes is folded to `" \n"` and a lone CR (classic Mac OS
+//! line ends) to `"\n"`, both of the same length, so records start on their
+//! own line and byte offsets stay those of the file.
 
 use crate::error::DataError;
 use crate::notes::LoadedFile;

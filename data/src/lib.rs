@@ -2,9 +2,11 @@
 //!
 //! An experiment is a time series of the model's declared signals (states,
 //! inputs, heading or rotation columns, measured disturbance components). It
-//! is held column by column in memory ([`Experiment`](leeway_model::Experiment)) or produced on the fly
-//! by any [`Source`](leeway_model::Source) (e.g. a simulator streaming 10⁷ samples): estimators only
-//! ever visit samples in order, so their memory does not grow with N.
+//! is held column by column in memory
+//! ([`Experiment`](leeway_model::experiment::Experiment)) or produced on the
+//! fly by any [`Source`](leeway_model::experiment::Source) (e.g. a simulator
+//! streaming 10⁷ samples): estimators only ever visit samples in order, so
+//! their memory does not grow with N.
 //!
 //! Loading validates everything and names the place of every problem;
 //! nothing is silently dropped or reordered. Every reader — CSV text
@@ -21,6 +23,9 @@
 //! or, after the same validating pass, visited in passes from a binary copy
 //! of its validated samples ([`open_csv`], [`open_file`], [`FileSource`]) so
 //! that memory stays flat in N and no pass parses the file again.
+//!
+//! The only IO is reading data files and their spill files. The feature
+//! `parquet` is on in leeway-cli and the Python package.
 
 mod checks;
 pub mod columns;

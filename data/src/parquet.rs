@@ -23,6 +23,11 @@
 //! type (text, or numbers printed as text). Pages compressed with Snappy,
 //! Zstandard, LZ4 or gzip are read, and a page's CRC-32, where the writer
 //! stored one, is verified: a flipped bit is an error, not a changed number.
+//!
+//! A damaged file is one error: a panic inside the decoder (a damaged
+//! footer's assertions included) is caught and reported as one, with the
+//! panic hook quiet for that call only. The tests run a seeded mutation
+//! campaign over a checksummed file.
 
 use crate::error::DataError;
 use crate::open::open_path;

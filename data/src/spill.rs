@@ -1,6 +1,13 @@
 //! Streaming a validated file: the validating pass writes every row's
 //! values to a binary spill file, and each pass over an experiment
 //! ([`FileSource`]) reads them back from there, whatever the format read.
+//!
+//! Each row is its position and its values in base units, little-endian, in
+//! a temporary file removed when the sources are dropped. A visit reads its
+//! block back through a 64 KiB buffer holding one row at a time, so the
+//! values are the validated ones bit for bit, no pass parses text again, a
+//! file rewritten after validation changes nothing, and memory does not grow
+//! with the file.
 
 use crate::error::DataError;
 use crate::notes::FileNotes;

@@ -4,8 +4,11 @@
 //! declared units converted to base units, every cell a finite number,
 //! experiments split into contiguous blocks, time steps against the mean
 //! step, gross outliers — and locates every problem in the table's own
-//! terms ([`Places`]). [`load_table`] holds the validated experiments in
-//! memory; `open_table` (in `spill`) streams them through a binary copy.
+//! terms ([`Places`]). Each experiment is a contiguous [`Block`] with its
+//! start, first row and row count. [`load_table`] holds the validated
+//! experiments in memory (`load_csv`, `load_columns`, `load_file_noted`);
+//! `open_table` (in `spill`) streams them through a binary copy (`open_csv`,
+//! `open_columns`, `open_file`). No check exists anywhere else.
 
 use crate::checks::{BlockTimes, Extremes, Outlier, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};

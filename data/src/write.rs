@@ -5,7 +5,8 @@
 //! one experiment, the states, the heading (or the measured rotation
 //! columns), the inputs and the measured disturbance components. Numbers are
 //! written in Rust's shortest round-trip form, so reading the file back gives
-//! the same values bit for bit.
+//! the same values bit for bit. [`columns`] gives what a row holds, for the
+//! CLI's file and Python's DataFrame alike.
 
 use leeway_model::experiment::{Experiment, column_name};
 use leeway_structure::ir::{Ir, Rotation};

@@ -1,5 +1,9 @@
 //! Input guards run before pest: a file too large, expressions nested too
 //! deep, too many operands in one expression or too many signs in a row.
+//!
+//! The scans skip comments and string literals. Past these guards every
+//! expression tree is shallow, so no input exhausts the stack — in pest, in
+//! building the tree, in cloning or dropping it, or in any later pass.
 
 use crate::ast::Span;
 use crate::diagnostic::data::Diagnostic;

@@ -2,6 +2,10 @@
 //! a shell over `leeway-codegen` (which parses the arguments, resolves the
 //! path, runs the structure compiler and emits the tokens). Use them through
 //! the `leeway` crate, whose documentation describes them.
+//!
+//! `include_model!` passes its tokens, `Span::call_site().local_file()` and
+//! `CARGO_MANIFEST_DIR` to codegen; `inline_model!` passes its tokens. No
+//! logic lives here: an `if` in this crate belongs in codegen.
 
 use proc_macro::{Span, TokenStream};
 

@@ -1,5 +1,8 @@
 //! Samples as estimators read them ([`Row`], [`Source`]) and experiments
-//! held in memory ([`Experiment`]).
+//! held in memory ([`Experiment`]). A source is anything visited in order —
+//! held in memory, generated, or streamed from a file — and names where each
+//! sample came from ([`Source::locate`]); its samples are visited in passes
+//! ([`Source::visit`]), so a streamed one is never collected whole.
 
 use leeway_structure::ir::{Ir, Rotation};
 

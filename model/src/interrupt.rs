@@ -1,5 +1,9 @@
 //! A question long work asks now and then: should it stop? (Ctrl-C from
 //! Python, whose signal handler runs only when native code asks for it.)
+//!
+//! The estimator asks it around every pass and every 32768 samples of its
+//! own data walks, and a frame's columns ask it every 32768 rows while they
+//! are validated: that is how Python's Ctrl-C reaches a running estimate.
 
 /// A question the estimator asks around its passes and during its data
 /// walks: should it stop? Once answered yes, it stays yes (a signal handler

@@ -2,8 +2,11 @@
 //! trait that generated (`include_model!`) and interpreted models implement,
 //! the IR [`Interpreter`], samples and experiments as estimators read them
 //! ([`experiment`]), the sign patterns found in data ([`signs`]), simulation
-//! and fits ([`simulate`]), and the [`interrupt`] flag a caller raises to
-//! stop a long computation. No IO, no randomness.
+//! and fits ([`simulate`]), validation of θ on recorded experiments — the
+//! one implementation `leeway validate` and `leeway.validate` share
+//! ([`validation`]) —, values given by name ([`given`]), and the
+//! [`interrupt`] flag a caller raises to stop a long computation. No IO, no
+//! randomness.
 
 pub mod experiment;
 pub mod given;

@@ -1,6 +1,9 @@
 //! Sign patterns read from data and checked against paper A7: within one
 //! experiment every modulus argument that carries noise or an unmeasured
-//! disturbance must keep its sign.
+//! disturbance must keep its sign. The moduli of plain states are signed
+//! sample by sample instead ([`plain_sign_args`], [`set_pointwise_signs`]):
+//! every predictor evaluates them exactly as [`simulate`](crate::simulate)
+//! does (`scenarios/tests/real_logs.rs`).
 
 use crate::experiment::Source;
 use crate::interp::{ArgPlan, arg_plan};

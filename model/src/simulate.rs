@@ -1,6 +1,8 @@
-//! Simulation of a model on an input, the normalised fit, and validation:
-//! the fits of one θ on a recorded experiment (what `leeway validate` and
-//! `leeway.validate` report).
+//! Simulation of a model on an input and the normalised fit. [`simulate`]
+//! keeps the simulated states; [`simulate_each`] hands each sample's states
+//! to a caller instead, in flat memory. Fits are per state and of the
+//! unwrapped, integrated heading, `NaN` after a divergence. Validating θ on
+//! recorded experiments is [`validation`](crate::validation).
 
 use crate::experiment::{Experiment, Row, Source};
 use crate::model::{HeadingRotation, Model, Signals, next_heading};

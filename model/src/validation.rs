@@ -14,12 +14,12 @@ pub struct Validation {
     /// The simulation (from the experiment's first sample, with its inputs,
     /// measured disturbances and rotation).
     pub trajectory: Trajectory,
-    /// Fit per state in % ([`fit`](crate::simulate::fit)); `None` when the measurement is constant
-    /// or the simulation diverged.
+    /// Fit per state in % ([`fit`](crate::simulate::fit)); `None` when the
+    /// measurement is constant or the simulation diverged.
     pub fits: Vec<Option<f64>>,
     /// For a planar heading, the fit of the integrated heading against the
-    /// measured one [`unwrap_heading`](crate::simulate::unwrap_heading) (`Some(None)` when undefined); `None` for
-    /// a model without one.
+    /// measured one [`unwrap_heading`](crate::simulate::unwrap_heading)
+    /// (`Some(None)` when undefined); `None` for a model without one.
     pub heading_fit: Option<Option<f64>>,
 }
 

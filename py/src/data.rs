@@ -6,7 +6,9 @@
 //!
 //! The columns are borrowed from numpy without copying and read as they
 //! are: no text pass, and the values bit for bit those a CSV file of the
-//! same numbers would give.
+//! same numbers would give. An estimate holds frames up to [`HELD_BYTES`]
+//! and streams larger ones through the spill, so its memory is flat in the
+//! rows.
 
 use crate::failure::Failure;
 use leeway_data::Columns;

@@ -1,10 +1,13 @@
-//! Estimation past one machine: the two halves of `leeway_estimate` as
-//! Python sees them. A [`Dataset`] is one data file opened on a worker
-//! (validated once, streamed on every pass); it answers a pass's request
+//! Estimation past one machine: the two halves of `leeway_estimate::estimate`
+//! as Python sees them. A [`Dataset`] is experiments opened where they are —
+//! a data file on a worker (validated once, streamed on every pass), or
+//! frames; it answers a pass's request
 //! with its experiments' summaries, as bytes. [`estimate_mapped`] is the
 //! driver: it runs `leeway_estimate::estimate_with` with passes that call
 //! back into Python (`leeway.dask` maps them over the cluster), and writes
-//! the same document as `leeway estimate --json`.
+//! the same document as `leeway estimate --json`. A distributed estimate is
+//! the local one bit for bit, and survives a killed worker
+//! (`py/tests/test_dask.py`).
 
 use crate::data::{FrameArg, borrow_frames};
 use crate::estimate::estimate_document;

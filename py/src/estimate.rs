@@ -1,4 +1,6 @@
 //! `leeway estimate --json` of a model on frames: the GIL released while the data are read and estimated.
+//! Ctrl-C is asked for by the estimator's `Interrupt` (`options.rs`) and
+//! raised as `KeyboardInterrupt`.
 
 use crate::data::{self, FrameArg, borrow_frames};
 use crate::failure::Failure;

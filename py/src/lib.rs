@@ -3,10 +3,19 @@
 //! `python/leeway` (numpy float64 arrays, read in place), and answers with the
 //! same JSON documents as `leeway check --json` and `leeway estimate --json`,
 //! built by the same code ([`leeway_report`]); it simulates and
-//! validates with the functions `leeway simulate` and `leeway
+//! validates with the library functions `leeway simulate` and `leeway
 //! validate` call (`simulate.rs`), answering with columns and fits. The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
+//!
+//! Built by maturin (pyo3, abi3-py310); the `extension-module` feature is
+//! set only by maturin and the crate has no Rust tests, so `cargo test`
+//! never links libpython. The stub `_leeway.pyi` is checked by
+//! `mypy.stubtest`. The Python half refuses what it would otherwise coerce
+//! (date-times outside the time column, durations, booleans, text, complex,
+//! categories; options of the wrong type) with located `leeway.errors`, and
+//! a native panic reaches Python as `internal-error`, never as
+//! `PanicException` (`py/tests/test_fuzz.py`).
 
 // As in the CLI: estimates allocate and free record-sized buffers many
 // times a second, and mimalloc reuses freed pages rather than faulting

@@ -1,4 +1,4 @@
-//! `leeway.simulate` and `leeway.validate`: leeway-model's simulation and
+//! `leeway.simulate` and `leeway.validate`: the libraries' simulation and
 //! validation (`leeway_data::input`, `leeway_model::simulate`), the code
 //! `leeway simulate` and `leeway validate` run, on frames handed over from
 //! Python. A simulation's input frame is read by the CLI's input reader (the

@@ -3,6 +3,13 @@
 //! paper's claims checked against them. Tables and plots live in the CLI
 //! (`leeway reproduce`).
 //!
+//! One run estimates every method on longer and longer prefixes of one
+//! record, through passes continued along them ([`evaluate_continuing`]);
+//! [`run_study_inspecting`] hands each run's true trajectory to a caller
+//! that measures it, as the design check does. Every run has its own seed
+//! and results are merged in run order, so they do not depend on the thread
+//! count.
+//!
 //! Input design (estimation): a static offset `τ̄` that holds the ship in a
 //! steady turn with surge ≈ 5 m/s, sway ≈ 3.3 m/s and yaw rate ≈ 0.15 rad/s,
 //! plus smoothed pulses of random width (20–80 s) and amplitude on each

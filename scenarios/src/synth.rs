@@ -1,6 +1,7 @@
 //! Synthetic experiments from a "true system": any model with true θ,
 //! i.i.d. Gaussian disturbances and measurement noises, seeded. Used by the
 //! simulation study (paper §V) and by tests; reproducible for a given seed.
+//! Samples are streamed to a caller ([`run`]) or stored ([`experiment`]).
 
 use leeway_model::experiment::{Experiment, Row, Source};
 use leeway_model::model::{Model, Signals, next_heading, planar_rotation};

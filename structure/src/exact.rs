@@ -4,6 +4,11 @@
 //! should any intermediate overflow, again over arbitrary-precision rationals:
 //! the result is exact either way, and fast in the common case of small
 //! integer coefficients.
+//!
+//! Literals are checked on their text ([`MAX_SIGNIFICANT_DIGITS`], a normal
+//! `f64`'s range) before any big-integer arithmetic, and products of
+//! literals stay within an `f64`'s range and [`MAX_COEFFICIENT_BITS`], so no
+//! literal makes the exact arithmetic slow.
 
 use num_bigint::BigInt;
 use num_integer::Integer;

@@ -3,6 +3,16 @@
 //! squares and group by the disturbance monomial: degree 0 → `Φ`, `v_j` →
 //! `ρ_(j,p)`, `v_j v_m` → `λ_(jm,p)`. Measured media give `Φ2` columns
 //! evaluated pointwise.
+//!
+//! A sign argument is fixed per experiment only when it is relative to a
+//! medium the predictor does not take from data (paper A7); a plain state's
+//! modulus ([`SignArg::pointwise`](crate::ir::SignArg::pointwise)) is
+//! evaluated sample by sample by every predictor, and the analysis keeps its
+//! sign symbolic. Structural polynomials keep the monomials that are
+//! constant within an experiment; the centring
+//! ([`Centring`](crate::ir::Centring)) decides which of them the instruments
+//! annihilate, so a constant is identifiable exactly where the estimator
+//! keeps it.
 
 use crate::exact::{Q, fmt_q, to_f64};
 use crate::ir::{

@@ -2,6 +2,10 @@
 //! evaluate regressors at run time, and to re-run the exact identifiability
 //! analysis for the sign patterns found in data.
 //!
+//! Per predictor (basic, augmented, measured) the IR holds a list of
+//! columns, each with its evaluation entries and the structural polynomials
+//! from which the estimator re-runs the exact analysis.
+//!
 //! Evaluation order is part of the contract: generated code and the run-time
 //! interpreter evaluate every column as described on [`Entry`], so they agree
 //! bit for bit.

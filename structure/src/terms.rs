@@ -1,6 +1,9 @@
 //! Pass 2, terms: every right-hand side → a sum of class terms
 //! `coefficient · θ_p · (a | |a| | a·b | a·|b|)`, rejecting everything outside
-//! the second-order modulus class with a located error.
+//! the second-order modulus class with a located error. A parameter alone
+//! is a constant term. An expression's operand chain is walked iteratively,
+//! recursing only into right operands, whose depth the grammar's guards
+//! bound.
 
 use crate::exact::{Q, coefficient_fits, decimal, fmt_q};
 use crate::ir::{Arg, Factor, Signal};

@@ -2,6 +2,7 @@
 //! (`examples/models/*.som`): the text of `leeway check`, then the rendered
 //! diagnostics. Each snapshot was reviewed against a hand expansion; see
 //! `ship_phi_is_the_papers` and `identifiability.rs` for the facts asserted.
+//! insta snapshots; CI never writes them (a new or changed one fails).
 
 use leeway_structure::grammar::{RenderStyle, render};
 use leeway_structure::{CompileOptions, compile, render as structure};

@@ -1,5 +1,7 @@
-//! Syntax errors worded for the user: what was expected (by grammar rule),
-//! what was found, the delimiter left open and a help line.
+//! Syntax errors worded for the user: what was expected (rules named in
+//! words — `Rule::xyz` never reaches a user), the whole token found
+//! underlined, the `(` or `|` left open when an expression is cut short, and
+//! a help line.
 
 use crate::ast::Span;
 use crate::diagnostic::data::Diagnostic;

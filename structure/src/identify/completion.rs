@@ -1,5 +1,12 @@
 //! The completion: a set of sign patterns, at most one per sign character,
 //! that identifies whatever the symbolic signs identify in some blocks.
+//!
+//! Per row family (output, monomial without its signs) the evaluation matrix
+//! of its sign characters is brought to full column rank, each new pattern a
+//! non-root of a null-vector polynomial found variable by variable. Under
+//! per-experiment centring the families of monomials constant within an
+//! experiment are skipped (the centring annihilates them), so n media need
+//! n experiments, not n + 1.
 
 use crate::exact::{Q, Small, field_row, insert_row, small_to_q};
 use crate::ir::{Centring, SignPattern, StructVar};

@@ -1,5 +1,7 @@
 //! Sign patterns: which signs a predictor fixes, how a set of patterns is
-//! written in messages, and parsing the patterns a user names.
+//! written in messages, and parsing the patterns a user names
+//! (`water.u:+,r:-`, [`parse_pattern`]: `leeway check --pattern` and
+//! Python's `check`).
 
 use crate::ir::{Ir, PredictorKind, SignArg, SignPattern};
 use leeway_grammar::{MAX_LISTED, join_capped};

@@ -1,5 +1,7 @@
 //! The compile-time identifiability report: its options, the notes on
-//! constant terms, and the report itself.
+//! constant terms, and the report itself. The report names the centring it
+//! assumed and, for a constant that centring annihilates, the centring that
+//! keeps it.
 
 use crate::ir::{Centring, ColumnKind, Ir, PredictorKind, Report, Separation, SignPattern};
 use leeway_grammar::and_list;
