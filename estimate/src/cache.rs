@@ -1,4 +1,12 @@
-//! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation — values later passes would compute again bit for bit.
+//! What passes over an in-memory record keep for later passes over it (of the same estimate, or of other estimates on the same record): its facts, its regressor rows and targets, its headings' rotations and its last instrument simulation (the next refinement's reference) — values later passes would compute again bit for bit.
+//!
+//! At most 512 MiB (`KEEP_BUDGET`) over all records, or what
+//! `LocalPasses::with_budget` says; streamed records keep nothing, so their
+//! memory stays flat. Keeping
+//! changes no estimate: `scenarios/tests/distributed.rs` checks every
+//! method, in any order, with warm starts, under any budget and continued
+//! from prefixes (rows kept over other records must go unused), against
+//! workers that keep nothing.
 
 use crate::method::Instruments;
 use crate::moments::{PartialSums, RegressorRows};

@@ -14,6 +14,18 @@
 //! disturbances enter as their experiment mean. The estimate is refined by
 //! re-simulating with it (Young's refined IV) until it settles. Equations
 //! start at k = 2 so no instrument uses a same-sample measurement.
+//!
+//! One module per phase: per-experiment facts, the structural plan, the
+//! data walk and its moment sums, the solve, the refinement, covariance,
+//! disturbance means, the estimate's own simulation, the report; passes over
+//! the data go through a byte-exact protocol, run here or on workers.
+//!
+//! Estimators never panic on data: errors are [`EstimateError`] values with
+//! a stable code and a hint. Every sum runs in a fixed order (experiments in
+//! order, samples in order), so results are bit-identical across runs,
+//! CPUs and whoever runs the passes. An estimate on a streamed source keeps
+//! `O(n_ϑ²)` memory whatever N — samples are visited, never collected — and
+//! on in-memory records at most the keeping budget of [`LocalPasses`] more.
 
 mod accumulate;
 mod cache;

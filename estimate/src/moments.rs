@@ -2,7 +2,15 @@
 //!
 //! Sums are shifted by the first sample (`Σ (z − z₀)(φ − φ₀)ᵀ`), which keeps
 //! the centred co-moments accurate even for regressors that barely vary
-//! around a large mean, at one multiply-add per entry and sample.
+//! around a large mean, at one multiply-add per entry and sample. Each sum
+//! comes with the energies that bound it (the residue test's scale).
+//!
+//! Samples are added [`BLOCK`] at a time by a register-tiled kernel that
+//! pulp compiles for each instruction set, running the widest the CPU has
+//! (AVX2 or AVX-512): unfused multiply and add, each sum over the block's
+//! samples in order whatever the tile, so the bits do not depend on the CPU
+//! (a test runs the kernel on every instruction set the CPU has).
+//! [`LongRun`] gives the truncated long-run covariance sums.
 
 use nalgebra::{DMatrix, DVector};
 

@@ -54,9 +54,13 @@ pub struct EstimateOptions {
     /// or an error under `strict`). The Monte Carlo study, which validates
     /// its estimates itself, turns it off.
     pub own_simulation: bool,
-    /// Asked before and after every pass over the data: `true` stops the
-    /// estimate with the error `interrupted` (Ctrl-C in Python, whose
-    /// handler runs only when asked while native code runs).
+    /// Asked before and after every pass over the data, and by the
+    /// estimate's own passes ([`estimate`](crate::run::estimate)'s, not
+    /// those given to [`estimate_with`](crate::run::estimate_with)) every
+    /// 32768 samples of a data walk or facts visit, whose rest is then
+    /// skipped: `true` stops the estimate with the error `interrupted`
+    /// (Ctrl-C in Python, whose handler runs only when asked while native
+    /// code runs).
     pub interrupt: Option<Interrupt>,
 }
 

@@ -5,6 +5,11 @@
 //! their means and with the previous iterate, so a refinement may settle on
 //! a θ whose own simulation diverges (an unstable model under an autopilot,
 //! paper A1): this pass is what says so.
+//!
+//! It is one `FreeRun` pass. An estimate whose own simulation diverges or
+//! fits below 0 % is never reported as converged: a warning naming the
+//! likely causes, the error `own-simulation` under `strict`. The Monte Carlo
+//! study, which validates its estimates itself, turns it off.
 
 use crate::accumulate::mismatched;
 use crate::estimator::Estimator;

@@ -1,4 +1,10 @@
 //! What is estimated before any data pass: the structural analysis for the experiments' sign patterns, held columns, blocks of outputs, the meaning of each kept column.
+//!
+//! The analysis is exact (`leeway_structure::identify`, under the centring
+//! used) and the single source of identifiability verdicts; the solve's
+//! numeric rank only adds what the data failed to excite. Its result depends
+//! only on a [`PlanKey`], so passes serving several estimates keep each
+//! [`StructuralPlan`] and an estimate with the same key skips the analysis.
 
 use crate::options::EstimateOptions;
 use crate::outcome::{EstimateError, err};

@@ -1,7 +1,7 @@
 //! The protocol of a pass over the data: what the driver asks of every
 //! experiment ([`FactsRequest`], [`PassRequest`]), what each experiment
 //! answers ([`ExperimentFacts`], [`PassSummary`]), their exact byte form
-//! ([`encode`], [`decode`]), and the [`Passes`] trait that runs them.
+//! ([`encode`], [`decode`]: CBOR), and the [`Passes`] trait that runs them.
 //!
 //! This is the map half of estimation: what one experiment contributes to
 //! a pass is a small summary (moment sums, long-run sums, sign facts) that
@@ -9,7 +9,9 @@
 //! in experiment order on this machine (`LocalPasses`), or mapped over the
 //! workers of a distributed engine — and combines the summaries in
 //! experiment order whoever computed them, so local and distributed
-//! estimates agree bit for bit.
+//! estimates agree bit for bit. A request says everything a pass computes
+//! (a warm start's instruments included), so what a runner keeps only
+//! changes how soon it answers.
 
 use crate::method::{Instruments, Method};
 use crate::moments::CrossMoments;

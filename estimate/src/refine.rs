@@ -1,4 +1,11 @@
 //! The refinement policy: bootstrap, re-simulation with the estimate, damping, convergence, the iterate reported.
+//!
+//! Its decisions do not hang on round-off: fits within 10⁻⁶ points
+//! (`FIT_TIE`) are a tie settled for the earlier iterate, and with the
+//! runaway guard a diverging full step stops the refinement rather than
+//! damping near an unstable simulation. `scenarios/tests/robustness.rs`
+//! moves every measured value by one ulp: the study's mean fits of LS, IV2
+//! and IV3 stay within half their Monte Carlo standard error.
 
 use crate::accumulate::Accumulated;
 use crate::estimator::Estimator;

@@ -1,4 +1,15 @@
 //! Solving the moment equations per block: residue test, equilibration, column selection, the pseudo-inverse map used by the covariance.
+//!
+//! The experiments' equations are summed (the default, and least squares'
+//! normal equations) or stacked. An IV's summed system is divided by the
+//! total number of equations, so one experiment gives the stacked system's
+//! estimate bit for bit. Rank decisions and the reported condition number
+//! are made on the row- and column-equilibrated system, so units never
+//! change a verdict; the numeric rank only adds what the data failed to
+//! excite to the structural analysis, the single source of identifiability
+//! verdicts. A moment sum that is not finite is the error
+//! `non-finite-moments` before any decomposition sees it (nalgebra's SVD
+//! panics on a NaN).
 
 use crate::estimator::Estimator;
 use crate::method::{Combine, Method};

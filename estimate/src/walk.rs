@@ -1,4 +1,11 @@
 //! The data pass: every equation of an experiment with its regressors, instruments (simulated, delayed or none) and target, and the instrument simulation stepped along.
+//!
+//! The anchored heading is rotated by small steps rather than by a `sincos`
+//! a sample, and pointwise moduli take their signs sample by sample as the
+//! simulation evaluates them (`scenarios/tests/real_logs.rs`). A measured
+//! regressor or target beyond [`REGRESSOR_LIMIT`] or not finite is the data
+//! error `non-finite-data`, located in its source and found by the first
+//! (scanning) pass, never a rank verdict.
 
 use crate::estimator::Estimator;
 use crate::method::{Instruments, Method};
