@@ -8,46 +8,14 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use leeway::ir::PredictorKind;
-use leeway::{Interpreter, Model, Signals, planar_rotation};
+use leeway::{Interpreter, Model};
+use leeway_bench::Sample;
 use std::hint::black_box;
 use std::time::Duration;
 
 leeway::include_model!("../../examples/models/ship.som");
 
 const BATCH: usize = 1000;
-
-/// One sample's signals, owned.
-struct Sample {
-    states: Vec<f64>,
-    inputs: Vec<f64>,
-    rotation: Vec<f64>,
-    disturbances: Vec<f64>,
-}
-
-/// Deterministic pseudo-random samples (a 64-bit LCG; no dependency).
-fn samples() -> Vec<Sample> {
-    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..BATCH)
-        .map(|_| Sample {
-            states: (0..Ship::STATES.len())
-                .map(|_| 4.0 * next() - 2.0)
-                .collect(),
-            inputs: (0..Ship::INPUTS.len())
-                .map(|_| 40.0 * next() - 20.0)
-                .collect(),
-            rotation: planar_rotation(7.0 * next()).to_vec(),
-            disturbances: (0..Ship::COMPONENTS.len())
-                .map(|_| 3.0 * next() - 1.5)
-                .collect(),
-        })
-        .collect()
-}
 
 fn run(
     model: &impl Model,
@@ -57,12 +25,7 @@ fn run(
     out: &mut [f64],
 ) {
     for s in samples {
-        let sig = Signals {
-            states: &s.states,
-            inputs: &s.inputs,
-            rotation: &s.rotation,
-            disturbances: &s.disturbances,
-        };
+        let sig = s.signals();
         match kind {
             PredictorKind::Basic => model.basic(black_box(&sig), out),
             PredictorKind::Augmented => model.augmented(black_box(&sig), black_box(signs), out),
@@ -74,7 +37,7 @@ fn run(
 
 fn regressors(c: &mut Criterion) {
     let interpreter = Interpreter::new(Ship.ir().clone());
-    let samples = samples();
+    let samples = leeway_bench::samples(&Ship, BATCH);
     let signs = vec![1.0; Ship::SIGN_ARGS.len()];
     let mut out = vec![
         0.0;
@@ -120,12 +83,7 @@ fn step(model: &impl Model, samples: &[Sample], theta: &[f64], out: &mut [f64]) 
     let n = Ship::STATES.len();
     let (f, next) = out.split_at_mut(n);
     for s in samples {
-        let sig = Signals {
-            states: &s.states,
-            inputs: &s.inputs,
-            rotation: &s.rotation,
-            disturbances: &s.disturbances,
-        };
+        let sig = s.signals();
         model.step(black_box(theta), 1.0, black_box(&sig), f, next);
         black_box(&mut *next);
     }

@@ -131,6 +131,52 @@ pub fn rate(flop: f64, seconds: f64) -> String {
     )
 }
 
+/// One sample's signals, owned.
+pub struct Sample {
+    /// The states.
+    pub states: Vec<f64>,
+    /// The inputs.
+    pub inputs: Vec<f64>,
+    /// The planar rotation's entries.
+    pub rotation: Vec<f64>,
+    /// Every disturbance component.
+    pub disturbances: Vec<f64>,
+}
+
+impl Sample {
+    /// The sample as a model reads it.
+    pub fn signals(&self) -> leeway::Signals<'_> {
+        leeway::Signals {
+            states: &self.states,
+            inputs: &self.inputs,
+            rotation: &self.rotation,
+            disturbances: &self.disturbances,
+        }
+    }
+}
+
+/// `batch` deterministic pseudo-random samples (a 64-bit LCG; no
+/// dependency) of a planar `model`'s signals.
+pub fn samples(model: &dyn leeway::Model, batch: usize) -> Vec<Sample> {
+    let ir = model.ir();
+    let (states, inputs, components) = (ir.states.len(), ir.inputs.len(), ir.components.len());
+    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    (0..batch)
+        .map(|_| Sample {
+            states: (0..states).map(|_| 4.0 * next() - 2.0).collect(),
+            inputs: (0..inputs).map(|_| 40.0 * next() - 20.0).collect(),
+            rotation: leeway::planar_rotation(7.0 * next()).to_vec(),
+            disturbances: (0..components).map(|_| 3.0 * next() - 1.5).collect(),
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -135,22 +135,14 @@ const JITTER_FLOOR: f64 = 1e-6;
 pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
     let mut lines = Vec::new();
     for f in notes {
-        if f.comment_lines > 0 {
-            lines.push(format!(
-                "{}: {} comment line{} skipped",
-                f.file,
-                f.comment_lines,
-                if f.comment_lines == 1 { "" } else { "s" }
-            ));
-        }
-        if f.blank_lines > 0 {
-            lines.push(format!(
-                "{}: {} blank line{} skipped",
-                f.file,
-                f.blank_lines,
-                if f.blank_lines == 1 { "" } else { "s" }
-            ));
-        }
+        let skipped = |n: usize, what: &str| {
+            (n > 0).then(|| {
+                let plural = if n == 1 { "" } else { "s" };
+                format!("{}: {n} {what} line{plural} skipped", f.file)
+            })
+        };
+        lines.extend(skipped(f.comment_lines, "comment"));
+        lines.extend(skipped(f.blank_lines, "blank"));
         for e in &f.experiments {
             if let Some(n) = e.resampled {
                 lines.push(format!(

@@ -22,7 +22,8 @@ use leeway::estimate::Method;
 use leeway::estimate::estimate;
 use leeway::ir::PredictorKind;
 use leeway::model::Source;
-use leeway::{Interpreter, Model, Signals, planar_rotation};
+use leeway::{Interpreter, Model, Signals};
+use leeway_bench::Sample;
 use leeway_scenarios::study;
 use std::hint::black_box;
 use std::process::ExitCode;
@@ -32,40 +33,6 @@ leeway::include_model!("../../../examples/models/ship.som");
 
 /// Samples per round of the regressor measurements.
 const BATCH: usize = 1000;
-
-/// One sample's signals, owned.
-struct Sample {
-    states: Vec<f64>,
-    inputs: Vec<f64>,
-    rotation: Vec<f64>,
-    disturbances: Vec<f64>,
-}
-
-/// Deterministic pseudo-random samples (a 64-bit LCG), as in
-/// `benches/regressors.rs`.
-fn samples() -> Vec<Sample> {
-    let mut state = 0x9E37_79B9_7F4A_7C15_u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..BATCH)
-        .map(|_| Sample {
-            states: (0..Ship::STATES.len())
-                .map(|_| 4.0 * next() - 2.0)
-                .collect(),
-            inputs: (0..Ship::INPUTS.len())
-                .map(|_| 40.0 * next() - 20.0)
-                .collect(),
-            rotation: planar_rotation(7.0 * next()).to_vec(),
-            disturbances: (0..Ship::COMPONENTS.len())
-                .map(|_| 3.0 * next() - 1.5)
-                .collect(),
-        })
-        .collect()
-}
 
 /// What one round evaluates on every sample.
 #[derive(Clone, Copy)]
@@ -82,12 +49,7 @@ fn round(model: &dyn Model, work: Work, samples: &[Sample], out: &mut [f64]) -> 
     let theta = [0.3; Ship::PARAMETERS.len()];
     let start = Instant::now();
     for s in samples {
-        let sig = Signals {
-            states: &s.states,
-            inputs: &s.inputs,
-            rotation: &s.rotation,
-            disturbances: &s.disturbances,
-        };
+        let sig = s.signals();
         let sig = black_box(&sig);
         match work {
             Work::Basic => model.basic(sig, out),
@@ -133,15 +95,7 @@ fn block_round(
     out: &mut [f64],
 ) -> f64 {
     let signs = [1.0; Ship::SIGN_ARGS.len() * BLOCK];
-    let signals: Vec<Signals> = samples
-        .iter()
-        .map(|s| Signals {
-            states: &s.states,
-            inputs: &s.inputs,
-            rotation: &s.rotation,
-            disturbances: &s.disturbances,
-        })
-        .collect();
+    let signals: Vec<Signals> = samples.iter().map(|s| s.signals()).collect();
     let start = Instant::now();
     for block in signals.chunks(BLOCK) {
         let signs = &signs[..block.len() * Ship::SIGN_ARGS.len()];
@@ -153,7 +107,7 @@ fn block_round(
 
 fn regressors(rounds: usize) {
     let interpreter = Interpreter::new(Ship.ir().clone());
-    let samples = samples();
+    let samples = leeway_bench::samples(&Ship, BATCH);
     let mut out = vec![
         0.0;
         Ship::AUGMENTED_LEN
