@@ -20,7 +20,7 @@ use leeway_data::LoadOptions;
 use leeway_data::input::OptionNames;
 use leeway_data::input::read_input;
 use leeway_data::with_table;
-use leeway_model::given::{MAX_GIVEN_VALUE, components_hint, given_value_ok};
+use leeway_model::given::MAX_GIVEN_VALUE;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -125,44 +125,6 @@ pub fn parse_input(
     let mut records =
         leeway_data::Records::new(file, text, "--input").map_err(|e| Problem::data(&e))?;
     read_input(&mut records, ir, options, x0, &NAMES).map_err(|e| Problem::data(&e))
-}
-
-/// `--disturbance NAME=VALUE,...`: constant unmeasured components by name
-/// (`north` or `current.north`), the others zero; measured components come
-/// from the data.
-pub fn disturbance_values(ir: &Ir, specs: &[String]) -> Result<Vec<f64>, Problem> {
-    let hint = components_hint(ir);
-    let bad = |item: &str, why: String| {
-        Problem::error("invalid-option", format!("--disturbance `{item}`: {why}")).help(&hint)
-    };
-    let items: Vec<&str> = specs
-        .iter()
-        .flat_map(|spec| spec.split(','))
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .collect();
-    let mut given = Vec::with_capacity(items.len());
-    for item in &items {
-        let Some((name, value)) = item.split_once('=') else {
-            return Err(bad(
-                item,
-                "expected NAME=VALUE, e.g. current.north=0.2".into(),
-            ));
-        };
-        let value = value.trim();
-        let v = match value.parse::<f64>() {
-            Ok(v) if given_value_ok(v) => v,
-            Ok(v) if v.is_finite() => {
-                return Err(bad(
-                    item,
-                    format!("`{value}` exceeds {MAX_GIVEN_VALUE:e} in magnitude"),
-                ));
-            }
-            _ => return Err(bad(item, format!("`{value}` is not a finite number"))),
-        };
-        given.push((name.trim(), v));
-    }
-    leeway_model::given::disturbance_values(ir, &given).map_err(|p| bad(items[p.index], p.reason))
 }
 
 #[cfg(test)]

@@ -32,6 +32,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod check;
 mod data;
+mod disturbances;
 mod estimate;
 mod files;
 mod input;

@@ -6,7 +6,7 @@
 
 use crate::files::read_text;
 use crate::problem::{Failure, Problem};
-use leeway_model::given::parameter_names;
+use leeway_model::given::{disturbance_slots, given_value_ok, parameter_names};
 use leeway_structure::grammar::line_col;
 use leeway_structure::ir::Ir;
 use serde_json::Value;
@@ -14,13 +14,29 @@ use std::path::Path;
 
 /// θ in the model's parameter order, read from `path` (given with `flag`).
 pub fn read(path: &Path, ir: &Ir, flag: &str) -> Result<Vec<f64>, Failure> {
+    Ok(read_file(path, ir, flag)?.theta)
+}
+
+/// A parameter file: θ and, from an estimate's document, the disturbance
+/// means it found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterFile {
+    /// θ in the model's parameter order.
+    pub theta: Vec<f64>,
+    /// Per disturbance component of the model, the estimate's mean (`None`
+    /// where it has none); `None` for a file that is not an estimate.
+    pub means: Option<Vec<Option<f64>>>,
+}
+
+/// θ and the disturbance means read from `path` (given with `flag`).
+pub fn read_file(path: &Path, ir: &Ir, flag: &str) -> Result<ParameterFile, Failure> {
     let file = path.display().to_string();
     let text = read_text(path, &format!("the {flag} file"))?;
     parse(&file, &text, ir, flag).map_err(Failure::Problems)
 }
 
 /// Parses a parameter file's text; `file` names it in problems.
-pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Vec<Problem>> {
+pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<ParameterFile, Vec<Problem>> {
     let help = format!(
         "{flag} takes the output of `leeway estimate --json` or an object {{\"name\": value}} with one number per parameter"
     );
@@ -42,15 +58,80 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<Vec<f64>, Ve
     // An estimate document: read its `estimates`; otherwise the object itself.
     // Entries are re-read in file order with duplicates kept, so a repeated
     // name is reported rather than silently overwritten.
-    let (entries, start) = if matches!(top.get("estimates"), Some(Value::Object(_))) {
+    let places = Places { file, text };
+    if matches!(top.get("estimates"), Some(Value::Object(_))) {
         let doc: EstimateDocument = serde_json::from_str(text).map_err(invalid)?;
-        (doc.estimates.0, key_offset(text, 0, "estimates", true))
+        let start = key_offset(text, 0, "estimates", true);
+        let theta = theta_of(ir, &doc.estimates.0, start, &places, &help);
+        let means = disturbance_means(ir, top.get("disturbances"), &places);
+        match (theta, means) {
+            (Ok(theta), Ok(means)) => Ok(ParameterFile {
+                theta,
+                means: Some(means),
+            }),
+            (theta, means) => Err([theta.err(), means.err()]
+                .into_iter()
+                .flatten()
+                .flatten()
+                .collect()),
+        }
     } else {
         let entries: Entries = serde_json::from_str(text).map_err(invalid)?;
-        (entries.0, text.find('{'))
+        let theta = theta_of(ir, &entries.0, text.find('{'), &places, &help)?;
+        Ok(ParameterFile { theta, means: None })
+    }
+}
+
+/// The disturbance means of an estimate document's `disturbances`
+/// (`{"current": {"north": {"mean": 0.19, ...}}}`), per component of the
+/// model; a component the model does not have unmeasured is a problem (the
+/// file belongs to another model), a null or absent mean is `None`.
+fn disturbance_means(
+    ir: &Ir,
+    value: Option<&Value>,
+    places: &Places<'_>,
+) -> Result<Vec<Option<f64>>, Vec<Problem>> {
+    let at = places.at(key_offset(places.text, 0, "disturbances", true));
+    let problem = |message: String| {
+        vec![
+            Problem::error("invalid-params", message)
+                .at(&at)
+                .help(leeway_model::given::components_hint(ir)),
+        ]
     };
-    let places = Places { file, text };
-    theta_of(ir, &entries, start, &places, &help)
+    let mut named = Vec::new();
+    match value {
+        None | Some(Value::Null) => {}
+        Some(Value::Object(media)) => {
+            for (medium, components) in media {
+                let Value::Object(components) = components else {
+                    return Err(problem(format!("`disturbances.{medium}` is not an object")));
+                };
+                for (component, entry) in components {
+                    let name = format!("{medium}.{component}");
+                    match entry.get("mean") {
+                        Some(Value::Null) => {}
+                        Some(m) if m.as_f64().is_some_and(given_value_ok) => {
+                            named.push((name, m.as_f64().unwrap_or_default()));
+                        }
+                        _ => {
+                            return Err(problem(format!(
+                                "`disturbances.{name}.mean` is not a finite number"
+                            )));
+                        }
+                    }
+                }
+            }
+        }
+        Some(_) => return Err(problem("`disturbances` is not an object".into())),
+    }
+    let given: Vec<(&str, f64)> = named.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    disturbance_slots(ir, &given).map_err(|p| {
+        problem(format!(
+            "the estimate's disturbance `{}` does not fit model `{}`: {}",
+            given[p.index].0, ir.name, p.reason
+        ))
+    })
 }
 
 /// Where a parameter file's entries are, as `file:line:col`.
@@ -219,13 +300,52 @@ mod tests {
         let ir = ir();
         assert_eq!(
             parse("p.json", r#"{"b": 2.5, "a": -1}"#, &ir, "--params").map_err(|p| p.len()),
-            Ok(vec![-1.0, 2.5])
+            Ok(ParameterFile {
+                theta: vec![-1.0, 2.5],
+                means: None
+            })
         );
         let doc = r#"{"method": "iv3", "nuisance": [{"estimates": "E[a]"}],
             "estimates": {"a": -0.5, "b": 0.25}, "std_errors": {"a": null, "b": 0.1}}"#;
         assert_eq!(
-            parse("e.json", doc, &ir, "--params").map_err(|p| p.len()),
+            parse("e.json", doc, &ir, "--params")
+                .map(|p| p.theta)
+                .map_err(|p| p.len()),
             Ok(vec![-0.5, 0.25])
+        );
+    }
+
+    #[test]
+    fn an_estimate_documents_disturbance_means_are_read_by_component() {
+        let src = "model M { step 1 state x input u disturbance current unmeasured body(x: c) \
+                   water = relative(current) der x = a*water.x + b*u }";
+        let c = leeway_structure::compile(src, &Default::default());
+        let ir = c.ir.unwrap_or_else(|| panic!("{:?}", c.diagnostics));
+        let doc = |d: &str| format!(r#"{{"estimates": {{"a": -1, "b": 2}}, "disturbances": {d}}}"#);
+        let read = |d: &str| parse("e.json", &doc(d), &ir, "--params");
+        assert_eq!(
+            read(r#"{"current": {"c": {"mean": 0.25, "std_error": null}}}"#)
+                .map(|p| p.means)
+                .map_err(|p| p.len()),
+            Ok(Some(vec![Some(0.25)]))
+        );
+        assert_eq!(
+            read(r#"{"current": {"c": {"mean": null}}}"#)
+                .map(|p| p.means)
+                .map_err(|p| p.len()),
+            Ok(Some(vec![None]))
+        );
+        let problems = read(r#"{"wind": {"c": {"mean": 1}}}"#)
+            .err()
+            .unwrap_or_default();
+        assert_eq!(problems.len(), 1);
+        assert_eq!(problems[0].location.as_deref(), Some("e.json:1:34"));
+        assert!(
+            problems[0]
+                .message
+                .contains("`wind.c` does not fit model `M`"),
+            "{}",
+            problems[0].message
         );
     }
 

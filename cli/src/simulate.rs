@@ -4,7 +4,7 @@
 //! CSV data file. Exit 0 on success, 1 when the simulation diverges (the rows
 //! before the divergence are still written), 2 on any model, file or option error.
 
-use crate::input::disturbance_values;
+use crate::disturbances;
 use crate::input::{initial_values, load_input};
 use crate::model::load;
 use crate::options::load_options;
@@ -13,6 +13,7 @@ use crate::output::{Status, err, headline, out, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_data::write_csv;
 use leeway_model::Interpreter;
+use leeway_model::given::Origin;
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
 use std::path::PathBuf;
@@ -38,7 +39,9 @@ pub struct SimulateArgs {
     #[arg(long = "x0", value_name = "NAME=VALUE,...")]
     pub x0: Vec<String>,
     /// A constant unmeasured disturbance component, e.g. `current.north=0.2`
-    /// (earth frame for earth-fixed media); components not given are zero.
+    /// (earth frame for earth-fixed media), or `zero` for none. Components
+    /// not given take the means of the estimate given as --params, else zero
+    /// (with a warning).
     #[arg(long = "disturbance", value_name = "NAME=VALUE,...")]
     pub disturbances: Vec<String>,
     /// Sample time for an input without a time column when the model declares no `step`.
@@ -68,13 +71,30 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Fa
     warnings.extend(loaded.warnings);
     let ir = loaded.ir;
     let options = load_options(&ir, args.step, None)?;
-    let theta = crate::params::read(&args.params, &ir, "--params")?;
+    let file = crate::params::read_file(&args.params, &ir, "--params")?;
     let x0 = initial_values(&ir, &args.x0)?;
-    let dist = disturbance_values(&ir, &args.disturbances)?;
+    let given = disturbances::given(&ir, &args.disturbances)?;
+    let (held, warning) = disturbances::held(&ir, &given, &file, &args.params);
+    // Said when values came from the estimate (the user may not expect it);
+    // a default zero is warned of.
+    let from_estimate = held.origins.contains(&Some(Origin::Estimate));
+    match (
+        warning,
+        disturbances::described(&ir, &held).filter(|_| from_estimate),
+    ) {
+        (Some(w), _) => warnings.push(w),
+        (None, Some(line)) => err(&headline(
+            stderr_style(),
+            "note",
+            None,
+            &format!("disturbances held: {line}"),
+        )),
+        (None, None) => {}
+    }
     let input = load_input(&args.input, &ir, &options, &x0)?;
     let model = Interpreter::new(ir.clone());
     let e = &input.experiment;
-    let written = simulate_written(&model, &theta, e, Disturbances::Constant(&dist));
+    let written = simulate_written(&model, &file.theta, e, Disturbances::Constant(&held.values));
     let (result, finite) = (written.experiment, written.samples);
     let mut buffer = Vec::new();
     write_csv(&ir, &[&result], input.t0, &mut buffer)

@@ -9,7 +9,7 @@
 //! data, parameter-file or option error.
 
 use crate::data::{data_notes, load_data};
-use crate::input::disturbance_values;
+use crate::disturbances::{self, HeldJson};
 use crate::model::load;
 use crate::options::positive;
 use crate::options::{TimeArgs, load_options};
@@ -51,7 +51,9 @@ pub struct ValidateArgs {
     #[arg(long)]
     pub json: bool,
     /// A constant unmeasured disturbance component during the simulation, e.g.
-    /// `current.north=0.2` (earth frame for earth-fixed media); others are zero.
+    /// `current.north=0.2` (earth frame for earth-fixed media), or `zero` for
+    /// none. Components not given take the means of each estimate given as
+    /// --params, else zero (with a warning).
     #[arg(long = "disturbance", value_name = "NAME=VALUE,...")]
     pub disturbances: Vec<String>,
     /// Sample time for data without a time column when the model declares no `step`.
@@ -87,6 +89,12 @@ struct ModelFits {
     /// Mean fit over experiments per output (and `heading`); null when an
     /// experiment diverged or no experiment defines it.
     mean: Ordered<Option<f64>>,
+    /// The unmeasured disturbance components held during the simulation,
+    /// each with its value and where it comes from.
+    disturbances: Ordered<HeldJson>,
+    /// The same in words, for the text output.
+    #[serde(skip)]
+    held: Option<String>,
 }
 
 /// The JSON document of `leeway validate --json` (docs/json.md).
@@ -224,11 +232,16 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     warnings.extend(loaded.warnings);
     let ir = loaded.ir;
     let options = load_options(&ir, args.step, Some(&args.time))?;
-    let mut thetas = Vec::new();
+    let given = disturbances::given(&ir, &args.disturbances)?;
+    let (mut thetas, mut held) = (Vec::new(), Vec::new());
     for p in &args.params {
-        thetas.push(crate::params::read(p, &ir, "--params")?);
+        let file = crate::params::read_file(p, &ir, "--params")?;
+        let (h, warning) = disturbances::held(&ir, &given, &file, p);
+        warnings.extend(warning);
+        thetas.push(file.theta);
+        held.push(h);
     }
-    let dist = disturbance_values(&ir, &args.disturbances)?;
+    let dist: Vec<Vec<f64>> = held.iter().map(|h| h.values.clone()).collect();
     let (experiments, notes) = load_data(&ir, &args.data, &options)?;
     let sources: Vec<&dyn leeway_model::Source> = experiments
         .iter()
@@ -248,11 +261,12 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     let comparison = compare(&model, &thetas, &names, &experiments, &dist);
     warnings.extend(comparison.warnings);
     let mut results = Vec::new();
-    for ((validations, mean), name) in comparison
+    for (((validations, mean), name), held) in comparison
         .validations
         .iter()
         .zip(comparison.means)
         .zip(&names)
+        .zip(&held)
     {
         for (k, v) in validations.iter().enumerate() {
             add_simulated(&mut panels, k, &v.trajectory, ir.states.len());
@@ -277,6 +291,8 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             name: name.clone(),
             experiments,
             mean: Ordered(outputs.iter().cloned().zip(mean).collect()),
+            disturbances: disturbances::json(&ir, held),
+            held: disturbances::described(&ir, held),
         });
     }
     title_panels(&mut panels, &results, &outputs, experiments.len());
@@ -424,6 +440,9 @@ fn render(o: &Outcome) -> String {
             rows.push(r);
         }
         s.push_str(&table(&rows));
+        if let Some(held) = &m.held {
+            let _ = writeln!(s, "disturbances held: {held}");
+        }
     }
     let mut extra: Vec<String> = o.units.iter().map(|u| format!("unit: {u}")).collect();
     extra.extend(

@@ -520,12 +520,31 @@ fn estimate_then_validate_round_trips_the_parameters() {
     let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let est = dir.write("est.json", &stdout(&o));
+    // The validation run is calm (no current): held at the estimate's
+    // current (the default) the surge fit drops; `--disturbance zero` says so.
     let o = leeway(&[
         "validate", SHIP, "--params", &est, "--data", &val_file, "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let held = json(&o)["mean"]["u"].as_f64().unwrap_or(f64::NAN);
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &est,
+        "--data",
+        &val_file,
+        "--json",
+        "--disturbance",
+        "zero",
     ]);
     no_panic(&o);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let v = json(&o);
+    assert!(
+        held < v["mean"]["u"].as_f64().unwrap_or(f64::NAN) - 10.0,
+        "{held}: {v}"
+    );
     let fit = &v["experiments"][0]["fit"];
     for output in ["u", "v", "r"] {
         let f = fit[output].as_f64().unwrap_or(f64::NAN);
@@ -583,7 +602,16 @@ fn estimate_then_validate_round_trips_the_parameters() {
     // A plot that cannot be written: exit 2, the fits still printed.
     let nowhere = dir.path("no/such/dir/fit.svg").display().to_string();
     let o = leeway(&[
-        "validate", SHIP, "--params", &truth, "--data", &val_file, "--plot", &nowhere,
+        "validate",
+        SHIP,
+        "--params",
+        &truth,
+        "--data",
+        &val_file,
+        "--plot",
+        &nowhere,
+        "--disturbance",
+        "zero",
     ]);
     no_panic(&o);
     assert_eq!(code(&o), 2);
@@ -719,6 +747,8 @@ fn simulate_writes_a_data_file_that_validates() {
         &input,
         "--x0",
         "u=4,v=0,r=0,psi=0",
+        "--disturbance",
+        "zero",
     ]);
     no_panic(&o);
     assert_eq!(code(&o), 1, "{}", stderr(&o));
@@ -752,7 +782,134 @@ fn text_output_snapshots() {
         "val.csv",
         &csv_text(&model, &[&study::validation_experiment(&model, 600)]),
     );
-    let o = leeway(&["validate", SHIP, "--params", &est, "--data", &val]);
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &est,
+        "--data",
+        &val,
+        "--disturbance",
+        "zero",
+    ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     insta::assert_snapshot!("validate_stdout", stdout(&o).replace(&here, "[dir]"));
+}
+
+/// A new craft's first hour: validating the estimate's own output holds the
+/// current it found (the fit its own simulation reported, the fit the means
+/// given by hand give); a plain parameter file holds zero and says so.
+#[test]
+fn validate_holds_the_disturbance_means_of_the_estimate_it_is_given() {
+    let dir = Scratch::new("catamaran");
+    let data = dir.write("runs.csv", &catamaran_csv(3000, 7));
+    let o = leeway(&[
+        "estimate",
+        CATAMARAN,
+        "--data",
+        &data,
+        "--json",
+        "--centring",
+        "none",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let est = dir.write("est.json", &stdout(&o));
+    let e = json(&o);
+    // One answer on the constant force: `check` and `estimate` (default
+    // centring, per experiment) name the same centring and experiments.
+    let way = "θ is identifiable with `--centring none` or `pooled` from experiments with sign patterns {+water.u +water.v}, {-water.u +water.v}";
+    let check = leeway(&["check", CATAMARAN]);
+    let default = leeway(&["estimate", CATAMARAN, "--data", &data]);
+    assert_eq!(code(&default), 1, "{}", stderr(&default));
+    for o in [&check, &default] {
+        assert!(
+            stdout(o).contains(way) || stderr(o).contains(way),
+            "{}{}",
+            stdout(o),
+            stderr(o)
+        );
+    }
+    let mean = |c: &str| {
+        e["disturbances"]["current"][c]["mean"]
+            .as_f64()
+            .unwrap_or(f64::NAN)
+    };
+    let (north, east) = (mean("north"), mean("east"));
+    // The current found, within a few standard errors of (0.2, −0.1).
+    assert!(
+        (north - 0.2).abs() < 0.05 && (east + 0.1).abs() < 0.05,
+        "{north} {east}"
+    );
+    let fits = |v: &Value| -> Vec<f64> {
+        ["u", "v", "r", "psi"]
+            .iter()
+            .map(|s| v["mean"][s].as_f64().unwrap_or(f64::NAN))
+            .collect()
+    };
+    let validate = |extra: &[&str]| {
+        let mut args = vec!["validate", CATAMARAN, "--data", &data, "--json"];
+        args.extend(extra);
+        let o = leeway(&args);
+        no_panic(&o);
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        json(&o)
+    };
+    // Without options: the estimate's means, said in JSON, no warning.
+    let held = validate(&["--params", &est]);
+    assert_eq!(held["warnings"], serde_json::json!([]), "{held}");
+    assert_eq!(
+        held["models"][0]["disturbances"],
+        serde_json::json!({
+            "current.north": {"value": north, "from": "estimate"},
+            "current.east": {"value": east, "from": "estimate"},
+        })
+    );
+    // The fit the estimate's own simulation reported for u, v, r.
+    let own = &e["diagnostics"]["own_simulation"]["fits"];
+    for (k, state) in ["u", "v", "r"].iter().enumerate() {
+        let reported = own[k]["fit"].as_f64().unwrap_or(f64::NAN);
+        assert_eq!(own[k]["state"], *state);
+        assert!(
+            (fits(&held)[k] - reported).abs() < 1e-9,
+            "{state}: {held} vs {own}"
+        );
+    }
+    // The same means given by hand: the same fits, bit for bit.
+    let given = format!("current.north={north:?},current.east={east:?}");
+    let by_hand = validate(&["--params", &est, "--disturbance", &given]);
+    assert_eq!(fits(&by_hand), fits(&held));
+    assert_eq!(
+        by_hand["models"][0]["disturbances"]["current.east"]["from"],
+        "given"
+    );
+    // θ as a plain file: the current is zero, with a warning saying how to
+    // give it; `--disturbance zero` asks for that and silences it.
+    let plain = serde_json::to_string(&e["estimates"]).unwrap_or_default();
+    let plain = dir.write("plain.json", &plain);
+    let zero = validate(&["--params", &plain]);
+    let warnings = zero["warnings"].to_string();
+    assert!(
+        warnings.contains("the `current` is taken as zero while simulating with")
+            && warnings.contains("--disturbance current.north=VALUE,current.east=VALUE"),
+        "{warnings}"
+    );
+    assert_eq!(
+        zero["models"][0]["disturbances"]["current.north"]["from"],
+        "default"
+    );
+    let asked = validate(&["--params", &plain, "--disturbance", "zero"]);
+    assert_eq!(asked["warnings"], serde_json::json!([]));
+    assert_eq!(fits(&asked), fits(&zero));
+    // Without the current the fit drops: what made a newcomer doubt the model.
+    assert!(fits(&zero)[0] < fits(&held)[0] - 5.0, "{zero} vs {held}");
+    // The text output says what was held.
+    let o = leeway(&["validate", CATAMARAN, "--data", &data, "--params", &est]);
+    assert!(
+        stdout(&o).contains(&format!(
+            "disturbances held: current.north = {} (estimate)",
+            (north * 1e4).round() / 1e4
+        )),
+        "{}",
+        stdout(&o)
+    );
 }

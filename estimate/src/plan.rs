@@ -13,8 +13,8 @@ use leeway_model::signs::ExperimentSigns;
 use leeway_structure::exact::Q;
 use leeway_structure::identify::Centring;
 use leeway_structure::identify::{
-    Analysis, ExperimentStructure, Patterns, Reduction, Verdict, constant_parameters, linear_text,
-    patterns_text, verdict,
+    Analysis, ExperimentStructure, Patterns, Reduction, Verdict, centring_remedies,
+    constant_parameters, linear_text, patterns_text, remedies_text, verdict,
 };
 use leeway_structure::ir::{ColumnKind, Ir, PredictorKind};
 use std::collections::BTreeMap;
@@ -143,10 +143,12 @@ fn unidentifiable(
         .all(|c| c.parameters.iter().all(|p| constants.contains(p)));
     let required = analysis.required_patterns();
     let hint = match (&required, remark2) {
-                    _ if only_constants && centring != Centring::None => format!(
-                        "a constant term is estimable with uncentred instruments (--centring none: {}), or with --centring pooled; or remove the term",
-                        Centring::None.reason(ir, kind)
-                    ),
+                    (None, _) if only_constants => {
+                        match remedies_text(ir, kind, &centring_remedies(ir, kind, centring)) {
+                            Some(way) => format!("θ is identifiable with {way}; or remove the constant term"),
+                            None => "no centring identifies the constant term from any experiments: remove it, or estimate the identifiable combinations with --aggregate".to_string(),
+                        }
+                    }
                     (_, true) => "the heading barely varied: run experiments that turn the craft (paper Remark 2), or estimate the identifiable combinations with --aggregate".to_string(),
                     (Some(r), false) if !r.is_empty() => format!(
                         "θ needs experiments with sign patterns {}; or estimate the identifiable combinations with --aggregate",

@@ -52,8 +52,16 @@ pub fn components_hint(ir: &Ir) -> String {
 /// from the data) or one given twice is a problem. The values themselves
 /// are checked by the caller (see [`given_value_ok`]).
 pub fn disturbance_values(ir: &Ir, given: &[(&str, f64)]) -> Result<Vec<f64>, NameProblem> {
-    let mut values = vec![0.0; ir.components.len()];
-    let mut set = vec![false; ir.components.len()];
+    Ok(disturbance_slots(ir, given)?
+        .into_iter()
+        .map(|v| v.unwrap_or(0.0))
+        .collect())
+}
+
+/// Unmeasured disturbance components by name, as [`disturbance_values`]
+/// reads them, in the model's component order: `None` where not given.
+pub fn disturbance_slots(ir: &Ir, given: &[(&str, f64)]) -> Result<Vec<Option<f64>>, NameProblem> {
+    let mut values = vec![None; ir.components.len()];
     for (index, &(name, v)) in given.iter().enumerate() {
         let problem = |reason: String| NameProblem { index, reason };
         let found = ir.components.iter().position(|c| {
@@ -68,13 +76,109 @@ pub fn disturbance_values(ir: &Ir, given: &[(&str, f64)]) -> Result<Vec<f64>, Na
                 "`{name}` is measured: its values come from the data"
             )));
         }
-        if set[i] {
+        if values[i].is_some() {
             return Err(problem(format!("`{name}` is given twice")));
         }
-        values[i] = v;
-        set[i] = true;
+        values[i] = Some(v);
     }
     Ok(values)
+}
+
+/// Where the constant value of an unmeasured disturbance component in a
+/// simulation comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// Given by the user (`--disturbance`, `disturbances=`).
+    Given,
+    /// The mean an estimate found (its parameter file or object).
+    Estimate,
+    /// Zero because nothing gave it: the user must be warned.
+    Default,
+}
+
+impl Origin {
+    /// The word in JSON and tables.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Origin::Given => "given",
+            Origin::Estimate => "estimate",
+            Origin::Default => "default",
+        }
+    }
+}
+
+/// The constant unmeasured disturbances a simulation holds, each with where
+/// it comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HeldDisturbances {
+    /// Per component of the model (measured ones 0: they come from the data).
+    pub values: Vec<f64>,
+    /// Per component: `None` for a measured one.
+    pub origins: Vec<Option<Origin>>,
+}
+
+impl HeldDisturbances {
+    /// The unmeasured components as `(current.north, value, origin)`.
+    pub fn named(&self, ir: &Ir) -> Vec<(String, f64, Origin)> {
+        ir.components
+            .iter()
+            .zip(self.values.iter().zip(&self.origins))
+            .filter_map(|(c, (&v, o))| {
+                o.map(|o| {
+                    let d = &ir.disturbances[c.disturbance].name;
+                    (format!("{d}.{}", c.name), v, o)
+                })
+            })
+            .collect()
+    }
+
+    /// The unmeasured media (`current`) with a component zero by default,
+    /// and those components: what the warning names.
+    pub fn defaulted(&self, ir: &Ir) -> (Vec<String>, Vec<String>) {
+        let mut media: Vec<String> = Vec::new();
+        let mut components = Vec::new();
+        for (c, o) in ir.components.iter().zip(&self.origins) {
+            if *o == Some(Origin::Default) {
+                let d = &ir.disturbances[c.disturbance].name;
+                if !media.contains(d) {
+                    media.push(d.clone());
+                }
+                components.push(format!("{d}.{}", c.name));
+            }
+        }
+        (media, components)
+    }
+}
+
+/// The disturbances a simulation holds: per unmeasured component the value
+/// given (from [`disturbance_slots`]), else the estimate's mean, else zero
+/// by default; `zero` (the user asked for no disturbance) makes every
+/// component not given a given zero.
+pub fn held_disturbances(
+    ir: &Ir,
+    given: &[Option<f64>],
+    zero: bool,
+    estimated: &[Option<f64>],
+) -> HeldDisturbances {
+    let mut values = vec![0.0; ir.components.len()];
+    let mut origins = vec![None; ir.components.len()];
+    for (i, c) in ir.components.iter().enumerate() {
+        if ir.disturbances[c.disturbance].measured {
+            continue;
+        }
+        let (v, o) = match (
+            given.get(i).copied().flatten(),
+            estimated.get(i).copied().flatten(),
+        ) {
+            (Some(v), _) => (v, Origin::Given),
+            (None, _) if zero => (0.0, Origin::Given),
+            (None, Some(v)) => (v, Origin::Estimate),
+            (None, None) => (0.0, Origin::Default),
+        };
+        values[i] = v;
+        origins[i] = Some(o);
+    }
+    HeldDisturbances { values, origins }
 }
 
 /// How names given for θ match the model's parameters.

@@ -121,13 +121,14 @@ pub struct Comparison {
 }
 
 /// Validates every θ (named by `names`; `θ` where a name is missing) on
-/// every experiment, each with the same constant disturbances.
+/// every experiment, each θ with its constant disturbances (`disturbances[m]`
+/// for `thetas[m]`: an estimate's own means, say; zero where missing).
 pub fn compare(
     model: &dyn Model,
     thetas: &[Vec<f64>],
     names: &[String],
     experiments: &[Experiment],
-    disturbances: &[f64],
+    disturbances: &[Vec<f64>],
 ) -> Comparison {
     let ir = model.ir();
     let mut outputs = ir.states.clone();
@@ -139,10 +140,12 @@ pub fn compare(
     let mut means = Vec::with_capacity(thetas.len());
     for (m, theta) in thetas.iter().enumerate() {
         let name = names.get(m).map_or("θ", String::as_str);
+        let zero = vec![0.0; ir.components.len()];
+        let held = disturbances.get(m).unwrap_or(&zero);
         let validations: Vec<Validation> = experiments
             .iter()
             .map(|e| {
-                let v = validate(model, theta, e, Disturbances::Constant(disturbances));
+                let v = validate(model, theta, e, Disturbances::Constant(held));
                 warnings.extend(told(&v, e, name, m == 0, &outputs, &ir.states));
                 v
             })

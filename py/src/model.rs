@@ -2,8 +2,9 @@
 
 use crate::data;
 use crate::failure::Failure;
+use crate::options::choice;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
-use leeway_structure::identify::parse_pattern;
+use leeway_structure::identify::{Centring, parse_pattern};
 use leeway_structure::ir::Ir;
 use leeway_structure::{Compilation, compile};
 use pyo3::prelude::*;
@@ -29,6 +30,18 @@ fn options(
         patterns,
         centring: None,
     }
+}
+
+/// The compiler's options for `check`: the sign patterns and the centring.
+fn check_options(
+    aggregate: bool,
+    patterns: Option<Vec<leeway_structure::ir::SignPattern>>,
+    centring: Option<&str>,
+) -> Result<leeway_structure::CompileOptions, Failure> {
+    Ok(leeway_structure::CompileOptions {
+        centring: centring.map(choice::<Centring>).transpose()?,
+        ..options(aggregate, patterns)
+    })
 }
 
 /// The compiler's warnings, one line each, as the CLI lists them.
@@ -176,9 +189,15 @@ impl Model {
     }
 
     /// `leeway check --json` of this model, for the given sign patterns
-    /// (`"water.u:+,water.v:-"`, as `--pattern` takes them) or the searched ones.
-    #[pyo3(signature = (patterns=None))]
-    fn check_json(&self, patterns: Option<Vec<String>>) -> PyResult<String> {
+    /// (`"water.u:+,water.v:-"`, as `--pattern` takes them) or the searched
+    /// ones, under `centring` (`experiment`, `pooled`, `none`; default: the
+    /// model's).
+    #[pyo3(signature = (patterns=None, centring=None))]
+    fn check_json(
+        &self,
+        patterns: Option<Vec<String>>,
+        centring: Option<String>,
+    ) -> PyResult<String> {
         let patterns = match patterns {
             None => None,
             Some(specs) => {
@@ -192,7 +211,8 @@ impl Model {
                 Some(parsed)
             }
         };
-        let compilation = compile(&self.source, &options(self.aggregate, patterns));
+        let options = check_options(self.aggregate, patterns, centring.as_deref())?;
+        let compilation = compile(&self.source, &options);
         let report =
             leeway_report::check::report(&self.file, &self.source, &compilation, self.aggregate);
         serde_json::to_string(&report)

@@ -29,7 +29,7 @@ pub(crate) struct EstimateOptions {
 
 /// The value named `given` of a named option, or an `OptionError` listing
 /// the names.
-fn choice<T: Named>(given: &str) -> Result<T, Failure> {
+pub(crate) fn choice<T: Named>(given: &str) -> Result<T, Failure> {
     T::from_name(given).map_err(|e| {
         let names = e.names.join(", ");
         Failure::option(

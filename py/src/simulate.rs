@@ -18,13 +18,14 @@ use leeway_data::write;
 use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::experiment::column_name;
-use leeway_model::given::{components_hint, given_value_ok};
+use leeway_model::given::{components_hint, disturbance_slots, given_value_ok, held_disturbances};
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
 use leeway_model::validation::compare;
 use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
 use leeway_report::unit_warnings;
+use leeway_structure::grammar::and_list;
 use leeway_structure::ir::{Ir, Rotation};
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -78,31 +79,75 @@ fn initial_values(ir: &Ir, x0: &[(String, f64)]) -> Result<Vec<(String, f64)>, F
         .collect()
 }
 
-/// Constant unmeasured disturbance components by name (`north` or
-/// `current.north`, as `--disturbance` takes them); others are zero.
-fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Failure> {
-    let mut named = Vec::with_capacity(given.len());
-    for (name, v) in given {
-        named.push((name.as_str(), checked("disturbances", name, *v)?));
-    }
-    leeway_model::given::disturbance_values(ir, &named).map_err(|p| {
-        Failure::option(
-            format!("disturbances: {}", p.reason),
-            Some(components_hint(ir)),
+/// The unmeasured disturbance components a simulation holds, as
+/// `(current.north, value, origin)`: `given` (or `"zero"`), else the
+/// estimate's `means`, else zero with a warning in Python's spelling.
+type Held = Vec<(String, f64, &'static str)>;
+
+/// The disturbances a simulation with `what` holds (see [`Held`]): values
+/// for the model and the warning when a medium is zero by default.
+fn held(
+    ir: &Ir,
+    given: &[(String, f64)],
+    zero: bool,
+    means: Option<&[(String, f64)]>,
+    what: &str,
+) -> Result<(Vec<f64>, Held, Option<String>), Failure> {
+    let slots = |pairs: &[(String, f64)], label: &str| -> Result<Vec<Option<f64>>, Failure> {
+        let mut named = Vec::with_capacity(pairs.len());
+        for (name, v) in pairs {
+            named.push((name.as_str(), checked(label, name, *v)?));
+        }
+        disturbance_slots(ir, &named).map_err(|p| {
+            Failure::option(format!("{label}: {}", p.reason), Some(components_hint(ir)))
+        })
+    };
+    let given = slots(given, "disturbances")?;
+    let estimated = match means {
+        Some(m) => slots(m, "the estimate's disturbance means")?,
+        None => vec![None; ir.components.len()],
+    };
+    let held = held_disturbances(ir, &given, zero, &estimated);
+    let (media, components) = held.defaulted(ir);
+    let warning = (!media.is_empty()).then(|| {
+        let why = if means.is_some() {
+            "the estimate has no mean for it"
+        } else {
+            "it holds no disturbance means (an Estimate does)"
+        };
+        let values: Vec<String> = components.iter().map(|c| format!("{c:?}: VALUE")).collect();
+        format!(
+            "{} taken as zero while simulating with {what}: {why}; pass disturbances={{{}}} or disturbances=\"zero\"",
+            and_list(media.iter().map(|m| format!("`{m}`"))),
+            values.join(", ")
         )
-    })
+    });
+    let named = held
+        .named(ir)
+        .into_iter()
+        .map(|(n, v, o)| (n, v, o.as_str()))
+        .collect();
+    Ok((held.values, named, warning))
 }
 
 /// A simulated trajectory: the columns of `leeway simulate`'s output
-/// (`leeway_data::write::header`) and, when it diverged, why (the
-/// columns then hold the samples before).
-type Simulated<'py> = (Vec<(String, Bound<'py, PyArray1<f64>>)>, Option<String>);
+/// (`leeway_data::write::header`), when it diverged, why (the columns then
+/// hold the samples before), the disturbances held and the warnings.
+type Simulated<'py> = (
+    Vec<(String, Bound<'py, PyArray1<f64>>)>,
+    Option<String>,
+    Held,
+    Vec<String>,
+);
 
 /// `leeway simulate` of `model` with `theta` on the input frame: `x0` gives
 /// or overrides initial values, `disturbances` constant unmeasured
-/// components. The GIL is released while the frame is read and simulated.
+/// components (`zero`: all not given are zero), the others the estimate's
+/// `means` when θ is an estimate (see [`held`]). The GIL is released while
+/// the frame is read and simulated.
 #[pyfunction]
-#[pyo3(signature = (model, frame, theta, x0, disturbances, step=None))]
+#[pyo3(signature = (model, frame, theta, x0, disturbances, zero=false, means=None, step=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn simulate_columns<'py>(
     py: Python<'py>,
     model: &Model,
@@ -110,13 +155,15 @@ pub fn simulate_columns<'py>(
     theta: Vec<f64>,
     x0: Vec<(String, f64)>,
     disturbances: Vec<(String, f64)>,
+    zero: bool,
+    means: Option<Vec<(String, f64)>>,
     step: Option<f64>,
 ) -> PyResult<Simulated<'py>> {
     let ir = &model.ir;
     check_theta(ir, &theta)?;
     let options = load_options(ir, step, None, None)?;
     let x0 = initial_values(ir, &x0)?;
-    let dist = disturbance_values(ir, &disturbances)?;
+    let (dist, named, warning) = held(ir, &disturbances, zero, means.as_deref(), "theta")?;
     let frames = borrow_frames(std::slice::from_ref(&frame))?;
     let frame = &frames[0];
     let (header, columns, diverged) = py.detach(|| -> Result<_, Failure> {
@@ -152,7 +199,7 @@ pub fn simulate_columns<'py>(
         .zip(columns)
         .map(|(name, c)| (name, PyArray1::from_vec(py, c)))
         .collect();
-    Ok((columns, diverged))
+    Ok((columns, diverged, named, warning.into_iter().collect()))
 }
 
 fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
@@ -184,14 +231,21 @@ fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
 type FitRow = (usize, String, usize, bool, Vec<Option<f64>>);
 
 /// What `leeway validate` reports: the outputs (table columns), a row per θ
-/// and experiment, per θ the mean fit per output, and the warnings.
-type Fits = (Vec<String>, Vec<FitRow>, Vec<Vec<Option<f64>>>, Vec<String>);
+/// and experiment, per θ the mean fit per output, the warnings, and per θ
+/// the disturbances held.
+type Fits = (
+    Vec<String>,
+    Vec<FitRow>,
+    Vec<Vec<Option<f64>>>,
+    Vec<String>,
+    Vec<Held>,
+);
 
 /// `leeway validate` of `model` with each θ on the frames' experiments
 /// (loaded as `leeway.estimate` loads them). `names` names each θ in
 /// warnings. The GIL is released while loading and simulating.
 #[pyfunction]
-#[pyo3(signature = (model, frames, thetas, names, disturbances, step=None, time_tolerance=0.05, resample=None))]
+#[pyo3(signature = (model, frames, thetas, names, disturbances, zero=false, means=Vec::new(), step=None, time_tolerance=0.05, resample=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn validate_fits(
     py: Python<'_>,
@@ -200,6 +254,8 @@ pub fn validate_fits(
     thetas: Vec<Vec<f64>>,
     names: Vec<String>,
     disturbances: Vec<(String, f64)>,
+    zero: bool,
+    means: Vec<Option<Vec<(String, f64)>>>,
     step: Option<f64>,
     time_tolerance: f64,
     resample: Option<f64>,
@@ -209,12 +265,20 @@ pub fn validate_fits(
         check_theta(ir, theta)?;
     }
     let options = load_options(ir, step, Some(time_tolerance), resample)?;
-    let dist = disturbance_values(ir, &disturbances)?;
+    let (mut dist, mut named, mut held_warnings) = (Vec::new(), Vec::new(), Vec::new());
+    for (m, name) in names.iter().enumerate() {
+        let estimated = means.get(m).and_then(Option::as_deref);
+        let (values, n, w) = held(ir, &disturbances, zero, estimated, name)?;
+        dist.push(values);
+        named.push(n);
+        held_warnings.extend(w);
+    }
     let frames = borrow_frames(&frames)?;
     let fits = py.detach(|| -> Result<Fits, Failure> {
         let (experiments, _notes) = data::load(ir, &frames, &options)?;
         let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
-        let mut warnings = unit_warnings(ir, &sources);
+        let mut warnings = held_warnings;
+        warnings.extend(unit_warnings(ir, &sources));
         warnings.extend(heading_warnings(ir, &heading_gains(ir, &sources)));
         let interpreter = Interpreter::new(ir.clone());
         let comparison = compare(&interpreter, &thetas, &names, &experiments, &dist);
@@ -231,7 +295,7 @@ pub fn validate_fits(
             })
             .collect();
         let (outputs, means) = (comparison.outputs, comparison.means);
-        Ok((outputs, rows, means, warnings))
+        Ok((outputs, rows, means, warnings, named))
     })?;
     Ok(fits)
 }

@@ -34,6 +34,9 @@ pub struct CheckReport {
     any_single_pattern: bool,
     /// `--aggregate` was given.
     aggregate: bool,
+    /// The instruments' centring the verdicts assume (`--centring`, or the
+    /// model's) and why it is valid; null when the model has errors.
+    centring: Option<CentringJson>,
     /// The `Φ` part: one entry per (parameter, output).
     regressors: Vec<Regressor>,
     /// The nuisance parameters before and after reduction.
@@ -56,6 +59,15 @@ pub struct CheckReport {
     notes: Vec<JsonDiagnostic>,
     /// Diagnostics left out: at most the first 50 of each severity are listed.
     omitted: usize,
+}
+
+/// The centring a check analysed.
+#[derive(Debug, Serialize)]
+struct CentringJson {
+    /// `experiment`, `pooled` or `none`.
+    name: &'static str,
+    /// Why it is valid for the model, one sentence.
+    reason: String,
 }
 
 #[derive(Debug, Serialize)]
@@ -273,6 +285,10 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Ch
         search_cut: r.search_cut.clone(),
         any_single_pattern: r.any_single_pattern,
         aggregate,
+        centring: r.centring.map(|c| CentringJson {
+            name: c.name(),
+            reason: r.centring_reason.clone(),
+        }),
         regressors,
         nuisance: nuisance(r, nuisance_regressors),
         sign_arguments: ir
@@ -436,6 +452,7 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> CheckReport {
         search_cut: None,
         any_single_pattern: false,
         aggregate,
+        centring: None,
         regressors: Vec::new(),
         nuisance: Nuisance::default(),
         sign_arguments: Vec::new(),

@@ -163,8 +163,10 @@ fn unidentifiable_help(
 ) -> &'static str {
     if options.aggregate {
         "the absorbed parameters are held at their nominal values; the kept ones estimate the combinations above"
+    } else if c.parameters.iter().all(|p| constants.contains(p)) && s.patterns.is_some() {
+        "estimate with the centring and from the experiments named in the note (`leeway check --centring` shows that analysis), or remove the constant term"
     } else if c.parameters.iter().all(|p| constants.contains(p)) {
-        "estimate with the centring named in the note (`leeway check --centring`, `leeway estimate --centring`), or remove the constant term"
+        "remove the constant term, or estimate the identifiable combinations with --aggregate"
     } else if s.patterns.is_some() {
         "run the experiments named in the note, or estimate the identifiable combinations with --aggregate"
     } else {

@@ -124,13 +124,25 @@ class Model:
         """The compiler's warnings, one line each (``file:line:col: warning[code]: …``)."""
         return self._core.warnings
 
-    def check(self, patterns: Sequence[str] | None = None) -> Check:
+    def check(
+        self, patterns: Sequence[str] | None = None, *, centring: str | None = None
+    ) -> Check:
         """The structure and identifiability report of ``leeway check``, for
         the given experiments' sign patterns or the smallest
         set the compiler finds. A pattern reads as ``leeway check --pattern``:
-        ``"water.u:+,water.v:-"`` (arguments not named are ``+``)."""
+        ``"water.u:+,water.v:-"`` (arguments not named are ``+``).
+        ``centring`` (``"experiment"``, ``"pooled"``, ``"none"``; default: the
+        model's, as ``estimate`` uses it) is the instruments' centring the
+        analysis assumes; a constant term it annihilates is reported with
+        the centring and experiments that identify it."""
+        if isinstance(patterns, str):
+            patterns = [patterns]
         document = json.loads(
-            self._core.check_json(list(patterns) if patterns is not None else None)
+            _native(
+                self._core.check_json,
+                list(patterns) if patterns is not None else None,
+                _text("centring", centring, optional=True),
+            )
         )
         return Check._from_document(document)
 
@@ -161,6 +173,9 @@ class Check:
     required_sign_patterns: tuple[SignPattern, ...]
     analysed_sign_patterns: tuple[SignPattern, ...]
     any_single_pattern: bool
+    centring: str | None
+    """The instruments' centring the verdicts assume (``experiment``,
+    ``pooled`` or ``none``); ``None`` when the model has errors."""
     regressors: pd.DataFrame
     """One row per (parameter, output): expression, term as written, kind."""
     combinations: tuple[dict[str, Any], ...]
@@ -197,6 +212,7 @@ class Check:
             required_sign_patterns=tuple(d["required_sign_patterns"]),
             analysed_sign_patterns=tuple(d["analysed_sign_patterns"]),
             any_single_pattern=d["any_single_pattern"],
+            centring=(d.get("centring") or {}).get("name"),
             regressors=regressors,
             combinations=combinations,
             nuisance=d["nuisance"],
@@ -805,13 +821,49 @@ def _named_values(values: Mapping[str, float] | None, what: str) -> list[tuple[s
     return out
 
 
+Disturbances = Union[Mapping[str, float], str, None]
+"""Constant unmeasured disturbances for a simulation: ``{"current.north":
+0.2}`` (components not given take the estimate's means when θ is an
+``Estimate``, else zero), ``"zero"`` for none, or ``None`` (the estimate's
+means; zero with a ``LeewayWarning`` when θ is not an ``Estimate``)."""
+
+
+def _disturbances(given: Disturbances) -> tuple[list[tuple[str, float]], bool]:
+    """The values given by name, and whether ``"zero"`` was asked."""
+    if isinstance(given, str):
+        if given != "zero":
+            raise OptionError(
+                f"disturbances={given!r}: the only word taken is \"zero\"",
+                code="invalid-option",
+                hint='pass disturbances="zero" or {"current.north": 0.2}',
+            )
+        return [], True
+    return _named_values(given, "disturbances"), False
+
+
+def _means(theta: Any) -> list[tuple[str, float]] | None:
+    """The disturbance means of an ``Estimate`` by ``medium.component``
+    (those it could estimate); ``None`` for any other θ."""
+    if not isinstance(theta, Estimate):
+        return None
+    return [
+        (f"{medium}.{component}", float(mean))
+        for (medium, component), mean in theta.disturbances["mean"].items()
+        if mean is not None and np.isfinite(mean)
+    ]
+
+
+def _held_frame(held: list[tuple[str, float, str]]) -> pd.DataFrame:
+    return pd.DataFrame(held, columns=["component", "value", "from"]).set_index("component")
+
+
 def simulate(
     model: Model,
     theta: Theta,
     inputs: Frame,
     *,
     x0: Mapping[str, float] | None = None,
-    disturbances: Mapping[str, float] | None = None,
+    disturbances: Disturbances = None,
     step: float | None = None,
 ) -> pd.DataFrame:
     """Simulates ``model`` with ``theta`` on ``inputs`` from its first row, as
@@ -824,26 +876,34 @@ def simulate(
     with every input, measured rotation and measured disturbance on every
     row, and optionally ``time``; the states and the heading are read from
     its first row, and ``x0={"u": 5.0, "psi": 0.0}`` gives or overrides
-    them (base units). ``disturbances={"current.north": 0.2}`` holds
-    unmeasured components constant (others are zero). When the simulation
-    diverges, a ``LeewayWarning`` says where, and the rows before are
-    returned (``frame.attrs["diverged"]`` is then true)."""
+    them (base units). Unmeasured disturbances are held constant: an
+    ``Estimate``'s means by default, ``disturbances={"current.north": 0.2}``
+    to give components, ``disturbances="zero"`` for none (``Disturbances``);
+    ``frame.attrs["disturbances"]`` says what was held and from where
+    (``given``, ``estimate`` or ``default``). When the simulation diverges, a
+    ``LeewayWarning`` says where, and the rows before are returned
+    (``frame.attrs["diverged"]`` is then true)."""
     checked_theta = _theta(model, theta)
     checked_x0 = _named_values(x0, "x0")
-    checked_disturbances = _named_values(disturbances, "disturbances")
+    given, zero = _disturbances(disturbances)
     checked_step = _seconds("step", step)
     (name, columns, labels), = _handover(model, {"inputs": inputs})
-    values, diverged = _native(
+    values, diverged, held, issued = _native(
         _leeway.simulate_columns,
         model._core,
         (name, columns, labels),
         checked_theta,
         checked_x0,
-        checked_disturbances,
+        given,
+        zero,
+        _means(theta),
         checked_step,
     )
     frame = pd.DataFrame(dict(values))
     frame.attrs["diverged"] = diverged is not None
+    frame.attrs["disturbances"] = _held_frame(held)
+    for w in issued:
+        warnings.warn(w, LeewayWarning, stacklevel=2)
     if diverged is not None:
         warnings.warn(diverged, LeewayWarning, stacklevel=2)
     return frame
@@ -852,23 +912,25 @@ def simulate(
 Thetas = Union[Theta, Sequence[Theta], Mapping[str, Theta]]
 
 
-def _thetas(model: Model, given: Thetas) -> list[tuple[str, list[float]]]:
+def _thetas(given: Thetas) -> list[tuple[str, str, Any]]:
+    """Each θ given: its name, how errors call it, and θ as passed (an
+    ``Estimate`` kept for its disturbance means)."""
     if isinstance(given, Estimate):
-        return [(given.method, _theta(model, given))]
+        return [(given.method, "theta", given)]
     if isinstance(given, Mapping):
         if all(isinstance(v, (Estimate, Mapping, Sequence, np.ndarray)) and not isinstance(v, str)
                for v in given.values()) and given:
-            return [(str(k), _theta(model, v, f"thetas[{k!r}]")) for k, v in given.items()]
-        return [("theta", _theta(model, given))]
+            return [(str(k), f"thetas[{k!r}]", v) for k, v in given.items()]
+        return [("theta", "theta", given)]
     if isinstance(given, (Sequence, np.ndarray)) and not isinstance(given, (str, bytes)):
         items = list(given)
         if items and all(isinstance(v, (Estimate, Mapping, Sequence, np.ndarray)) for v in items):
             names = [v.method if isinstance(v, Estimate) else f"theta[{i}]" for i, v in enumerate(items)]
             if len(set(names)) < len(names):
                 names = [f"theta[{i}]" for i in range(len(items))]
-            return [(n, _theta(model, v, n)) for n, v in zip(names, items)]
-        return [("theta", _theta(model, given))]
-    return [("theta", _theta(model, given))]
+            return [(n, n, v) for n, v in zip(names, items)]
+        return [("theta", "theta", given)]
+    return [("theta", "theta", given)]
 
 
 def validate(
@@ -876,7 +938,7 @@ def validate(
     thetas: Thetas,
     data: Data,
     *,
-    disturbances: Mapping[str, float] | None = None,
+    disturbances: Disturbances = None,
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
@@ -895,19 +957,26 @@ def validate(
     the mean over experiments (NaN when a simulation diverged; experiments
     with a constant measurement left out), as ``leeway validate --json``'s
     ``mean``. A fit is NaN when undefined (constant measurement, or the
-    simulation diverged). Warnings are issued as ``LeewayWarning``."""
-    named = _thetas(model, thetas)
-    checked_disturbances = _named_values(disturbances, "disturbances")
+    simulation diverged). Each θ holds the unmeasured disturbances as
+    ``simulate`` does (an ``Estimate``'s own means by default;
+    ``disturbances`` gives them for every θ); ``frame.attrs["disturbances"]``
+    maps each θ's name to what it held. Warnings are issued as
+    ``LeewayWarning``."""
+    given = _thetas(thetas)
+    named = [(n, _theta(model, t, what)) for n, what, t in given]
+    fixed, zero = _disturbances(disturbances)
     checked_step = _seconds("step", step)
     checked_tolerance = _seconds("time_tolerance", time_tolerance, optional=False)
     checked_resample = _seconds("resample", resample)
-    outputs, rows, means, issued = _native(
+    outputs, rows, means, issued, held = _native(
         _leeway.validate_fits,
         model._core,
         _handover(model, data),
         [t for _, t in named],
         [n for n, _ in named],
-        checked_disturbances,
+        fixed,
+        zero,
+        [_means(t) for _, _, t in given],
         checked_step,
         checked_tolerance,
         checked_resample,
@@ -924,6 +993,7 @@ def validate(
         records, columns=["model", "experiment", "samples", "diverged", *outputs]
     ).set_index(["model", "experiment"])
     frame[outputs] = frame[outputs].astype("float64")
+    frame.attrs["disturbances"] = {n: _held_frame(h) for (n, _), h in zip(named, held)}
     for w in issued:
         warnings.warn(w, LeewayWarning, stacklevel=2)
     return frame

@@ -50,7 +50,7 @@ class Model:
     @property
     def warnings(self) -> list[str]: ...
     def parameter_names(self, names: list[str]) -> tuple[list[int | None], list[str], list[str]]: ...
-    def check_json(self, patterns: list[str] | None = None) -> str: ...
+    def check_json(self, patterns: list[str] | None = None, centring: str | None = None) -> str: ...
 
 def estimate_json(
     model: Model,
@@ -91,14 +91,23 @@ def simulate_columns(
     theta: list[float],
     x0: list[tuple[str, float]],
     disturbances: list[tuple[str, float]],
+    zero: bool = False,
+    means: list[tuple[str, float]] | None = None,
     step: float | None = None,
-) -> tuple[list[tuple[str, npt.NDArray[np.float64]]], str | None]: ...
+) -> tuple[
+    list[tuple[str, npt.NDArray[np.float64]]],
+    str | None,
+    list[tuple[str, float, str]],
+    list[str],
+]: ...
 def validate_fits(
     model: Model,
     frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
     thetas: list[list[float]],
     names: list[str],
     disturbances: list[tuple[str, float]],
+    zero: bool = False,
+    means: list[list[tuple[str, float]] | None] = ...,
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
@@ -107,4 +116,5 @@ def validate_fits(
     list[tuple[int, str, int, bool, list[float | None]]],
     list[list[float | None]],
     list[str],
+    list[list[tuple[str, float, str]]],
 ]: ...

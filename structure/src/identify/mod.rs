@@ -17,7 +17,8 @@
 //! (with `completion`) finds the fewest experiments; `separation` says
 //! what tells each unidentifiable group apart. `analysis` holds one
 //! predictor's context, `pattern` the sign patterns as text, `names` the
-//! names messages use, and `centring` the centring policy.
+//! names messages use, `centring` the centring policy, and `remedy` what
+//! another centring would identify.
 
 pub(crate) mod analysis;
 pub(crate) mod centring;
@@ -25,6 +26,7 @@ pub(crate) mod completion;
 pub(crate) mod names;
 pub(crate) mod pattern;
 pub(crate) mod reduce;
+pub(crate) mod remedy;
 pub(crate) mod report;
 pub(crate) mod search;
 pub(crate) mod separation;
@@ -42,6 +44,7 @@ pub use pattern::{
 pub use reduce::{
     ExperimentStructure, Patterns, Reduction, blocks, preference_order, reduce, reduce_block,
 };
+pub use remedy::{Remedy, centring_remedies, remedies_text};
 pub use report::{CompileOptions, constant_parameters, report};
 pub use search::{Found, MAX_ENUMERATED_SIGNS, PRUNE_BUDGET, SEARCH_BUDGET};
 pub use structural::Structural;

@@ -10,6 +10,7 @@ use std::collections::BTreeSet;
 
 use super::analysis::Analysis;
 use super::reduce::Patterns;
+use super::remedy::{centring_remedies, remedies_text};
 use super::verdict::{nuisance_report, verdict};
 
 /// Options of [`compile`](crate::compile) and of the identifiability [`report`]: aggregation,
@@ -39,82 +40,83 @@ pub fn constant_parameters(ir: &Ir) -> Vec<usize> {
         .collect()
 }
 
-/// What the analysis says about constant terms under each centring: a note
-/// per constant, and for a group of constants that the centring annihilates,
-/// the option that makes them estimable.
+/// What the analysis says about constant terms: a note per constant
+/// identifiable under `centring`; for a group it annihilates, the centrings
+/// and experiments that identify θ ([`centring_remedies`]), with those
+/// experiments as the separation's patterns. When θ is identifiable under
+/// `centring` from other experiments (`identifiable_somewhere`), the sign
+/// patterns are the way out and the usual separation says so.
 fn constant_notes(
     ir: &Ir,
     centring: Centring,
     patterns: &[SignPattern],
-) -> (Vec<String>, Vec<(Vec<usize>, String)>) {
+    identifiable_somewhere: bool,
+) -> (Vec<String>, Vec<(Vec<usize>, Separation)>) {
     let constants = constant_parameters(ir);
     if constants.is_empty() {
         return (Vec::new(), Vec::new());
     }
     let constant_set: BTreeSet<usize> = constants.iter().copied().collect();
-    let identifiable_under = |c: Centring| {
-        let a = Analysis::with_centring(ir, PredictorKind::Measured, c);
-        let red = a.reduce(Patterns::Set(patterns));
-        let theta: BTreeSet<usize> = a
-            .names
-            .columns
-            .iter()
-            .enumerate()
-            .filter(|(_, col)| matches!(col.kind, ColumnKind::Theta { parameter } if constant_set.contains(&parameter)))
-            .map(|(i, _)| i)
-            .collect();
-        red.null_space()
-            .iter()
-            .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()))
-    };
+    let a = Analysis::with_centring(ir, PredictorKind::Measured, centring);
+    let red = a.reduce(Patterns::Set(patterns));
+    let theta: BTreeSet<usize> = a
+        .names
+        .columns
+        .iter()
+        .enumerate()
+        .filter(|(_, col)| matches!(col.kind, ColumnKind::Theta { parameter } if constant_set.contains(&parameter)))
+        .map(|(i, _)| i)
+        .collect();
+    let here = red
+        .null_space()
+        .iter()
+        .all(|v| v.iter().all(|(c, q)| !theta.contains(c) || q.is_zero()));
     let names: Vec<String> = constants
         .iter()
         .map(|p| format!("`{}`", ir.parameters[*p].name))
         .collect();
     let list = quoted_join(&names);
-    let here = identifiable_under(centring);
-    let none = identifiable_under(Centring::None);
-    let pooled = identifiable_under(Centring::Pooled);
-    let mut notes = Vec::new();
-    let mut separations = Vec::new();
-    let alternatives: Vec<&str> = [(Centring::None, none), (Centring::Pooled, pooled)]
-        .iter()
-        .filter(|(c, ok)| *ok && *c != centring)
-        .map(|(c, _)| match c {
-            Centring::None => "`--centring none` (uncentred instruments)",
-            _ => "`--centring pooled`",
-        })
-        .collect();
+    let (plural, them) = if constants.len() == 1 {
+        ("", "it")
+    } else {
+        ("s", "them")
+    };
     if here {
-        notes.push(format!(
-            "{list}: constant term{} (a constant force), identifiable with {}; least squares estimates {} as its intercept",
-            if constants.len() == 1 { "" } else { "s" },
+        let note = format!(
+            "{list}: constant term{plural} (a constant force), identifiable with {}; least squares estimates {them} as its intercept",
             match centring {
                 Centring::None => "uncentred instruments (centring none)",
                 Centring::Pooled => "pooled centring (a constant's own instrument stays uncentred)",
                 Centring::Experiment => "per-experiment centring",
             },
-            if constants.len() == 1 { "it" } else { "them" }
-        ));
-    } else {
-        let message = if alternatives.is_empty() {
-            format!(
-                "{list}: constant term{} that no centring separates from the constant parts of the other columns (e.g. the nuisance moments of `cos² = 1 − sin²`); remove {} or estimate the aggregate with --aggregate",
-                if constants.len() == 1 { "" } else { "s" },
-                if constants.len() == 1 { "it" } else { "them" }
-            )
-        } else {
-            format!(
-                "{list} {} estimable with {}: {} centring annihilates every constant ({})",
-                if constants.len() == 1 { "is" } else { "are" },
-                alternatives.join(" or "),
-                centring.name(),
-                Centring::None.reason(ir, PredictorKind::Measured)
-            )
-        };
-        separations.push((constants.clone(), message));
+        );
+        return (vec![note], Vec::new());
     }
-    (notes, separations)
+    if identifiable_somewhere {
+        return (Vec::new(), Vec::new());
+    }
+    let remedies = centring_remedies(ir, PredictorKind::Measured, centring);
+    let separation = match remedies_text(ir, PredictorKind::Measured, &remedies) {
+        Some(way) => Separation {
+            parameters: constants.clone(),
+            // Full patterns: over every sign argument.
+            arguments: (0..remedies
+                .first()
+                .map_or(0, |r| r.patterns.first().map_or(0, Vec::len)))
+                .collect(),
+            patterns: remedies.first().map(|r| r.patterns.clone()),
+            message: format!("{list}: θ is identifiable with {way}"),
+        },
+        None => Separation {
+            parameters: constants.clone(),
+            patterns: None,
+            arguments: Vec::new(),
+            message: format!(
+                "{list}: constant term{plural} that no centring separates from the constant parts of the other columns (e.g. the nuisance moments of `cos² = 1 − sin²`) from any experiments; remove {them} or estimate the aggregate with --aggregate"
+            ),
+        },
+    };
+    (Vec::new(), vec![(constants, separation)])
 }
 
 fn quoted_join(q: &[String]) -> String {
@@ -178,7 +180,8 @@ pub fn report(ir: &Ir, options: &CompileOptions) -> Report {
             false
         }
     };
-    let (mut notes, constant_separations) = constant_notes(ir, centring, &reduction_set);
+    let (mut notes, constant_separations) =
+        constant_notes(ir, centring, &reduction_set, found.is_some());
     let separations = v_check
         .combinations
         .iter()
@@ -188,11 +191,9 @@ pub fn report(ir: &Ir, options: &CompileOptions) -> Report {
                 .iter()
                 .find(|(ps, _)| c.parameters.iter().all(|p| ps.contains(p)))
             {
-                Some((_, message)) => Separation {
+                Some((_, separation)) => Separation {
                     parameters: c.parameters.clone(),
-                    patterns: None,
-                    arguments: Vec::new(),
-                    message: message.clone(),
+                    ..separation.clone()
                 },
                 None => a.separation(c),
             }
