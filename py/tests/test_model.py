@@ -125,3 +125,22 @@ def test_errors_pickle_with_their_fields() -> None:
     back = pickle.loads(pickle.dumps(e.value))
     assert type(back) is leeway.ModelError
     assert (back.code, back.location, back.hint) == (e.value.code, e.value.location, e.value.hint)
+
+
+def test_check_takes_a_centring_and_names_the_way_out_for_a_constant() -> None:
+    cat = leeway.Model.load(ROOT / "tests" / "models" / "catamaran.som")
+    default = cat.check()
+    assert default.centring == "experiment" and not default.identifiable
+    (x0,) = default.combinations
+    way = "`--centring none` or `pooled` from experiments with sign patterns {+water.u +water.v}, {-water.u +water.v}"
+    separation = default.document["separations"][0]["message"]
+    assert way in separation, separation
+    # The centring named: identifiable from exactly those experiments.
+    for centring in ("none", "pooled"):
+        c = cat.check(centring=centring)
+        assert c.centring == centring and c.identifiable
+        assert c.required_sign_patterns == tuple(x0["separated_by"])
+    # And from the experiments given: one sign of water.u is not enough.
+    assert not cat.check(["water.u:+"], centring="none").identifiable
+    with pytest.raises(leeway.OptionError, match="centring"):
+        cat.check(centring="mean")

@@ -237,6 +237,52 @@ def test_validate_names_thetas_and_takes_one(ship: leeway.Model, est: leeway.Est
     assert a.equals(b)
 
 
+def test_validate_holds_the_disturbance_means_of_an_estimate(
+    ship: leeway.Model, est: leeway.Estimate, ship_frame: pd.DataFrame, tmp_path: Path
+) -> None:
+    val = ship_frame.head(400)
+    means = {f"{d}.{c}": m for (d, c), m in est.disturbances["mean"].items()}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        held = leeway.validate(ship, est, val)
+    assert not [w for w in caught if "taken as zero" in str(w.message)]
+    assert held.attrs["disturbances"] == {
+        "iv3": {n: {"value": v, "from": "estimate"} for n, v in means.items()}
+    }
+    # The means given by hand: the same fits, bit for bit.
+    by_hand = leeway.validate(ship, est, val, disturbances=means)
+    assert held.equals(by_hand)
+    # As the CLI does with the estimate's document as --params, without options.
+    (tmp_path / "iv3.json").write_text(est.to_json())
+    val.to_csv(tmp_path / "val.csv", index=False)
+    o = run_leeway("validate", str(SHIP), "--params", str(tmp_path / "iv3.json"),
+                   "--data", str(tmp_path / "val.csv"), "--json")
+    assert o.returncode == 0, o.stderr
+    assert [held.loc[("iv3", "mean"), s] for s in ("u", "v", "r", "psi")] == list(
+        json.loads(o.stdout)["mean"].values()
+    )
+    # θ without means: zero, with a warning in Python's words; "zero" asks for it.
+    with pytest.warns(leeway.LeewayWarning, match='taken as zero.*disturbances="zero"') as caught:
+        plain = leeway.validate(ship, est.theta, val)
+    assert not any("--" in str(w.message) for w in caught)
+    assert plain.attrs["disturbances"]["theta"]["current.north"] == {"value": 0.0, "from": "default"}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        zero = leeway.validate(ship, est.theta, val, disturbances="zero")
+    assert not [w for w in caught if "taken as zero" in str(w.message)]
+    assert zero[["u", "v", "r"]].equals(plain[["u", "v", "r"]])
+    with pytest.raises(leeway.OptionError, match='"zero"'):
+        leeway.validate(ship, est, val, disturbances="calm")
+
+
+def test_simulate_holds_the_estimates_means(ship: leeway.Model, est: leeway.Estimate, ship_frame: pd.DataFrame) -> None:
+    inputs = ship_frame.head(50)
+    frame = leeway.simulate(ship, est, inputs)
+    assert {v["from"] for v in frame.attrs["disturbances"].values()} == {"estimate"}
+    with pytest.warns(leeway.LeewayWarning, match="`current` taken as zero"):
+        leeway.simulate(ship, est.theta, inputs)
+
+
 def test_validate_errors(ship: leeway.Model, ship_frame: pd.DataFrame) -> None:
     with pytest.raises(leeway.DataError) as e:
         leeway.validate(ship, TRUE, {"val": ship_frame.drop(columns="tau1")})

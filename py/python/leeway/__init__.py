@@ -853,8 +853,10 @@ def _means(theta: Any) -> list[tuple[str, float]] | None:
     ]
 
 
-def _held_frame(held: list[tuple[str, float, str]]) -> pd.DataFrame:
-    return pd.DataFrame(held, columns=["component", "value", "from"]).set_index("component")
+def _held(held: list[tuple[str, float, str]]) -> dict[str, dict[str, Any]]:
+    """What a simulation held, as ``validate --json`` says it (plain data:
+    ``attrs`` travel into Parquet metadata as JSON)."""
+    return {name: {"value": value, "from": origin} for name, value, origin in held}
 
 
 def simulate(
@@ -879,8 +881,9 @@ def simulate(
     them (base units). Unmeasured disturbances are held constant: an
     ``Estimate``'s means by default, ``disturbances={"current.north": 0.2}``
     to give components, ``disturbances="zero"`` for none (``Disturbances``);
-    ``frame.attrs["disturbances"]`` says what was held and from where
-    (``given``, ``estimate`` or ``default``). When the simulation diverges, a
+    ``frame.attrs["disturbances"]`` says what was held and from where,
+    ``{"current.north": {"value": 0.2, "from": "estimate"}}`` (``from``:
+    ``given``, ``estimate`` or ``default``). When the simulation diverges, a
     ``LeewayWarning`` says where, and the rows before are returned
     (``frame.attrs["diverged"]`` is then true)."""
     checked_theta = _theta(model, theta)
@@ -901,7 +904,7 @@ def simulate(
     )
     frame = pd.DataFrame(dict(values))
     frame.attrs["diverged"] = diverged is not None
-    frame.attrs["disturbances"] = _held_frame(held)
+    frame.attrs["disturbances"] = _held(held)
     for w in issued:
         warnings.warn(w, LeewayWarning, stacklevel=2)
     if diverged is not None:
@@ -993,7 +996,7 @@ def validate(
         records, columns=["model", "experiment", "samples", "diverged", *outputs]
     ).set_index(["model", "experiment"])
     frame[outputs] = frame[outputs].astype("float64")
-    frame.attrs["disturbances"] = {n: _held_frame(h) for (n, _), h in zip(named, held)}
+    frame.attrs["disturbances"] = {n: _held(h) for (n, _), h in zip(named, held)}
     for w in issued:
         warnings.warn(w, LeewayWarning, stacklevel=2)
     return frame
