@@ -59,6 +59,21 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<ParameterFil
     // Entries are re-read in file order with duplicates kept, so a repeated
     // name is reported rather than silently overwritten.
     let places = Places { file, text };
+    if let (Some(Value::Object(estimates)), Some(Value::Array(errors))) =
+        (top.get("estimates"), top.get("errors"))
+        && estimates.is_empty()
+        && !errors.is_empty()
+    {
+        let why = errors[0]["message"].as_str().unwrap_or("see its `errors`");
+        return Err(vec![
+            Problem::error(
+                "invalid-params",
+                format!("the file is the output of an estimate that failed: {why}"),
+            )
+            .at(file)
+            .help("give the output of an estimate that succeeded (exit 0)"),
+        ]);
+    }
     if matches!(top.get("estimates"), Some(Value::Object(_))) {
         let doc: EstimateDocument = serde_json::from_str(text).map_err(invalid)?;
         let start = key_offset(text, 0, "estimates", true);
@@ -346,6 +361,18 @@ mod tests {
                 .contains("`wind.c` does not fit model `M`"),
             "{}",
             problems[0].message
+        );
+    }
+
+    #[test]
+    fn a_failed_estimate_is_named_as_such() {
+        let doc = r#"{"estimates": {}, "errors": [{"message": "θ is not identifiable"}]}"#;
+        let problems = parse("e.json", doc, &ir(), "--params")
+            .err()
+            .unwrap_or_default();
+        assert_eq!(
+            problems[0].message,
+            "the file is the output of an estimate that failed: θ is not identifiable"
         );
     }
 

@@ -8,8 +8,9 @@
 //! `DIR/estimation.csv`: one estimation experiment of the study (current mean
 //! `[0.2, 0.2]`, wind mean `[WIND, WIND]` measured by an anemometer, noisy
 //! states and heading; default N = 5000, WIND = 1, SEED = 1).
-//! `DIR/validation.csv`: the undisturbed, noise-free zigzag validation run
-//! (1000 samples) simulated with the true θ.
+//! `DIR/validation.csv`: a zigzag validation run of 1000 samples on the same
+//! day — the same current and wind, noisy measurements (seed `SEED + 1`) — so
+//! that `leeway validate` with the estimate holds the current it found.
 
 use leeway_data::write_csv;
 use leeway_model::Interpreter;
@@ -31,7 +32,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = Interpreter::new(ir.clone());
     let (e, _) =
         study::estimation_experiment(&model, &study::InputDesign::default(), wind, n, seed);
-    let val = study::validation_experiment(&model, 1000);
+    let val = leeway_scenarios::synth::experiment(
+        &model,
+        &study::true_system(wind),
+        "validation",
+        &[4.0, 0.0, 0.0],
+        0.0,
+        &study::validation_input(1000),
+        seed + 1,
+    )
+    .0;
     std::fs::create_dir_all(&dir)?;
     for (name, exp) in [("estimation.csv", &e), ("validation.csv", &val)] {
         let mut file = std::io::BufWriter::new(std::fs::File::create(dir.join(name))?);
