@@ -80,7 +80,7 @@ fn initial_values(ir: &Ir, x0: &[(String, f64)]) -> Result<Vec<(String, f64)>, F
 
 /// Constant unmeasured disturbance components by name (`north` or
 /// `current.north`, as `--disturbance` takes them); others are zero.
-fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Failure> {
+pub(crate) fn disturbance_values(ir: &Ir, given: &[(String, f64)]) -> Result<Vec<f64>, Failure> {
     let mut named = Vec::with_capacity(given.len());
     for (name, v) in given {
         named.push((name.as_str(), checked("disturbances", name, *v)?));
@@ -155,7 +155,7 @@ pub fn simulate_columns<'py>(
     Ok((columns, diverged))
 }
 
-fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
+pub(crate) fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
     if theta.len() != ir.parameters.len() {
         return Err(Failure::params(format!(
             "θ has {} values, model `{}` {} parameters",

@@ -1,20 +1,6 @@
-"""leeway for Python: compile vessel models written in the ``.som`` language,
-prove whether their parameters are identifiable, and estimate them with
-instrumental variables from pandas DataFrames.
-
->>> model = leeway.Model.load("examples/models/ship.som")   # doctest: +SKIP
->>> model.check().identifiable                               # doctest: +SKIP
->>> est = leeway.estimate(model, df, method="iv3")           # doctest: +SKIP
->>> est.params                                               # doctest: +SKIP
->>> est.cov                                                  # doctest: +SKIP
->>> leeway.simulate(model, est, inputs)                      # doctest: +SKIP
->>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
-
-Everything is computed by the same Rust code as the ``leeway`` command:
-``Estimate.to_json()`` is the document of ``leeway estimate --json``,
-``simulate`` returns what ``leeway simulate`` writes and ``validate`` the
-fits ``leeway validate`` prints, bit for bit.
-"""
+"""The API of leeway: models, checks, estimates, simulation and
+validation, each a call into the native half (``_leeway``) with its
+arguments checked here first."""
 
 from __future__ import annotations
 
@@ -29,31 +15,12 @@ from typing import Any, TypeVar, Union
 import numpy as np
 import pandas as pd
 
-from . import _leeway, errors
-from .errors import (
-    DataError,
-    EstimateError,
-    LeewayError,
-    LeewayWarning,
-    ModelError,
-    OptionError,
-    RankDeficient,
-    SignViolation,
-    Unidentifiable,
-)
+from . import _leeway, _summary
+from ._data import Data, Frame, _handover
+from ._hints import python_spelling
+from .errors import EstimateError, LeewayWarning, OptionError
 
 T = TypeVar("T")
-
-__all__ = [
-    "Model",
-    "Check",
-    "Estimate",
-    "estimate",
-    "simulate",
-    "validate",
-    "Theta",
-    *errors.__all__,
-]
 
 
 class Model:
@@ -122,7 +89,7 @@ class Model:
     @property
     def warnings(self) -> list[str]:
         """The compiler's warnings, one line each (``file:line:col: warning[code]: …``)."""
-        return self._core.warnings
+        return [python_spelling(w) for w in self._core.warnings]
 
     def check(self, patterns: Sequence[str] | None = None) -> Check:
         """The structure and identifiability report of ``leeway check``, for
@@ -201,8 +168,8 @@ class Check:
             combinations=combinations,
             nuisance=d["nuisance"],
             aggregates=tuple(d["aggregates"]),
-            warnings=tuple(w["message"] for w in d["warnings"]),
-            notes=tuple(n["message"] for n in d["notes"]),
+            warnings=tuple(python_spelling(w["message"]) for w in d["warnings"]),
+            notes=tuple(python_spelling(n["message"]) for n in d["notes"]),
             document=d,
         )
 
@@ -248,8 +215,9 @@ class Estimate:
         self.diagnostics: dict[str, Any] = d["diagnostics"]
         self.sign_patterns: list[dict[str, Any]] = d["sign_patterns"]
         self.experiments: list[dict[str, Any]] = d["experiments"]
-        self.warnings: list[str] = d["warnings"]
-        self.notes: list[str] = d["notes"]
+        self.warnings: list[str] = [python_spelling(w) for w in d["warnings"]]
+        """The estimate's warnings, in Python's spelling (``document`` keeps the CLI's)."""
+        self.notes: list[str] = [python_spelling(n) for n in d["notes"]]
 
     @property
     def theta(self) -> dict[str, float]:
@@ -260,8 +228,52 @@ class Estimate:
         """The document of ``leeway estimate --json`` (without its final newline)."""
         return self._json
 
+    @property
+    def bse(self) -> pd.Series:
+        """The standard errors of θ (statsmodels' name); NaN where none
+        (held, dropped: see ``params.status``)."""
+        return self.params["std_error"].rename("bse")
+
+    @property
+    def tvalues(self) -> pd.Series:
+        """θ over its standard error; NaN where there is none."""
+        return self.table()["t"].rename("tvalues")
+
+    @property
+    def pvalues(self) -> pd.Series:
+        """Two-sided p-values of θ = 0 from the normal distribution (N is
+        large; docs/python.md); NaN where there is no standard error."""
+        return self.table()["p"].rename("pvalues")
+
+    def conf_int(self, alpha: float = 0.05) -> pd.DataFrame:
+        """The ``1 − alpha`` confidence intervals of θ, columns ``lower`` and
+        ``upper``: estimate ∓ z·std_error with z the normal quantile
+        (``statistics.NormalDist``); NaN where there is no standard error."""
+        return self.table(alpha)[["lower", "upper"]]
+
+    def table(self, alpha: float = 0.05) -> pd.DataFrame:
+        """θ with ``estimate``, ``std_error``, ``t``, ``p``, ``lower``,
+        ``upper`` (at ``1 − alpha``), ``status`` and ``note`` (why a row has
+        no standard error)."""
+        return _summary.table(self.params, alpha)
+
+    def summary(self, alpha: float = 0.05) -> _summary.Summary:
+        """The summary table of the estimate (print it); its ``tables`` are
+        DataFrames of θ, the nuisance parameters and the disturbance means
+        with t, p and the ``1 − alpha`` intervals."""
+        return _summary.summary(
+            self.document, self.params, self.nuisance, self.disturbances, self.warnings, alpha
+        )
+
     def __repr__(self) -> str:
-        return f"<leeway.Estimate {self.method}: {len(self.params)} parameters>"
+        estimated = int((self.params["status"] == "estimated").sum())
+        n = sum(e["samples"] for e in self.experiments)
+        return (
+            f"<leeway.Estimate {self.method} of {self.document.get('model')}: "
+            f"{estimated} of {len(self.params)} parameters estimated, "
+            f"{len(self.nuisance)} nuisance, N={n} in {len(self.experiments)} experiment(s), "
+            f"{len(self.warnings)} warning(s); .summary() for the table>"
+        )
 
 
 def _columns(entries: list[dict[str, Any]]) -> pd.DataFrame:
@@ -273,270 +285,6 @@ def _columns(entries: list[dict[str, Any]]) -> pd.DataFrame:
     frame["estimate"] = frame["estimate"].astype("float64")
     frame["std_error"] = frame["std_error"].astype("float64")
     return frame
-
-
-Frame = Any  # a pandas DataFrame, or anything with ``to_pandas()`` / ``__arrow_c_stream__``
-Data = Union[Frame, Sequence[Frame], Mapping[str, Frame]]
-
-
-def _to_pandas(frame: Any, name: str) -> pd.DataFrame:
-    if isinstance(frame, pd.DataFrame):
-        result = frame
-    elif isinstance(frame, pd.Series):
-        raise DataError(
-            f"a pandas Series (`{frame.name}`) is not a DataFrame",
-            code="data",
-            location=name,
-            hint="pass a DataFrame with a column per signal: series.to_frame(), or pd.DataFrame({...})",
-        )
-    elif hasattr(frame, "to_pandas") or hasattr(frame, "__arrow_c_stream__"):  # pyarrow, polars
-        try:
-            if hasattr(frame, "to_pandas"):
-                result = frame.to_pandas()
-            else:
-                import pyarrow as pa
-
-                result = pa.table(frame).to_pandas()
-        except Exception as e:  # whatever the library raises, located here
-            raise DataError(
-                f"the {type(frame).__name__} could not be converted to a DataFrame: {type(e).__name__}: {e}",
-                code="data",
-                location=name,
-                hint="pass a pandas DataFrame of numeric columns",
-            ) from None
-        if not isinstance(result, pd.DataFrame):
-            raise DataError(
-                f"{type(frame).__name__}.to_pandas() gave a {type(result).__name__}, not a DataFrame",
-                code="data",
-                location=name,
-                hint="pass a pandas DataFrame, a list or dict of them, or an Arrow/polars table",
-            )
-    else:
-        raise DataError(
-            f"{type(frame).__name__} is not a DataFrame",
-            code="data",
-            location=name,
-            hint="pass a pandas DataFrame, a list or dict of them, or an Arrow/polars table",
-        )
-    if isinstance(result.columns, pd.MultiIndex):
-        raise DataError(
-            f"the columns are a MultiIndex of {result.columns.nlevels} levels",
-            code="data",
-            location=name,
-            hint="give the frame one level of column names, e.g. "
-            "df.columns = ['_'.join(map(str, c)) for c in df.columns], or select a level",
-        )
-    return result
-
-
-def _frames(data: Data) -> list[tuple[str, Any]]:
-    if isinstance(data, Mapping):
-        return [(str(k), v) for k, v in data.items()]
-    if isinstance(data, Sequence) and not isinstance(data, (str, bytes)):
-        return [(f"data[{i}]", v) for i, v in enumerate(data)]
-    return [("data", data)]
-
-
-# The largest integer every smaller one of which a float64 holds exactly
-# (2⁵³): a larger integer is refused, as the Parquet reader refuses it.
-_EXACT = 1 << 53
-
-# Units per second of numpy's datetime64/timedelta64 resolutions.
-_PER_SECOND = {"s": 1, "ms": 1_000, "us": 1_000_000, "ns": 1_000_000_000}
-
-
-def _row(name: str, row: int, column: str) -> str:
-    """A location as the runtime writes it (positional row, from 0, as ``iloc``)."""
-    return f"{name}: row {row}, column `{column}`"
-
-
-def _refuse(name: str, column: str, what: str, hint: str) -> DataError:
-    return DataError(
-        f"column `{column}` is not numeric: {what}; leeway reads numbers only and converts nothing silently",
-        code="data",
-        location=f"{name}: column `{column}`",
-        hint=hint,
-    )
-
-
-def _missing(
-    name: str,
-    series: pd.Series,
-    column: str,
-    what: str = "missing value",
-    hint: str = "leeway does not drop or fill samples: repair or remove the row (every column of every row must hold a number)",
-) -> None:
-    """A missing value (``pd.NA``, ``None``, ``NaT``) is an error at its row."""
-    na = np.asarray(series.isna(), dtype=bool)
-    if na.any():
-        row = int(np.flatnonzero(na)[0])
-        raise DataError(
-            f"{what} ({series.iloc[row]!r}) in column `{column}`",
-            code="data",
-            location=_row(name, row, column),
-            hint=hint,
-        )
-
-
-def _stamps(name: str, series: pd.Series, column: str) -> np.ndarray:
-    """A datetime64 (naive or tz-aware) or timedelta64 time column as float
-    seconds since its first stamp: the differences taken in integers of the
-    column's own unit, then divided once by its units per second (the rule
-    of the Parquet reader for TIMESTAMP columns), so large epoch values carry
-    no rounding into the times."""
-    _missing(name, series, column)
-    if pd.api.types.is_timedelta64_dtype(series.dtype):
-        index: pd.Index = pd.TimedeltaIndex(series)
-    else:
-        index = pd.DatetimeIndex(series)  # tz-aware: the UTC instants
-    unit = str(index.unit)
-    ticks = np.asarray(index.asi8, dtype=np.int64)
-    if len(ticks) == 0:
-        return np.zeros(0)
-    lo, hi, first = int(ticks.min()), int(ticks.max()), int(ticks[0])
-    if max(hi - first, first - lo) >= 1 << 63:
-        raise _refuse(name, column, f"time stamps spanning {hi - lo} {unit}, beyond 64-bit integers", "split the record")
-    seconds: np.ndarray = (ticks - ticks[0]).astype(np.float64) / float(_PER_SECOND[unit])
-    return seconds
-
-
-def _integers(name: str, values: np.ndarray, column: str) -> np.ndarray:
-    """Integers as float64, refused beyond ±2⁵³ (where a float64 would round them)."""
-    if values.dtype.itemsize >= 8 and len(values):
-        if values.dtype.kind == "u":
-            beyond = values > np.uint64(_EXACT)
-        else:
-            beyond = (values > _EXACT) | (values < -_EXACT)
-        if beyond.any():
-            row = int(np.flatnonzero(beyond)[0])
-            raise DataError(
-                f"{values[row]} is beyond ±2⁵³ (9007199254740992): a 64-bit float cannot hold it exactly",
-                code="data",
-                location=_row(name, row, column),
-                hint="leeway reads every value as a 64-bit float and will not round one silently: "
-                "convert the column to float yourself, or to a unit that keeps it within ±2⁵³",
-            )
-    return values.astype(np.float64)
-
-
-def _no_stamps_in_unit(name: str, series: pd.Series, column: str, unit: str) -> None:
-    """Date-times and durations are read in seconds: a time column the model
-    declares in another unit must hold numbers in that unit."""
-    types = pd.api.types
-    if types.is_datetime64_any_dtype(series.dtype) or types.is_timedelta64_dtype(series.dtype):
-        raise _refuse(
-            name,
-            column,
-            f"date-times or durations ({series.dtype}), read in seconds, while the model declares `time` in {unit}",
-            "drop the time unit from the model's data { } block, or give the time as numbers in that unit",
-        )
-
-
-def _column(name: str, series: pd.Series, column: str, is_time: bool) -> np.ndarray:
-    """One model column as float64: floats as they are (a view where the
-    column already is contiguous float64), integers within ±2⁵³, a time
-    column of datetimes or durations as seconds since its first stamp;
-    anything else refused, located, with how to convert it."""
-    dtype = series.dtype
-    types = pd.api.types
-    if isinstance(dtype, pd.CategoricalDtype):
-        raise _refuse(name, column, "categorical", f"convert it to numbers yourself, e.g. df[{column!r}].astype(float)")
-    if types.is_bool_dtype(dtype):
-        raise _refuse(name, column, f"boolean ({dtype})", f"convert it to numbers yourself: df[{column!r}].astype(float)")
-    if types.is_datetime64_any_dtype(dtype) or types.is_timedelta64_dtype(dtype):
-        if is_time:
-            return _stamps(name, series, column)
-        kind = "durations" if types.is_timedelta64_dtype(dtype) else "date-times"
-        hint = (
-            f"convert to seconds as float: df[{column!r}].dt.total_seconds()"
-            if kind == "durations"
-            else f"convert to seconds as float: (t - t.iloc[0]).dt.total_seconds() with t = df[{column!r}]"
-        )
-        raise _refuse(name, column, f"{kind} ({dtype})", hint)
-    if types.is_complex_dtype(dtype):
-        raise _refuse(name, column, f"complex ({dtype})", f"choose the real number you mean: df[{column!r}].to_numpy().real, or np.abs(...)")
-    if types.is_integer_dtype(dtype):
-        if isinstance(dtype, np.dtype):
-            return _integers(name, series.to_numpy(), column)
-        _missing(name, series, column)
-        return _integers(name, series.to_numpy(dtype=dtype.numpy_dtype), column)
-    if types.is_float_dtype(dtype):
-        if not isinstance(dtype, np.dtype):
-            _missing(name, series, column)
-        return np.ascontiguousarray(series.to_numpy(dtype=np.float64, copy=False))
-    if types.is_string_dtype(dtype) or dtype == object:
-        what = "text" if types.is_string_dtype(dtype) and dtype != object else "Python objects"
-        return_hint = f"convert it to numbers yourself, e.g. pd.to_numeric(df[{column!r}])"
-        raise _refuse(name, column, f"{what} ({dtype})", return_hint)
-    raise _refuse(name, column, f"{dtype}", f"convert it to float64 yourself, e.g. pd.to_numeric(df[{column!r}])")
-
-
-def _labels(name: str, frame: pd.DataFrame, column: str) -> tuple[np.ndarray, list[str]]:
-    """The experiment labels coded, as ``pandas.factorize`` codes them (an
-    int64 per row and the distinct labels as text: no string per row); a
-    missing label is an error at its row."""
-    series = frame[column]
-    if isinstance(series, pd.DataFrame):  # a repeated name is refused before
-        raise DataError(f"column `{column}` appears more than once", code="data", location=name)
-    _missing(name, series, column, "missing experiment label", f"give every row the label of its experiment in `{column}`")
-    codes, uniques = pd.factorize(series, sort=False)
-    return np.ascontiguousarray(codes, dtype=np.int64), [str(v) for v in uniques.tolist()]
-
-
-def _handover(
-    model: Model, data: Data
-) -> list[tuple[str, list[tuple[str, np.ndarray]], tuple[np.ndarray, list[str]] | None]]:
-    """The model's columns of every frame as contiguous float64 arrays (a
-    view, not a copy, where the column already is one) and the experiment
-    labels coded (an int64 per row, the distinct labels as text). Nothing is coerced silently: a column that is not of
-    numbers (dates, durations, booleans, complex numbers, text, categories)
-    is refused, except the time column's date-times and durations, read as
-    seconds since the first stamp."""
-    out = []
-    experiment_column = model._core.experiment_column
-    time_column = model.columns[0]
-    frames = _frames(data)
-    if not frames:
-        raise DataError(
-            f"no experiment given (an empty {type(data).__name__})",
-            code="no-data",
-            hint="pass a DataFrame, or a list or dict of them",
-        )
-    for name, raw in frames:
-        frame = _to_pandas(raw, name)
-        if not frame.columns.is_unique:
-            twice = sorted({str(c) for c in frame.columns[frame.columns.duplicated()]})
-            raise DataError(
-                f"column `{twice[0]}` appears more than once",
-                code="data",
-                location=name,
-                hint="give every column one name",
-            )
-        index = frame.index
-        if time_column not in frame.columns and (
-            index.name == time_column or isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex))
-        ):
-            raise DataError(
-                f"the time stamps are the frame's index ({index.name or type(index).__name__}), "
-                f"not a column `{time_column}`; leeway reads columns only",
-                code="data",
-                location=name,
-                hint=f"make the index a column: df.rename_axis({time_column!r}).reset_index()",
-            )
-        columns = []
-        for column in model.columns:
-            if column not in frame.columns:
-                continue  # the loader names what is missing, as for a file
-            is_time = column == time_column
-            if is_time and model._core.time_unit not in (None, "s"):
-                _no_stamps_in_unit(name, frame[column], column, model._core.time_unit)
-            values = _column(name, frame[column], column, is_time)
-            columns.append((column, values))
-        labels = None
-        if experiment_column in frame.columns:
-            labels = _labels(name, frame, experiment_column)
-        out.append((name, columns, labels))
-    return out
 
 
 def _is_bool(v: Any) -> bool:
@@ -845,7 +593,7 @@ def simulate(
     frame = pd.DataFrame(dict(values))
     frame.attrs["diverged"] = diverged is not None
     if diverged is not None:
-        warnings.warn(diverged, LeewayWarning, stacklevel=2)
+        warnings.warn(python_spelling(diverged), LeewayWarning, stacklevel=2)
     return frame
 
 
@@ -925,5 +673,5 @@ def validate(
     ).set_index(["model", "experiment"])
     frame[outputs] = frame[outputs].astype("float64")
     for w in issued:
-        warnings.warn(w, LeewayWarning, stacklevel=2)
+        warnings.warn(python_spelling(w), LeewayWarning, stacklevel=2)
     return frame

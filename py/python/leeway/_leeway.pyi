@@ -7,6 +7,8 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
+__version__: str
+
 __all__ = [
     "Model",
     "Dataset",
@@ -14,6 +16,7 @@ __all__ = [
     "estimate_mapped",
     "simulate_columns",
     "validate_fits",
+    "residual_analysis",
     "study_tasks",
     "study_run",
     "study_summary",
@@ -107,4 +110,25 @@ def validate_fits(
     list[tuple[int, str, int, bool, list[float | None]]],
     list[list[float | None]],
     list[str],
+]: ...
+def residual_analysis(
+    model: Model,
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
+    theta: list[float],
+    disturbances: list[tuple[str, float]],
+    lags: int,
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> tuple[
+    list[
+        tuple[
+            str,
+            float,
+            list[npt.NDArray[np.float64]],
+            list[npt.NDArray[np.float64]],
+            list[npt.NDArray[np.float64]],
+        ]
+    ],
+    str,
 ]: ...

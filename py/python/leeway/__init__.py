@@ -1,0 +1,53 @@
+"""leeway for Python: compile vessel models written in the ``.som`` language,
+prove whether their parameters are identifiable, and estimate them with
+instrumental variables from pandas DataFrames.
+
+>>> model = leeway.Model.load("examples/models/ship.som")   # doctest: +SKIP
+>>> model.check().identifiable                               # doctest: +SKIP
+>>> est = leeway.estimate(model, df, method="iv3")           # doctest: +SKIP
+>>> print(est.summary())                                     # doctest: +SKIP
+>>> est.conf_int()                                           # doctest: +SKIP
+>>> leeway.simulate(model, est, inputs)                      # doctest: +SKIP
+>>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
+>>> leeway.residuals(model, est, held_out).tests             # doctest: +SKIP
+
+Everything is computed by the same Rust code as the ``leeway`` command:
+``Estimate.to_json()`` is the document of ``leeway estimate --json``,
+``simulate`` returns what ``leeway simulate`` writes, ``validate`` the
+fits ``leeway validate`` prints and ``residuals`` the analysis of
+``leeway validate --resid``, bit for bit. Figures: ``leeway.plot``
+(matplotlib, imported only when used).
+"""
+
+from . import errors
+from ._api import Check, Estimate, Model, Theta, estimate, simulate, validate
+from ._leeway import __version__
+from ._residuals import ResidualAnalysis, predict, residuals
+from ._summary import Summary
+from .errors import (
+    DataError,
+    EstimateError,
+    LeewayError,
+    LeewayWarning,
+    ModelError,
+    OptionError,
+    RankDeficient,
+    SignViolation,
+    Unidentifiable,
+)
+
+__all__ = [
+    "Model",
+    "Check",
+    "Estimate",
+    "Summary",
+    "ResidualAnalysis",
+    "estimate",
+    "simulate",
+    "validate",
+    "residuals",
+    "predict",
+    "Theta",
+    "__version__",
+    *errors.__all__,
+]
