@@ -41,6 +41,7 @@ mod output;
 mod params;
 mod plot;
 mod problem;
+mod residuals;
 mod reproduce;
 mod simulate;
 mod units;

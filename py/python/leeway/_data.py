@@ -226,6 +226,44 @@ def _labels(name: str, frame: pd.DataFrame, column: str) -> tuple[np.ndarray, li
     return np.ascontiguousarray(codes, dtype=np.int64), [str(v) for v in uniques.tolist()]
 
 
+def _is_default_index(index: pd.Index) -> bool:
+    """A RangeIndex of step 1 and no name (``reset_index(drop=True)``, or a
+    slice of one): positions, which say nothing about time."""
+    return isinstance(index, pd.RangeIndex) and index.step == 1 and index.name is None
+
+
+def _time_from_index(name: str, frame: pd.DataFrame, time_column: str) -> pd.DataFrame:
+    """The frame with its index as the time column when the index holds the
+    time stamps (a DatetimeIndex or TimedeltaIndex, or an index named as the
+    time column) and the frame has no time column; a frame whose index says
+    something else (not a default RangeIndex) and that has no time column is
+    refused rather than read as if the index were positions."""
+    if time_column in frame.columns:
+        return frame
+    index = frame.index
+    if isinstance(index, pd.MultiIndex):
+        raise DataError(
+            f"the frame has a MultiIndex ({', '.join(map(str, index.names))}) and no column `{time_column}`",
+            code="data",
+            location=name,
+            hint="make the index columns: df.reset_index(); name the time column "
+            f"`{time_column}` (or map it in the model's data {{ }} block)",
+        )
+    if index.name == time_column or isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex)):
+        return frame.rename_axis(time_column).reset_index()
+    if not _is_default_index(index):
+        raise DataError(
+            f"the frame has no column `{time_column}` and an index that is not positions "
+            f"({type(index).__name__}{f' named {index.name!r}' if index.name is not None else ''}, "
+            f"{f'first {index[0]!r}' if len(index) else 'empty'}); leeway would ignore it and time the samples by the model's step",
+            code="data",
+            location=name,
+            hint=f"if the index is the time, name it: df.rename_axis({time_column!r}); "
+            "else drop it: df.reset_index(drop=True)",
+        )
+    return frame
+
+
 def _handover(
     model: Model, data: Data
 ) -> list[tuple[str, list[tuple[str, np.ndarray]], tuple[np.ndarray, list[str]] | None]]:
@@ -255,17 +293,7 @@ def _handover(
                 location=name,
                 hint="give every column one name",
             )
-        index = frame.index
-        if time_column not in frame.columns and (
-            index.name == time_column or isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex))
-        ):
-            raise DataError(
-                f"the time stamps are the frame's index ({index.name or type(index).__name__}), "
-                f"not a column `{time_column}`; leeway reads columns only",
-                code="data",
-                location=name,
-                hint=f"make the index a column: df.rename_axis({time_column!r}).reset_index()",
-            )
+        frame = _time_from_index(name, frame, time_column)
         columns = []
         for column in model.columns:
             if column not in frame.columns:
