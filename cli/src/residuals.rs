@@ -87,9 +87,17 @@ pub fn render(results: &[ModelResiduals]) -> String {
             m.name, t.samples, t.lags, t.band, t.white_band, t.input_band
         );
         let mut rows = vec![
-            ["state", "std", "max |r|", "white", "Ljung-Box Q", "p", "lags outside"]
-                .map(String::from)
-                .to_vec(),
+            [
+                "state",
+                "std",
+                "max |r|",
+                "white",
+                "Ljung-Box Q",
+                "p",
+                "lags outside",
+            ]
+            .map(String::from)
+            .to_vec(),
         ];
         for st in &t.states {
             rows.push(vec![

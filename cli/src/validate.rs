@@ -214,7 +214,11 @@ pub fn run(args: &ValidateArgs) -> Status {
         let style = stderr_style();
         if let Ok(o) = &result {
             out(&render(o));
-            out(&o.residuals.as_deref().map(render_residuals).unwrap_or_default());
+            out(&o
+                .residuals
+                .as_deref()
+                .map(render_residuals)
+                .unwrap_or_default());
         }
         for w in &warnings {
             err(&headline(style, "warning", None, w));
@@ -259,7 +263,16 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     let mut panels = measured_panels(&ir, &outputs, &experiments);
     let comparison = compare(&model, &thetas, &names, &experiments, &dist);
     let residuals = (args.resid.resid)
-        .then(|| analyse_all(&model, &thetas, &names, &experiments, &dist, args.resid.lags))
+        .then(|| {
+            analyse_all(
+                &model,
+                &thetas,
+                &names,
+                &experiments,
+                &dist,
+                args.resid.lags,
+            )
+        })
         .transpose()?;
     warnings.extend(comparison.warnings);
     let mut results = Vec::new();

@@ -181,7 +181,10 @@ mod tests {
     fn ln_gamma_matches_factorials() {
         let mut factorial = 1.0f64;
         for n in 1..20 {
-            assert!((ln_gamma(n as f64) - factorial.ln()).abs() < 1e-12, "Γ({n})");
+            assert!(
+                (ln_gamma(n as f64) - factorial.ln()).abs() < 1e-12,
+                "Γ({n})"
+            );
             factorial *= n as f64;
         }
         assert!((ln_gamma(0.5) - std::f64::consts::PI.sqrt().ln()).abs() < 1e-14);

@@ -82,9 +82,23 @@ fn residuals_of_the_true_model_are_its_process_noise_and_white() {
     assert_eq!(a.tests.samples, 2999 + 1999);
     assert!((a.tests.band - 2.5758 / (4998f64).sqrt()).abs() < 1e-4);
     for s in &a.tests.states {
-        assert!(s.white, "{}: lags outside {:?}, max {:?}", s.state, s.outside, s.max_abs);
-        assert!(s.p_value.is_some_and(|p| p > 0.01), "{}: p {:?}", s.state, s.p_value);
-        assert!((s.std.unwrap() - 0.01).abs() < 0.001, "{}: std {:?}", s.state, s.std);
+        assert!(
+            s.white,
+            "{}: lags outside {:?}, max {:?}",
+            s.state, s.outside, s.max_abs
+        );
+        assert!(
+            s.p_value.is_some_and(|p| p > 0.01),
+            "{}: p {:?}",
+            s.state,
+            s.p_value
+        );
+        assert!(
+            s.std.is_some_and(|sd| (sd - 0.01).abs() < 0.001),
+            "{}: std {:?}",
+            s.state,
+            s.std
+        );
         for i in &s.inputs {
             assert!(i.independent, "{} × {}: {:?}", s.state, i.input, i.outside);
         }

@@ -52,12 +52,19 @@ pub fn residual_analysis<'py>(
     let (experiments, analysis) = py.detach(|| -> Result<_, Failure> {
         let (experiments, _notes) = data::load(ir, &frames, &options)?;
         let interpreter = Interpreter::new(ir.clone());
-        let analysis = analyse(&interpreter, &theta, &experiments, &dist, lags)
-            .map_err(|m| Failure::option(format!("lags={lags}: {m}"), Some("give fewer lags, e.g. lags=25, or more samples".into())))?;
+        let analysis = analyse(&interpreter, &theta, &experiments, &dist, lags).map_err(|m| {
+            Failure::option(
+                format!("lags={lags}: {m}"),
+                Some("give fewer lags, e.g. lags=25, or more samples".into()),
+            )
+        })?;
         Ok((experiments, analysis))
     })?;
     let arrays = |columns: &[Vec<f64>]| -> Vec<Bound<'py, PyArray1<f64>>> {
-        columns.iter().map(|c| PyArray1::from_slice(py, c)).collect()
+        columns
+            .iter()
+            .map(|c| PyArray1::from_slice(py, c))
+            .collect()
     };
     let columns = experiments
         .iter()
