@@ -43,6 +43,7 @@ mod params;
 mod plot;
 mod problem;
 mod reproduce;
+mod residuals;
 mod simulate;
 mod units;
 mod validate;

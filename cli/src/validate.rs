@@ -16,6 +16,7 @@ use crate::options::{TimeArgs, load_options};
 use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
+use crate::residuals::{ModelResiduals, ResidArgs, analyse_all, render as render_residuals};
 use crate::units::{axis_label, unit_lines};
 use leeway_model::Source;
 use leeway_model::simulate::{Trajectory, unwrap_heading};
@@ -62,6 +63,9 @@ pub struct ValidateArgs {
     /// Time stamps: jitter tolerance and resampling.
     #[command(flatten)]
     pub time: TimeArgs,
+    /// One-step-ahead residual analysis.
+    #[command(flatten)]
+    pub resid: ResidArgs,
 }
 
 /// The fit of one experiment.
@@ -117,6 +121,9 @@ struct Report {
     data_units: Ordered<String>,
     /// The plot written, or null.
     plot: Option<String>,
+    /// With `--resid`: per parameter file, the residual tests.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    residuals: Option<Vec<ModelResiduals>>,
     warnings: Vec<String>,
     errors: Vec<JsonError>,
 }
@@ -132,6 +139,8 @@ struct Outcome {
     plot: Option<PathBuf>,
     /// The plot could not be drawn (the fits are still reported; exit 2).
     plot_problem: Option<Problem>,
+    /// With `--resid`.
+    residuals: Option<Vec<ModelResiduals>>,
 }
 
 /// A parameter file's name in tables and legends: its stem, made unique by
@@ -186,6 +195,7 @@ pub fn run(args: &ValidateArgs) -> Status {
             data_files: Vec::new(),
             data_units: Ordered::default(),
             plot: None,
+            residuals: None,
             warnings,
             errors: Vec::new(),
         };
@@ -199,6 +209,7 @@ pub fn run(args: &ValidateArgs) -> Status {
                     report.mean = first.mean.clone();
                 }
                 report.models = std::mem::take(&mut o.models);
+                report.residuals = o.residuals.take();
                 match o.plot_problem {
                     Some(p) => report.errors = Failure::from(p).json(),
                     None => report.plot = o.plot.map(|p| p.display().to_string()),
@@ -211,6 +222,11 @@ pub fn run(args: &ValidateArgs) -> Status {
         let style = stderr_style();
         if let Ok(o) = &result {
             out(&render(o));
+            out(&o
+                .residuals
+                .as_deref()
+                .map(render_residuals)
+                .unwrap_or_default());
         }
         for w in &warnings {
             err(&headline(style, "warning", None, w));
@@ -259,6 +275,18 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
     let model = Interpreter::new(ir.clone());
     let mut panels = measured_panels(&ir, &outputs, &experiments);
     let comparison = compare(&model, &thetas, &names, &experiments, &dist);
+    let residuals = (args.resid.resid)
+        .then(|| {
+            analyse_all(
+                &model,
+                &thetas,
+                &names,
+                &experiments,
+                &dist,
+                args.resid.lags,
+            )
+        })
+        .transpose()?;
     warnings.extend(comparison.warnings);
     let mut results = Vec::new();
     for (((validations, mean), name), held) in comparison
@@ -319,6 +347,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             .collect(),
         plot,
         plot_problem,
+        residuals,
     })
 }
 

@@ -913,3 +913,87 @@ fn validate_holds_the_disturbance_means_of_the_estimate_it_is_given() {
         stdout(&o)
     );
 }
+
+#[test]
+fn validate_resid_reports_the_residual_tests() {
+    let dir = Scratch::new("resid");
+    let model = ship();
+    let data = dir.write("run.csv", &estimation_csv(600, 1.0, 7));
+    let truth = dir.write("truth.json", &true_params());
+    let o = leeway(&[
+        "validate", SHIP, "--params", &truth, "--data", &data, "--resid",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let text = stdout(&o);
+    for label in [
+        "truth: one-step residuals, N = 599, lags 1..25",
+        "Ljung-Box Q",
+        "independent",
+        "tau1",
+    ] {
+        assert!(text.contains(label), "`{label}` missing:\n{text}");
+    }
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &truth,
+        "--data",
+        &data,
+        "--resid",
+        "--resid-lags",
+        "10",
+        "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let tests = &v["residuals"][0]["tests"];
+    assert_eq!(v["residuals"][0]["name"], "truth");
+    assert_eq!(tests["lags"], 10);
+    assert_eq!(tests["samples"], 599);
+    let states = tests["states"].as_array().cloned().unwrap_or_default();
+    assert_eq!(states.len(), leeway_model::Model::ir(&model).states.len());
+    assert_eq!(
+        states[0]["autocorrelation"].as_array().map(Vec::len),
+        Some(10)
+    );
+    assert_eq!(
+        states[0]["inputs"][0]["correlation"]
+            .as_array()
+            .map(Vec::len),
+        Some(21)
+    );
+    // Without `--resid` there is no `residuals` field; its lags alone are a usage error.
+    let o = leeway(&[
+        "validate", SHIP, "--params", &truth, "--data", &data, "--json",
+    ]);
+    assert!(json(&o).get("residuals").is_none());
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &truth,
+        "--data",
+        &data,
+        "--resid-lags",
+        "5",
+    ]);
+    assert_eq!(code(&o), 2);
+    // More lags than samples: a located option error, exit 2.
+    let o = leeway(&[
+        "validate",
+        SHIP,
+        "--params",
+        &truth,
+        "--data",
+        &data,
+        "--resid",
+        "--resid-lags",
+        "900",
+        "--json",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    assert_eq!(json(&o)["errors"][0]["code"], "invalid-option");
+}

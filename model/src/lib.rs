@@ -4,15 +4,19 @@
 //! ([`experiment`]), the sign patterns found in data ([`signs`]), simulation
 //! and fits ([`simulate`]), validation of θ on recorded experiments — the
 //! one implementation `leeway validate` and `leeway.validate` share
-//! ([`validation`]) —, values given by name ([`given`]), and the
+//! ([`validation`]) —, one-step-ahead residuals and their whiteness and
+//! input-independence tests ([`residuals`], on the sample correlations of
+//! [`correlation`]), values given by name ([`given`]), and the
 //! [`interrupt`] flag a caller raises to stop a long computation. No IO, no
 //! randomness.
 
+pub mod correlation;
 pub mod experiment;
 pub mod given;
 pub mod interp;
 pub mod interrupt;
 pub mod model;
+pub mod residuals;
 pub mod signs;
 pub mod simulate;
 pub mod validation;

@@ -4,7 +4,9 @@
 //! same JSON documents as `leeway check --json` and `leeway estimate --json`,
 //! built by the same code ([`leeway_report`]); it simulates and
 //! validates with the library functions `leeway simulate` and `leeway
-//! validate` call (`simulate.rs`), answering with columns and fits. The Python half turns
+//! validate` call (`simulate.rs`), answering with columns and fits, and
+//! analyses one-step residuals as `leeway validate --resid` does
+//! (`residuals.rs`). The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 //!
@@ -29,6 +31,7 @@ mod estimate;
 mod failure;
 mod model;
 mod options;
+mod residuals;
 mod simulate;
 mod study;
 
@@ -41,6 +44,8 @@ fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(estimate::estimate_json, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_columns, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::validate_fits, m)?)?;
+    m.add_function(wrap_pyfunction!(residuals::residual_analysis, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<distributed::Dataset>()?;
     m.add_function(wrap_pyfunction!(distributed::estimate_mapped, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_tasks, m)?)?;

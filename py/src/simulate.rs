@@ -82,11 +82,11 @@ fn initial_values(ir: &Ir, x0: &[(String, f64)]) -> Result<Vec<(String, f64)>, F
 /// The unmeasured disturbance components a simulation holds, as
 /// `(current.north, value, origin)`: `given` (or `"zero"`), else the
 /// estimate's `means`, else zero with a warning in Python's spelling.
-type Held = Vec<(String, f64, &'static str)>;
+pub(crate) type Held = Vec<(String, f64, &'static str)>;
 
 /// The disturbances a simulation with `what` holds (see [`Held`]): values
 /// for the model and the warning when a medium is zero by default.
-fn held(
+pub(crate) fn held(
     ir: &Ir,
     given: &[(String, f64)],
     zero: bool,
@@ -202,7 +202,7 @@ pub fn simulate_columns<'py>(
     Ok((columns, diverged, named, warning.into_iter().collect()))
 }
 
-fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
+pub(crate) fn check_theta(ir: &Ir, theta: &[f64]) -> Result<(), Failure> {
     if theta.len() != ir.parameters.len() {
         return Err(Failure::params(format!(
             "θ has {} values, model `{}` {} parameters",

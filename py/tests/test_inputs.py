@@ -4,8 +4,10 @@ coerced to numbers; a datetime or duration time column is read as seconds
 since its first stamp (the Parquet reader's rule), so that it gives the
 float-seconds estimate with or without a model `step`; missing values
 (pd.NA, None, NaT), integers beyond ±2⁵³ and missing experiment labels are
-errors at their row; a Series, a column MultiIndex or a time index is
-refused with a hint."""
+errors at their row; a Series or a column MultiIndex is refused with a
+hint. A time index (DatetimeIndex, TimedeltaIndex, or named as the time
+column) is read as the time column; any other index that is not positions,
+on a frame without a time column, is refused rather than ignored."""
 
 from __future__ import annotations
 
@@ -178,17 +180,40 @@ def test_a_column_multiindex_is_refused_with_a_hint(ship, ship_frame) -> None:  
     assert "columns" in (err.hint or "")
 
 
-@pytest.mark.parametrize("index", ["named", "datetime"])
-def test_time_as_the_index_is_refused_with_a_hint(ship, ship_frame, index) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize("index", ["named", "datetime", "datetime-tz", "timedelta"])
+def test_time_as_the_index_is_read_as_the_time_column(ship, ship_frame, index) -> None:  # type: ignore[no-untyped-def]
     frame = ship_frame.set_index("time")
+    seconds = pd.to_timedelta(frame.index, unit="s")
     if index == "datetime":
-        frame.index = pd.Timestamp("2025-01-01") + pd.to_timedelta(frame.index, unit="s")
-        frame.index.name = "stamp"
-    err = refused(ship, frame, match="index")
-    assert "reset_index" in (err.hint or "")
-    # As the hint says: the same estimate as with the column.
-    fixed = frame.rename_axis("time").reset_index()
-    assert quiet_estimate(ship, fixed).to_json() == quiet_estimate(ship, ship_frame).to_json()
+        frame.index = pd.DatetimeIndex(pd.Timestamp("2025-01-01") + seconds, name="stamp")
+    elif index == "datetime-tz":
+        frame.index = pd.DatetimeIndex(pd.Timestamp("2025-01-01", tz="Europe/Oslo") + seconds)
+    elif index == "timedelta":
+        frame.index = pd.TimedeltaIndex(seconds, name="elapsed")
+    assert "time" not in frame.columns
+    # The same estimate as with the column (times from the first stamp).
+    assert quiet_estimate(ship, frame).to_json() == quiet_estimate(ship, ship_frame).to_json()
+
+
+def test_an_index_that_is_not_positions_and_no_time_column_is_refused(ship, ship_frame) -> None:  # type: ignore[no-untyped-def]
+    # The reported case: time as an unnamed index, sampled at 7 s, while
+    # the model's step is 1 s — once read as if the index were positions.
+    frame = ship_frame.drop(columns="time")
+    frame.index = pd.Index(ship_frame["time"].to_numpy() * 7.0)
+    err = refused(ship, frame, match="index that is not positions")
+    assert "reset_index(drop=True)" in (err.hint or "") and "rename_axis('time')" in (err.hint or "")
+    # A filtered frame (gaps in an integer index) says something too.
+    gappy = ship_frame.drop(columns="time").iloc[::2]
+    refused(ship, gappy, match="Index")
+    # Positions are fine: a default RangeIndex, or a slice of one.
+    quiet_estimate(ship, ship_frame.drop(columns="time"))
+    quiet_estimate(ship, ship_frame.drop(columns="time").iloc[10:])
+
+
+def test_a_multiindex_without_a_time_column_is_refused(ship, ship_frame) -> None:  # type: ignore[no-untyped-def]
+    frame = ship_frame.assign(run="a").set_index(["run", "time"])
+    err = refused(ship, frame, match="MultiIndex")
+    assert "reset_index()" in (err.hint or "")
 
 
 def test_simulate_and_validate_refuse_the_same_columns(ship, ship_frame) -> None:  # type: ignore[no-untyped-def]

@@ -7,13 +7,17 @@ from typing import Any, final
 import numpy as np
 import numpy.typing as npt
 
+__version__: str
+
 __all__ = [
+    "__version__",
     "Model",
     "Dataset",
     "estimate_json",
     "estimate_mapped",
     "simulate_columns",
     "validate_fits",
+    "residual_analysis",
     "study_tasks",
     "study_run",
     "study_summary",
@@ -117,4 +121,28 @@ def validate_fits(
     list[list[float | None]],
     list[str],
     list[list[tuple[str, float, str]]],
+]: ...
+def residual_analysis(
+    model: Model,
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
+    theta: list[float],
+    disturbances: list[tuple[str, float]],
+    lags: int,
+    zero: bool = False,
+    means: list[tuple[str, float]] | None = None,
+    step: float | None = None,
+    time_tolerance: float = 0.05,
+    resample: float | None = None,
+) -> tuple[
+    list[
+        tuple[
+            str,
+            float,
+            list[npt.NDArray[np.float64]],
+            list[npt.NDArray[np.float64]],
+            list[npt.NDArray[np.float64]],
+        ]
+    ],
+    str,
+    list[str],
 ]: ...

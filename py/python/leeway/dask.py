@@ -42,7 +42,8 @@ from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import Estimate, Model, _flag, _integer, _leeway, _native, _number, _text
+from . import _leeway
+from ._api import Estimate, Model, _flag, _integer, _native, _number, _text
 from . import mapreduce
 from .errors import DataError, EstimateError, LeewayError, OptionError
 

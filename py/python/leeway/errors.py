@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 from typing import Any
 
+from ._hints import python_spelling
+
 
 class LeewayError(Exception):
     """A leeway error: ``code`` is the CLI's stable kebab-case code,
@@ -22,10 +24,12 @@ class LeewayError(Exception):
         location: str | None = None,
         report: str | None = None,
     ) -> None:
+        # The native half words its messages for the command line.
+        message = python_spelling(message)
         super().__init__(message)
         self.message = message
         self.code = code
-        self.hint = hint
+        self.hint = python_spelling(hint) if hint is not None else None
         self.location = location
         self.report: dict[str, Any] = json.loads(report) if report else {}
 

@@ -20,18 +20,9 @@ import os
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import (
-    Data,
-    Estimate,
-    Model,
-    _checked_options,
-    _estimate_options,
-    _handover,
-    _leeway,
-    _native,
-    _number,
-    _warn,
-)
+from . import _leeway
+from ._api import Estimate, Model, _checked_options, _estimate_options, _native, _number, _warn
+from ._data import Data, _handover
 from .errors import OptionError
 
 __all__ = ["Dataset", "options", "open_file", "open_frame", "estimate"]
