@@ -148,7 +148,7 @@ fn estimate_prints_tables_and_warnings_for_people() {
     // Low wind: the wind parameters are held, and stderr says so.
     let err = stderr(&o);
     assert!(
-        err.contains("warning: W_uu is not separately excited"),
+        err.contains("warning: `W_uu` held at 0: the wind barely varies"),
         "{err}"
     );
     assert!(!out.contains('\u{1b}') && !err.contains('\u{1b}'));

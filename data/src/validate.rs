@@ -10,6 +10,7 @@
 //! `open_table` (in `spill`) streams them through a binary copy (`open_csv`,
 //! `open_columns`, `open_file`). No check exists anywhere else.
 
+use leeway_model::number::short_number as num;
 use crate::checks::{BlockTimes, Extremes, Outlier, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};
 use crate::error::DataError;
@@ -529,29 +530,33 @@ fn outlier_error(
     let (v, lo, hi) = (o.value, o.lo, o.hi);
     let why = if hi > lo {
         format!(
-            "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
+            "the other samples of experiment `{}` lie in [{}, {}], and this one is {} times that range away",
             block.name,
-            if v > hi {
+            num(lo),
+            num(hi),
+            num(if v > hi {
                 (v - hi) / (hi - lo)
             } else {
                 (lo - v) / (hi - lo)
-            }
+            })
         )
     } else if let Some(bound) = o.zero_bound {
         format!(
-            "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
-            block.name
+            "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {} in magnitude",
+            block.name,
+            num(bound)
         )
     } else {
         format!(
-            "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+            "every other sample of experiment `{}` is {} (the column is constant, a sensor stuck?), and this one is {} times that value away",
             block.name,
-            (v - lo).abs() / lo.abs()
+            num(lo),
+            num((v - lo).abs() / lo.abs())
         )
     };
     DataError::new(
         table.at(o.line, Some((i, name))),
-        format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+        format!("`{name}` = {} is a gross outlier: {why}{more}", num(v)),
         format!(
             "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
         ),

@@ -1,5 +1,6 @@
 //! The estimator for one model, method and set of experiments: what every phase shares.
 
+use leeway_model::warning::Warning;
 use crate::method::Combine;
 use crate::options::EstimateOptions;
 use crate::outcome::{EstimateError, err};
@@ -38,7 +39,7 @@ pub(crate) struct Estimator<'a> {
     pub(crate) meaning: BTreeMap<usize, Vec<(usize, f64)>>,
     /// What each predictor column estimates, as the report states it.
     pub(crate) column_texts: std::sync::Arc<[String]>,
-    pub(crate) warnings: Vec<String>,
+    pub(crate) warnings: Vec<Warning>,
     pub(crate) unexcited: Vec<String>,
     pub(crate) aggregates: Vec<String>,
     /// Runs the passes over the data (here, or on workers).
@@ -66,7 +67,7 @@ impl<'a> Estimator<'a> {
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,
         signs: &[ExperimentSigns],
-        warnings: Vec<String>,
+        warnings: Vec<Warning>,
         passes: &'a dyn Passes,
         facts: Vec<ExperimentFacts>,
     ) -> Result<Estimator<'a>, EstimateError> {

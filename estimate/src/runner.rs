@@ -2,6 +2,7 @@
 //! facts, and walks it for a pass's moment sums, long-run sums or free-run
 //! fit, keeping what later passes over an in-memory record can reuse.
 
+use leeway_model::number::short_number;
 use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
 use crate::method::Instruments;
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
@@ -880,8 +881,10 @@ pub(super) fn non_finite(
                 return Some((
                     k - 1,
                     format!(
-                        "the regressor {} of `{}` evaluates to {v:e}",
-                        col.name, ir.states[o]
+                        "the regressor {} of `{}` evaluates to {}",
+                        col.name,
+                        ir.states[o],
+                        short_number(v)
                     ),
                 ));
             }
@@ -890,8 +893,9 @@ pub(super) fn non_finite(
             return Some((
                 k,
                 format!(
-                    "the difference quotient of `{}` evaluates to {target:e}",
-                    ir.states[o]
+                    "the difference quotient of `{}` evaluates to {}",
+                    ir.states[o],
+                    short_number(*target)
                 ),
             ));
         }

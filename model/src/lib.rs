@@ -4,7 +4,8 @@
 //! ([`experiment`]), the sign patterns found in data ([`signs`]), simulation
 //! and fits ([`simulate`]), validation of θ on recorded experiments — the
 //! one implementation `leeway validate` and `leeway.validate` share
-//! ([`validation`]) —, values given by name ([`given`]), and the
+//! ([`validation`]) —, values given by name ([`given`]), numbers in messages
+//! ([`number`]), the [`warning`] shape every estimate-time warning takes, and the
 //! [`interrupt`] flag a caller raises to stop a long computation. No IO, no
 //! randomness.
 
@@ -13,9 +14,11 @@ pub mod given;
 pub mod interp;
 pub mod interrupt;
 pub mod model;
+pub mod number;
 pub mod signs;
 pub mod simulate;
 pub mod validation;
+pub mod warning;
 
 #[doc(inline)]
 pub use experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
