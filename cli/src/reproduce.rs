@@ -121,7 +121,10 @@ fn writable(dir: &Path) -> Result<(), Problem> {
     let problem = |what: &str, e: std::io::Error| {
         Problem::error(
             "io",
-            format!("cannot {what} the output directory `{}`: {e}", dir.display()),
+            format!(
+                "cannot {what} the output directory `{}`: {e}",
+                dir.display()
+            ),
         )
         .at(dir.display().to_string())
         .help("choose another directory with --out DIR")

@@ -398,7 +398,7 @@ fn data_that_cannot_support_the_model_exit_1() {
         "--aggregate",
     ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
-    assert!(stderr(&o).contains("warning: experiment `windy`: air.u has sign"));
+    assert!(stderr(&o).contains("warning: experiment `windy`: air.u changes sign ("));
     // Wind unmeasured: X_uu and W_uu enter only as their sum; exit 1 unless aggregated.
     let o = leeway(&[
         "estimate",

@@ -25,9 +25,18 @@ fn assert_short_warnings(err: &str) {
         while let Some(next) = lines.next_if(|l| l.starts_with("  = ")) {
             block.push(next);
         }
-        assert!(block.len() <= 2, "a warning of {} lines:\n{}", block.len(), block.join("\n"));
+        assert!(
+            block.len() <= 2,
+            "a warning of {} lines:\n{}",
+            block.len(),
+            block.join("\n")
+        );
         for l in &block {
-            assert!(l.chars().count() <= WIDTH, "a warning line of {} characters:\n{l}", l.chars().count());
+            assert!(
+                l.chars().count() <= WIDTH,
+                "a warning line of {} characters:\n{l}",
+                l.chars().count()
+            );
         }
     }
 }
@@ -50,13 +59,22 @@ fn quick_start_and_study_warnings_fit_two_lines() {
         // The low wind's warnings, in full only when asked.
         if name == "low.csv" {
             let err = stderr(&o);
-            assert!(err.contains("warning: `W_uu` held at 0: the wind barely varies"), "{err}");
+            assert!(
+                err.contains("warning: `W_uu` held at 0: the wind barely varies"),
+                "{err}"
+            );
             assert!(!err.contains("its column equals"), "{err}");
             let verbose = stderr(&leeway(&["estimate", SHIP, "--data", &data, "--verbose"]));
-            assert!(verbose.contains("= detail: W_uu is not separately excited: its column equals"), "{verbose}");
+            assert!(
+                verbose.contains("= detail: W_uu is not separately excited: its column equals"),
+                "{verbose}"
+            );
             let j = json(&leeway(&["estimate", SHIP, "--data", &data, "--json"]));
             let full = j["warnings"].as_array().cloned().unwrap_or_default();
-            let summaries = j["warning_summaries"].as_array().cloned().unwrap_or_default();
+            let summaries = j["warning_summaries"]
+                .as_array()
+                .cloned()
+                .unwrap_or_default();
             assert_eq!(full.len(), summaries.len());
             assert!(!full.is_empty());
             for (w, s) in full.iter().zip(&summaries) {
@@ -93,7 +111,11 @@ fn a_zigzag_whose_sway_changes_sign_says_what_to_do_and_fails_under_strict() {
     );
     let strict = leeway(&["estimate", SHIP, "--data", &data, "--strict"]);
     assert_eq!(code(&strict), 1, "{}", stderr(&strict));
-    assert!(stderr(&strict).contains("error[sign-violation]"), "{}", stderr(&strict));
+    assert!(
+        stderr(&strict).contains("error[sign-violation]"),
+        "{}",
+        stderr(&strict)
+    );
 }
 
 #[test]
@@ -103,8 +125,15 @@ fn strict_fails_on_a_parameter_held_for_lack_of_excitation() {
     let o = leeway(&["estimate", SHIP, "--data", &data, "--strict"]);
     assert_eq!(code(&o), 1, "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(err.contains("error[biasing-warning]: --strict: a warning can bias the estimate: `W_uu` held at 0"), "{err}");
-    let j = json(&leeway(&["estimate", SHIP, "--data", &data, "--strict", "--json"]));
+    assert!(
+        err.contains(
+            "error[biasing-warning]: --strict: a warning can bias the estimate: `W_uu` held at 0"
+        ),
+        "{err}"
+    );
+    let j = json(&leeway(&[
+        "estimate", SHIP, "--data", &data, "--strict", "--json",
+    ]));
     assert_eq!(j["errors"][0]["code"], "biasing-warning");
 }
 
@@ -148,11 +177,18 @@ fn a_parameter_multiplying_a_difference_shows_the_difference() {
 fn file_errors_have_their_code_and_help_texts_say_what_is_read() {
     let o = leeway(&["check", "nope.som"]);
     assert_eq!(code(&o), 2);
-    assert!(stderr(&o).starts_with("error[io]: cannot read `nope.som`"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with("error[io]: cannot read `nope.som`"),
+        "{}",
+        stderr(&o)
+    );
     let help = stdout(&leeway(&["estimate", "--help"]));
     assert!(help.contains("CSV or Parquet"), "{help}");
     let help = stdout(&leeway(&["reproduce", "--help"]));
-    assert!(help.contains("[default: 1000,2000,3000,4000,5000]"), "{help}");
+    assert!(
+        help.contains("[default: 1000,2000,3000,4000,5000]"),
+        "{help}"
+    );
 }
 
 #[test]
@@ -164,4 +200,19 @@ fn an_unwritable_out_fails_before_the_study() {
     // Nothing of the study ran: no table on stdout, and quickly.
     assert!(stdout(&o).is_empty(), "{}", stdout(&o));
     assert!(start.elapsed().as_secs() < 20);
+}
+
+#[test]
+fn validate_on_one_experiment_has_no_mean() {
+    let dir = Scratch::new("words-one");
+    let model = ship();
+    let data = dir.write(
+        "val.csv",
+        &csv_text(&model, &[&study::validation_experiment(&model, 300)]),
+    );
+    let params = dir.write("theta.json", &common::true_params());
+    let o = leeway(&["validate", SHIP, "--params", &params, "--data", &data]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(!out.contains("mean"), "{out}");
 }

@@ -8,9 +8,9 @@
 //! few samples against its value or, when that value is 0, against an
 //! absolute bound in base units.
 
-use leeway_model::number::short_number as num;
 use crate::error::DataError;
 use crate::options::LoadOptions;
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::Ir;
 
 /// The most extreme samples of each signal column kept for the outlier check.
@@ -229,7 +229,11 @@ pub(super) fn sample_time(
         && (h - d).abs() > 1e-3 * d
     {
         let what = if options.resample.is_some() {
-            format!("--resample {} conflicts with the model's step {}", num(h), num(d))
+            format!(
+                "--resample {} conflicts with the model's step {}",
+                num(h),
+                num(d)
+            )
         } else {
             format!(
                 "the data are sampled every {} s but the model declares step {}",

@@ -14,11 +14,11 @@
 //! state without either is an error; nothing is assumed to be zero. Declared
 //! units are converted to base units, as for data files.
 
-use leeway_model::number::short_number as num;
 use crate::error::DataError;
 use crate::options::LoadOptions;
 use crate::validate::Table;
 use leeway_model::experiment::{Experiment, column_name};
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 

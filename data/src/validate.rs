@@ -10,7 +10,6 @@
 //! `open_table` (in `spill`) streams them through a binary copy (`open_csv`,
 //! `open_columns`, `open_file`). No check exists anywhere else.
 
-use leeway_model::number::short_number as num;
 use crate::checks::{BlockTimes, Extremes, Outlier, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};
 use crate::error::DataError;
@@ -18,6 +17,7 @@ use crate::notes::{FileNotes, LoadedFile, TimeNotes};
 use crate::options::LoadOptions;
 use crate::signals::{Role, required_signals, unit_factor};
 use leeway_model::experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 

@@ -1,6 +1,5 @@
 //! The estimator for one model, method and set of experiments: what every phase shares.
 
-use leeway_model::warning::Warning;
 use crate::method::Combine;
 use crate::options::EstimateOptions;
 use crate::outcome::{EstimateError, err};
@@ -10,6 +9,7 @@ use crate::protocol::{ExperimentFacts, PassRequest, PassSummary, Passes};
 use crate::record::ExperimentInfo;
 use leeway_model::model::Model;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use leeway_structure::exact::Q;
 use leeway_structure::identify::Centring;
 use leeway_structure::identify::ExperimentStructure;

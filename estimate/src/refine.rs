@@ -7,8 +7,6 @@
 //! moves every measured value by one ulp: the study's mean fits of LS, IV2
 //! and IV3 stay within half their Monte Carlo standard error.
 
-use leeway_model::number::short_number;
-use leeway_model::warning::Warning;
 use crate::accumulate::Accumulated;
 use crate::estimator::Estimator;
 use crate::method::{Initial, Instruments, Method};
@@ -16,7 +14,9 @@ use crate::moments::CrossMoments;
 use crate::outcome::{Estimate, EstimateError, InstrumentSimulation, err};
 use crate::protocol::PrefixInstruments;
 use crate::solve::BlockSolution;
+use leeway_model::number::short_number;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use std::collections::BTreeMap;
 
 /// Fit points by which a refinement's simulation may fall below the best

@@ -1,11 +1,11 @@
 //! Turning the solution into the returned `Estimate`: column statuses, standard errors, warnings, diagnostics.
 
-use leeway_model::warning::{Warning, names_capped};
 use crate::estimator::Estimator;
 use crate::method::{Initial, Instruments, Method};
 use crate::outcome::{ColumnEstimate, Diagnostics, Estimate, EstimateError};
 use crate::solve::{BlockSolution, CONDITION_WARNING};
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::{Warning, names_capped};
 use leeway_structure::identify::Centring;
 use leeway_structure::ir::{ColumnKind, PredictorKind, Rotation};
 use std::collections::BTreeMap;
@@ -238,7 +238,9 @@ impl Estimator<'_> {
                 );
                 // Only what this model has: a heading, measured media.
                 if matches!(self.ir.rotation, Rotation::Planar { .. }) {
-                    text.push_str("; rotation from the heading anchored to the previous measurement");
+                    text.push_str(
+                        "; rotation from the heading anchored to the previous measurement",
+                    );
                 }
                 if self.ir.disturbances.iter().any(|d| d.measured) {
                     text.push_str("; measured disturbances as their experiment mean");

@@ -1,6 +1,5 @@
 //! The entry points: [`estimate`] on data at hand, [`estimate_with`] on passes run anywhere.
 
-use leeway_model::warning::Warning;
 use crate::estimator::Estimator;
 use crate::estimator::stop_if_interrupted;
 use crate::local::LocalPasses;
@@ -10,6 +9,7 @@ use crate::protocol::{FactsRequest, Passes};
 use leeway_model::experiment::Source;
 use leeway_model::model::Model;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use leeway_structure::ir::Ir;
 
 /// The largest nominal value accepted: with a regressor within

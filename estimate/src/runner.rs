@@ -2,7 +2,6 @@
 //! facts, and walks it for a pass's moment sums, long-run sums or free-run
 //! fit, keeping what later passes over an in-memory record can reuse.
 
-use leeway_model::number::short_number;
 use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
 use crate::method::Instruments;
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
@@ -11,6 +10,7 @@ use leeway_model::experiment::Source;
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
 use leeway_model::model::{HeadingRotation, Model, Signals};
+use leeway_model::number::short_number;
 use leeway_model::signs::SignCounter;
 use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 use nalgebra::DVector;

@@ -11,12 +11,12 @@
 //! `non-finite-moments` before any decomposition sees it (nalgebra's SVD
 //! panics on a NaN).
 
-use leeway_model::number::short_number;
-use leeway_model::warning::{Warning, names_capped};
 use crate::estimator::Estimator;
 use crate::method::{Combine, Method};
 use crate::moments::CrossMoments;
 use crate::outcome::{EstimateError, err};
+use leeway_model::number::short_number;
+use leeway_model::warning::{Warning, names_capped};
 use leeway_structure::exact::Q;
 use leeway_structure::ir::{Column, ColumnKind, PredictorKind};
 use nalgebra::{DMatrix, DVector};
@@ -334,7 +334,11 @@ impl Estimator<'_> {
             .iter()
             .map(|(k, _)| &predictors[cols[*k]])
             .partition(|c| !c.kind.is_nuisance());
-        let names: Vec<String> = theta.iter().chain(&nuisance).map(|c| c.name.clone()).collect();
+        let names: Vec<String> = theta
+            .iter()
+            .chain(&nuisance)
+            .map(|c| c.name.clone())
+            .collect();
         names_capped(&names, theta.len().clamp(1, 2))
     }
 

@@ -48,5 +48,4 @@ mod tests {
         assert_eq!(short_number(-1e-12 * 0.0), "0");
         assert_eq!(short_number(-0.00004), "-4e-5");
     }
-
 }

@@ -8,9 +8,9 @@
 use crate::estimate::args::EstimateArgs;
 use crate::estimate::outcome::Outcome;
 use crate::problem::{Failure, JsonError};
+use leeway_model::warning::Warning;
 use leeway_report::EstimateReport;
 use leeway_report::Estimated;
-use leeway_model::warning::Warning;
 use leeway_report::estimate_report_warned;
 
 /// The whole document.

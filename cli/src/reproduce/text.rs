@@ -2,8 +2,8 @@
 //! case, the input design's margins, and the paper's claims with their
 //! verdicts and evidence.
 
-use crate::reproduce::args::MIN_N;
 use crate::output::table;
+use crate::reproduce::args::MIN_N;
 use crate::reproduce::args::ReproduceArgs;
 use crate::reproduce::margins::{CaseCheck, DesignCheck, medium_of};
 use crate::reproduce::report::Report;
@@ -274,7 +274,11 @@ fn claims(report: &Report) -> String {
 /// every N (no breakpoint within reach).
 fn finer_grid(run: &[usize], ahead: &[usize]) -> Option<Vec<usize>> {
     let lo = ahead.iter().copied().max();
-    let hi = run.iter().copied().filter(|n| lo.is_none_or(|lo| *n > lo)).min()?;
+    let hi = run
+        .iter()
+        .copied()
+        .filter(|n| lo.is_none_or(|lo| *n > lo))
+        .min()?;
     let grid: Vec<usize> = match lo {
         // The original investigation's grid below 1000: 150, 200, 300, 400, 600.
         None => [3, 4, 6, 8, 12]
@@ -330,9 +334,15 @@ mod tests {
         // Run with the suggested grid, LS ahead at none: look lower still.
         let suggested = [150, 200, 300, 400, 600];
         let again = finer_grid(&suggested, &[]).unwrap_or_default();
-        assert!(again.iter().all(|n| !suggested.contains(n) && *n < 150), "{again:?}");
+        assert!(
+            again.iter().all(|n| !suggested.contains(n) && *n < 150),
+            "{again:?}"
+        );
         // LS ahead up to 200: between 200 and 300.
-        assert_eq!(finer_grid(&suggested, &[150, 200]), Some(vec![220, 240, 260, 280]));
+        assert_eq!(
+            finer_grid(&suggested, &[150, 200]),
+            Some(vec![220, 240, 260, 280])
+        );
         // LS ahead everywhere: nothing to suggest.
         assert_eq!(finer_grid(&suggested, &suggested), None);
     }
