@@ -141,7 +141,13 @@ fn fail(args: &CheckArgs, file: &str, code: &str, message: String) -> Status {
         let d = Diagnostic::error(code, message);
         print_json(&json::failure(file, d, args.aggregate));
     } else {
-        err(&headline(stderr_style(), &message));
+        // Coded like every other command's errors (`error[io]: ...`).
+        err(&crate::output::headline(
+            stderr_style(),
+            "error",
+            Some(code),
+            &message,
+        ));
     }
     Status::Error
 }

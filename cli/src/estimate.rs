@@ -15,17 +15,24 @@ use crate::estimate::args::EstimateArgs;
 use crate::estimate::outcome::Outcome;
 use crate::model::load;
 use crate::options::load_options;
-use crate::output::{Status, err, headline, out, print_json, stderr_style};
+use crate::output::{Status, err, headline, out, print_json, stderr_style, warning_text};
 use crate::problem::{Failure, Problem};
 use leeway_estimate::estimate;
 use leeway_model::Interpreter;
-use leeway_report::{heading_gains, heading_warnings, unit_warnings};
+use leeway_model::warning::Warning;
+use leeway_report::{heading_alerts, heading_gains, unit_alerts};
 
 /// Runs `leeway estimate`.
 pub fn run(args: &EstimateArgs) -> Status {
     let mut warnings = Vec::new();
     let mut model = None;
-    let result = execute(args, &mut warnings, &mut model);
+    let mut result = execute(args, &mut warnings, &mut model);
+    if args.strict
+        && result.is_ok()
+        && let Some(f) = biasing_failure(&warnings)
+    {
+        result = Err(f);
+    }
     if args.json {
         print_json(&json::report(args, model, &result, warnings));
     } else {
@@ -34,7 +41,7 @@ pub fn run(args: &EstimateArgs) -> Status {
             out(&text::render(o));
         }
         for w in &warnings {
-            err(&headline(style, "warning", None, w));
+            err(&warning_text(style, w, args.verbose));
         }
         if let Ok(o) = &result {
             for n in &o.estimate.notes {
@@ -56,7 +63,7 @@ pub fn run(args: &EstimateArgs) -> Status {
 /// `model` as soon as it compiles (the JSON names it also on a data error).
 fn execute(
     args: &EstimateArgs,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
     model_name: &mut Option<String>,
 ) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, args.aggregate)?;
@@ -69,10 +76,15 @@ fn execute(
     };
     let (data, data_notes) = open_data(&ir, &args.data, &load_options)?;
     let sources = data.sources();
-    warnings.extend(loaded.warnings);
-    warnings.extend(unit_warnings(&ir, &sources));
+    warnings.extend(
+        loaded
+            .warnings
+            .into_iter()
+            .map(|w| Warning::plain("model", w)),
+    );
+    warnings.extend(unit_alerts(&ir, &sources));
     let gains = heading_gains(&ir, &sources);
-    warnings.extend(heading_warnings(&ir, &gains));
+    warnings.extend(heading_alerts(&ir, &gains));
     let model = Interpreter::new(ir.clone());
     let result = estimate(&model, &sources, &args.options(nominal));
     // A file that changed between passes voids whatever was computed.
@@ -80,7 +92,7 @@ fn execute(
         return Err(Failure::from(p));
     }
     let est = result.map_err(|e| Failure::from(Problem::estimate(&located(e, &data))))?;
-    warnings.extend(est.warnings.iter().cloned());
+    warnings.extend(est.warning_summaries.iter().cloned());
     Ok(Outcome {
         model: ir.name.clone(),
         experiments: sources
@@ -93,6 +105,28 @@ fn execute(
         units: crate::units::unit_lines(&ir),
         data_units: ir.data_units.clone(),
     })
+}
+
+/// Under `--strict`, the failure of a run whose warnings can bias the
+/// estimate (sign violations, parameters held for lack of excitation, unit
+/// mistakes, an estimate that does not reproduce its data).
+fn biasing_failure(warnings: &[Warning]) -> Option<Failure> {
+    let biasing: Vec<&Warning> = warnings.iter().filter(|w| w.can_bias).collect();
+    let first = biasing.first()?;
+    let more = match biasing.len() {
+        1 => String::new(),
+        n => format!(" (and {} more)", n - 1),
+    };
+    let mut p = Problem::error(
+        "biasing-warning",
+        format!(
+            "--strict: a warning can bias the estimate: {}{more}",
+            first.summary
+        ),
+    )
+    .help("see the warnings above for what to do, or drop --strict to estimate anyway");
+    p.status = Status::Unsupported;
+    Some(Failure::from(p))
 }
 
 /// An estimator's error with the data's places: `too-few-samples` names every

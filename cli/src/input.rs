@@ -207,7 +207,7 @@ mod tests {
             ),
             (
                 "time,u,v,r,psi,tau1,tau2,tau3,wind_n,wind_e\n0,5,3,0.1,0,50,160,230,1,1\n1,5,3,0.1,0,50,160,230,1,1\n3,5,3,0.1,0,50,160,230,1,1\n",
-                "in.csv:4:1 (time): inconsistent sample time: step 2 here, 1 at the start",
+                "in.csv:4:1 (time): inconsistent sample time: step 2 s here, 1 s at the start",
             ),
             (
                 "time,u,v,r,psi,tau1,tau2,tau3,wind_n,wind_e\n0,5,3,0.1,0,50,160,230,1,1\n0.5,5,3,0.1,0,50,160,230,1,1\n",
@@ -250,7 +250,7 @@ mod tests {
                 format!(
                     "{head}0,5,3,0.1,0.2,50,160,230,1,1\n\n1,,,,,50,160,230,1,1\n\n3,,,,,50,160,230,1,1\n"
                 ),
-                "in.csv:8:1 (time): inconsistent sample time: step 2 here, 1 at the start",
+                "in.csv:8:1 (time): inconsistent sample time: step 2 s here, 1 s at the start",
             ),
             (
                 format!("{head}0,5,3,0.1,0.2,50,160,230,1\n"),

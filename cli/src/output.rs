@@ -2,6 +2,7 @@
 //! decide on colour (ANSI only on a terminal and without `NO_COLOR`),
 //! writers that tolerate a closed pipe, tables and number formatting.
 
+use leeway_model::warning::Warning;
 use leeway_structure::grammar::RenderStyle;
 use std::io::IsTerminal;
 use std::process::ExitCode;
@@ -78,6 +79,19 @@ pub fn headline(style: RenderStyle, severity: &str, code: Option<&str>, message:
         }
         RenderStyle::Plain => format!("{tag}: {message}\n"),
     }
+}
+
+/// A warning as text: its summary as the headline and its help line (two
+/// lines at most), and with `verbose` its full detail under them.
+pub fn warning_text(style: RenderStyle, w: &Warning, verbose: bool) -> String {
+    let mut text = headline(style, "warning", None, &w.summary);
+    if !w.help.is_empty() {
+        text.push_str(&format!("  = help: {}\n", w.help));
+    }
+    if verbose && w.detail != w.summary {
+        text.push_str(&format!("  = detail: {}\n", w.detail));
+    }
+    text
 }
 
 /// Writes a document as pretty JSON and a newline on stdout.

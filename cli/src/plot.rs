@@ -206,6 +206,92 @@ pub fn clip_band(points: &[(f64, f64)], lo: f64, hi: f64) -> Vec<Vec<(f64, f64)>
     pieces
 }
 
+/// The pieces of a polyline split at its sharp turns (more than 120° in
+/// pixels, `to_pixel`): a thick line in the PNG backend joins segments with
+/// unlimited miters, so a chattering simulation would draw spikes far across
+/// the neighbouring panels; pieces that meet at a vertex without a join do not.
+pub fn split_sharp(
+    points: &[(f64, f64)],
+    to_pixel: impl Fn((f64, f64)) -> (i32, i32),
+) -> Vec<Vec<(f64, f64)>> {
+    let mut pieces = Vec::new();
+    let mut piece: Vec<(f64, f64)> = Vec::new();
+    for &p in points {
+        if let [.., a, b] = piece[..] {
+            let (pa, pb, pc) = (to_pixel(a), to_pixel(b), to_pixel(p));
+            let (u, v) = (
+                (f64::from(pb.0 - pa.0), f64::from(pb.1 - pa.1)),
+                (f64::from(pc.0 - pb.0), f64::from(pc.1 - pb.1)),
+            );
+            let (nu, nv) = (u.0.hypot(u.1), v.0.hypot(v.1));
+            if nu > 0.0 && nv > 0.0 && (u.0 * v.0 + u.1 * v.1) / (nu * nv) < -0.5 {
+                pieces.push(std::mem::replace(&mut piece, vec![b]));
+            }
+        }
+        piece.push(p);
+    }
+    if piece.len() >= 2 {
+        pieces.push(piece);
+    }
+    pieces
+}
+
+/// A tick label: `-0.0` reads `0`, as does any label that rounds to zero.
+pub fn tick(y: f64, decimals: usize) -> String {
+    let text = format!("{y:.decimals$}");
+    if text
+        .trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        format!("{:.decimals$}", 0.0)
+    } else {
+        text
+    }
+}
+
+/// Decimals enough to tell ticks apart on a range of width `span`.
+pub fn tick_decimals(span: f64) -> usize {
+    if !(span.is_finite() && span > 0.0) {
+        return 1;
+    }
+    // About ten ticks a panel: one decimal more than the step's magnitude.
+    let step = span / 10.0;
+    (-step.log10().floor()).clamp(0.0, 6.0) as usize
+}
+
+/// The corner of a chart whose quarter holds the fewest points: where a
+/// legend hides the least.
+pub fn emptiest_corner(points: &[(f64, f64)], x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let (xm, ym) = (x.0 + 0.7 * (x.1 - x.0), y.0 + 0.7 * (y.1 - y.0));
+    let (xl, yl) = (x.0 + 0.3 * (x.1 - x.0), y.0 + 0.3 * (y.1 - y.0));
+    let count = |fx: &dyn Fn(f64) -> bool, fy: &dyn Fn(f64) -> bool| {
+        points.iter().filter(|p| fx(p.0) && fy(p.1)).count()
+    };
+    let corners = [
+        (
+            count(&|t| t >= xm, &|v| v >= ym),
+            SeriesLabelPosition::UpperRight,
+        ),
+        (
+            count(&|t| t <= xl, &|v| v >= ym),
+            SeriesLabelPosition::UpperLeft,
+        ),
+        (
+            count(&|t| t >= xm, &|v| v <= yl),
+            SeriesLabelPosition::LowerRight,
+        ),
+        (
+            count(&|t| t <= xl, &|v| v <= yl),
+            SeriesLabelPosition::LowerLeft,
+        ),
+    ];
+    corners
+        .into_iter()
+        .min_by_key(|(n, _)| *n)
+        .map_or(SeriesLabelPosition::UpperRight, |(_, p)| p)
+}
+
 /// The mesh of every figure: the same fonts and grid, with these axis
 /// descriptions; callers add label formatters and draw it.
 pub fn styled_mesh<'a, 'b, DB: DrawingBackend>(
@@ -311,22 +397,36 @@ fn draw_panel<DB: DrawingBackend>(
     } else {
         "time (s)"
     };
+    let decimals = tick_decimals(y1 - y0);
     styled_mesh(&mut chart, x_desc, &p.y_label)
         .x_label_formatter(&|x| format!("{x}"))
+        .y_label_formatter(&|y| tick(*y, decimals))
         .draw()
         .map_err(e)?;
     separators(&mut chart, p, (y0, y1)).map_err(e)?;
     let clip = |pts: &[(f64, f64)]| -> Vec<(f64, f64)> {
         pts.iter().map(|(t, v)| (*t, v.clamp(y0, y1))).collect()
     };
+    let corner = emptiest_corner(
+        &all_measured
+            .iter()
+            .chain(&all_simulated)
+            .copied()
+            .collect::<Vec<_>>(),
+        (x0, x1),
+        (y0, y1),
+    );
     for (k, pts) in measured.iter().enumerate() {
-        let series = chart
-            .draw_series(LineSeries::new(clip(pts), measured_style))
-            .map_err(e)?;
-        if k == 0 {
-            series
-                .label("measured")
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], measured_style));
+        let pieces = split_sharp(&clip(pts), |p| chart.backend_coord(&p));
+        for (i, piece) in pieces.into_iter().enumerate() {
+            let series = chart
+                .draw_series(LineSeries::new(piece, measured_style))
+                .map_err(e)?;
+            if k == 0 && i == 0 {
+                series.label("measured").legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 24, y)], measured_style)
+                });
+            }
         }
     }
     for (m, model) in models.iter().enumerate() {
@@ -345,7 +445,7 @@ fn draw_panel<DB: DrawingBackend>(
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(corner)
         .label_font(("sans-serif", 15))
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK.mix(0.4))

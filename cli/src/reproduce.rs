@@ -51,6 +51,11 @@ pub fn run(args: &ReproduceArgs) -> Status {
             }
         }
     };
+    // A directory that cannot be written fails now, not after the study.
+    if let Err(p) = writable(&args.out) {
+        err(&p.render(style));
+        return Status::Error;
+    }
     let model = ship::Ship;
     let report = pool.install(|| execute(&model, &config));
     out(&text::render(&report, args));
@@ -110,18 +115,31 @@ fn execute(model: &dyn Model, config: &StudyConfig) -> Report {
     }
 }
 
-/// Writes results.json and every figure; one entry per file, written or not.
-fn write_outputs(model: &dyn Model, report: &Report, dir: &Path) -> Vec<Result<PathBuf, Problem>> {
-    if let Err(e) = std::fs::create_dir_all(dir) {
-        return vec![Err(Problem::error(
+/// Creates the output directory and writes (then removes) a probe file in
+/// it: the study's minutes are not spent for outputs that cannot be written.
+fn writable(dir: &Path) -> Result<(), Problem> {
+    let problem = |what: &str, e: std::io::Error| {
+        Problem::error(
             "io",
             format!(
-                "cannot create the output directory `{}`: {e}",
+                "cannot {what} the output directory `{}`: {e}",
                 dir.display()
             ),
         )
         .at(dir.display().to_string())
-        .help("choose another directory with --out DIR"))];
+        .help("choose another directory with --out DIR")
+    };
+    std::fs::create_dir_all(dir).map_err(|e| problem("create", e))?;
+    let probe = dir.join(format!(".leeway-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| problem("write into", e))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+/// Writes results.json and every figure; one entry per file, written or not.
+fn write_outputs(model: &dyn Model, report: &Report, dir: &Path) -> Vec<Result<PathBuf, Problem>> {
+    if let Err(p) = writable(dir) {
+        return vec![Err(p)];
     }
     use rayon::prelude::*;
     let mut results = vec![write_json(report, &dir.join("results.json"))];

@@ -442,10 +442,17 @@ fn cell(f: Option<f64>, diverged: bool) -> String {
 
 fn render(o: &Outcome) -> String {
     let mut s = String::new();
+    // One experiment has no mean row, so no word of one.
+    let several = o.models.first().is_some_and(|m| m.experiments.len() > 1);
     let _ = writeln!(
         s,
-        "{}: fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖), % (mean: over experiments)",
-        o.model
+        "{}: fit = 100·(1 − ‖y − ŷ‖/‖y − ȳ‖), %{}",
+        o.model,
+        if several {
+            " (mean: over experiments)"
+        } else {
+            ""
+        }
     );
     for m in &o.models {
         let _ = writeln!(s, "\n{} ({})", m.name, m.params);

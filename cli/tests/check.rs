@@ -1,6 +1,8 @@
 //! End-to-end tests of `leeway check`: the built binary, its exit codes,
 //! its text on stdout/stderr and the JSON contract of docs/json.md.
 
+mod common;
+
 use serde_json::Value;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -113,7 +115,7 @@ fn missing_file_exits_2_naming_the_path() {
     assert_eq!(code(&o), 2);
     assert_eq!(
         stderr(&o).trim(),
-        "error: cannot read `no/such/model.som`: no such file"
+        "error[io]: cannot read `no/such/model.som`: no such file"
     );
     let o = leeway(&["check", "--json", "no/such/model.som"]);
     assert_eq!(code(&o), 2);
@@ -187,7 +189,7 @@ fn patterns_select_the_experiments() {
     assert_eq!(code(&bad), 2);
     assert_eq!(
         stderr(&bad).trim(),
-        "error: --pattern `water.w:+`: `water.w` is not a sign argument of this model; its sign arguments are water.u, water.v, r"
+        "error[invalid-pattern]: --pattern `water.w:+`: `water.w` is not a sign argument of this model; its sign arguments are water.u, water.v, r"
     );
     let bad_json = leeway(&[
         "check",
@@ -358,9 +360,8 @@ fn json_of_the_rov() {
 /// identifiable from all + then all − (exit 0), not "not identifiable".
 #[test]
 fn nine_independent_moduli_exit_0_with_two_experiments() {
-    let dir = std::env::temp_dir().join(format!("leeway-nine-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join("nine.som");
+    let dir = common::Scratch::new("nine");
+    let path = dir.path("nine.som");
     let mut src = String::from("model Nine {\n    step 0.1\n    state ");
     src += &(0..9)
         .map(|i| format!("x{i}"))
@@ -400,7 +401,6 @@ fn nine_independent_moduli_exit_0_with_two_experiments() {
             .values()
             .all(|s| s == "-")
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A search cut by its budget: verdict `undecided`, exit 0 (θ is proven

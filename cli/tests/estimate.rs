@@ -148,7 +148,7 @@ fn estimate_prints_tables_and_warnings_for_people() {
     // Low wind: the wind parameters are held, and stderr says so.
     let err = stderr(&o);
     assert!(
-        err.contains("warning: W_uu is not separately excited"),
+        err.contains("warning: `W_uu` held at 0: the wind barely varies"),
         "{err}"
     );
     assert!(!out.contains('\u{1b}') && !err.contains('\u{1b}'));
@@ -398,7 +398,7 @@ fn data_that_cannot_support_the_model_exit_1() {
         "--aggregate",
     ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
-    assert!(stderr(&o).contains("warning: experiment `windy`: air.u has sign"));
+    assert!(stderr(&o).contains("warning: experiment `windy`: air.u changes sign ("));
     // Wind unmeasured: X_uu and W_uu enter only as their sum; exit 1 unless aggregated.
     let o = leeway(&[
         "estimate",

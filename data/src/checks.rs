@@ -10,6 +10,7 @@
 
 use crate::error::DataError;
 use crate::options::LoadOptions;
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::Ir;
 
 /// The most extreme samples of each signal column kept for the outlier check.
@@ -195,7 +196,7 @@ pub(super) fn sample_time(
     if let Some((dt, line)) = t.backwards {
         return Err(DataError::new(
             at(line),
-            format!("time does not increase: step {dt} s here"),
+            format!("time does not increase: step {} s here", num(dt)),
             hint,
         ));
     }
@@ -212,8 +213,10 @@ pub(super) fn sample_time(
         return Err(DataError::new(
             at(line),
             format!(
-                "inconsistent sample time: step {dt} s here, {:.1} % off the nominal (mean) step {mean} s; the tolerance is {:.1} %",
+                "inconsistent sample time: step {} s here, {:.1} % off the nominal (mean) step {} s; the tolerance is {:.1} %",
+                num(dt),
                 100.0 * worst,
+                num(mean),
                 100.0 * tol
             ),
             hint,
@@ -226,9 +229,17 @@ pub(super) fn sample_time(
         && (h - d).abs() > 1e-3 * d
     {
         let what = if options.resample.is_some() {
-            format!("--resample {h} conflicts with the model's step {d}")
+            format!(
+                "--resample {} conflicts with the model's step {}",
+                num(h),
+                num(d)
+            )
         } else {
-            format!("the data are sampled every {mean} s but the model declares step {d}")
+            format!(
+                "the data are sampled every {} s but the model declares step {}",
+                num(mean),
+                num(d)
+            )
         };
         return Err(DataError::new(
             at(block.first),

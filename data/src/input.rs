@@ -18,6 +18,7 @@ use crate::error::DataError;
 use crate::options::LoadOptions;
 use crate::validate::Table;
 use leeway_model::experiment::{Experiment, column_name};
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -326,7 +327,11 @@ impl TimeSteps {
             if dt <= 0.0 || (dt - h).abs() > 1e-3 * h.abs() {
                 return Err(DataError::new(
                     at(),
-                    format!("inconsistent sample time: step {dt} here, {h} at the start"),
+                    format!(
+                        "inconsistent sample time: step {} s here, {} s at the start",
+                        num(dt),
+                        num(h)
+                    ),
                     "leeway needs uniformly sampled data; resample the input",
                 ));
             }
@@ -376,7 +381,11 @@ fn sample_time(
     {
         return Err(DataError::new(
             first_at.unwrap_or_else(|| file.to_string()),
-            format!("the input is sampled every {mean} s but the model declares step {d}"),
+            format!(
+                "the input is sampled every {} s but the model declares step {}",
+                num(mean),
+                num(d)
+            ),
             "make `step` in the model match the data, or resample the input",
         ));
     }

@@ -17,6 +17,7 @@ use crate::notes::{FileNotes, LoadedFile, TimeNotes};
 use crate::options::LoadOptions;
 use crate::signals::{Role, required_signals, unit_factor};
 use leeway_model::experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
+use leeway_model::number::short_number as num;
 use leeway_structure::ir::{Ir, Rotation};
 use std::path::Path;
 
@@ -529,29 +530,33 @@ fn outlier_error(
     let (v, lo, hi) = (o.value, o.lo, o.hi);
     let why = if hi > lo {
         format!(
-            "the other samples of experiment `{}` lie in [{lo:e}, {hi:e}], and this one is {:.1e} times that range away",
+            "the other samples of experiment `{}` lie in [{}, {}], and this one is {} times that range away",
             block.name,
-            if v > hi {
+            num(lo),
+            num(hi),
+            num(if v > hi {
                 (v - hi) / (hi - lo)
             } else {
                 (lo - v) / (hi - lo)
-            }
+            })
         )
     } else if let Some(bound) = o.zero_bound {
         format!(
-            "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {bound:e} in magnitude",
-            block.name
+            "every other sample of experiment `{}` is 0 (the column is constant), and this one exceeds {} in magnitude",
+            block.name,
+            num(bound)
         )
     } else {
         format!(
-            "every other sample of experiment `{}` is {lo:e} (the column is constant, a sensor stuck?), and this one is {:.1e} times that value away",
+            "every other sample of experiment `{}` is {} (the column is constant, a sensor stuck?), and this one is {} times that value away",
             block.name,
-            (v - lo).abs() / lo.abs()
+            num(lo),
+            num((v - lo).abs() / lo.abs())
         )
     };
     DataError::new(
         table.at(o.line, Some((i, name))),
-        format!("`{name}` = {v:e} is a gross outlier: {why}{more}"),
+        format!("`{name}` = {} is a gross outlier: {why}{more}", num(v)),
         format!(
             "repair or remove the sample (leeway does not drop or interpolate samples); a value more than {OUTLIER_FACTOR:e} times the spread of the rest of its column (or, for a constant column, its value) away is taken for a logging error"
         ),

@@ -9,6 +9,7 @@ use crate::protocol::{ExperimentFacts, PassRequest, PassSummary, Passes};
 use crate::record::ExperimentInfo;
 use leeway_model::model::Model;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use leeway_structure::exact::Q;
 use leeway_structure::identify::Centring;
 use leeway_structure::identify::ExperimentStructure;
@@ -38,7 +39,7 @@ pub(crate) struct Estimator<'a> {
     pub(crate) meaning: BTreeMap<usize, Vec<(usize, f64)>>,
     /// What each predictor column estimates, as the report states it.
     pub(crate) column_texts: std::sync::Arc<[String]>,
-    pub(crate) warnings: Vec<String>,
+    pub(crate) warnings: Vec<Warning>,
     pub(crate) unexcited: Vec<String>,
     pub(crate) aggregates: Vec<String>,
     /// Runs the passes over the data (here, or on workers).
@@ -66,7 +67,7 @@ impl<'a> Estimator<'a> {
         nominal: Vec<f64>,
         infos: Vec<ExperimentInfo>,
         signs: &[ExperimentSigns],
-        warnings: Vec<String>,
+        warnings: Vec<Warning>,
         passes: &'a dyn Passes,
         facts: Vec<ExperimentFacts>,
     ) -> Result<Estimator<'a>, EstimateError> {

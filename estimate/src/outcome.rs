@@ -126,8 +126,12 @@ pub struct Estimate {
     pub sign_patterns: Vec<ExperimentSigns>,
     /// Diagnostics.
     pub diagnostics: Diagnostics,
-    /// Warnings.
+    /// Warnings, each in full (the `detail` of the same entry of
+    /// `warning_summaries`).
     pub warnings: Vec<String>,
+    /// The warnings with their one-line summary, help line and whether they
+    /// can bias the estimate, in the order of `warnings`.
+    pub warning_summaries: Vec<leeway_model::warning::Warning>,
     /// Notes: facts about the data worth knowing that need no action (e.g.
     /// where a pointwise modulus of a noisy state crosses zero).
     pub notes: Vec<String>,

@@ -14,7 +14,9 @@ use crate::moments::CrossMoments;
 use crate::outcome::{Estimate, EstimateError, InstrumentSimulation, err};
 use crate::protocol::PrefixInstruments;
 use crate::solve::BlockSolution;
+use leeway_model::number::short_number;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use std::collections::BTreeMap;
 
 /// Fit points by which a refinement's simulation may fall below the best
@@ -76,17 +78,27 @@ impl Estimator<'_> {
                 step,
             }) = self.resimulate(&cur, &theta_sim, &mu, tries)?
             else {
-                self.warnings.push(format!(
+                let detail = format!(
                     "refinement stopped after {refinements}: the simulation with the refined estimate diverges{}; the iterate whose simulation fits the data best is reported",
                     if tries > 1 { " even when damped" } else { "" }
+                );
+                self.warnings.push(Warning::new(
+                    "refinement-diverged",
+                    format!("refinement stopped after {refinements}: the refined model's simulation diverges"),
+                    "the best iterate is reported; try --initial nominal or longer experiments",
+                    detail,
                 ));
                 stopped = true;
                 break;
             };
             if step < 1.0 {
-                self.warnings.push(format!(
-                    "refinement {} damped by {step} (the simulation with the full step diverged)",
-                    refinements + 1
+                self.warnings.push(Warning::plain(
+                    "refinement-damped",
+                    format!(
+                        "refinement {} damped by {} (the simulation with the full step diverged)",
+                        refinements + 1,
+                        short_number(step)
+                    ),
                 ));
             } else {
                 cur.fit = Some(fit);
@@ -279,9 +291,14 @@ impl Estimator<'_> {
         if let (true, Some(b), Some(f)) = (self.options.runaway_guard, best, fit)
             && b.fit.unwrap_or(f) - f > RUNAWAY_FIT_DROP
         {
-            self.warnings.push(format!(
-                "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported",
-                b.fit.unwrap_or(f) - f
+            let drop = b.fit.unwrap_or(f) - f;
+            self.warnings.push(Warning::new(
+                "refinement-runaway",
+                format!("refinement stopped after {refinements}: it tracked the data {drop:.1} fit points worse than before"),
+                "the best iterate is reported; longer experiments make the refinement stable",
+                format!(
+                    "refinement stopped after {refinements}: the simulation of the refined estimate tracks the data {drop:.1} fit points worse than an earlier iterate (small-sample runaway); the best iterate is reported"
+                ),
             ));
             return true;
         }
@@ -305,9 +322,15 @@ impl Estimator<'_> {
             cur = b;
         }
         if !stopped {
-            self.warnings.push(format!(
-                "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
-                refinements, self.options.tolerance
+            self.warnings.push(Warning::new(
+                "not-settled",
+                format!("the refined IV did not settle within {refinements} refinements"),
+                "the best iterate is reported; raise --max-refinements or record longer experiments",
+                format!(
+                    "the refined IV did not settle within {} refinements (instrument simulation still moving more than {} of its variation); the iterate whose simulation fits the data best is reported",
+                    refinements,
+                    short_number(self.options.tolerance)
+                ),
             ));
         }
         cur
@@ -367,7 +390,15 @@ impl Estimator<'_> {
             if self.options.strict {
                 return Err(problem);
             }
-            self.warnings.push(problem.message);
+            self.warnings.push(
+                Warning::new(
+                    "own-simulation",
+                    own_simulation_summary(&problem.message),
+                    "compare with --method ls and validate on held-out data; --strict makes this an error",
+                    problem.message,
+                )
+                .biasing(),
+            );
             converged = false;
         }
         let cov = if self.options.covariance {
@@ -423,4 +454,13 @@ struct Settled {
     /// Stopped early (divergence, runaway).
     stopped: bool,
     refinements: usize,
+}
+
+/// The first clause of the own-simulation problem: what the simulation did.
+fn own_simulation_summary(message: &str) -> String {
+    message
+        .split(", so it is not reported")
+        .next()
+        .unwrap_or(message)
+        .to_string()
 }

@@ -5,8 +5,9 @@ use crate::method::{Initial, Instruments, Method};
 use crate::outcome::{ColumnEstimate, Diagnostics, Estimate, EstimateError};
 use crate::solve::{BlockSolution, CONDITION_WARNING};
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::{Warning, names_capped};
 use leeway_structure::identify::Centring;
-use leeway_structure::ir::{ColumnKind, PredictorKind};
+use leeway_structure::ir::{ColumnKind, PredictorKind, Rotation};
 use std::collections::BTreeMap;
 
 impl Estimator<'_> {
@@ -68,7 +69,8 @@ impl Estimator<'_> {
                 aggregates: self.aggregates.clone(),
                 own_simulation: None,
             },
-            warnings: self.warnings.clone(),
+            warnings: self.warnings.iter().map(|w| w.detail.clone()).collect(),
+            warning_summaries: self.warnings.clone(),
             notes: Vec::new(),
             instrument_simulation: None,
         })
@@ -179,11 +181,20 @@ impl Estimator<'_> {
     fn warn_ill_conditioned(&mut self, sol: &[BlockSolution]) {
         let cols = self.ir.predictors.get(self.kind);
         for s in sol.iter().filter(|s| s.condition > CONDITION_WARNING) {
-            let weak: Vec<&str> = s.weak.iter().map(|c| cols[*c].name.as_str()).collect();
-            self.warnings.push(format!(
-                "the moment matrix is ill-conditioned (condition number {:.2e}): the weakest direction involves {}, whose estimates are unreliable (nearly collinear, or barely excited by these data)",
-                s.condition,
-                if weak.is_empty() { "several columns".to_string() } else { weak.join(", ") }
+            let weak: Vec<String> = s.weak.iter().map(|c| cols[*c].name.clone()).collect();
+            self.warnings.push(Warning::new(
+                "ill-conditioned",
+                format!(
+                    "ill-conditioned (condition number {:.2e}): {} are nearly collinear or barely excited",
+                    s.condition,
+                    names_capped(&weak, 3)
+                ),
+                "vary the inputs more (larger, more varied manoeuvres) or add experiments; their standard errors say how unreliable",
+                format!(
+                    "the moment matrix is ill-conditioned (condition number {:.2e}): the weakest direction involves {}, whose estimates are unreliable (nearly collinear, or barely excited by these data)",
+                    s.condition,
+                    if weak.is_empty() { "several columns".to_string() } else { weak.join(", ") }
+                ),
             ));
         }
     }
@@ -216,14 +227,26 @@ impl Estimator<'_> {
     fn instruments_text(&self) -> String {
         match (self.options.method, self.options.instruments) {
             (Method::Ls, _) => "none (least squares: the regressors themselves)".to_string(),
-            (_, Instruments::Simulated) => format!(
-                "simulated model ({}), refined with the estimate; rotation from the heading anchored to the previous measurement; measured disturbances as their experiment mean",
-                match self.options.initial {
-                    Initial::Nominal => "first simulation: the nominal model",
-                    Initial::Delayed =>
-                        "first simulation: an estimate with delayed-measurement instruments",
+            (_, Instruments::Simulated) => {
+                let mut text = format!(
+                    "simulated model ({}), refined with the estimate",
+                    match self.options.initial {
+                        Initial::Nominal => "first simulation: the nominal model",
+                        Initial::Delayed =>
+                            "first simulation: an estimate with delayed-measurement instruments",
+                    }
+                );
+                // Only what this model has: a heading, measured media.
+                if matches!(self.ir.rotation, Rotation::Planar { .. }) {
+                    text.push_str(
+                        "; rotation from the heading anchored to the previous measurement",
+                    );
                 }
-            ),
+                if self.ir.disturbances.iter().any(|d| d.measured) {
+                    text.push_str("; measured disturbances as their experiment mean");
+                }
+                text
+            }
             (_, Instruments::Delayed) => {
                 "regressors of the measurements one sample earlier".to_string()
             }

@@ -9,6 +9,7 @@ use crate::protocol::{FactsRequest, Passes};
 use leeway_model::experiment::Source;
 use leeway_model::model::Model;
 use leeway_model::signs::ExperimentSigns;
+use leeway_model::warning::Warning;
 use leeway_structure::ir::Ir;
 
 /// The largest nominal value accepted: with a regressor within
@@ -103,10 +104,13 @@ pub fn estimate_with(
     }
     for (f, info) in facts.iter().zip(&infos) {
         if info.frozen.is_some() {
-            warnings.push(format!(
-                "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
-                f.name,
-                info.spread.max(0.0)
+            warnings.push(Warning::plain(
+                "constant-heading",
+                format!(
+                    "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
+                    f.name,
+                    info.spread.max(0.0)
+                ),
             ));
         }
     }
@@ -169,12 +173,32 @@ fn check_start(ir: &Ir, options: &EstimateOptions) -> Result<(), EstimateError> 
     Ok(())
 }
 
+/// Minority fraction from which a sign violation can bias the estimate badly
+/// (its summary says so).
+const LARGE_VIOLATION: f64 = 0.01;
+
 /// The warnings of an experiment whose sign arguments do not keep one sign
 /// (paper A7), or (`strict`) the error of the first.
-fn sign_violations(s: &ExperimentSigns, strict: bool) -> Result<Vec<String>, EstimateError> {
+fn sign_violations(s: &ExperimentSigns, strict: bool) -> Result<Vec<Warning>, EstimateError> {
     let mut warnings = Vec::new();
     for a in &s.arguments {
         if a.minority_fraction > 0.0 {
+            let how = if a.minority_fraction >= LARGE_VIOLATION {
+                "can be badly biased"
+            } else {
+                "may be slightly biased"
+            };
+            let summary = format!(
+                "experiment `{}`: {} changes sign ({:.1} % of samples, paper A7): terms in |{}| {how}",
+                s.experiment,
+                a.argument,
+                100.0 * a.minority_fraction,
+                a.argument
+            );
+            let help = format!(
+                "split the run where {} changes sign, or keep its sign with a steady offset; --strict makes this an error",
+                a.argument
+            );
             let msg = format!(
                 "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
                 s.experiment,
@@ -187,10 +211,10 @@ fn sign_violations(s: &ExperimentSigns, strict: bool) -> Result<Vec<String>, Est
                 return Err(err(
                     "sign-violation",
                     msg,
-                    "run experiments with a static offset large enough that the argument keeps its sign, or drop --strict to estimate anyway",
+                    "split the experiment where the argument changes sign, or run experiments with a static offset large enough that it keeps its sign, or drop --strict to estimate anyway",
                 ));
             }
-            warnings.push(msg);
+            warnings.push(Warning::new("sign-violation", summary, help, msg).biasing());
         }
     }
     Ok(warnings)

@@ -10,6 +10,7 @@ use leeway_model::experiment::Source;
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
 use leeway_model::model::{HeadingRotation, Model, Signals};
+use leeway_model::number::short_number;
 use leeway_model::signs::SignCounter;
 use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 use nalgebra::DVector;
@@ -880,8 +881,10 @@ pub(super) fn non_finite(
                 return Some((
                     k - 1,
                     format!(
-                        "the regressor {} of `{}` evaluates to {v:e}",
-                        col.name, ir.states[o]
+                        "the regressor {} of `{}` evaluates to {}",
+                        col.name,
+                        ir.states[o],
+                        short_number(v)
                     ),
                 ));
             }
@@ -890,8 +893,9 @@ pub(super) fn non_finite(
             return Some((
                 k,
                 format!(
-                    "the difference quotient of `{}` evaluates to {target:e}",
-                    ir.states[o]
+                    "the difference quotient of `{}` evaluates to {}",
+                    ir.states[o],
+                    short_number(*target)
                 ),
             ));
         }

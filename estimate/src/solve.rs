@@ -15,8 +15,10 @@ use crate::estimator::Estimator;
 use crate::method::{Combine, Method};
 use crate::moments::CrossMoments;
 use crate::outcome::{EstimateError, err};
+use leeway_model::number::short_number;
+use leeway_model::warning::{Warning, names_capped};
 use leeway_structure::exact::Q;
-use leeway_structure::ir::{ColumnKind, PredictorKind};
+use leeway_structure::ir::{Column, ColumnKind, PredictorKind};
 use nalgebra::{DMatrix, DVector};
 
 /// A moment column below this many machine epsilons per equation of its
@@ -268,8 +270,16 @@ impl Estimator<'_> {
                     } else if self.options.aggregate {
                         if record {
                             let text = text();
-                            self.warnings.push(format!(
-                                "{text}; held at its nominal value {value} (--aggregate)"
+                            self.warnings.push(Warning::new(
+                                "not-excited",
+                                format!(
+                                    "`{}` held at {} (--aggregate): these data do not excite it apart from {}",
+                                    p.name,
+                                    short_number(value),
+                                    self.combo_names(cols, combo)
+                                ),
+                                "add experiments that excite it; --verbose shows the exact combination",
+                                format!("{text}; held at its nominal value {value} (--aggregate)"),
                             ));
                             self.unexcited.push(text);
                         }
@@ -316,6 +326,22 @@ impl Estimator<'_> {
         }
     }
 
+    /// The columns of a combination (`combo`, indices into `cols`) for a
+    /// one-line summary: up to two θ names, the rest counted.
+    fn combo_names(&self, cols: &[usize], combo: &[(usize, f64)]) -> String {
+        let predictors = self.ir.predictors.get(self.kind);
+        let (theta, nuisance): (Vec<&Column>, Vec<&Column>) = combo
+            .iter()
+            .map(|(k, _)| &predictors[cols[*k]])
+            .partition(|c| !c.kind.is_nuisance());
+        let names: Vec<String> = theta
+            .iter()
+            .chain(&nuisance)
+            .map(|c| c.name.clone())
+            .collect();
+        names_capped(&names, theta.len().clamp(1, 2))
+    }
+
     /// Reports a measured-medium parameter held at its nominal value
     /// (`text` says why), and the aggregates the columns it is combined
     /// with (`combo`) estimate.
@@ -329,10 +355,26 @@ impl Estimator<'_> {
         let p = &self.ir.parameters[parameter];
         let value = self.nominal[parameter];
         let medium = &self.ir.disturbances[p.medium.unwrap_or(0)].name;
-        self.warnings.push(format!(
+        let detail = format!(
             "{}: the measured {} enters the instruments as its experiment mean, and with these data the instrument of `{}` is a combination of the others (its regressor differs from theirs only through the {}'s fluctuations, or it has no modulus whose sign changes); `{}` is not separately excited by these data, so it is held at its nominal value {} and the parameters it is combined with estimate the aggregates",
             text, medium, p.name, medium, p.name, value
-        ));
+        );
+        self.warnings.push(
+            Warning::new(
+                "not-excited",
+                format!(
+                    "`{}` held at {}: the {medium} barely varies; its regressor is nearly a combination of {}",
+                    p.name,
+                    short_number(value),
+                    self.combo_names(cols, combo)
+                ),
+                format!(
+                    "add runs where the {medium}-relative velocity changes sign or the {medium} varies; --verbose: the exact combination"
+                ),
+                detail,
+            )
+            .biasing(),
+        );
         self.unexcited.push(text);
         for (k, a) in combo {
             let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;

@@ -183,7 +183,13 @@ import leeway.mapreduce
 
 SAMPLES = int(os.environ.get("LEEWAY_CAMPAIGN_SAMPLES", "200000"))
 PER_FILE = min(SAMPLES, 1_000_000)
-campaign = Path(os.environ.get("LEEWAY_CAMPAIGN_DIR") or tempfile.mkdtemp(prefix="leeway-campaign-"))
+# A directory of our own is removed when the walk-through ends (an 18 MB
+# campaign per run otherwise stays in /tmp); one given is kept.
+if os.environ.get("LEEWAY_CAMPAIGN_DIR"):
+    campaign = Path(os.environ["LEEWAY_CAMPAIGN_DIR"])
+else:
+    _scratch = tempfile.TemporaryDirectory(prefix="leeway-campaign-")
+    campaign = Path(_scratch.name)
 campaign.mkdir(parents=True, exist_ok=True)
 
 

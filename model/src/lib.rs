@@ -6,7 +6,8 @@
 //! one implementation `leeway validate` and `leeway.validate` share
 //! ([`validation`]) —, one-step-ahead residuals and their whiteness and
 //! input-independence tests ([`residuals`], on the sample correlations of
-//! [`correlation`]), values given by name ([`given`]), and the
+//! [`correlation`]), values given by name ([`given`]), numbers in messages
+//! ([`number`]), the [`warning`] shape every estimate-time warning takes, and the
 //! [`interrupt`] flag a caller raises to stop a long computation. No IO, no
 //! randomness.
 
@@ -16,10 +17,12 @@ pub mod given;
 pub mod interp;
 pub mod interrupt;
 pub mod model;
+pub mod number;
 pub mod residuals;
 pub mod signs;
 pub mod simulate;
 pub mod validation;
+pub mod warning;
 
 #[doc(inline)]
 pub use experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};

@@ -345,7 +345,7 @@ fn regressors(ir: &Ir) -> (Vec<Regressor>, Vec<NuisanceRegressor>) {
                         parameter: ir.parameters[parameter].name.clone(),
                         output: state.clone(),
                         expression,
-                        term: term.join(" + "),
+                        term,
                         kind: if ir.parameters[parameter].measured {
                             "phi2"
                         } else {

@@ -12,6 +12,7 @@ use leeway_data::{FileNotes, heading_gain};
 use leeway_estimate::{ColumnEstimate, Diagnostics, Estimate, Method};
 use leeway_model::experiment::Source;
 use leeway_model::signs::ArgSign;
+use leeway_model::warning::Warning;
 use leeway_structure::ir::{Ir, Rotation};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -47,7 +48,17 @@ const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
 /// the name can tell an angle from a force of the same magnitude, so inputs
 /// named otherwise are left alone rather than warned about on every run.
 pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
-    unit_warnings_from_peaks(ir, &input_peaks(ir, experiments))
+    details(unit_alerts_from_peaks(ir, &input_peaks(ir, experiments)))
+}
+
+/// [`unit_warnings`] with their summaries and help lines.
+pub fn unit_alerts(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Warning> {
+    unit_alerts_from_peaks(ir, &input_peaks(ir, experiments))
+}
+
+/// Each warning's full text.
+fn details(warnings: Vec<Warning>) -> Vec<String> {
+    warnings.into_iter().map(|w| w.detail).collect()
 }
 
 /// The inputs whose name or column reads like an angle without a declared unit.
@@ -90,13 +101,26 @@ pub fn input_peaks(ir: &Ir, experiments: &[&dyn Source]) -> Vec<f64> {
 
 /// [`unit_warnings`] from the peaks of [`input_peaks`].
 pub fn unit_warnings_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<String> {
+    details(unit_alerts_from_peaks(ir, peaks))
+}
+
+/// [`unit_alerts`] from the peaks of [`input_peaks`].
+pub fn unit_alerts_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<Warning> {
     let mut out = Vec::new();
     for i in angle_like_inputs(ir) {
         let (name, peak) = (&ir.inputs[i], peaks.get(i).copied().unwrap_or(0.0));
         if peak > std::f64::consts::PI {
-            out.push(format!(
-                "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
-            ));
+            out.push(
+                Warning::new(
+                    "angle-unit",
+                    format!("input `{name}` reaches {peak:.1}, more than π: it looks like an angle in degrees"),
+                    format!("if it is, declare `{name} in deg` in data {{ }}"),
+                    format!(
+                        "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
+                    ),
+                )
+                .biasing(),
+            );
         }
     }
     out
@@ -118,6 +142,11 @@ pub fn heading_gains(ir: &Ir, experiments: &[&dyn Source]) -> Vec<(String, Optio
 /// `Δψ/h` on the yaw rate when it is off by more than 20 %, from the gains of
 /// [`heading_gains`].
 pub fn heading_warnings(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<String> {
+    details(heading_alerts(ir, gains))
+}
+
+/// [`heading_warnings`] with their summaries and help lines.
+pub fn heading_alerts(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<Warning> {
     let Some(heading) = heading_name(ir) else {
         return Vec::new();
     };
@@ -139,7 +168,7 @@ fn heading_name(ir: &Ir) -> Option<String> {
     }
 }
 
-fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> String {
+fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> Warning {
     let rate = match &ir.rotation {
         Rotation::Planar { integrates, .. } => {
             ir.states.get(*integrates).map_or("r", String::as_str)
@@ -153,9 +182,22 @@ fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> Strin
     } else {
         "check the units and frame of both columns"
     };
-    format!(
-        "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
+    let help = if gain > 20.0 {
+        format!("if `{heading}` is in degrees, declare `{heading} in deg` in data {{ }}")
+    } else {
+        "check the units and frame of both columns".to_string()
+    };
+    Warning::new(
+        "heading-gain",
+        format!(
+            "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}` (gain {gain:.2}, 1 expected)"
+        ),
+        help,
+        format!(
+            "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
+        ),
     )
+    .biasing()
 }
 
 /// The JSON form of the loading notes (docs/json.md: `data_files`).
@@ -261,8 +303,11 @@ pub struct EstimateReport<E> {
     data_files: Vec<DataFileJson>,
     /// `{signal: unit}` as declared in the model's `data { }` (values converted to base units).
     data_units: Ordered<String>,
-    /// Model warnings, data checks, estimator warnings.
+    /// Model warnings, data checks, estimator warnings, each in full.
     pub warnings: Vec<String>,
+    /// The same warnings, each with its one-line summary, help line and
+    /// whether it can bias the estimate (docs/json.md: `warning_summaries`).
+    pub warning_summaries: Vec<Warning>,
     /// Facts worth knowing that need no action (e.g. pointwise moduli crossing zero).
     notes: Vec<String>,
     /// Why nothing was estimated.
@@ -469,7 +514,8 @@ impl<E> EstimateReport<E> {
 
 /// The document for a result (`Ok`) or the errors that stopped it. `model`
 /// names the model when it compiled (also on a data or estimate error);
-/// `file` and `data` name the model and data files as given.
+/// `file` and `data` name the model and data files as given; `warnings` are
+/// given in full (each estimator warning keeps its summary).
 pub fn estimate_report<E>(
     file: String,
     data: Vec<String>,
@@ -477,6 +523,20 @@ pub fn estimate_report<E>(
     model: Option<String>,
     result: Result<Estimated<'_>, Vec<E>>,
     warnings: Vec<String>,
+) -> EstimateReport<E> {
+    let estimate = result.as_ref().ok().map(|o| o.estimate);
+    let warnings = warnings.iter().map(|w| summary_of(w, estimate)).collect();
+    estimate_report_warned(file, data, method, model, result, warnings)
+}
+
+/// [`estimate_report`] with every warning structured.
+pub fn estimate_report_warned<E>(
+    file: String,
+    data: Vec<String>,
+    method: Method,
+    model: Option<String>,
+    result: Result<Estimated<'_>, Vec<E>>,
+    warnings: Vec<Warning>,
 ) -> EstimateReport<E> {
     let mut r = EstimateReport {
         model,
@@ -494,7 +554,8 @@ pub fn estimate_report<E>(
         diagnostics: serde_json::Value::Object(serde_json::Map::new()),
         data_files: Vec::new(),
         data_units: Ordered::default(),
-        warnings,
+        warnings: warnings.iter().map(|w| w.detail.clone()).collect(),
+        warning_summaries: warnings,
         notes: Vec::new(),
         errors: Vec::new(),
     };
@@ -515,4 +576,13 @@ impl<E: Serialize> EstimateReport<E> {
     pub fn to_json(&self) -> Result<String, serde_json::Error> {
         serde_json::to_string_pretty(self)
     }
+}
+
+/// The structured form of a warning given in full: the estimator's own
+/// where it made it, otherwise the text as its own summary.
+fn summary_of(detail: &str, estimate: Option<&Estimate>) -> Warning {
+    estimate
+        .and_then(|e| e.warning_summaries.iter().find(|w| w.detail == detail))
+        .cloned()
+        .unwrap_or_else(|| Warning::plain("warning", detail))
 }

@@ -87,15 +87,22 @@ pub fn column_text(ir: &Ir, col: &Column, output: usize) -> String {
     if out.is_empty() { "0".to_string() } else { out }
 }
 
-/// The terms as written of each (parameter, output), in one pass over the
-/// terms (a model may have 10⁴ of them: no scan per column).
-pub fn written_terms(ir: &Ir) -> BTreeMap<(usize, usize), Vec<&str>> {
-    let mut written: BTreeMap<(usize, usize), Vec<&str>> = BTreeMap::new();
+/// The terms as written of each (parameter, output), joined with their
+/// signs (`T_p - T_s` for `N_T*T_p - N_T*T_s`), in one pass over the terms
+/// (a model may have 10⁴ of them: no scan per column).
+pub fn written_terms(ir: &Ir) -> BTreeMap<(usize, usize), String> {
+    let mut written: BTreeMap<(usize, usize), String> = BTreeMap::new();
     for t in &ir.terms {
-        written
-            .entry((t.parameter, t.output))
-            .or_default()
-            .push(t.text.as_str());
+        let text = written.entry((t.parameter, t.output)).or_default();
+        // The sign only: the numeric factor shows in the regressor beside it.
+        let neg = t.coefficient_exact.starts_with('-');
+        match (text.is_empty(), neg) {
+            (true, true) => text.push('-'),
+            (true, false) => {}
+            (false, true) => text.push_str(" - "),
+            (false, false) => text.push_str(" + "),
+        }
+        text.push_str(&t.text);
     }
     written
 }
@@ -287,7 +294,7 @@ fn render_theta(o: &mut String, ir: &Ir) {
         let _ = writeln!(o, "  {kind} {state} ({} terms)", theta.len());
         for c in theta {
             let p = c.kind.parameter();
-            let text = written.get(&(p, out)).cloned().unwrap_or_default();
+            let text = written.get(&(p, out)).map_or("", String::as_str);
             let tag = if ir.parameters[p].measured {
                 "  [Φ2]"
             } else {
@@ -297,7 +304,7 @@ fn render_theta(o: &mut String, ir: &Ir) {
                 o,
                 "    {:<8} {:<22} = {}{tag}",
                 c.name,
-                text.join(" + "),
+                text,
                 column_text(ir, c, out)
             );
         }

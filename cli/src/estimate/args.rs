@@ -10,8 +10,9 @@ pub struct EstimateArgs {
     /// The `.som` model file.
     #[arg(value_name = "MODEL.som")]
     pub model: PathBuf,
-    /// A CSV file of experiments (one, or several with an `experiment` column). Repeat for more files.
-    #[arg(long = "data", value_name = "FILE.csv", required = true)]
+    /// A CSV or Parquet file of experiments (one, or several with an `experiment` column).
+    /// Repeat for more files.
+    #[arg(long = "data", value_name = "FILE", required = true)]
     pub data: Vec<PathBuf>,
     /// The estimator: least squares, or instrumental variables on the basic (iv1),
     /// augmented (iv2) or augmented-plus-measured-medium (iv3) predictor.
@@ -43,9 +44,15 @@ pub struct EstimateArgs {
     /// (absorbed parameters held at their nominal values).
     #[arg(long)]
     pub aggregate: bool,
-    /// A sign assumption violated in the data (paper A7) is an error, not a warning.
+    /// Fail (exit 1) instead of warning when something can bias the estimate: a sign
+    /// assumption violated in the data (paper A7), a parameter held for lack of
+    /// excitation, an angle or heading in the wrong unit, an estimate that does not
+    /// reproduce its own data.
     #[arg(long)]
     pub strict: bool,
+    /// Print every warning in full (exact combinations, figures) under its two lines.
+    #[arg(long)]
+    pub verbose: bool,
     /// Lags of the robust (long-run) covariance; at least 1 (the Euler residual is MA(1)).
     #[arg(long, value_name = "L", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=leeway_estimate::MAX_LAGS as i64))]
     pub lags: u16,

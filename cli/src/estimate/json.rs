@@ -8,9 +8,10 @@
 use crate::estimate::args::EstimateArgs;
 use crate::estimate::outcome::Outcome;
 use crate::problem::{Failure, JsonError};
+use leeway_model::warning::Warning;
 use leeway_report::EstimateReport;
 use leeway_report::Estimated;
-use leeway_report::estimate_report;
+use leeway_report::estimate_report_warned;
 
 /// The whole document.
 pub type Report = EstimateReport<JsonError>;
@@ -20,7 +21,7 @@ pub fn report(
     args: &EstimateArgs,
     model: Option<String>,
     result: &Result<Outcome, Failure>,
-    warnings: Vec<String>,
+    warnings: Vec<Warning>,
 ) -> Report {
     let result = match result {
         Ok(o) => Ok(Estimated {
@@ -33,7 +34,7 @@ pub fn report(
         }),
         Err(f) => Err(f.json()),
     };
-    estimate_report(
+    estimate_report_warned(
         args.model.display().to_string(),
         args.data.iter().map(|p| p.display().to_string()).collect(),
         args.options(None).method,

@@ -110,12 +110,35 @@ fn nuisance(s: &mut String, e: &Estimate) {
             "status".to_string(),
             "estimates".to_string(),
         ]];
+        let mut reasons: Vec<(String, String)> = Vec::new();
         rows.extend(nuisance.iter().map(|c| {
             let mut r = column_row(c);
+            let (word, reason) = status_words(&c.status);
+            if let Some(reason) = reason
+                && !reasons.iter().any(|(w, _)| *w == word)
+            {
+                reasons.push((word.clone(), reason));
+            }
+            r[3] = word;
             r.push(c.estimates.clone());
             r
         }));
         s.push_str(&table(&rows));
+        for (word, reason) in reasons {
+            let _ = writeln!(s, "  {word}: {reason}");
+        }
+    }
+}
+
+/// A column's status in short words (`dropped`, `held at 0`) and the reason
+/// it gives in parentheses, said once under the table.
+fn status_words(status: &str) -> (String, Option<String>) {
+    match status.split_once(" (") {
+        Some((word, reason)) => (
+            word.to_string(),
+            Some(reason.trim_end_matches(')').to_string()),
+        ),
+        None => (status.to_string(), None),
     }
 }
 

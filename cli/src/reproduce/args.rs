@@ -27,7 +27,7 @@ pub struct ReproduceArgs {
         long = "n",
         value_name = "LIST",
         value_delimiter = ',',
-        default_values_t = [1000usize, 2000, 3000, 4000, 5000],
+        default_value = "1000,2000,3000,4000,5000",
         value_parser = record_length
     )]
     pub n: Vec<usize>,

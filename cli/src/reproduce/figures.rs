@@ -5,7 +5,9 @@
 //! validation run (the true undisturbed outputs against the four models of
 //! run 0 at the largest N).
 
-use crate::plot::{Figure, clip_band, save, styled_mesh, y_range};
+use crate::plot::{
+    Figure, clip_band, save, split_sharp, styled_mesh, tick, tick_decimals, y_range,
+};
 use crate::reproduce::report::Report;
 use leeway_model::Experiment;
 use leeway_model::Model;
@@ -247,7 +249,7 @@ impl FitFigure {
         format!(
             "Mean validation fit over {} Monte Carlo runs at each N (dots joined by lines), ▲ ▼ mean ± 1 standard deviation; \
              the estimators are set slightly apart along N so their markers do not overlap. As in the paper, the axis is held \
-             to fits between 0 and 100 and whatever falls outside is not drawn: {shown}",
+             to fits between 0 and 100: a mean outside is marked by an arrowhead on the edge it left by, without its ▲ ▼; {shown}",
             self.runs
         )
     }
@@ -327,6 +329,19 @@ impl Figure for FitFigure {
                             .map_err(e::<DB>)?;
                     }
                     if !(m.is_finite() && sd.is_finite()) {
+                        continue;
+                    }
+                    // A mean off the axis: an arrowhead on the edge it left
+                    // by, and no ▲ ▼ of a spread whose centre is not drawn.
+                    if !inside(*m) {
+                        let (edge, head) = if *m < 0.0 {
+                            (0.0, down(0, -6, colour.stroke_width(2)))
+                        } else {
+                            (100.0, up(0, 6, colour.stroke_width(2)))
+                        };
+                        chart
+                            .draw_series(std::iter::once(EmptyElement::at((x, edge)) + head))
+                            .map_err(e::<DB>)?;
                         continue;
                     }
                     if inside(m + sd) {
@@ -551,6 +566,12 @@ pub struct ValidationFigure {
 }
 
 const VAL_HEAD: u32 = 90;
+
+/// The validation figure's caption.
+const VAL_CAPTION: &str = "The undisturbed validation record (zigzag-forward input with the thrust stepped) simulated \
+                           from its first sample by each estimator's model of Monte Carlo run 0 at the largest N, drawn in \
+                           the legend's order (where IV2 and IV3 coincide, IV3 covers IV2), the true outputs last, translucent \
+                           over them; a curve that leaves the panel is cut at its edge.";
 const VAL_PANEL: u32 = 290;
 
 impl ValidationFigure {
@@ -594,7 +615,9 @@ impl ValidationFigure {
 
 impl Figure for ValidationFigure {
     fn size(&self) -> (u32, u32) {
-        (WIDTH, VAL_HEAD + 3 * VAL_PANEL + 50)
+        // Room for every caption line, 22 px each, and a margin under the last.
+        let lines = u32::try_from(wrap(VAL_CAPTION, 130).len()).unwrap_or(4);
+        (WIDTH, VAL_HEAD + 3 * VAL_PANEL + 22 * lines + 24)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
@@ -660,30 +683,30 @@ impl Figure for ValidationFigure {
                 .build_cartesian_2d(t0..t1, y0..y1)
                 .map_err(e::<DB>)?;
             let y_desc = format!("{} ({unit})", name.rsplit(' ').next().unwrap_or(name));
+            let decimals = tick_decimals(y1 - y0);
             styled_mesh(&mut chart, "time (s)", &y_desc)
                 .x_label_formatter(&|x| format!("{x:.0}"))
+                .y_label_formatter(&|y| tick(*y, decimals))
                 .draw()
                 .map_err(e::<DB>)?;
+            // The models first, the truth last and translucent over them,
+            // so that the best model's curve does not hide it.
             let truth_style = ShapeStyle::from(&BLACK.mix(0.35)).stroke_width(5);
-            for piece in clip_band(&truth, y0, y1) {
-                chart
-                    .draw_series(LineSeries::new(piece, truth_style))
-                    .map_err(e::<DB>)?;
-            }
-            for (sim, colour) in sims.iter().zip(COLOURS) {
-                let style = ShapeStyle::from(&colour).stroke_width(2);
-                for piece in clip_band(sim, y0, y1) {
-                    chart
-                        .draw_series(LineSeries::new(piece, style))
-                        .map_err(e::<DB>)?;
+            let sims_and_truth = sims
+                .iter()
+                .zip(COLOURS.map(|c| ShapeStyle::from(&c).stroke_width(2)))
+                .chain(std::iter::once((&truth, truth_style)));
+            for (points, style) in sims_and_truth {
+                for piece in clip_band(points, y0, y1) {
+                    for part in split_sharp(&piece, |p| chart.backend_coord(&p)) {
+                        chart
+                            .draw_series(LineSeries::new(part, style))
+                            .map_err(e::<DB>)?;
+                    }
                 }
             }
         }
-        let caption = "The undisturbed validation record (zigzag-forward input with the thrust stepped) simulated \
-                       from its first sample by each estimator's model of Monte Carlo run 0 at the largest N, drawn in \
-                       the legend's order (where IV2 and IV3 coincide, IV3 covers IV2); a curve that leaves the panel is \
-                       cut at its edge.";
-        for (k, line) in wrap(caption, 130).into_iter().enumerate() {
+        for (k, line) in wrap(VAL_CAPTION, 130).into_iter().enumerate() {
             let y = 6 + 22 * i32::try_from(k).unwrap_or(0);
             foot.draw(&Text::new(line, (24, y), (FONT, 15).into_font()))
                 .map_err(e::<DB>)?;

@@ -3,6 +3,7 @@
 //! verdicts and evidence.
 
 use crate::output::table;
+use crate::reproduce::args::MIN_N;
 use crate::reproduce::args::ReproduceArgs;
 use crate::reproduce::margins::{CaseCheck, DesignCheck, medium_of};
 use crate::reproduce::report::Report;
@@ -243,15 +244,61 @@ fn claims(report: &Report) -> String {
                     }
                 })
                 .collect();
+            let run = &report.outcomes.config.n;
+            let all_ahead: Vec<usize> = crate::reproduce::report::ls_ahead(report)
+                .into_values()
+                .flatten()
+                .collect();
+            let hint = match finer_grid(run, &all_ahead) {
+                Some(grid) => {
+                    let grid: Vec<String> = grid.iter().map(ToString::to_string).collect();
+                    format!("; try --n {}", grid.join(","))
+                }
+                None => String::new(),
+            };
             let _ = writeln!(
                 s,
                 "      investigation: LS's median parameter error over every estimate is below IV3's: {} \
-                 (the breakpoint lies below the smallest N where it is not; try --n 150,200,300,400,600)",
+                 (the breakpoint lies below the smallest N where it is not{hint})",
                 ahead.join("; ")
             );
         }
     }
     s
+}
+
+/// Record lengths that locate claim (a)'s breakpoint more closely than the
+/// `run` ones: between the largest N at which LS was ahead (`ahead`) and the
+/// smallest run N above it at which it was not, or (none ahead) below the
+/// smallest N run. `None` when every N is run already or LS is ahead at
+/// every N (no breakpoint within reach).
+fn finer_grid(run: &[usize], ahead: &[usize]) -> Option<Vec<usize>> {
+    let lo = ahead.iter().copied().max();
+    let hi = run
+        .iter()
+        .copied()
+        .filter(|n| lo.is_none_or(|lo| *n > lo))
+        .min()?;
+    let grid: Vec<usize> = match lo {
+        // The original investigation's grid below 1000: 150, 200, 300, 400, 600.
+        None => [3, 4, 6, 8, 12]
+            .iter()
+            .map(|k| round_n(hi * k / 20))
+            .collect(),
+        Some(lo) => (1..5).map(|k| round_n(lo + (hi - lo) * k / 5)).collect(),
+    };
+    let mut grid: Vec<usize> = grid
+        .into_iter()
+        .filter(|n| *n >= MIN_N && *n < hi && lo.is_none_or(|lo| *n > lo) && !run.contains(n))
+        .collect();
+    grid.dedup();
+    (!grid.is_empty()).then_some(grid)
+}
+
+/// A record length rounded to two significant digits.
+fn round_n(n: usize) -> usize {
+    let step = 10usize.pow((n.max(1).ilog10()).saturating_sub(1));
+    (n + step / 2) / step * step
 }
 
 /// The whole report.
@@ -271,4 +318,32 @@ pub fn render(report: &Report, args: &ReproduceArgs) -> String {
         if report.threads == 1 { "" } else { "s" }
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::finer_grid;
+
+    #[test]
+    fn the_hint_suggests_record_lengths_not_run() {
+        let default = [1000, 2000, 3000, 4000, 5000];
+        assert_eq!(
+            finer_grid(&default, &[]),
+            Some(vec![150, 200, 300, 400, 600])
+        );
+        // Run with the suggested grid, LS ahead at none: look lower still.
+        let suggested = [150, 200, 300, 400, 600];
+        let again = finer_grid(&suggested, &[]).unwrap_or_default();
+        assert!(
+            again.iter().all(|n| !suggested.contains(n) && *n < 150),
+            "{again:?}"
+        );
+        // LS ahead up to 200: between 200 and 300.
+        assert_eq!(
+            finer_grid(&suggested, &[150, 200]),
+            Some(vec![220, 240, 260, 280])
+        );
+        // LS ahead everywhere: nothing to suggest.
+        assert_eq!(finer_grid(&suggested, &suggested), None);
+    }
 }
