@@ -10,6 +10,8 @@ use leeway_model::given::{
     HeldDisturbances, MAX_GIVEN_VALUE, Origin, components_hint, disturbance_slots, given_value_ok,
     held_disturbances,
 };
+use leeway_model::number::short_number;
+use leeway_model::warning::Warning;
 use leeway_structure::grammar::{and_list, join_capped};
 use leeway_structure::ir::Ir;
 use std::path::Path;
@@ -72,7 +74,7 @@ pub fn held(
     given: &Given,
     file: &ParameterFile,
     path: &Path,
-) -> (HeldDisturbances, Option<String>) {
+) -> (HeldDisturbances, Option<Warning>) {
     let none = vec![None; ir.components.len()];
     let estimated = file.means.as_deref().unwrap_or(&none);
     let held = held_disturbances(ir, &given.values, given.zero, estimated);
@@ -84,18 +86,18 @@ pub fn held(
             "the file holds no disturbance means (it is not `leeway estimate --json` output)"
         };
         let plural = if media.len() == 1 { "is" } else { "are" };
-        format!(
-            "the {} {plural} taken as zero while simulating with `{}`: {why}; give --disturbance {} or --disturbance zero",
+        let summary = format!(
+            "the {} {plural} taken as zero while simulating with `{}`",
             and_list(media.iter().map(|m| format!("`{m}`"))),
             path.display(),
-            join_capped(
-                &components
-                    .iter()
-                    .map(|c| format!("{c}=VALUE"))
-                    .collect::<Vec<_>>(),
-                ","
-            ),
-        )
+        );
+        let values: Vec<String> = components.iter().map(|c| format!("{c}=VALUE")).collect();
+        let help = format!(
+            "give --disturbance {} (an estimate's means), or --disturbance zero",
+            join_capped(&values, ",")
+        );
+        let detail = format!("{summary}: {why}; {help}");
+        Warning::new("disturbance-zero", summary, help, detail)
     });
     (held, warning)
 }
@@ -106,24 +108,10 @@ pub fn described(ir: &Ir, held: &HeldDisturbances) -> Option<String> {
     (!named.is_empty()).then(|| {
         named
             .iter()
-            .map(|(n, v, o)| format!("{n} = {} ({})", short(*v), o.as_str()))
+            .map(|(n, v, o)| format!("{n} = {} ({})", short_number(*v), o.as_str()))
             .collect::<Vec<_>>()
             .join(", ")
     })
-}
-
-/// A value for a message: four significant digits, no trailing noise.
-fn short(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 12) as usize;
-    let s = format!("{v:.digits$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
 }
 
 /// The JSON shape of what was held: `{"current.north": {"value", "from"}}`.
@@ -175,25 +163,30 @@ mod tests {
         let estimate = file(Some(vec![Some(0.185), Some(-0.114), None, None]));
         let (h, w) = held(&ir, &Given::default(), &estimate, p);
         assert_eq!(h.values, vec![0.185, -0.114, 0.0, 0.0]);
-        assert_eq!(w, None);
+        assert!(w.is_none());
         assert_eq!(
             described(&ir, &h).as_deref(),
             Some("current.north = 0.185 (estimate), current.east = -0.114 (estimate)")
         );
         let one = given(&ir, &["current.east=0.3".into()]).unwrap_or_default();
         let (h, w) = held(&ir, &one, &estimate, p);
-        assert_eq!((h.values[..2].to_vec(), w), (vec![0.185, 0.3], None));
+        assert_eq!(h.values[..2].to_vec(), vec![0.185, 0.3]);
+        assert!(w.is_none());
         let zero = given(&ir, &["zero".into()]).unwrap_or_default();
         let (h, w) = held(&ir, &zero, &estimate, p);
-        assert_eq!((h.values[..2].to_vec(), w), (vec![0.0, 0.0], None));
+        assert_eq!(h.values[..2].to_vec(), vec![0.0, 0.0]);
+        assert!(w.is_none());
         let (h, w) = held(&ir, &Given::default(), &file(None), p);
         assert_eq!(h.values, vec![0.0; 4]);
+        let w = w.unwrap_or_else(|| Warning::plain("none", ""));
         assert_eq!(
-            w.as_deref(),
-            Some(
-                "the `current` is taken as zero while simulating with `p.json`: the file holds no disturbance means (it is not `leeway estimate --json` output); give --disturbance current.north=VALUE,current.east=VALUE or --disturbance zero"
+            (w.summary.as_str(), w.help.as_str()),
+            (
+                "the `current` is taken as zero while simulating with `p.json`",
+                "give --disturbance current.north=VALUE,current.east=VALUE (an estimate's means), or --disturbance zero"
             )
         );
+        assert!(w.detail.contains("the file holds no disturbance means"));
     }
 
     #[test]
@@ -206,7 +199,5 @@ mod tests {
         );
         let e = given(&ir, &["wind_n=1".into()]).err().map(|p| p.message);
         assert!(e.is_some_and(|m| m.contains("is measured")));
-        assert_eq!(short(-0.10000000000000142), "-0.1");
-        assert_eq!(short(1234.5678), "1235");
     }
 }

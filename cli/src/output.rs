@@ -94,6 +94,11 @@ pub fn warning_text(style: RenderStyle, w: &Warning, verbose: bool) -> String {
     text
 }
 
+/// Messages that are short already (one line each), as warnings.
+pub fn plain(code: &'static str, messages: Vec<String>) -> impl Iterator<Item = Warning> {
+    messages.into_iter().map(move |m| Warning::plain(code, m))
+}
+
 /// Writes a document as pretty JSON and a newline on stdout.
 pub fn print_json<T: serde::Serialize>(document: &T) {
     match serde_json::to_string_pretty(document) {

@@ -9,13 +9,14 @@ use crate::input::{initial_values, load_input};
 use crate::model::load;
 use crate::options::load_options;
 use crate::options::positive;
-use crate::output::{Status, err, headline, out, stderr_style};
+use crate::output::{Status, err, headline, out, plain, stderr_style, warning_text};
 use crate::problem::{Failure, Problem};
 use leeway_data::write_csv;
 use leeway_model::Interpreter;
 use leeway_model::given::Origin;
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
+use leeway_model::warning::Warning;
 use std::path::PathBuf;
 
 /// Arguments of `leeway simulate`.
@@ -52,10 +53,10 @@ pub struct SimulateArgs {
 /// Runs `leeway simulate`.
 pub fn run(args: &SimulateArgs) -> Status {
     let style = stderr_style();
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<Warning> = Vec::new();
     let result = execute(args, &mut warnings);
     for w in &warnings {
-        err(&headline(style, "warning", None, w));
+        err(&warning_text(style, w, false));
     }
     match result {
         Ok(status) => status,
@@ -66,9 +67,9 @@ pub fn run(args: &SimulateArgs) -> Status {
     }
 }
 
-fn execute(args: &SimulateArgs, warnings: &mut Vec<String>) -> Result<Status, Failure> {
+fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, Failure> {
     let loaded = load(&args.model, false)?;
-    warnings.extend(loaded.warnings);
+    warnings.extend(plain("model", loaded.warnings));
     let ir = loaded.ir;
     let options = load_options(&ir, args.step, None)?;
     let file = crate::params::read_file(&args.params, &ir, "--params")?;

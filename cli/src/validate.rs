@@ -13,7 +13,9 @@ use crate::disturbances::{self, HeldJson};
 use crate::model::load;
 use crate::options::positive;
 use crate::options::{TimeArgs, load_options};
-use crate::output::{Ordered, Status, err, headline, out, print_json, stderr_style, table};
+use crate::output::{
+    Ordered, Status, err, out, plain, print_json, stderr_style, table, warning_text,
+};
 use crate::plot::{Panel, Segment, draw};
 use crate::problem::{Failure, JsonError, Problem};
 use crate::residuals::{ModelResiduals, ResidArgs, analyse_all, render as render_residuals};
@@ -21,6 +23,7 @@ use crate::units::{axis_label, unit_lines};
 use leeway_model::Source;
 use leeway_model::simulate::{Trajectory, unwrap_heading};
 use leeway_model::validation::compare;
+use leeway_model::warning::Warning;
 use leeway_model::{Experiment, Interpreter};
 use leeway_report::{data_files_json, heading_gains, heading_warnings, unit_warnings};
 use leeway_structure::ir::{Ir, Rotation};
@@ -165,7 +168,7 @@ fn model_names(params: &[PathBuf]) -> Vec<String> {
 
 /// Runs `leeway validate`.
 pub fn run(args: &ValidateArgs) -> Status {
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<Warning> = Vec::new();
     let result = execute(args, &mut warnings);
     let status = match &result {
         Ok(o) if o.plot_problem.is_some() => Status::Error,
@@ -196,7 +199,7 @@ pub fn run(args: &ValidateArgs) -> Status {
             data_units: Ordered::default(),
             plot: None,
             residuals: None,
-            warnings,
+            warnings: warnings.iter().map(|w| w.detail.clone()).collect(),
             errors: Vec::new(),
         };
         match result {
@@ -229,7 +232,7 @@ pub fn run(args: &ValidateArgs) -> Status {
                 .unwrap_or_default());
         }
         for w in &warnings {
-            err(&headline(style, "warning", None, w));
+            err(&warning_text(style, w, false));
         }
         match &result {
             Err(f) => err(&f.render(style, "validated")),
@@ -243,9 +246,9 @@ pub fn run(args: &ValidateArgs) -> Status {
     status
 }
 
-fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, Failure> {
+fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, Failure> {
     let loaded = load(&args.model, false)?;
-    warnings.extend(loaded.warnings);
+    warnings.extend(plain("model", loaded.warnings));
     let ir = loaded.ir;
     let options = load_options(&ir, args.step, Some(&args.time))?;
     let given = disturbances::given(&ir, &args.disturbances)?;
@@ -263,8 +266,11 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
         .iter()
         .map(|e| e as &dyn leeway_model::Source)
         .collect();
-    warnings.extend(unit_warnings(&ir, &sources));
-    warnings.extend(heading_warnings(&ir, &heading_gains(&ir, &sources)));
+    warnings.extend(plain("units", unit_warnings(&ir, &sources)));
+    warnings.extend(plain(
+        "heading",
+        heading_warnings(&ir, &heading_gains(&ir, &sources)),
+    ));
     let heading = match &ir.rotation {
         Rotation::Planar { heading, .. } => Some(heading.clone()),
         _ => None,
@@ -287,7 +293,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<String>) -> Result<Outcome, F
             )
         })
         .transpose()?;
-    warnings.extend(comparison.warnings);
+    warnings.extend(plain("validation", comparison.warnings));
     let mut results = Vec::new();
     for (((validations, mean), name), held) in comparison
         .validations
