@@ -39,6 +39,7 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--params": ("theta", "name"),
     "--input": ("inputs", "name"),
     "--json": ("", "name"),
+    "--verbose": ("", "name"),
 }
 
 # The choices of the "text" options (estimate/src/method.rs, the IR's centring).
@@ -85,6 +86,9 @@ def _replace(m: re.Match[str]) -> str:
     if flag not in KEYWORDS:
         return m.group(0)
     keyword, kind = KEYWORDS[flag]
+    if flag == "--verbose":
+        # The text output's detail line: in Python, the warnings' full text.
+        return "Estimate.warnings"
     if flag == "--json":
         # `leeway check --json` lists everything: in Python, the Check it returns.
         return f"{COMMANDS[command]}()" if command else "the JSON document"

@@ -12,13 +12,12 @@ function returns the matplotlib ``Figure`` (``fig.savefig("out.png")``).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from ._api import Model, Thetas, _thetas, simulate, validate
+from ._api import Disturbances, Model, Thetas, _thetas, simulate, validate
 from ._data import Data, _frames, _to_pandas
 from ._residuals import ResidualAnalysis
 
@@ -55,7 +54,7 @@ def compare(
     thetas: Thetas,
     data: Data,
     *,
-    disturbances: Mapping[str, float] | None = None,
+    disturbances: Disturbances = None,
     step: float | None = None,
     experiment: int | str = 0,
 ) -> Any:
@@ -78,7 +77,7 @@ def compare(
             hint=f"give a position 0..{len(experiments) - 1} or a name: {', '.join(names)}",
         )
     name, frame = experiments[index]
-    named = _thetas(model, thetas)
+    named = [(label, theta) for label, _, theta in _thetas(thetas)]
     fits = validate(model, dict(named), {name: frame}, disturbances=disturbances, step=step)
     states = model.states
     fig, axes = plt.subplots(len(states), 1, sharex=True, squeeze=False, figsize=(8, 2.2 * len(states)))
