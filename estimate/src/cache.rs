@@ -3,7 +3,7 @@
 //! At most 512 MiB (`KEEP_BUDGET`) over all records, or what
 //! `LocalPasses::with_budget` says; streamed records keep nothing, so their
 //! memory stays flat. Keeping
-//! changes no estimate: `scenarios/tests/distributed.rs` checks every
+//! changes no estimate: `scenarios/tests/scenarios/distributed.rs` checks every
 //! method, in any order, with warm starts, under any budget and continued
 //! from prefixes (rows kept over other records must go unused), against
 //! workers that keep nothing.

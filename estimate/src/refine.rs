@@ -3,7 +3,7 @@
 //! Its decisions do not hang on round-off: fits within 10⁻⁶ points
 //! (`FIT_TIE`) are a tie settled for the earlier iterate, and with the
 //! runaway guard a diverging full step stops the refinement rather than
-//! damping near an unstable simulation. `scenarios/tests/robustness.rs`
+//! damping near an unstable simulation. `scenarios/tests/scenarios/robustness.rs`
 //! moves every measured value by one ulp: the study's mean fits of LS, IV2
 //! and IV3 stay within half their Monte Carlo standard error.
 

@@ -2,7 +2,7 @@
 //!
 //! The anchored heading is rotated by small steps rather than by a `sincos`
 //! a sample, and pointwise moduli take their signs sample by sample as the
-//! simulation evaluates them (`scenarios/tests/real_logs.rs`). A measured
+//! simulation evaluates them (`scenarios/tests/scenarios/real_logs.rs`). A measured
 //! regressor or target beyond [`REGRESSOR_LIMIT`] or not finite is the data
 //! error `non-finite-data`, located in its source and found by the first
 //! (scanning) pass, never a rank verdict.

@@ -7,7 +7,7 @@
 //! written from precomputed runs. Its arithmetic follows the IR's evaluation
 //! order exactly (see `leeway_structure::ir::Entry`), as generated code does,
 //! so the two agree bit for bit (`tests/bit_exact.rs`,
-//! `model/tests/interpreter.rs`).
+//! `model/tests/model/interpreter.rs`).
 //!
 //! [`Interpreter::regressors_block`] evaluates the same plans for a block of
 //! samples at once, each product a loop over the samples.

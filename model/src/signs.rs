@@ -3,7 +3,7 @@
 //! disturbance must keep its sign. The moduli of plain states are signed
 //! sample by sample instead ([`plain_sign_args`], [`set_pointwise_signs`]):
 //! every predictor evaluates them exactly as [`simulate`](crate::simulate)
-//! does (`scenarios/tests/real_logs.rs`).
+//! does (`scenarios/tests/scenarios/real_logs.rs`).
 
 use crate::experiment::Source;
 use crate::interp::{ArgPlan, arg_plan};

@@ -12,7 +12,7 @@
 //! merged into one with a count, so a multiplied-out product reports a
 //! problem once. Every diagnostic code has a broken model in
 //! `examples/models/broken/` and a section in `docs/language.md`
-//! (`structure/tests/broken.rs` holds both to it). Nothing is quadratic in
+//! (`structure/tests/structure/broken.rs` holds both to it). Nothing is quadratic in
 //! the size of the model: columns are grouped by output in one pass
 //! ([`ir::columns_by_output`]), and the experiment search and its report
 //! grow with the model (10⁴ states, 100 media: well under a second).

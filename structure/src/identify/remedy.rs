@@ -64,15 +64,13 @@ pub fn remedies_text(ir: &Ir, kind: PredictorKind, remedies: &[Remedy]) -> Optio
             format!("`--centring {}`{experiments}", names.join("` or `"))
         })
         .collect();
-    let validity = remedies
-        .iter()
-        .any(|r| r.centring == Centring::None)
-        .then(|| {
-            format!(
-                " (uncentred instruments are {})",
-                Centring::None.reason(ir, kind)
-            )
-        })
-        .unwrap_or_default();
+    let validity = if remedies.iter().any(|r| r.centring == Centring::None) {
+        format!(
+            " (uncentred instruments are {})",
+            Centring::None.reason(ir, kind)
+        )
+    } else {
+        String::new()
+    };
     Some(format!("{}{validity}", each.join(" or ")))
 }

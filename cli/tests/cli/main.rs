@@ -1,0 +1,12 @@
+//! The integration tests of this crate, one binary (each module was a test
+//! binary of its own: one link instead of many keeps the test build lean).
+
+mod common;
+
+mod check;
+mod csv_layouts;
+mod data;
+mod estimate;
+mod parquet;
+mod reproduce;
+mod words;

@@ -1,0 +1,6 @@
+//! The integration tests of this crate, one binary (each module was a test
+//! binary of its own: one link instead of many keeps the test build lean).
+
+mod expansion;
+mod interpreter;
+mod residuals;
