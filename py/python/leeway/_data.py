@@ -252,10 +252,12 @@ def _time_from_index(name: str, frame: pd.DataFrame, time_column: str) -> pd.Dat
     if index.name == time_column or isinstance(index, (pd.DatetimeIndex, pd.TimedeltaIndex)):
         return frame.rename_axis(time_column).reset_index()
     if not _is_default_index(index):
+        # The first label as the user wrote it (a numpy scalar as a number).
+        first = index[0].item() if len(index) and hasattr(index[0], "item") else (index[0] if len(index) else None)
         raise DataError(
             f"the frame has no column `{time_column}` and an index that is not positions "
             f"({type(index).__name__}{f' named {index.name!r}' if index.name is not None else ''}, "
-            f"{f'first {index[0]!r}' if len(index) else 'empty'}); leeway would ignore it and time the samples by the model's step",
+            f"{f'first {first!r}' if len(index) else 'empty'}); leeway would ignore it and time the samples by the model's step",
             code="data",
             location=name,
             hint=f"if the index is the time, name it: df.rename_axis({time_column!r}); "
