@@ -83,16 +83,7 @@ pub fn one_step(
                 residuals[i].push(row.states[i] - p);
             }
         }
-        for (c, value) in dist.iter_mut().enumerate() {
-            *value = if ir.disturbances[ir.components[c].disturbance].measured {
-                row.disturbances[c]
-            } else {
-                match disturbances {
-                    Disturbances::None => 0.0,
-                    Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
-                }
-            };
-        }
+        disturbances.fill(ir, row.disturbances, &mut dist);
         let heading_rotation = planar_rotation(row.heading);
         let sig = Signals {
             states: row.states,

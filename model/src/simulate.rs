@@ -6,7 +6,7 @@
 
 use crate::experiment::{Experiment, Row, Source};
 use crate::model::{HeadingRotation, Model, Signals, next_heading};
-use leeway_structure::ir::Rotation;
+use leeway_structure::ir::{Ir, Rotation};
 
 /// A simulated trajectory.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,6 +27,23 @@ pub enum Disturbances<'a> {
     /// Constant values per global component (earth frame for earth disturbances);
     /// measured components are taken from the data when present.
     Constant(&'a [f64]),
+}
+
+impl Disturbances<'_> {
+    /// The values of every component at one sample: a measured component's
+    /// recorded value (`recorded`), an unmeasured one's held value.
+    pub fn fill(&self, ir: &Ir, recorded: &[f64], out: &mut [f64]) {
+        for (c, value) in out.iter_mut().enumerate() {
+            *value = if ir.disturbances[ir.components[c].disturbance].measured {
+                recorded[c]
+            } else {
+                match self {
+                    Disturbances::None => 0.0,
+                    Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
+                }
+            };
+        }
+    }
 }
 
 /// Simulates `model` with parameters `theta` from the data's first sample,
@@ -89,16 +106,7 @@ pub fn simulate_each(
             psi = row.heading;
         }
         each(row, &x, psi);
-        for (c, value) in dist.iter_mut().enumerate() {
-            *value = if ir.disturbances[ir.components[c].disturbance].measured {
-                row.disturbances[c]
-            } else {
-                match disturbances {
-                    Disturbances::None => 0.0,
-                    Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
-                }
-            };
-        }
+        disturbances.fill(ir, row.disturbances, &mut dist);
         let rot_buf;
         let rotation: &[f64] = if planar {
             rot_buf = headings.next(psi);
