@@ -775,15 +775,19 @@ mod tests {
         Ok(out)
     }
 
-    fn scratch(name: &str) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("leeway-parquet-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap_or_else(|e| panic!("{e}"));
-        dir.join(name)
+    /// A file path in a fresh directory, removed with the returned guard.
+    fn scratch(name: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+        let dir = tempfile::Builder::new()
+            .prefix("leeway-parquet-")
+            .tempdir()
+            .unwrap_or_else(|e| panic!("{e}"));
+        let path = dir.path().join(name);
+        (dir, path)
     }
 
     #[test]
     fn unsigned_integers_are_read_unsigned() {
-        let path = scratch("unsigned.parquet");
+        let (_path_dir, path) = scratch("unsigned.parquet");
         // 3000000037 stored in an INT32's bits; 2⁵³ and 2⁶⁴−40 in an INT64's.
         #[allow(clippy::cast_possible_wrap)]
         let u32s = vec![3_000_000_037u32 as i32, 7];
@@ -810,7 +814,7 @@ mod tests {
 
     #[test]
     fn decimals_are_read_with_their_scale_as_their_text_would_be() {
-        let path = scratch("decimal.parquet");
+        let (_path_dir, path) = scratch("decimal.parquet");
         let texts = ["37.382572", "-0.000001", "0.020100", "123456789.123456"];
         let unscaled: Vec<i64> = texts
             .iter()
@@ -863,14 +867,14 @@ mod tests {
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&got), bits(&expected), "column {i}: {got:?}");
         }
-        let small = scratch("decimal32.parquet");
+        let (_small_dir, small) = scratch("decimal32.parquet");
         write(
             &small,
             &[("required int32 a (DECIMAL(9,6));", Values::I32(as_i32))],
         );
         assert_eq!(numbers(&small, 0).ok(), Some(expected[..3].to_vec()));
         // An unscaled value beyond 2⁵³ is refused, shown as the decimal it is.
-        let wide = scratch("decimal-wide.parquet");
+        let (_wide_dir, wide) = scratch("decimal-wide.parquet");
         write(
             &wide,
             &[(
@@ -886,7 +890,7 @@ mod tests {
 
     #[test]
     fn dates_and_times_are_seconds_since_the_first() {
-        let path = scratch("dates.parquet");
+        let (_path_dir, path) = scratch("dates.parquet");
         write(
             &path,
             &[
@@ -917,7 +921,7 @@ mod tests {
 
     #[test]
     fn other_logical_types_are_refused_by_name() {
-        let path = scratch("refused.parquet");
+        let (_path_dir, path) = scratch("refused.parquet");
         write(
             &path,
             &[
@@ -950,7 +954,7 @@ mod tests {
             Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/checksummed.parquet"),
         )
         .unwrap_or_else(|e| panic!("{e}"));
-        let path = scratch("crc.parquet");
+        let (_path_dir, path) = scratch("crc.parquet");
         std::fs::write(&path, &good).unwrap_or_else(|e| panic!("{e}"));
         let values: Vec<f64> = (0..2000).map(|k| f64::from(k * 7919)).collect();
         assert_eq!(numbers(&path, 0).ok(), Some(values.clone()));
@@ -995,7 +999,7 @@ mod tests {
         let footer =
             good.len() - 8 - u32::from_le_bytes([tail[0], tail[1], tail[2], tail[3]]) as usize;
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(22);
-        let path = scratch("fuzz.parquet");
+        let (_path_dir, path) = scratch("fuzz.parquet");
         // (errors, same numbers, other numbers) for pages, and for footers.
         let (mut pages, mut footers) = ([0usize; 3], [0usize; 3]);
         let mut slowest = std::time::Duration::ZERO;

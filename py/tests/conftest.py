@@ -66,6 +66,20 @@ def ship_data(tmp: Path, n: int, wind: float, seed: int, name: str = "run") -> p
     return frame
 
 
+@pytest.fixture(scope="session", autouse=True)
+def leeway_temporary_files(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """leeway's spill files go under pytest's temporary directory, which
+    pytest prunes, and not the system's: a Dask worker the fault tests kill
+    cannot remove its own."""
+    before = os.environ.get("TMPDIR")
+    os.environ["TMPDIR"] = str(tmp_path_factory.mktemp("leeway-tmp"))
+    yield
+    if before is None:
+        os.environ.pop("TMPDIR", None)
+    else:
+        os.environ["TMPDIR"] = before
+
+
 @pytest.fixture(scope="session")
 def ship_frame(tmp_path_factory: pytest.TempPathFactory) -> pd.DataFrame:
     return ship_data(tmp_path_factory.mktemp("ship"), 1500, 1.0, 7)
