@@ -80,9 +80,10 @@ pub fn true_system(wind: f64) -> TrueSystem {
         h: 1.0,
         disturbance_mean: vec![CURRENT_MEAN[0], CURRENT_MEAN[1], wind, wind],
         disturbance_std: vec![1e-3f64.sqrt(); 4],
+        disturbance_time: Vec::new(),
         state_noise: vec![2e-4f64.sqrt(); 3],
         heading_noise: 1e-4f64.sqrt(),
-        aux_noise: 1e-3f64.sqrt(),
+        aux_noise: vec![1e-3f64.sqrt(); 4],
         process_noise: vec![0.0; 3],
     }
 }
@@ -178,7 +179,7 @@ pub fn validation_experiment(model: &dyn Model, n: usize) -> Experiment {
     sys.disturbance_std = vec![0.0; 4];
     sys.state_noise = vec![0.0; 3];
     sys.heading_noise = 0.0;
-    sys.aux_noise = 0.0;
+    sys.aux_noise = vec![0.0; 4];
     experiment(
         model,
         &sys,

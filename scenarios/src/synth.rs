@@ -19,14 +19,19 @@ pub struct TrueSystem {
     pub h: f64,
     /// Mean of each disturbance component (global index; earth frame for earth ones).
     pub disturbance_mean: Vec<f64>,
-    /// Standard deviation of each component (i.i.d. over time).
+    /// Standard deviation of each component about its mean.
     pub disturbance_std: Vec<f64>,
+    /// Correlation time of each component, s: a first-order Gauss–Markov
+    /// process `d(k+1) = a·d(k) + √(1−a²)·σ·ε`, `a = exp(−h/T)`, whose
+    /// stationary std is `σ`. Zero or missing: i.i.d. over time.
+    pub disturbance_time: Vec<f64>,
     /// Measurement noise std of each state.
     pub state_noise: Vec<f64>,
     /// Heading measurement noise std.
     pub heading_noise: f64,
-    /// Noise std of measured disturbance components (the auxiliary sensor).
-    pub aux_noise: f64,
+    /// Noise std of each measured disturbance component (the auxiliary
+    /// sensor; missing: noise-free).
+    pub aux_noise: Vec<f64>,
     /// Process noise std per state (additive `w`).
     pub process_noise: Vec<f64>,
 }
@@ -81,17 +86,35 @@ pub fn run(
     let mut v = vec![0.0; n_comp];
     let mut y = vec![0.0; n_out];
     let mut m = vec![0.0; n_comp];
+    // The Gauss–Markov state of each component; the first sample is drawn
+    // from the stationary law, so an i.i.d. component (a = 0) draws as before.
+    let decay: Vec<f64> = (0..n_comp)
+        .map(|c| match system.disturbance_time.get(c) {
+            Some(t) if *t > 0.0 => (-system.h / t).exp(),
+            _ => 0.0,
+        })
+        .collect();
+    let mut deviation = vec![0.0; n_comp];
+    let mut first = true;
     for u in inputs {
         for (c, value) in v.iter_mut().enumerate() {
-            *value = system.disturbance_mean[c] + system.disturbance_std[c] * g();
+            let std = system.disturbance_std.get(c).copied().unwrap_or(0.0);
+            let a = decay[c];
+            deviation[c] = if a == 0.0 || first {
+                std * g()
+            } else {
+                a * deviation[c] + (1.0 - a * a).sqrt() * std * g()
+            };
+            *value = system.disturbance_mean.get(c).copied().unwrap_or(0.0) + deviation[c];
         }
+        first = false;
         for o in 0..n_out {
             y[o] = x[o] + system.state_noise[o] * g();
         }
         let y_psi = psi + system.heading_noise * g();
         for c in 0..n_comp {
             m[c] = if ir.disturbances[ir.components[c].disturbance].measured {
-                v[c] + system.aux_noise * g()
+                v[c] + system.aux_noise.get(c).copied().unwrap_or(0.0) * g()
             } else {
                 0.0
             };

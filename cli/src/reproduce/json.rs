@@ -289,7 +289,7 @@ pub fn document(report: &Report) -> Document<'_> {
                 disturbance_std: first(&system.disturbance_std),
                 velocity_noise_std: first(&system.state_noise),
                 heading_noise_std: system.heading_noise,
-                aux_noise_std: system.aux_noise,
+                aux_noise_std: first(&system.aux_noise),
             },
         },
         input_design: Design {

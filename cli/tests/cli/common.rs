@@ -132,9 +132,10 @@ pub fn catamaran_csv(n: usize, seed: u64) -> String {
         h: 0.1,
         disturbance_mean: CATAMARAN_CURRENT.to_vec(),
         disturbance_std: vec![0.02; 2],
+        disturbance_time: Vec::new(),
         state_noise: vec![0.01, 0.01, 0.002],
         heading_noise: 0.002,
-        aux_noise: 0.0,
+        aux_noise: Vec::new(),
         process_noise: vec![0.002, 0.002, 0.0005],
     };
     let design = study::InputDesign {
