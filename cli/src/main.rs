@@ -32,6 +32,7 @@ static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod check;
 mod data;
+mod design;
 mod disturbances;
 mod estimate;
 mod files;
@@ -71,6 +72,8 @@ enum Command {
     Validate(validate::ValidateArgs),
     /// Re-run the paper's simulation study (§V): tables, claims, results.json and figures.
     Reproduce(reproduce::args::ReproduceArgs),
+    /// Plan the trial for a craft: runs, operating points, excitation, predicted accuracy; --verify by Monte Carlo.
+    Design(design::args::DesignArgs),
 }
 
 fn main() -> ExitCode {
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Command::Estimate(args) => estimate::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::Validate(args) => validate::run(&args),
+        Command::Design(args) => design::run(&args),
         Command::Reproduce(args) => {
             // Bounds across options, reported like clap's own (exit 2).
             if let Err(message) = reproduce::args::check_work(&args) {

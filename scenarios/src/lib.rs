@@ -2,10 +2,13 @@
 //! thread count. Synthetic experiments from a true system ([`synth`]), the
 //! paper's Monte Carlo study ([`study`]), a tanker zigzag campaign
 //! ([`zigzag`]) and the checks of an input design on the true trajectory
-//! ([`design`]). The only crate of the workspace that uses random numbers
-//! (rand, rand_chacha, rand_distr) and threads (rayon).
+//! ([`design`]), all on one Monte Carlo engine ([`engine`]). With
+//! leeway-design, which plans trials on it, the only library crates of the
+//! workspace that use random numbers (rand, rand_chacha, rand_distr) and
+//! threads (rayon).
 
 pub mod design;
+pub mod engine;
 pub mod study;
 pub mod synth;
 pub mod zigzag;

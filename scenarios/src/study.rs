@@ -4,7 +4,8 @@
 //! (`leeway reproduce`).
 //!
 //! One run estimates every method on longer and longer prefixes of one
-//! record, through passes continued along them ([`evaluate_continuing`]);
+//! record, through passes continued along them ([`evaluate_continuing`]),
+//! on the study engine ([`campaign`](crate::engine::campaign));
 //! [`run_study_inspecting`] hands each run's true trajectory to a caller
 //! that measures it, as the design check does. Every run has its own seed
 //! and results are merged in run order, so they do not depend on the thread
@@ -24,6 +25,7 @@
 //! change. Validation: undisturbed, a zigzag-forward input whose thrust is
 //! stepped too (else the surge fit would divide by ~0).
 
+use crate::engine::{campaign, keyed_seed};
 use crate::synth::{TrueSystem, Truth, experiment};
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
@@ -310,20 +312,6 @@ pub fn run_seed(seed: u64, case: &Case, run: usize) -> u64 {
     keyed_seed(seed, &case.name, run)
 }
 
-/// The seed of run `run` of a set named `name`: FNV-1a of the name, then
-/// SplitMix64 of the three numbers (shared by every seeded campaign).
-pub fn keyed_seed(seed: u64, name: &str, run: usize) -> u64 {
-    let key = name.bytes().fold(0xCBF2_9CE4_8422_2325u64, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01B3)
-    });
-    let mut z = seed
-        ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        ^ (run as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 /// The estimator options the study uses for a method: the refined IV as in
 /// [`leeway_estimate::EstimateOptions::default`], aggregated where the structure
 /// requires it (IV1, IV2; IV3 at low wind holds the unexcited wind
@@ -447,16 +435,16 @@ pub fn run_study_inspecting<T: Send>(
     progress: &(dyn Fn() + Sync),
     inspect: &(dyn Fn(usize, usize, &Truth) -> T + Sync),
 ) -> (StudyOutcomes, Vec<T>) {
-    use rayon::prelude::*;
     let validation = validation_experiment(model, config.validation_len);
     let tasks = study_tasks(config);
-    let (results, inspected): (Vec<Vec<Vec<Outcome>>>, Vec<T>) = tasks
-        .par_iter()
-        .map(|&(c, r)| {
-            let run = study_run_inspecting(model, config, &validation, c, r, |t| inspect(c, r, t));
-            progress();
-            run
+    let (results, inspected): (Vec<Vec<Vec<Outcome>>>, Vec<T>) =
+        campaign(tasks.len(), progress, &|t| {
+            let (c, r) = tasks[t];
+            study_run_inspecting(model, config, &validation, c, r, |truth| {
+                inspect(c, r, truth)
+            })
         })
+        .into_iter()
         .unzip();
     (collect_outcomes(config, results), inspected)
 }

@@ -476,9 +476,9 @@ pub fn simulate_zigzag(tanker: &Tanker, z: &Zigzag) -> Trace {
 }
 
 /// The seed of run `run` of set `set`, derived as the study's
-/// ([`crate::study::keyed_seed`]).
+/// ([`crate::engine::keyed_seed`]).
 pub fn run_seed(seed: u64, set: &str, run: usize) -> u64 {
-    crate::study::keyed_seed(seed, set, run)
+    crate::engine::keyed_seed(seed, set, run)
 }
 
 /// Zigzag angles `(δ_z, ψ_z)` in degrees of the training runs.

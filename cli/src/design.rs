@@ -1,0 +1,151 @@
+//! `leeway design MODEL --plan PLAN [--target 5%] [--out DIR] [--verify M]
+//! [--seed S] [--method iv3|iv2] [--threads T] [--json]`: plan the trial
+//! for a craft (leeway-design) — runs from the exact analysis's sign
+//! patterns, their operating points and excitation, the predicted standard
+//! errors against run length — and with `--verify` check the design by a
+//! seeded Monte Carlo study on the study engine `leeway reproduce` uses.
+//! With `--out`, per run an input file `simulate` reads (`run-N.csv`, the
+//! nominal trajectory beside the inputs), its margins over time
+//! (`run-N-margins.csv`), `design.json` and the figure (`design.svg`,
+//! `design.png`). Exit 0 for a design that keeps every held sign, 1 when no
+//! plan within the limits can (the report says what falls short and what
+//! would work), 2 on a model, plan, option or file error.
+
+pub mod args;
+mod figure;
+mod files;
+mod text;
+
+use crate::design::args::{DesignArgs, MethodArg};
+use crate::files::read_text;
+use crate::model::load;
+use crate::output::{Status, err, out, stderr_style};
+use crate::problem::{Failure, Problem};
+use leeway_design::design::{DesignOptions, design};
+use leeway_design::error::DesignError;
+use leeway_design::plan::parse;
+use leeway_design::report::Design;
+use leeway_design::verify::{Verification, verify};
+use leeway_estimate::Method;
+use leeway_model::Interpreter;
+use leeway_model::model::Model;
+
+/// Runs `leeway design`.
+pub fn run(args: &DesignArgs) -> Status {
+    let style = stderr_style();
+    match execute(args) {
+        Ok(status) => status,
+        Err(f) => {
+            err(&f.render(style, "designed"));
+            f.status()
+        }
+    }
+}
+
+fn execute(args: &DesignArgs) -> Result<Status, Failure> {
+    let loaded = load(&args.model, false)?;
+    let model = Interpreter::new(loaded.ir);
+    let plan_name = args.plan.display().to_string();
+    let text = read_text(&args.plan, "plan")?;
+    let json = args
+        .plan
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let plan = parse(&text, json).map_err(|e| problem(&e, &plan_name))?;
+    let conditions = plan
+        .conditions(model.ir())
+        .map_err(|e| problem(&e, &plan_name))?;
+    let options = DesignOptions {
+        method: match args.method {
+            MethodArg::Iv3 => Method::Iv3,
+            MethodArg::Iv2 => Method::Iv2,
+        },
+        target: args.target,
+        seed: args.seed,
+        pilot: args.pilot,
+    };
+    let pool = pool(args.threads)?;
+    let design = pool
+        .install(|| design(&model, &conditions, &options))
+        .map_err(|e| problem(&e, &plan_name))?;
+    let verification = match args.verify {
+        Some(m) if design.feasible => {
+            pool.install(|| verify_with_progress(&model, &design, m, args.seed))
+        }
+        _ => None,
+    };
+    if args.json {
+        out(&files::json(&design, verification.as_ref()));
+    } else {
+        out(&text::render(&model, &design, verification.as_ref(), args));
+    }
+    if let Some(dir) = &args.out {
+        let written = files::write(&model, &design, verification.as_ref(), dir)?;
+        if !args.json {
+            out(&format!("\nwrote {}\n", written.join(", ")));
+        }
+    }
+    Ok(if design.feasible {
+        Status::Success
+    } else {
+        Status::Unsupported
+    })
+}
+
+fn verify_with_progress(
+    model: &Interpreter,
+    design: &Design,
+    runs: usize,
+    seed: u64,
+) -> Option<Verification> {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal;
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::with_draw_target(Some(runs as u64), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} trials (eta {eta})",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_message("leeway design --verify");
+    let v = verify(model, design, runs, seed, &|| bar.inc(1));
+    bar.finish_and_clear();
+    v
+}
+
+fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        builder = builder.num_threads(t);
+    }
+    builder.build().map_err(|e| {
+        Problem::error(
+            "invalid-option",
+            format!("cannot start the worker threads: {e}"),
+        )
+        .into()
+    })
+}
+
+/// A design error as a located problem: the plan file's line and column
+/// when the file is at fault.
+fn problem(e: &DesignError, plan: &str) -> Failure {
+    let at = match (e.code, e.line, e.column) {
+        ("plan", Some(l), Some(c)) => Some(format!("{plan}:{l}:{c}")),
+        ("plan", _, _) => Some(plan.to_string()),
+        _ => None,
+    };
+    let mut p = Problem::error(e.code, e.message.clone()).help(e.hint.clone());
+    if let Some(at) = at {
+        p = p.at(at);
+    }
+    // A plan the design cannot read is an input error (2); a model or
+    // conditions no plan can serve is a valid input without a result (1).
+    if e.code != "plan" {
+        p.status = Status::Unsupported;
+    }
+    p.into()
+}

@@ -1,0 +1,294 @@
+//! The design's figure: per run (a column each) the planned inputs (as a
+//! share of their ranges), the nominal states, and each held sign argument
+//! with its band shaded; below, the predicted relative standard errors of
+//! θ against run length (log–log), the budget marked.
+
+use crate::plot::{Figure, decimate_to, save as save_figure, styled_mesh};
+use leeway_design::report::Design;
+use leeway_design::trial::margins;
+use leeway_model::Interpreter;
+use leeway_model::model::Model;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::path::Path;
+
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+/// Runs drawn (a design rarely needs more).
+const MAX_RUNS: usize = 4;
+const ROW: u32 = 240;
+
+struct DesignFigure<'a> {
+    model: &'a Interpreter,
+    design: &'a Design,
+}
+
+/// Draws the figure into `path` (`.png` a bitmap, else SVG).
+pub fn save(path: &Path, model: &Interpreter, design: &Design) -> Result<(), String> {
+    save_figure(path, &DesignFigure { model, design })
+}
+
+impl Figure for DesignFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        let runs = self.design.runs.len().clamp(1, MAX_RUNS) as u32;
+        (520 * runs.max(2), 4 * ROW)
+    }
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let (top, bottom) = root.split_vertically(3 * ROW);
+        let runs = self.design.runs.len().clamp(1, MAX_RUNS);
+        let columns = top.split_evenly((3, runs));
+        for (e, _) in self.design.runs.iter().enumerate().take(runs) {
+            self.inputs(&columns[e], e)?;
+            self.states(&columns[runs + e], e)?;
+            self.margins(&columns[2 * runs + e], e)?;
+        }
+        self.accuracy(&bottom)
+    }
+}
+
+type Area<'a, DB> = DrawingArea<DB, Shift>;
+
+impl DesignFigure<'_> {
+    fn time(&self, n: usize) -> Vec<f64> {
+        (0..n).map(|k| k as f64 * self.design.step).collect()
+    }
+
+    fn lines<DB: DrawingBackend>(
+        &self,
+        area: &Area<'_, DB>,
+        title: &str,
+        y_desc: &str,
+        series: &[(String, Vec<f64>)],
+        band: Option<f64>,
+    ) -> Result<(), String> {
+        let n = series.first().map_or(0, |s| s.1.len());
+        let t = self.time(n);
+        let pts: Vec<Vec<(f64, f64)>> =
+            series.iter().map(|s| decimate_to(&t, &s.1, 1500)).collect();
+        let (mut lo, mut hi) = pts
+            .iter()
+            .flatten()
+            .filter(|p| p.1.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p.1), h.max(p.1))
+            });
+        if let Some(b) = band {
+            lo = lo.min(-0.1 * b);
+            hi = hi.max(1.1 * b);
+        }
+        if !lo.is_finite() || hi <= lo {
+            (lo, hi) = (lo.min(0.0) - 1.0, hi.max(0.0) + 1.0);
+        }
+        let pad = 0.05 * (hi - lo);
+        let x_max = t.last().copied().unwrap_or(1.0).max(self.design.step);
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 17))
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(58)
+            .build_cartesian_2d(0.0..x_max, (lo - pad)..(hi + pad))
+            .map_err(|e| e.to_string())?;
+        styled_mesh(&mut chart, "time (s)", y_desc)
+            .draw()
+            .map_err(|e| e.to_string())?;
+        if let Some(b) = band {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(0.0, lo - pad), (x_max, b)],
+                    RGBColor(214, 39, 40).mix(0.12).filled(),
+                )))
+                .map_err(|e| e.to_string())?;
+        }
+        for (i, (s, p)) in series.iter().zip(&pts).enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            chart
+                .draw_series(LineSeries::new(p.iter().copied(), colour.stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(s.0.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font(("sans-serif", 13))
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK.mix(0.2))
+            .draw()
+            .map_err(|e| e.to_string())
+    }
+
+    fn inputs<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
+        let ir = self.model.ir();
+        let c = self.design.conditions.as_ref().ok_or("no conditions")?;
+        let run = &self.design.runs[e];
+        let series: Vec<(String, Vec<f64>)> = ir
+            .inputs
+            .iter()
+            .enumerate()
+            .map(|(i, name)| {
+                let l = c.limits[i];
+                (
+                    name.clone(),
+                    run.inputs
+                        .iter()
+                        .map(|u| 100.0 * (u[i] - l.low) / l.span())
+                        .collect(),
+                )
+            })
+            .collect();
+        let title = format!(
+            "run {} {}: inputs",
+            e + 1,
+            self.design.experiments[e].pattern
+        );
+        self.lines(area, &title, "% of range", &series, None)
+    }
+
+    fn states<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
+        let ir = self.model.ir();
+        let truth = &self.design.nominal[e];
+        let series: Vec<(String, Vec<f64>)> = ir
+            .states
+            .iter()
+            .cloned()
+            .zip(truth.states.iter().cloned())
+            .collect();
+        self.lines(
+            area,
+            &format!("run {}: nominal states", e + 1),
+            "state",
+            &series,
+            None,
+        )
+    }
+
+    fn margins<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
+        let held = &self.design.held[e];
+        if held.is_empty() {
+            return self.lines(area, &format!("run {}: no sign held", e + 1), "", &[], None);
+        }
+        let run = &self.design.runs[e];
+        let values = margins(self.model, &self.design.nominal[e], &run.inputs, held);
+        let series: Vec<(String, Vec<f64>)> = held
+            .iter()
+            .zip(values)
+            .map(|(h, v)| {
+                let side = if h.sign < 0.0 { "−" } else { "+" };
+                (
+                    format!("{side}{}", h.name),
+                    v.iter().map(|m| m + h.band).collect(),
+                )
+            })
+            .collect();
+        let band = held.iter().map(|h| h.band).fold(0.0, f64::max);
+        self.lines(
+            area,
+            &format!("run {}: held signs (band shaded)", e + 1),
+            "sign·argument",
+            &series,
+            Some(band),
+        )
+    }
+
+    fn accuracy<DB: DrawingBackend>(&self, area: &Area<'_, DB>) -> Result<(), String> {
+        let Some(p) = &self.design.prediction else {
+            return Ok(());
+        };
+        let curve: Vec<(f64, Vec<f64>)> = p
+            .curve
+            .iter()
+            .map(|c| {
+                let rel = c
+                    .std_errors
+                    .iter()
+                    .zip(&p.parameters)
+                    .map(|(s, q)| match s {
+                        Some(s) if q.nominal != 0.0 => 100.0 * s / q.nominal.abs(),
+                        _ => f64::NAN,
+                    })
+                    .collect();
+                (c.seconds, rel)
+            })
+            .collect();
+        let all = curve
+            .iter()
+            .flat_map(|c| c.1.iter())
+            .filter(|v| v.is_finite() && **v > 0.0);
+        let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+        if !lo.is_finite() {
+            return Ok(());
+        }
+        let (x0, x1) = (
+            curve.first().map_or(1.0, |c| c.0),
+            curve.last().map_or(2.0, |c| c.0),
+        );
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                "predicted relative standard error of θ against run length",
+                ("sans-serif", 17),
+            )
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(58)
+            .build_cartesian_2d(
+                (x0..x1.max(x0 * 1.01)).log_scale(),
+                (lo * 0.8..hi * 1.25).log_scale(),
+            )
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("seconds per experiment")
+            .y_desc("σ/|θ| (%)")
+            .label_style(("sans-serif", 15))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(BLACK.mix(0.04))
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (i, q) in p.parameters.iter().enumerate() {
+            let pts: Vec<(f64, f64)> = curve
+                .iter()
+                .map(|c| (c.0, c.1[i]))
+                .filter(|pt| pt.1.is_finite() && pt.1 > 0.0)
+                .collect();
+            if pts.is_empty() {
+                continue;
+            }
+            let colour = COLOURS[i % COLOURS.len()];
+            chart
+                .draw_series(LineSeries::new(pts, colour.stroke_width(1)))
+                .map_err(|e| e.to_string())?
+                .label(q.name.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+        }
+        let budget = self.design.seconds;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(budget, lo * 0.8), (budget, hi * 1.25)],
+                BLACK.mix(0.5).stroke_width(1),
+            )))
+            .map_err(|e| e.to_string())?
+            .label("budget")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
+        chart
+            .configure_series_labels()
+            .label_font(("sans-serif", 12))
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK.mix(0.2))
+            .draw()
+            .map_err(|e| e.to_string())
+    }
+}

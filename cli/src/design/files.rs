@@ -1,0 +1,90 @@
+//! What `design --out DIR` writes: per run the input file `simulate` reads
+//! (`run-N.csv`: the nominal trajectory beside the inputs, in the model's
+//! data columns), its margins over time (`run-N-margins.csv`),
+//! `design.json` (the document `--json` prints) and the figure.
+
+use crate::problem::Problem;
+use leeway_data::write_csv;
+use leeway_design::report::Design;
+use leeway_design::trial::margins;
+use leeway_design::verify::Verification;
+use leeway_model::Interpreter;
+use leeway_model::model::Model;
+use serde::Serialize;
+use std::path::Path;
+
+/// The JSON document: the design, and its verification when run.
+#[derive(Serialize)]
+struct Document<'a> {
+    #[serde(flatten)]
+    design: &'a Design,
+    verification: Option<&'a Verification>,
+}
+
+/// The design (and verification) as pretty JSON.
+pub fn json(design: &Design, verification: Option<&Verification>) -> String {
+    let doc = Document {
+        design,
+        verification,
+    };
+    serde_json::to_string_pretty(&doc).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}
+
+/// Writes every file into `dir` (created if missing); the names written.
+pub fn write(
+    model: &Interpreter,
+    design: &Design,
+    verification: Option<&Verification>,
+    dir: &Path,
+) -> Result<Vec<String>, Problem> {
+    let io = |what: &Path, e: &dyn std::fmt::Display| {
+        Problem::error("io", format!("cannot write `{}`: {e}", what.display()))
+            .at(what.display().to_string())
+            .help("choose another directory with --out DIR")
+    };
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
+    let ir = model.ir();
+    let mut written = Vec::new();
+    for (e, record) in design.records.iter().enumerate() {
+        let path = dir.join(format!("run-{}.csv", e + 1));
+        let mut text = Vec::new();
+        write_csv(ir, &[record], 0.0, &mut text).map_err(|err| io(&path, &err))?;
+        std::fs::write(&path, text).map_err(|err| io(&path, &err))?;
+        written.push(path.display().to_string());
+        let path = dir.join(format!("run-{}-margins.csv", e + 1));
+        std::fs::write(&path, margins_csv(model, design, e)).map_err(|err| io(&path, &err))?;
+        written.push(path.display().to_string());
+    }
+    let path = dir.join("design.json");
+    std::fs::write(&path, json(design, verification) + "\n").map_err(|e| io(&path, &e))?;
+    written.push(path.display().to_string());
+    for name in ["design.svg", "design.png"] {
+        let path = dir.join(name);
+        crate::design::figure::save(&path, model, design).map_err(|e| io(&path, &e))?;
+        written.push(path.display().to_string());
+    }
+    Ok(written)
+}
+
+/// `time`, then per held argument its value on its side (`sign·argument`)
+/// and the band it must clear, along the nominal run from heading 0.
+fn margins_csv(model: &Interpreter, design: &Design, e: usize) -> String {
+    let held = &design.held[e];
+    let truth = &design.nominal[e];
+    let run = &design.runs[e];
+    let values = margins(model, truth, &run.inputs, held);
+    let mut s = String::from("time");
+    for h in held {
+        s.push_str(&format!(",{},{}_band", h.name, h.name));
+    }
+    s.push('\n');
+    let n = run.inputs.len();
+    for k in 0..n {
+        s.push_str(&format!("{}", k as f64 * design.step));
+        for (h, v) in held.iter().zip(&values) {
+            s.push_str(&format!(",{},{}", v[k] + h.band, h.band));
+        }
+        s.push('\n');
+    }
+    s
+}

@@ -1,0 +1,346 @@
+//! The design as text: the runs, the excitation chosen, the predicted
+//! standard errors against run length, the signs each estimator needs,
+//! and the verification's table.
+
+use crate::design::args::DesignArgs;
+use leeway_design::report::{Design, PlannedRun, PredictionReport};
+use leeway_design::verify::Verification;
+use leeway_model::Interpreter;
+use leeway_model::model::Model;
+use leeway_model::number::short_number as num;
+use std::fmt::Write;
+
+/// Renders a design (and its verification).
+pub fn render(
+    model: &Interpreter,
+    d: &Design,
+    v: Option<&Verification>,
+    args: &DesignArgs,
+) -> String {
+    let ir = model.ir();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "design for {} ({}, instrument centring {}): {} experiment{} of {} s ({} samples at {} s)",
+        d.model,
+        d.method,
+        d.centring,
+        d.experiments.len(),
+        if d.experiments.len() == 1 { "" } else { "s" },
+        num(d.seconds),
+        d.samples,
+        num(d.step)
+    );
+    for a in &d.assumptions {
+        let _ = writeln!(s, "  assumed: {a}");
+    }
+    for (e, run) in d.experiments.iter().enumerate() {
+        experiment(&mut s, ir, e, run, d);
+    }
+    families(&mut s, d);
+    if let Some(p) = &d.prediction {
+        prediction(&mut s, d, p);
+    }
+    signs(&mut s, d);
+    if !d.shortfalls.is_empty() {
+        let _ = writeln!(s, "\nno plan within the limits keeps every held sign:");
+        for p in &d.proposals {
+            let _ = writeln!(s, "  {p}");
+        }
+    }
+    if let Some(v) = v {
+        verification(&mut s, v);
+    } else if args.verify.is_some() && !d.feasible {
+        let _ = writeln!(s, "\nnot verified: the design does not keep its signs");
+    }
+    s
+}
+
+fn experiment(
+    s: &mut String,
+    ir: &leeway_structure::ir::Ir,
+    e: usize,
+    run: &PlannedRun,
+    d: &Design,
+) {
+    let _ = writeln!(s, "\nexperiment {} {}", e + 1, run.pattern);
+    let inputs: Vec<String> = ir
+        .inputs
+        .iter()
+        .filter_map(|i| {
+            run.inputs
+                .get(i)
+                .map(|p| format!("{i} = {} ± {}", num(p.offset), num(p.amplitude)))
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "  inputs      {} ({})",
+        inputs.join(", "),
+        d.excitation.name()
+    );
+    let steady: Vec<String> = ir
+        .states
+        .iter()
+        .filter_map(|x| run.steady.get(x).map(|v| format!("{x} = {}", num(*v))))
+        .collect();
+    let _ = writeln!(
+        s,
+        "  steady      {} (calm, at the offsets)",
+        steady.join(", ")
+    );
+    for h in &run.held {
+        let _ = writeln!(
+            s,
+            "  held        {} {} 0: band {}, steady margin {}, smallest nominal margin {}{}",
+            h.argument,
+            if h.side == "-" { "<" } else { ">" },
+            num(h.band),
+            num(h.steady_margin),
+            num(h.min_margin),
+            if h.min_margin < 0.0 { "  (short)" } else { "" }
+        );
+    }
+    for p in &run.pointwise {
+        let _ = writeln!(
+            s,
+            "  pointwise   {}: {} % of the samples below zero",
+            p.state,
+            num(100.0 * p.negative_fraction)
+        );
+    }
+    if let Some(span) = run.heading_span_deg {
+        let _ = writeln!(
+            s,
+            "  heading     turns through {}°",
+            num(span.min(99_999.0))
+        );
+    }
+    if run.full_range {
+        let _ = writeln!(
+            s,
+            "  note        the offsets use the whole ranges: little room is left to excite"
+        );
+    }
+}
+
+fn families(s: &mut String, d: &Design) {
+    let each: Vec<String> = d
+        .families
+        .iter()
+        .map(|f| match f.status.as_str() {
+            "chosen" | "scored" => format!(
+                "{} {} ({} of the room){}",
+                f.family.name(),
+                num(f.score),
+                num(f.scale),
+                if f.status == "chosen" { " chosen" } else { "" }
+            ),
+            "failed" => format!(
+                "{} failed ({})",
+                f.family.name(),
+                first_clause(f.detail.as_deref())
+            ),
+            _ => format!("{} cannot keep the signs", f.family.name()),
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "\nexcitation (mean ln σ/|θ|, lower is better): {}",
+        each.join("; ")
+    );
+}
+
+fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
+    let source = if p.trials > 0 {
+        format!("root-mean-square error of {} simulated trials", p.trials)
+    } else {
+        "the estimator's asymptotic covariance".to_string()
+    };
+    let _ = writeln!(
+        s,
+        "\npredicted standard errors ({}), {} s per experiment ({source})",
+        d.method,
+        num(d.seconds)
+    );
+    let width = p
+        .parameters
+        .iter()
+        .map(|q| q.name.len())
+        .max()
+        .unwrap_or(4)
+        .max(9);
+    let _ = writeln!(
+        s,
+        "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}",
+        "parameter", "nominal", "std error", "relative", "asymptotic"
+    );
+    for q in &p.parameters {
+        let _ = writeln!(
+            s,
+            "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}",
+            q.name,
+            num(q.nominal),
+            q.std_error.map_or("held".into(), num),
+            q.relative
+                .map_or("-".into(), |r| format!("{} %", num(100.0 * r))),
+            q.asymptotic.map_or("-".into(), num)
+        );
+    }
+    for m in &p.disturbances {
+        let _ = writeln!(
+            s,
+            "  mean of {}: {} ± {}",
+            m.name,
+            num(m.mean),
+            m.std_error.map_or("?".into(), num)
+        );
+    }
+    let curve: Vec<String> = p
+        .curve
+        .iter()
+        .map(|c| format!("{} s {} %", num(c.seconds), num(100.0 * c.worst_relative)))
+        .collect();
+    let _ = writeln!(
+        s,
+        "  worst relative error against run length: {}",
+        curve.join(", ")
+    );
+    if let Some(t) = &p.target {
+        let _ = writeln!(
+            s,
+            "  target {} %: {} s per experiment ({} samples){}",
+            num(100.0 * t.relative),
+            num(t.seconds),
+            t.samples,
+            if t.within_budget {
+                ", within the budget"
+            } else {
+                ", beyond the budget"
+            }
+        );
+    }
+    for q in &p.poorly_determined {
+        let _ = writeln!(
+            s,
+            "  poorly determined: {} ({} %): {}",
+            q.name,
+            num(100.0 * q.relative),
+            q.help
+        );
+    }
+}
+
+fn signs(s: &mut String, d: &Design) {
+    let _ = writeln!(s);
+    for m in &d.methods {
+        let short: Vec<String> = m
+            .arguments
+            .iter()
+            .filter(|a| a.min_margin < 0.0)
+            .map(|a| {
+                format!(
+                    "{} in experiment {} (short by {})",
+                    a.argument,
+                    a.experiment,
+                    num(-a.min_margin)
+                )
+            })
+            .collect();
+        let held: Vec<&str> = m.arguments.iter().map(|a| a.argument.as_str()).collect();
+        let line = if held.is_empty() {
+            format!("{}: holds no sign (every modulus pointwise)", m.method)
+        } else if short.is_empty() {
+            format!(
+                "{}: keeps {} on their sides in every nominal run",
+                m.method,
+                dedup(&held).join(", ")
+            )
+        } else {
+            format!("{}: crosses {}", m.method, short.join(", "))
+        };
+        let _ = writeln!(s, "signs {line}");
+    }
+}
+
+fn dedup<'a>(v: &[&'a str]) -> Vec<&'a str> {
+    let mut out: Vec<&str> = Vec::new();
+    for x in v {
+        if !out.contains(x) {
+            out.push(x);
+        }
+    }
+    out
+}
+
+fn verification(s: &mut String, v: &Verification) {
+    let _ = writeln!(
+        s,
+        "\nverification: {} trials (seed {}), {} samples per experiment",
+        v.runs, v.seed, v.samples
+    );
+    for k in &v.signs {
+        let _ = writeln!(
+            s,
+            "  experiment {} {}: on its side in {} % of the samples (worst trial {} %)",
+            k.experiment,
+            k.argument,
+            num(100.0 * k.mean),
+            num(100.0 * k.min)
+        );
+    }
+    for m in &v.methods {
+        let fits: Vec<String> = m.fits.iter().map(|(_, f)| num(*f)).collect();
+        let _ = writeln!(
+            s,
+            "  {}{}: {} failed, {} rank-deficient, {} diverged; validation fit {} %{}",
+            m.method,
+            if m.designed_for {
+                " (designed for)"
+            } else {
+                ""
+            },
+            m.failed,
+            m.rank_deficient,
+            m.diverged,
+            fits.join("/"),
+            m.failure
+                .as_ref()
+                .map_or(String::new(), |f| format!("; {f}"))
+        );
+    }
+    if let Some(m) = v.methods.iter().find(|m| m.designed_for) {
+        let width = m
+            .parameters
+            .iter()
+            .map(|q| q.name.len())
+            .max()
+            .unwrap_or(4)
+            .max(9);
+        let _ = writeln!(
+            s,
+            "  {:width$}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>8}",
+            "parameter", "truth", "mean", "spread", "predicted", "reported", "±2σ"
+        );
+        for q in &m.parameters {
+            let _ = writeln!(
+                s,
+                "  {:width$}  {:>10}  {:>10}  {:>10}  {:>10}  {:>10}  {:>8}",
+                q.name,
+                num(q.truth),
+                num(q.mean),
+                num(q.std),
+                q.predicted.map_or("-".into(), num),
+                q.reported.map_or("-".into(), num),
+                q.coverage
+                    .map_or("-".into(), |c| format!("{} %", num(100.0 * c)))
+            );
+        }
+    }
+}
+
+/// A failure's first clause (the code and what happened, not the column list).
+fn first_clause(detail: Option<&str>) -> &str {
+    let d = detail.unwrap_or("");
+    d.split([':', ';']).take(2).last().map_or(d, str::trim)
+}

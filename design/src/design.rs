@@ -1,0 +1,495 @@
+//! `design`: from the exact analysis's smallest set of sign patterns to runs
+//! an engineer can take to sea. Per pattern an operating point
+//! ([`operating_point`]); one excitation family for all runs, the largest
+//! amplitude (a fraction of each input's room) whose nominal trajectories
+//! keep every held argument beyond its band from every starting heading,
+//! chosen among the families by predicted information ([`predict`]); the
+//! standard errors against run length; what falls short and what would
+//! work when nothing fits.
+
+use crate::error::DesignError;
+use crate::excitation::Excitation;
+use crate::operating::{OperatingPoint, operating_point};
+use crate::plan::{Conditions, Family, SAMPLES};
+use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
+use crate::report::{self, Design, FamilyScore};
+use crate::signs::{Held, held, pointwise_states};
+use crate::trial::{Run, margins, simulate, start_headings, true_system};
+use leeway_estimate::{EstimateOptions, Method};
+use leeway_model::experiment::Experiment;
+use leeway_model::model::Model;
+use leeway_scenarios::synth::Truth;
+use leeway_structure::identify::{Analysis, Centring, centring_remedies, relevant_signs};
+use leeway_structure::ir::{PredictorKind, SignPattern};
+
+/// What the caller asks of a design.
+#[derive(Clone, Debug)]
+pub struct DesignOptions {
+    /// The estimator to design for (default IV3: measured media pointwise).
+    pub method: Method,
+    /// Relative standard error wanted for every θ (e.g. 0.05).
+    pub target: Option<f64>,
+    /// Seed of the excitation and of the prediction's realisation.
+    pub seed: u64,
+    /// Pilot trials calibrating the predicted standard errors (0: the
+    /// estimator's asymptotic ones).
+    pub pilot: usize,
+}
+
+impl Default for DesignOptions {
+    fn default() -> DesignOptions {
+        DesignOptions {
+            method: Method::Iv3,
+            target: None,
+            seed: 0,
+            pilot: 50,
+        }
+    }
+}
+
+/// One experiment before its excitation: its pattern, what it holds, where.
+#[derive(Clone, Debug)]
+pub struct Base {
+    /// ±1 per sign argument.
+    pub pattern: SignPattern,
+    /// The arguments it holds.
+    pub held: Vec<Held>,
+    /// Its operating point.
+    pub operating: OperatingPoint,
+}
+
+/// An excitation fitted to the bases: one per run, and how it fared.
+#[derive(Clone, Debug)]
+pub struct Fitted {
+    /// The family.
+    pub family: Family,
+    /// Per run.
+    pub excitations: Vec<Excitation>,
+    /// Fraction of each input's room used.
+    pub scale: f64,
+    /// Per run, per held argument: the smallest nominal margin over the
+    /// samples and starting headings.
+    pub min_margins: Vec<Vec<f64>>,
+}
+
+impl Fitted {
+    /// Whether every held argument keeps its side with its band.
+    pub fn feasible(&self) -> bool {
+        self.min_margins.iter().flatten().all(|m| *m >= 0.0)
+    }
+    /// The runs at `n` samples each.
+    pub fn runs(&self, bases: &[Base], n: usize, c: &Conditions) -> Vec<Run> {
+        bases
+            .iter()
+            .zip(&self.excitations)
+            .map(|(b, e)| Run {
+                x0: b.operating.steady.states.clone(),
+                inputs: e.generate(n, &c.limits),
+            })
+            .collect()
+    }
+}
+
+/// Designs the trial for `model` under conditions `c`.
+pub fn design(
+    model: &dyn Model,
+    c: &Conditions,
+    options: &DesignOptions,
+) -> Result<Design, DesignError> {
+    let ir = model.ir();
+    let kind = options.method.predictor();
+    let (centring, patterns, choose_one, mut assumptions) = experiments(model, kind)?;
+    assumptions.extend(c.assumptions.iter().cloned());
+    let runs_needed = if choose_one { 1 } else { patterns.len() };
+    let n = c.budget.samples(runs_needed, c.h);
+    if n < SAMPLES.0 {
+        return Err(DesignError::plan(
+            format!("the budget buys {n} samples per experiment for {runs_needed} experiments"),
+            &format!(
+                "a run needs at least {} samples: raise budget.time",
+                SAMPLES.0
+            ),
+        ));
+    }
+    let pointwise = pointwise_states(ir, kind);
+    let mut bases = bases(model, c, kind, &patterns, &pointwise, choose_one)?;
+    let time_scale = bases
+        .iter()
+        .map(|b| b.operating.steady.time_constant)
+        .max()
+        .unwrap_or(1)
+        .clamp(2, (n / 10).max(2));
+    // The noise the plan leaves out is 1 % of the planned excursion.
+    let first = fit(
+        model,
+        c,
+        &bases,
+        first_family(c),
+        time_scale,
+        n,
+        options.seed,
+    );
+    let noise = noise(model, c, &first.runs(&bases, n, c), &mut assumptions);
+    let c = Conditions {
+        state_noise: noise.states.iter().map(|s| Some(*s)).collect(),
+        heading_noise: Some(noise.heading),
+        ..c.clone()
+    };
+    for b in &mut bases {
+        b.held = held(ir, kind, &b.pattern, &c);
+    }
+    let estimate = EstimateOptions {
+        method: options.method,
+        centring: Some(centring),
+        ..Default::default()
+    };
+    let (fitted, prediction, scores) = choose_family(
+        model,
+        &c,
+        &bases,
+        &noise,
+        &estimate,
+        (time_scale, n),
+        options.seed,
+    );
+    let runs = fitted.runs(&bases, n, &c);
+    let mut prediction = prediction;
+    if let Some(p) = prediction.as_mut() {
+        let setting = Setting {
+            conditions: &c,
+            runs: &runs,
+            noise: &noise,
+            options: &estimate,
+        };
+        calibrate(model, setting, options.seed, options.pilot, p);
+    }
+    let (records, nominal) = nominal_truths(model, &c, &runs, &noise).into_iter().unzip();
+    let validation = fitted.excitations.first().map(|e| Run {
+        x0: bases[0].operating.steady.states.clone(),
+        inputs: Excitation {
+            seed: leeway_scenarios::engine::keyed_seed(options.seed, "validation", 0),
+            ..e.clone()
+        }
+        .generate(n, &c.limits),
+    });
+    Ok(report::assemble(report::Parts {
+        model,
+        conditions: &c,
+        options,
+        centring,
+        bases: &bases,
+        fitted,
+        runs,
+        nominal,
+        records,
+        prediction,
+        families: scores,
+        noise,
+        assumptions,
+        validation,
+    }))
+}
+
+/// Fits every family the plan allows (or its one), scores the feasible
+/// ones by the estimator's asymptotic covariance on one realisation, and
+/// keeps the best (or, when none is feasible, the first, to report what
+/// falls short). `(time_scale, n)`: the craft's time constant and the run
+/// length, samples.
+fn choose_family(
+    model: &dyn Model,
+    c: &Conditions,
+    bases: &[Base],
+    noise: &Noise,
+    estimate: &EstimateOptions,
+    (time_scale, n): (usize, usize),
+    seed: u64,
+) -> (Fitted, Option<Prediction>, Vec<FamilyScore>) {
+    let families: Vec<Family> = c.family.map_or(Family::ALL.to_vec(), |f| vec![f]);
+    let mut tried: Vec<(Fitted, Option<Prediction>, FamilyScore)> = Vec::new();
+    for family in families {
+        let fitted = fit(model, c, bases, family, time_scale, n, seed);
+        let (prediction, score) = if fitted.feasible() {
+            let runs = fitted.runs(bases, n, c);
+            let setting = Setting {
+                conditions: c,
+                runs: &runs,
+                noise,
+                options: estimate,
+            };
+            match predict(model, setting, seed) {
+                Ok(p) => {
+                    let s = p.score();
+                    (Some(p), FamilyScore::scored(family, fitted.scale, s))
+                }
+                Err(e) => (None, FamilyScore::failed(family, fitted.scale, e)),
+            }
+        } else {
+            (None, FamilyScore::infeasible(family))
+        };
+        tried.push((fitted, prediction, score));
+    }
+    let scores: Vec<FamilyScore> = tried.iter().map(|t| t.2.clone()).collect();
+    let best = tried
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| t.1.as_ref().is_some_and(|p| p.score().is_finite()))
+        .min_by(|a, b| a.1.2.score.total_cmp(&b.1.2.score))
+        .map_or(0, |(i, _)| i);
+    let (fitted, prediction, _) = tried.swap_remove(best);
+    let prediction = prediction.filter(|p| p.score().is_finite());
+    (fitted, prediction, scores)
+}
+
+/// The centring and sign patterns to design for: the model's centring if
+/// θ is identifiable under it, else the first centring that identifies θ
+/// (said in the assumptions: the estimate must use it too).
+fn experiments(
+    model: &dyn Model,
+    kind: PredictorKind,
+) -> Result<(Centring, Vec<SignPattern>, bool, Vec<String>), DesignError> {
+    let ir = model.ir();
+    let centring = Centring::for_model(ir, kind);
+    let analysis = Analysis::with_centring(ir, kind, centring);
+    if let Some(found) = analysis.required() {
+        if found.patterns.len() == 1 && analysis.any_single_pattern() == Some(true) {
+            return Ok((centring, single_candidates(ir, kind), true, Vec::new()));
+        }
+        return Ok((centring, found.patterns, false, Vec::new()));
+    }
+    let remedy = centring_remedies(ir, kind, centring).into_iter().next().ok_or_else(|| {
+        DesignError {
+            code: "not-identifiable",
+            ..DesignError::cannot(
+                "θ is not identifiable from any set of experiments, so no trial can identify it",
+                "`leeway check MODEL` names the parameters that enter together: merge them, measure the medium (IV3), or estimate the identifiable combinations with --aggregate",
+            )
+        }
+    })?;
+    let note = format!(
+        "θ is not identifiable with {} centring (it annihilates a constant term); designed for `--centring {}`: estimate with it",
+        centring.name(),
+        remedy.centring.name()
+    );
+    Ok((remedy.centring, remedy.patterns, false, vec![note]))
+}
+
+/// When any one pattern identifies θ, every pattern over the held signs is
+/// a candidate for the single experiment (at most 16); [`bases`] keeps the
+/// one with the largest margin.
+fn single_candidates(ir: &leeway_structure::ir::Ir, kind: PredictorKind) -> Vec<SignPattern> {
+    let relevant = relevant_signs(ir, kind);
+    if relevant.is_empty() || relevant.len() > 4 {
+        return vec![vec![1; ir.sign_args.len()]];
+    }
+    (0..1usize << relevant.len())
+        .map(|bits| {
+            let mut p = vec![1i8; ir.sign_args.len()];
+            for (j, a) in relevant.iter().enumerate() {
+                if bits >> j & 1 == 1 {
+                    p[*a] = -1;
+                }
+            }
+            p
+        })
+        .collect()
+}
+
+/// The operating point of each pattern (of the single-experiment
+/// candidates, the best one).
+fn bases(
+    model: &dyn Model,
+    c: &Conditions,
+    kind: PredictorKind,
+    patterns: &[SignPattern],
+    pointwise: &[usize],
+    choose_one: bool,
+) -> Result<Vec<Base>, DesignError> {
+    let ir = model.ir();
+    let mut out = Vec::new();
+    for p in patterns {
+        let h = held(ir, kind, p, c);
+        let op = operating_point(model, c, &h, pointwise).ok_or_else(|| {
+            DesignError::cannot(
+                "no input within the limits brings the nominal craft to a steady state",
+                "check the nominal θ (a stable craft: damping terms negative) and the inputs' ranges",
+            )
+        })?;
+        out.push(Base {
+            pattern: p.clone(),
+            held: h,
+            operating: op,
+        });
+    }
+    if choose_one {
+        let best = out
+            .into_iter()
+            .max_by(|a, b| {
+                a.operating
+                    .min_margin()
+                    .total_cmp(&b.operating.min_margin())
+            })
+            .into_iter()
+            .collect();
+        return Ok(best);
+    }
+    Ok(out)
+}
+
+fn first_family(c: &Conditions) -> Family {
+    c.family.unwrap_or(Family::ALL[0])
+}
+
+/// The largest fraction of each input's room (bisected) whose nominal
+/// trajectories keep every held argument beyond its band.
+pub fn fit(
+    model: &dyn Model,
+    c: &Conditions,
+    bases: &[Base],
+    family: Family,
+    time_scale: usize,
+    n: usize,
+    seed: u64,
+) -> Fitted {
+    let excite = |scale: f64| -> Vec<Excitation> {
+        bases
+            .iter()
+            .enumerate()
+            .map(|(e, b)| Excitation {
+                family,
+                offsets: b.operating.offsets.clone(),
+                amplitudes: b
+                    .operating
+                    .offsets
+                    .iter()
+                    .zip(&c.limits)
+                    .map(|(u, l)| scale * (u - l.low).min(l.high - u))
+                    .collect(),
+                time_scale,
+                seed: leeway_scenarios::engine::keyed_seed(seed, "excitation", e),
+            })
+            .collect()
+    };
+    let evaluate = |scale: f64| {
+        let fitted = Fitted {
+            family,
+            excitations: excite(scale),
+            scale,
+            min_margins: Vec::new(),
+        };
+        let runs = fitted.runs(bases, n, c);
+        let min_margins = nominal_margins(model, c, bases, &runs);
+        Fitted {
+            min_margins,
+            ..fitted
+        }
+    };
+    let full = evaluate(1.0);
+    if full.feasible() {
+        return full;
+    }
+    let none = evaluate(0.0);
+    if !none.feasible() {
+        return none;
+    }
+    let (mut lo, mut hi) = (none, 1.0);
+    for _ in 0..10 {
+        let mid = 0.5 * (lo.scale + hi);
+        let f = evaluate(mid);
+        if f.feasible() {
+            lo = f;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// Per run, per held argument: the smallest margin along the nominal
+/// trajectory from every starting heading (a diverging simulation counts
+/// as −∞).
+fn nominal_margins(
+    model: &dyn Model,
+    c: &Conditions,
+    bases: &[Base],
+    runs: &[Run],
+) -> Vec<Vec<f64>> {
+    let system = true_system(c, &[], 0.0, false);
+    let headings = start_headings(model, c);
+    bases
+        .iter()
+        .zip(runs)
+        .map(|(b, run)| {
+            let mut worst = vec![f64::INFINITY; b.held.len()];
+            for psi0 in &headings {
+                let (_, truth) = simulate(model, &system, run, "nominal", *psi0, 0);
+                if truth.states.iter().flatten().any(|x| !x.is_finite()) {
+                    return vec![f64::NEG_INFINITY; b.held.len().max(1)];
+                }
+                for (w, m) in worst
+                    .iter_mut()
+                    .zip(margins(model, &truth, &run.inputs, &b.held))
+                {
+                    *w = m.into_iter().fold(*w, f64::min);
+                }
+            }
+            worst
+        })
+        .collect()
+}
+
+/// The measurement noise: the plan's, else 1 % of each state's standard
+/// deviation along the nominal runs (stated), and 0.005 rad for a heading.
+fn noise(model: &dyn Model, c: &Conditions, runs: &[Run], assumptions: &mut Vec<String>) -> Noise {
+    let ir = model.ir();
+    let system = true_system(c, &[], 0.0, false);
+    let truths: Vec<Truth> = runs
+        .iter()
+        .map(|r| simulate(model, &system, r, "nominal", 0.0, 0).1)
+        .collect();
+    let states = (0..ir.states.len())
+        .map(|s| {
+            c.state_noise[s].unwrap_or_else(|| {
+                let (mut n, mut sum, mut sq) = (0.0, 0.0, 0.0);
+                for x in truths.iter().flat_map(|t| &t.states[s]) {
+                    n += 1.0;
+                    sum += x;
+                    sq += x * x;
+                }
+                let mean = sum / f64::max(n, 1.0);
+                let std = (sq / f64::max(n, 1.0) - mean * mean).max(0.0).sqrt();
+                let sigma = 0.01 * std.max(1e-6 * (1.0 + mean.abs()));
+                assumptions.push(format!(
+                    "noise on {}: {} (1 % of its planned excursion; the plan gives none)",
+                    ir.states[s],
+                    leeway_model::number::short_number(sigma)
+                ));
+                sigma
+            })
+        })
+        .collect();
+    let heading = match (&ir.rotation, c.heading_noise) {
+        (leeway_structure::ir::Rotation::Planar { heading, .. }, None) => {
+            assumptions.push(format!(
+                "noise on {heading}: 0.005 rad (a gyro compass; the plan gives none)"
+            ));
+            0.005
+        }
+        (_, h) => h.unwrap_or(0.0),
+    };
+    Noise { states, heading }
+}
+
+/// The nominal record and trajectory of each run from heading 0 (what the
+/// files and the figure show).
+fn nominal_truths(
+    model: &dyn Model,
+    c: &Conditions,
+    runs: &[Run],
+    noise: &Noise,
+) -> Vec<(Experiment, Truth)> {
+    let system = true_system(c, &noise.states, noise.heading, false);
+    runs.iter()
+        .enumerate()
+        .map(|(e, r)| simulate(model, &system, r, &format!("run-{}", e + 1), 0.0, 0))
+        .collect()
+}

@@ -1,0 +1,576 @@
+//! The plan file: what an engineer knows before the trial (TOML or JSON,
+//! `docs/design.md`), read into [`Conditions`] against a model. Everything
+//! the file leaves out gets a stated default ([`Conditions::assumptions`]),
+//! except an actuator's range: the design is bounded by it and no default
+//! would be honest.
+
+use crate::error::DesignError;
+use leeway_structure::ir::{Ir, Rotation};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// The plan file as written.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlanFile {
+    /// Sample time of the trial's log, s (default: the model's `step`).
+    pub step: Option<f64>,
+    /// θ to design for, by name (default: the model's `nominal { }`).
+    #[serde(default)]
+    pub nominal: BTreeMap<String, f64>,
+    /// Limits per input.
+    #[serde(default)]
+    pub inputs: BTreeMap<String, InputLimits>,
+    /// Expected statistics per medium.
+    #[serde(default)]
+    pub disturbances: BTreeMap<String, MediumPlan>,
+    /// Measurement noise std per state and for the heading.
+    #[serde(default)]
+    pub noise: BTreeMap<String, f64>,
+    /// Time at sea.
+    pub budget: Option<Budget>,
+    /// The excitation family (`auto`, the default, chooses by predicted information).
+    pub excitation: Option<String>,
+}
+
+/// An actuator's limits.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InputLimits {
+    /// `[low, high]`, in the input's units.
+    pub range: [f64; 2],
+    /// Largest change per second (optional).
+    pub rate: Option<f64>,
+}
+
+/// One number for every component, or one per component.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum PerComponent {
+    /// The same value for each component.
+    One(f64),
+    /// In the medium's component order.
+    Each(Vec<f64>),
+}
+
+/// A medium's expected statistics.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediumPlan {
+    /// Mean per component (earth frame for an earth-fixed medium).
+    pub mean: Option<PerComponent>,
+    /// Standard deviation about the mean, per component.
+    pub std: Option<PerComponent>,
+    /// Correlation time, s (0: white from sample to sample).
+    pub correlation_time: Option<f64>,
+    /// How far the true mean may be from `mean` (a speed, any direction).
+    pub mean_uncertainty: Option<f64>,
+    /// Sensor noise std of a measured medium, per component.
+    pub sensor_noise: Option<PerComponent>,
+}
+
+/// The time at sea.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Budget {
+    /// Total time at sea, s, shared equally by the experiments.
+    pub time: Option<f64>,
+    /// Samples per experiment.
+    pub samples: Option<usize>,
+}
+
+/// An actuator's limits in samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Limits {
+    /// Lowest value.
+    pub low: f64,
+    /// Highest value.
+    pub high: f64,
+    /// Largest change per sample (`∞` without a rate limit).
+    pub per_sample: f64,
+}
+
+impl Limits {
+    /// `high − low`.
+    pub fn span(&self) -> f64 {
+        self.high - self.low
+    }
+}
+
+/// The excitation families a design can use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Family {
+    /// Smoothed pulses of random width and amplitude (the paper's §V input).
+    Pulses,
+    /// A pseudo-random binary sequence with a random hold time.
+    Prbs,
+    /// A sum of sines over the craft's band, random phases.
+    Multisine,
+    /// Square waves of incommensurate periods per input.
+    Zigzag,
+}
+
+impl Family {
+    /// Every family, in the order they are tried.
+    pub const ALL: [Family; 4] = [
+        Family::Pulses,
+        Family::Prbs,
+        Family::Multisine,
+        Family::Zigzag,
+    ];
+    /// `pulses`, `prbs`, ...
+    pub fn name(self) -> &'static str {
+        match self {
+            Family::Pulses => "pulses",
+            Family::Prbs => "prbs",
+            Family::Multisine => "multisine",
+            Family::Zigzag => "zigzag",
+        }
+    }
+}
+
+/// The plan read against a model: one value per input, component and state.
+#[derive(Clone, Debug)]
+pub struct Conditions {
+    /// θ designed for.
+    pub theta: Vec<f64>,
+    /// Sample time, s.
+    pub h: f64,
+    /// Per input.
+    pub limits: Vec<Limits>,
+    /// Mean per component.
+    pub mean: Vec<f64>,
+    /// Std per component.
+    pub std: Vec<f64>,
+    /// Correlation time per component, s.
+    pub correlation_time: Vec<f64>,
+    /// Uncertainty of the mean per component (the medium's speed bound).
+    pub uncertainty: Vec<f64>,
+    /// Sensor noise per component (measured media).
+    pub sensor_noise: Vec<f64>,
+    /// Measurement noise per state; `None`: 1 % of the planned excursion
+    /// (decided once the nominal trajectory is known, and stated).
+    pub state_noise: Vec<Option<f64>>,
+    /// Heading noise, rad (`None` as for states).
+    pub heading_noise: Option<f64>,
+    /// Samples per experiment, or the total time to share.
+    pub budget: BudgetRule,
+    /// A family the plan insists on.
+    pub family: Option<Family>,
+    /// What the plan did not say and the design assumed, in words.
+    pub assumptions: Vec<String>,
+}
+
+/// How the run length follows from the budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BudgetRule {
+    /// Samples per experiment.
+    Samples(usize),
+    /// Total seconds, shared by the experiments.
+    Time(f64),
+    /// Seconds per experiment.
+    Each(f64),
+}
+
+impl BudgetRule {
+    /// Samples per experiment when `experiments` share the budget.
+    pub fn samples(self, experiments: usize, h: f64) -> usize {
+        match self {
+            BudgetRule::Samples(n) => n,
+            BudgetRule::Time(t) => (t / h / experiments.max(1) as f64).floor() as usize,
+            BudgetRule::Each(t) => (t / h).floor() as usize,
+        }
+    }
+}
+
+/// The default time per experiment when the plan gives no budget, s.
+pub const DEFAULT_SECONDS: f64 = 600.0;
+/// Bounds on samples per experiment.
+pub const SAMPLES: (usize, usize) = (50, 10_000_000);
+
+/// Reads a plan file's text: JSON when `json` (or when the text starts with
+/// `{`), TOML otherwise. Syntax errors carry the line and column.
+pub fn parse(text: &str, json: bool) -> Result<PlanFile, DesignError> {
+    if json || text.trim_start().starts_with('{') {
+        serde_json::from_str(text).map_err(|e| {
+            DesignError::plan(
+                format!("{e}"),
+                "the plan is JSON (docs/design.md lists its fields)",
+            )
+            .at(e.line(), e.column())
+        })
+    } else {
+        toml::from_str(text).map_err(|e| {
+            let at = e.span().map(|s| line_col(text, s.start));
+            let message = e.message().to_string();
+            let err = DesignError::plan(
+                message,
+                "the plan is TOML (docs/design.md lists its fields)",
+            );
+            match at {
+                Some((l, c)) => err.at(l, c),
+                None => err,
+            }
+        })
+    }
+}
+
+fn line_col(text: &str, byte: usize) -> (usize, usize) {
+    let before = &text[..byte.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+impl PlanFile {
+    /// The conditions for `ir`, every name checked and every number bounded.
+    pub fn conditions(&self, ir: &Ir) -> Result<Conditions, DesignError> {
+        if matches!(ir.rotation, Rotation::Measured { .. }) {
+            return Err(DesignError::cannot(
+                "the rotation is measured entry by entry (`rotation { }`): a design cannot predict R along a trial",
+                "give the craft a heading (`heading psi integrates r`) if it turns in the plane, or design its runs by hand and check them with `leeway check --patterns`",
+            ));
+        }
+        let mut assumptions = Vec::new();
+        let theta = self.theta(ir)?;
+        let h = self.step(ir, &mut assumptions)?;
+        let limits = self.limits(ir, h)?;
+        let media = self.media(ir, &mut assumptions)?;
+        let (state_noise, heading_noise) = self.noise(ir)?;
+        let budget = self.budget(&mut assumptions)?;
+        let family = match self.excitation.as_deref() {
+            None | Some("auto") => None,
+            Some(name) => Some(
+                Family::ALL
+                    .into_iter()
+                    .find(|f| f.name() == name)
+                    .ok_or_else(|| {
+                        DesignError::plan(
+                            format!("excitation = \"{name}\" is not a family"),
+                            "use auto, pulses, prbs, multisine or zigzag",
+                        )
+                    })?,
+            ),
+        };
+        Ok(Conditions {
+            theta,
+            h,
+            limits,
+            mean: media.mean,
+            std: media.std,
+            correlation_time: media.time,
+            uncertainty: media.uncertainty,
+            sensor_noise: media.sensor,
+            state_noise,
+            heading_noise,
+            budget,
+            family,
+            assumptions,
+        })
+    }
+
+    fn theta(&self, ir: &Ir) -> Result<Vec<f64>, DesignError> {
+        let mut theta: Vec<f64> = ir.parameters.iter().map(|p| p.nominal).collect();
+        for (name, value) in &self.nominal {
+            let i = ir
+                .parameters
+                .iter()
+                .position(|p| &p.name == name)
+                .ok_or_else(|| unknown("nominal", name, ir.parameters.iter().map(|p| &p.name)))?;
+            finite(&format!("nominal.{name}"), *value)?;
+            theta[i] = *value;
+        }
+        Ok(theta)
+    }
+
+    fn step(&self, ir: &Ir, assumptions: &mut Vec<String>) -> Result<f64, DesignError> {
+        let h = match (self.step, ir.step) {
+            (Some(h), _) => h,
+            (None, Some(h)) => {
+                assumptions.push(format!("sample time: the model's step, {h} s"));
+                h
+            }
+            (None, None) => {
+                return Err(DesignError::plan(
+                    "the model declares no `step` and the plan gives none".to_string(),
+                    "add `step = 0.1` (the trial log's sample time, s) to the plan",
+                ));
+            }
+        };
+        if !(h.is_finite() && h > 0.0 && h <= 3600.0) {
+            return Err(DesignError::plan(
+                format!("step = {h} is not a sample time"),
+                "give a positive sample time in seconds, at most 3600",
+            ));
+        }
+        Ok(h)
+    }
+
+    fn limits(&self, ir: &Ir, h: f64) -> Result<Vec<Limits>, DesignError> {
+        for name in self.inputs.keys() {
+            if !ir.inputs.contains(name) {
+                return Err(unknown("inputs", name, ir.inputs.iter()));
+            }
+        }
+        ir.inputs
+            .iter()
+            .map(|name| {
+                let l = self.inputs.get(name).ok_or_else(|| {
+                    DesignError::plan(
+                        format!("the plan gives no range for the input `{name}`"),
+                        &format!(
+                            "an actuator's range bounds the design: add `[inputs.{name}]` with `range = [low, high]`"
+                        ),
+                    )
+                })?;
+                let [low, high] = l.range;
+                if !(low.is_finite() && high.is_finite() && low < high) {
+                    return Err(DesignError::plan(
+                        format!("inputs.{name}.range = [{low}, {high}] is not a range"),
+                        "give [low, high] with low < high, both finite",
+                    ));
+                }
+                let per_sample = match l.rate {
+                    None => f64::INFINITY,
+                    Some(r) if r.is_finite() && r > 0.0 => r * h,
+                    Some(r) => {
+                        return Err(DesignError::plan(
+                            format!("inputs.{name}.rate = {r} is not a rate"),
+                            "give the largest change per second, positive",
+                        ));
+                    }
+                };
+                Ok(Limits {
+                    low,
+                    high,
+                    per_sample,
+                })
+            })
+            .collect()
+    }
+
+    fn noise(&self, ir: &Ir) -> Result<(Vec<Option<f64>>, Option<f64>), DesignError> {
+        let heading = match &ir.rotation {
+            Rotation::Planar { heading, .. } => Some(heading.as_str()),
+            _ => None,
+        };
+        for (name, value) in &self.noise {
+            if !ir.states.contains(name) && Some(name.as_str()) != heading {
+                return Err(unknown(
+                    "noise",
+                    name,
+                    ir.states.iter().map(String::as_str).chain(heading),
+                ));
+            }
+            non_negative(&format!("noise.{name}"), *value)?;
+        }
+        let states = ir
+            .states
+            .iter()
+            .map(|s| self.noise.get(s).copied())
+            .collect();
+        Ok((states, heading.and_then(|h| self.noise.get(h).copied())))
+    }
+
+    fn budget(&self, assumptions: &mut Vec<String>) -> Result<BudgetRule, DesignError> {
+        let b = self.budget.clone().unwrap_or_default();
+        match (b.time, b.samples) {
+            (Some(_), Some(_)) => Err(DesignError::plan(
+                "the budget gives both `time` and `samples`".to_string(),
+                "give the total time at sea (`time`, s) or the samples per experiment (`samples`), not both",
+            )),
+            (Some(t), None) if t.is_finite() && t > 0.0 => Ok(BudgetRule::Time(t)),
+            (Some(t), None) => Err(DesignError::plan(
+                format!("budget.time = {t} is not a duration"),
+                "give the total time at sea in seconds",
+            )),
+            (None, Some(n)) if (SAMPLES.0..=SAMPLES.1).contains(&n) => Ok(BudgetRule::Samples(n)),
+            (None, Some(n)) => Err(DesignError::plan(
+                format!(
+                    "budget.samples = {n} is not in {}..={}",
+                    SAMPLES.0, SAMPLES.1
+                ),
+                "give the samples per experiment",
+            )),
+            (None, None) => {
+                assumptions.push(format!(
+                    "budget: {DEFAULT_SECONDS} s per experiment (the plan gives none)"
+                ));
+                Ok(BudgetRule::Each(DEFAULT_SECONDS))
+            }
+        }
+    }
+}
+
+/// Per-component statistics of every medium.
+struct Media {
+    mean: Vec<f64>,
+    std: Vec<f64>,
+    time: Vec<f64>,
+    uncertainty: Vec<f64>,
+    sensor: Vec<f64>,
+}
+
+impl PlanFile {
+    fn media(&self, ir: &Ir, assumptions: &mut Vec<String>) -> Result<Media, DesignError> {
+        for name in self.disturbances.keys() {
+            if !ir.disturbances.iter().any(|d| &d.name == name) {
+                return Err(unknown(
+                    "disturbances",
+                    name,
+                    ir.disturbances.iter().map(|d| &d.name),
+                ));
+            }
+        }
+        let n = ir.components.len();
+        let mut m = Media {
+            mean: vec![0.0; n],
+            std: vec![0.0; n],
+            time: vec![0.0; n],
+            uncertainty: vec![0.0; n],
+            sensor: vec![0.0; n],
+        };
+        for d in &ir.disturbances {
+            let Some(p) = self.disturbances.get(&d.name) else {
+                assumptions.push(format!(
+                    "{}: calm (mean 0, std 0; the plan gives no statistics)",
+                    d.name
+                ));
+                continue;
+            };
+            let key = |field: &str| format!("disturbances.{}.{field}", d.name);
+            let k = d.components.len();
+            let fill = |field: &str, v: &Option<PerComponent>, out: &mut Vec<f64>, signed: bool| {
+                let values = each(&key(field), v, k)?;
+                for (c, x) in d.components.iter().zip(values) {
+                    if signed {
+                        finite(&key(field), x)?
+                    } else {
+                        non_negative(&key(field), x)?
+                    }
+                    out[*c] = x;
+                }
+                Ok::<(), DesignError>(())
+            };
+            fill("mean", &p.mean, &mut m.mean, true)?;
+            fill("std", &p.std, &mut m.std, false)?;
+            if p.sensor_noise.is_some() && !d.measured {
+                return Err(DesignError::plan(
+                    format!(
+                        "{} has a sensor_noise but the model does not measure {}",
+                        key("sensor_noise"),
+                        d.name
+                    ),
+                    "sensor noise belongs to a medium declared `measured`; give the states' noise under [noise]",
+                ));
+            }
+            fill("sensor_noise", &p.sensor_noise, &mut m.sensor, false)?;
+            let t = p.correlation_time.unwrap_or(0.0);
+            non_negative(&key("correlation_time"), t)?;
+            let u = p.mean_uncertainty.unwrap_or(0.0);
+            non_negative(&key("mean_uncertainty"), u)?;
+            for c in &d.components {
+                m.time[*c] = t;
+                m.uncertainty[*c] = u;
+            }
+            if p.correlation_time.is_none() && p.std.is_some() {
+                assumptions.push(format!(
+                    "{}: white from sample to sample (no correlation_time)",
+                    d.name
+                ));
+            }
+        }
+        Ok(m)
+    }
+}
+
+fn each(key: &str, v: &Option<PerComponent>, k: usize) -> Result<Vec<f64>, DesignError> {
+    match v {
+        None => Ok(vec![0.0; k]),
+        Some(PerComponent::One(x)) => Ok(vec![*x; k]),
+        Some(PerComponent::Each(xs)) if xs.len() == k => Ok(xs.clone()),
+        Some(PerComponent::Each(xs)) => Err(DesignError::plan(
+            format!(
+                "{key} has {} values; the medium has {k} components",
+                xs.len()
+            ),
+            "give one number for every component, or one per component in the model's order",
+        )),
+    }
+}
+
+fn finite(key: &str, x: f64) -> Result<(), DesignError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(DesignError::plan(
+            format!("{key} = {x} is not a number"),
+            "give a finite number",
+        ))
+    }
+}
+
+fn non_negative(key: &str, x: f64) -> Result<(), DesignError> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(DesignError::plan(
+            format!("{key} = {x} is not a non-negative number"),
+            "a standard deviation, time or bound is ≥ 0 and finite",
+        ))
+    }
+}
+
+fn unknown<'a>(
+    table: &str,
+    name: &str,
+    known: impl Iterator<Item = impl AsRef<str> + 'a>,
+) -> DesignError {
+    let known: Vec<String> = known.map(|s| s.as_ref().to_string()).collect();
+    DesignError::plan(
+        format!(
+            "{table}.{name}: the model has no {} named `{name}`",
+            singular(table)
+        ),
+        &format!("the model's: {}", known.join(", ")),
+    )
+}
+
+fn singular(table: &str) -> &str {
+    match table {
+        "inputs" => "input",
+        "disturbances" => "disturbance",
+        "nominal" => "parameter",
+        _ => "state or heading",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toml_and_json_read_alike() {
+        let t = parse(
+            "step = 0.5\n[inputs.f]\nrange = [-1, 2]\nrate = 4\n[disturbances.current]\nmean = [0.1, 0.2]\nstd = 0.05\n",
+            false,
+        )
+        .expect("reads");
+        let j = parse(
+            r#"{"step": 0.5, "inputs": {"f": {"range": [-1, 2], "rate": 4}}, "disturbances": {"current": {"mean": [0.1, 0.2], "std": 0.05}}}"#,
+            true,
+        )
+        .expect("reads");
+        assert_eq!(format!("{t:?}"), format!("{j:?}"));
+    }
+
+    #[test]
+    fn syntax_errors_are_located() {
+        let e = parse("step = 0.5\n[inputs.f]\nrange = [-1, \n", false).expect_err("refused");
+        assert_eq!(e.line, Some(3), "{e:?}");
+        let e = parse("{\"step\": 0.5,\n \"colour\": 1}", true).expect_err("refused");
+        assert_eq!(e.line, Some(2), "{e:?}");
+        assert!(e.message.contains("colour"), "{e:?}");
+    }
+}

@@ -1,0 +1,350 @@
+//! `--verify M`: the Monte Carlo study of a design, for any model. Each run
+//! realises every experiment of the design (the plan's random disturbances
+//! and noise, seeded by the run's index), estimates with every method, and
+//! validates each estimate on a fresh nominal run; the summary sets the
+//! spread of the estimates against the predicted standard errors (coverage
+//! of ±2σ), the signs actually kept, rank deficiencies and fits. Runs go
+//! through the study engine `leeway_scenarios::engine::campaign`, as
+//! `leeway reproduce` does.
+
+use crate::predict::Noise;
+use crate::report::Design;
+use crate::signs::Held;
+use crate::trial::{Run, kept, simulate, true_system};
+use leeway_estimate::{Estimate, EstimateOptions, Method, estimate};
+use leeway_model::experiment::{Experiment, Source};
+use leeway_model::model::Model;
+use leeway_model::simulate::{Disturbances, fits};
+use leeway_scenarios::engine::{campaign, keyed_seed};
+use leeway_structure::identify::Centring;
+use serde::Serialize;
+
+/// The verification of a design.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verification {
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// Master seed.
+    pub seed: u64,
+    /// Samples per experiment.
+    pub samples: usize,
+    /// Per experiment and held argument: the fraction of samples on its side.
+    pub signs: Vec<SignKept>,
+    /// Per method.
+    pub methods: Vec<MethodVerification>,
+}
+
+/// How often a held argument kept its side.
+#[derive(Clone, Debug, Serialize)]
+pub struct SignKept {
+    /// Experiment, from 1.
+    pub experiment: usize,
+    /// `water.u`.
+    pub argument: String,
+    /// Mean over runs of the fraction of samples on its side.
+    pub mean: f64,
+    /// The smallest such fraction of any run.
+    pub min: f64,
+}
+
+/// One method's figures over the runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodVerification {
+    /// `iv3`.
+    pub method: String,
+    /// The method the design was made for.
+    pub designed_for: bool,
+    /// Runs whose estimate failed.
+    pub failed: usize,
+    /// The first failure's message.
+    pub failure: Option<String>,
+    /// Runs whose data left a column unexcited or the system rank deficient.
+    pub rank_deficient: usize,
+    /// Per θ.
+    pub parameters: Vec<ParameterVerification>,
+    /// Mean validation fit per state (%), over runs whose model did not diverge.
+    pub fits: Vec<(String, f64)>,
+    /// Runs whose model diverged on the validation run.
+    pub diverged: usize,
+}
+
+/// One θ over the runs.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParameterVerification {
+    /// Its name.
+    pub name: String,
+    /// The true value (the plan's nominal).
+    pub truth: f64,
+    /// Mean of the estimates.
+    pub mean: f64,
+    /// Their standard deviation (the verified standard error).
+    pub std: f64,
+    /// The design's predicted standard error.
+    pub predicted: Option<f64>,
+    /// Fraction of runs with `|θ̂ − θ0| ≤ 2σ_predicted`.
+    pub coverage: Option<f64>,
+    /// The estimator's own standard error, averaged over the runs (the
+    /// designed method only).
+    pub reported: Option<f64>,
+}
+
+/// One method's estimate in a run and its validation fits (`None`:
+/// diverged), or why it failed.
+type Outcome = Result<(Estimate, Option<Vec<f64>>), String>;
+
+/// One run's results: per method the estimate (or its error), per
+/// experiment and held argument the fraction kept.
+struct RunResult {
+    estimates: Vec<Outcome>,
+    kept: Vec<Vec<f64>>,
+}
+
+/// Verifies `design` by `runs` Monte Carlo runs, seeded by `seed`;
+/// `progress` is called after each run.
+pub fn verify(
+    model: &dyn Model,
+    design: &Design,
+    runs: usize,
+    seed: u64,
+    progress: &(dyn Fn() + Sync),
+) -> Option<Verification> {
+    let noise = design.noise_used.as_ref()?;
+    let validation = validation_experiment(model, design, noise)?;
+    let designed = design.method_used?;
+    let methods = Method::ALL;
+    let results = campaign(runs, progress, &|r| {
+        one_run(
+            model,
+            design,
+            noise,
+            &validation,
+            &methods,
+            designed,
+            keyed_seed(seed, "verify", r),
+        )
+    });
+    Some(summarise(
+        model, design, &methods, designed, runs, seed, &results,
+    ))
+}
+
+fn one_run(
+    model: &dyn Model,
+    design: &Design,
+    noise: &Noise,
+    validation: &Experiment,
+    methods: &[Method],
+    designed: Method,
+    seed: u64,
+) -> RunResult {
+    let Some(c) = design.conditions.as_ref() else {
+        return RunResult {
+            estimates: Vec::new(),
+            kept: Vec::new(),
+        };
+    };
+    let system = true_system(c, &noise.states, noise.heading, true);
+    let mut experiments = Vec::new();
+    let mut kept_fractions = Vec::new();
+    for (e, (run, held)) in design.runs.iter().zip(&design.held).enumerate() {
+        let (exp, truth) = simulate(
+            model,
+            &system,
+            run,
+            &format!("run{}", e + 1),
+            0.0,
+            keyed_seed(seed, "experiment", e),
+        );
+        kept_fractions.push(kept(model, &truth, &run.inputs, held));
+        experiments.push(exp);
+    }
+    let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
+    let estimates = methods
+        .iter()
+        .map(|m| {
+            let options = EstimateOptions {
+                method: *m,
+                centring: centring_for(design, *m),
+                // The designed method's own standard errors, averaged over
+                // the runs, say whether the estimator's σ is calibrated.
+                covariance: *m == designed,
+                own_simulation: false,
+                ..Default::default()
+            };
+            let est = estimate(model, &sources, &options)
+                .map_err(|e| format!("{}: {}", e.code, e.message))?;
+            let fit = validate(model, &est, validation);
+            Ok((est, fit))
+        })
+        .collect();
+    RunResult {
+        estimates,
+        kept: kept_fractions,
+    }
+}
+
+/// The validation run: run 1's operating point and excitation family with
+/// another seed, nominal (mean disturbances, no noise).
+fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> Option<Experiment> {
+    let c = design.conditions.as_ref()?;
+    let run: &Run = design.validation.as_ref()?;
+    let system = true_system(c, &noise.states, noise.heading, false);
+    Some(simulate(model, &system, run, "validation", 0.0, 0).0)
+}
+
+/// Fits per state of `est` simulated on `validation` with its disturbance
+/// means held; `None` when it diverged.
+fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Option<Vec<f64>> {
+    let ir = model.ir();
+    let means: Vec<f64> = ir
+        .components
+        .iter()
+        .map(|comp| {
+            let medium = &ir.disturbances[comp.disturbance].name;
+            est.disturbances
+                .iter()
+                .find(|d| &d.disturbance == medium && d.component == comp.name)
+                .map_or(0.0, |d| d.mean)
+        })
+        .collect();
+    let sim = leeway_model::simulate::simulate(
+        model,
+        &est.theta,
+        validation,
+        Disturbances::Constant(&means),
+    );
+    let f = fits(validation, &sim);
+    (!sim.diverged && f.iter().all(|v| v.is_finite())).then_some(f)
+}
+
+fn summarise(
+    model: &dyn Model,
+    design: &Design,
+    methods: &[Method],
+    designed: Method,
+    runs: usize,
+    seed: u64,
+    results: &[RunResult],
+) -> Verification {
+    let ir = model.ir();
+    let signs = design
+        .held
+        .iter()
+        .enumerate()
+        .flat_map(|(e, held): (usize, &Vec<Held>)| {
+            held.iter().enumerate().map(move |(a, h)| {
+                let fr: Vec<f64> = results
+                    .iter()
+                    .filter_map(|r| r.kept.get(e).and_then(|k| k.get(a)).copied())
+                    .collect();
+                SignKept {
+                    experiment: e + 1,
+                    argument: h.name.clone(),
+                    mean: fr.iter().sum::<f64>() / fr.len().max(1) as f64,
+                    min: fr.iter().copied().fold(f64::INFINITY, f64::min),
+                }
+            })
+        })
+        .collect();
+    let predicted = design.predicted.as_ref().map(|p| p.at(design.samples));
+    let methods = methods
+        .iter()
+        .enumerate()
+        .map(|(mi, m)| {
+            let outcomes: Vec<&Outcome> =
+                results.iter().filter_map(|r| r.estimates.get(mi)).collect();
+            let ok: Vec<&(Estimate, Option<Vec<f64>>)> =
+                outcomes.iter().filter_map(|o| o.as_ref().ok()).collect();
+            let failure = outcomes.iter().find_map(|o| o.as_ref().err().cloned());
+            let rank_deficient = ok
+                .iter()
+                .filter(|(e, _)| {
+                    e.diagnostics.rank < e.diagnostics.estimated
+                        || !e.diagnostics.unexcited.is_empty()
+                })
+                .count();
+            let parameters = ir
+                .parameters
+                .iter()
+                .enumerate()
+                .map(|(p, param)| {
+                    let values: Vec<f64> = ok.iter().map(|(e, _)| e.theta[p]).collect();
+                    let (mean, std) = mean_std(&values);
+                    let truth = design.conditions.as_ref().map_or(f64::NAN, |c| c.theta[p]);
+                    let sigma = if *m == designed {
+                        predicted.as_ref().and_then(|s| s[p])
+                    } else {
+                        None
+                    };
+                    let coverage = sigma.filter(|_| !values.is_empty()).map(|s| {
+                        values
+                            .iter()
+                            .filter(|v| (*v - truth).abs() <= 2.0 * s)
+                            .count() as f64
+                            / values.len() as f64
+                    });
+                    let own: Vec<f64> = ok.iter().filter_map(|(e, _)| e.std_errors[p]).collect();
+                    let reported = (!own.is_empty()).then(|| mean_std(&own).0);
+                    ParameterVerification {
+                        name: param.name.clone(),
+                        truth,
+                        mean,
+                        std,
+                        predicted: sigma,
+                        coverage,
+                        reported,
+                    }
+                })
+                .collect();
+            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|(_, f)| f.as_ref()).collect();
+            let fits = ir
+                .states
+                .iter()
+                .enumerate()
+                .map(|(s, name)| {
+                    let v: Vec<f64> = fitted.iter().map(|f| f[s]).collect();
+                    (name.clone(), mean_std(&v).0)
+                })
+                .collect();
+            MethodVerification {
+                method: m.name().to_string(),
+                designed_for: *m == designed,
+                failed: outcomes.len() - ok.len(),
+                failure,
+                rank_deficient,
+                parameters,
+                fits,
+                diverged: ok.len() - fitted.len(),
+            }
+        })
+        .collect();
+    Verification {
+        runs,
+        seed,
+        samples: design.samples,
+        signs,
+        methods,
+    }
+}
+
+fn mean_std(v: &[f64]) -> (f64, f64) {
+    if v.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = if v.len() > 1 {
+        v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
+}
+
+/// The centring a method's estimate uses in a verification: the design's
+/// for the method it was made for, the method's default for the others.
+fn centring_for(design: &Design, method: Method) -> Option<Centring> {
+    (Some(method) == design.method_used)
+        .then_some(design.centring_used)
+        .flatten()
+}
