@@ -75,7 +75,10 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         _ => None,
     };
     if args.json {
-        out(&files::json(&design, verification.as_ref()));
+        out(&leeway_design::document::json(
+            &design,
+            verification.as_ref(),
+        ));
     } else {
         out(&text::render(&model, &design, verification.as_ref(), args));
     }

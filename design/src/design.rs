@@ -138,12 +138,12 @@ pub fn design(
     for b in &mut bases {
         b.held = held(ir, kind, &b.pattern, &c);
     }
-    let estimate = EstimateOptions {
+    let mut estimate = EstimateOptions {
         method: options.method,
         centring: Some(centring),
         ..Default::default()
     };
-    let (fitted, prediction, scores) = choose_family(
+    let mut chosen = choose_family(
         model,
         &c,
         &bases,
@@ -152,6 +152,29 @@ pub fn design(
         (time_scale, n),
         options.seed,
     );
+    if chosen.1.is_none() && chosen.2.iter().all(|f| f.status == "failed") {
+        // Every feasible excitation leaves some θ not excited apart from
+        // others (e.g. two media moving alike, paper A12): design for the
+        // estimate that holds those at nominal.
+        estimate.aggregate = true;
+        chosen = choose_family(
+            model,
+            &c,
+            &bases,
+            &noise,
+            &estimate,
+            (time_scale, n),
+            options.seed,
+        );
+        if let Some(p) = &chosen.1 {
+            assumptions.push(format!(
+                "no excitation within the limits determines {} apart from the other parameters: the estimate holds {} at nominal and reports the identifiable combinations (--aggregate)",
+                p.undetermined().join(", "),
+                if p.undetermined().len() == 1 { "it" } else { "them" }
+            ));
+        }
+    }
+    let (fitted, prediction, scores) = chosen;
     let runs = fitted.runs(&bases, n, &c);
     let mut prediction = prediction;
     if let Some(p) = prediction.as_mut() {
@@ -187,6 +210,7 @@ pub fn design(
         noise,
         assumptions,
         validation,
+        aggregate: estimate.aggregate,
     }))
 }
 
@@ -217,9 +241,13 @@ fn choose_family(
                 options: estimate,
             };
             match predict(model, setting, seed) {
-                Ok(p) => {
+                Ok(p) if p.score().is_finite() => {
                     let s = p.score();
                     (Some(p), FamilyScore::scored(family, fitted.scale, s))
+                }
+                Ok(p) => {
+                    let why = format!("leaves {} undetermined", p.undetermined().join(", "));
+                    (None, FamilyScore::failed(family, fitted.scale, why))
                 }
                 Err(e) => (None, FamilyScore::failed(family, fitted.scale, e)),
             }

@@ -11,6 +11,7 @@
 //! same verification, whatever the thread count.
 
 pub mod design;
+pub mod document;
 pub mod error;
 pub mod excitation;
 pub mod operating;

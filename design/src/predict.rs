@@ -35,6 +35,8 @@ pub struct Prediction {
     pub nuisance: Vec<(String, Option<f64>, Option<f64>)>,
     /// Columns the realisation did not excite (the estimator's verdict).
     pub unexcited: Vec<String>,
+    /// Whether the estimate held unexcited θ at nominal (`--aggregate`).
+    pub aggregated: bool,
 }
 
 impl Prediction {
@@ -61,21 +63,24 @@ impl Prediction {
             .then(|| (self.samples as f64 * (worst / target) * (worst / target)).ceil() as usize)
     }
 
+    /// θ with a nominal value the realisation left without a standard
+    /// error (held at nominal: not excited apart from others).
+    pub fn undetermined(&self) -> Vec<String> {
+        self.parameters
+            .iter()
+            .zip(&self.std_errors)
+            .zip(&self.theta)
+            .filter(|((_, s), t)| **t != 0.0 && s.is_none())
+            .map(|((name, _), _)| name.clone())
+            .collect()
+    }
+
     /// The design score: the mean of `ln(σ/|θ|)` over θ with a nominal
     /// value (information per parameter, unit-free); `+∞` when a parameter
     /// went undetermined.
     pub fn score(&self) -> f64 {
-        if !self.unexcited.is_empty() {
-            return f64::INFINITY;
-        }
         let rel: Vec<f64> = self.relative().into_iter().flatten().collect();
-        if rel.is_empty()
-            || self
-                .std_errors
-                .iter()
-                .zip(&self.theta)
-                .any(|(s, t)| *t != 0.0 && s.is_none())
-        {
+        if rel.is_empty() || (!self.aggregated && !self.undetermined().is_empty()) {
             return f64::INFINITY;
         }
         rel.iter().map(|r| r.ln()).sum::<f64>() / rel.len() as f64
@@ -135,8 +140,7 @@ pub fn predict(model: &dyn Model, setting: Setting, seed: u64) -> Result<Predict
         own_simulation: false,
         ..options.clone()
     };
-    let est =
-        estimate(model, &sources, &options).map_err(|e| format!("{}: {}", e.code, e.message))?;
+    let est = estimate(model, &sources, &options).map_err(|e| failure(e.code, &e.message))?;
     Ok(Prediction {
         samples: runs.first().map_or(0, |r| r.inputs.len()),
         parameters: est.parameters.clone(),
@@ -163,6 +167,7 @@ pub fn predict(model: &dyn Model, setting: Setting, seed: u64) -> Result<Predict
             .map(|col| (col.name.clone(), col.value, col.std_error))
             .collect(),
         unexcited: est.diagnostics.unexcited.clone(),
+        aggregated: options.aggregate,
     })
 }
 
@@ -247,4 +252,20 @@ pub fn calibrate(
             .map(|m| m - mean)));
     }
     prediction.trials = ok.len();
+}
+
+/// An estimate's failure in a line: its code and, for a rank deficiency,
+/// the parameters not separately excited (not the combinations).
+fn failure(code: &str, message: &str) -> String {
+    let names: Vec<&str> = message
+        .split("; ")
+        .flat_map(|part| part.split(": "))
+        .filter_map(|part| part.strip_suffix(" is not separately excited"))
+        .map(|name| name.rsplit(' ').next().unwrap_or(name))
+        .collect();
+    if names.is_empty() {
+        format!("{code}: {}", message.split(": ").next().unwrap_or(message))
+    } else {
+        format!("{code}: {} not separately excited", names.join(", "))
+    }
 }

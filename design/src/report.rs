@@ -27,6 +27,9 @@ pub struct Design {
     pub method: String,
     /// The instrument centring the estimate must use.
     pub centring: String,
+    /// Whether the estimate must hold θ the trial does not excite at
+    /// nominal (`estimate --aggregate`).
+    pub aggregate: bool,
     /// Whether every held argument keeps its side in the nominal runs.
     pub feasible: bool,
     /// Sample time, s.
@@ -340,6 +343,8 @@ pub struct Parts<'a> {
     pub assumptions: Vec<String>,
     /// The validation run.
     pub validation: Option<Run>,
+    /// Whether the estimate holds unexcited θ (`--aggregate`).
+    pub aggregate: bool,
 }
 
 /// Puts a design's report together.
@@ -390,6 +395,7 @@ pub fn assemble(p: Parts) -> Design {
         model: ir.name.clone(),
         method: p.options.method.name().to_string(),
         centring: p.centring.name().to_string(),
+        aggregate: p.aggregate,
         feasible: shortfalls.is_empty() && p.prediction.is_some(),
         step: c.h,
         samples: n,
@@ -473,7 +479,8 @@ fn planned_run(
             }
         })
         .collect();
-    let heading_span_deg = (!truth.heading.is_empty()).then(|| {
+    let planar = matches!(ir.rotation, leeway_structure::ir::Rotation::Planar { .. });
+    let heading_span_deg = (planar && !truth.heading.is_empty()).then(|| {
         let (lo, hi) = truth
             .heading
             .iter()

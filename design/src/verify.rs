@@ -165,6 +165,7 @@ fn one_run(
             let options = EstimateOptions {
                 method: *m,
                 centring: centring_for(design, *m),
+                aggregate: design.aggregate,
                 // The designed method's own standard errors, averaged over
                 // the runs, say whether the estimator's σ is calibrated.
                 covariance: *m == designed,

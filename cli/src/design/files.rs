@@ -10,25 +10,7 @@ use leeway_design::trial::margins;
 use leeway_design::verify::Verification;
 use leeway_model::Interpreter;
 use leeway_model::model::Model;
-use serde::Serialize;
 use std::path::Path;
-
-/// The JSON document: the design, and its verification when run.
-#[derive(Serialize)]
-struct Document<'a> {
-    #[serde(flatten)]
-    design: &'a Design,
-    verification: Option<&'a Verification>,
-}
-
-/// The design (and verification) as pretty JSON.
-pub fn json(design: &Design, verification: Option<&Verification>) -> String {
-    let doc = Document {
-        design,
-        verification,
-    };
-    serde_json::to_string_pretty(&doc).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
-}
 
 /// Writes every file into `dir` (created if missing); the names written.
 pub fn write(
@@ -56,7 +38,11 @@ pub fn write(
         written.push(path.display().to_string());
     }
     let path = dir.join("design.json");
-    std::fs::write(&path, json(design, verification) + "\n").map_err(|e| io(&path, &e))?;
+    std::fs::write(
+        &path,
+        leeway_design::document::json(design, verification) + "\n",
+    )
+    .map_err(|e| io(&path, &e))?;
     written.push(path.display().to_string());
     for name in ["design.svg", "design.png"] {
         let path = dir.join(name);

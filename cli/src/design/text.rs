@@ -139,7 +139,7 @@ fn families(s: &mut String, d: &Design) {
             "failed" => format!(
                 "{} failed ({})",
                 f.family.name(),
-                first_clause(f.detail.as_deref())
+                f.detail.as_deref().unwrap_or("")
             ),
             _ => format!("{} cannot keep the signs", f.family.name()),
         })
@@ -337,10 +337,4 @@ fn verification(s: &mut String, v: &Verification) {
             );
         }
     }
-}
-
-/// A failure's first clause (the code and what happened, not the column list).
-fn first_clause(detail: Option<&str>) -> &str {
-    let d = detail.unwrap_or("");
-    d.split([':', ';']).take(2).last().map_or(d, str::trim)
 }

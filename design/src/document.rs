@@ -1,0 +1,31 @@
+//! The design's JSON document (`design --json`, `design.json`, Python's
+//! `leeway.design`): the design's report with its verification, when run
+//! (docs/json.md).
+
+use crate::report::Design;
+use crate::verify::Verification;
+use serde::Serialize;
+
+/// The design (and its verification) as one document.
+#[derive(Serialize)]
+struct Document<'a> {
+    #[serde(flatten)]
+    design: &'a Design,
+    verification: Option<&'a Verification>,
+}
+
+/// The document as pretty JSON (non-finite numbers as `null`).
+pub fn json(design: &Design, verification: Option<&Verification>) -> String {
+    let doc = Document {
+        design,
+        verification,
+    };
+    // Serialising plain data with string keys cannot fail; an error
+    // would still be reported as a document rather than lost.
+    serde_json::to_string_pretty(&doc).unwrap_or_else(|e| {
+        format!(
+            "{{\"error\": {}}}",
+            serde_json::Value::String(e.to_string())
+        )
+    })
+}
