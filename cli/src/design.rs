@@ -18,13 +18,18 @@ mod text;
 
 use crate::design::args::{DesignArgs, MethodArg};
 use crate::files::read_text;
+use crate::input::load_input;
 use crate::model::load;
+use crate::options::load_options;
 use crate::output::{Status, err, out, stderr_style};
 use crate::problem::{Failure, Problem};
+use leeway_design::compare::compare;
 use leeway_design::design::{DesignOptions, design};
+use leeway_design::document::json_with;
 use leeway_design::error::DesignError;
 use leeway_design::plan::parse;
 use leeway_design::report::Design;
+use leeway_design::trial::Run;
 use leeway_design::verify::{Verification, verify};
 use leeway_estimate::Method;
 use leeway_model::Interpreter;
@@ -74,13 +79,23 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         }
         _ => None,
     };
+    let comparison = if args.compare.is_empty() {
+        None
+    } else {
+        let runs = given_runs(&model, &args.compare, design.step)?;
+        pool.install(|| compare(&model, &design, &runs, args.seed, args.pilot))
+    };
     if args.json {
-        out(&leeway_design::document::json(
+        out(&json_with(
             &design,
             verification.as_ref(),
+            comparison.as_ref(),
         ));
     } else {
         out(&text::render(&model, &design, verification.as_ref(), args));
+        if let Some(c) = &comparison {
+            out(&text::comparison(c, &args.compare));
+        }
     }
     if let Some(dir) = &args.out {
         let written = files::write(&model, &design, verification.as_ref(), dir)?;
@@ -93,6 +108,35 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
     } else {
         Status::Unsupported
     })
+}
+
+/// The given input files as runs: the first row's states (the run's
+/// start) and every row's inputs.
+fn given_runs(
+    model: &Interpreter,
+    paths: &[std::path::PathBuf],
+    h: f64,
+) -> Result<Vec<Run>, Failure> {
+    let ir = model.ir();
+    let options = load_options(ir, Some(h), None)?;
+    paths
+        .iter()
+        .map(|path| {
+            let input = load_input(path, ir, &options, &[])?;
+            let e = input.experiment;
+            let n = e.inputs.first().map_or(0, Vec::len);
+            Ok(Run {
+                x0: e
+                    .states
+                    .iter()
+                    .map(|s| s.first().copied().unwrap_or(0.0))
+                    .collect(),
+                inputs: (0..n)
+                    .map(|k| e.inputs.iter().map(|i| i[k]).collect())
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 fn verify_with_progress(

@@ -42,7 +42,7 @@ impl Default for DesignOptions {
             method: Method::Iv3,
             target: None,
             seed: 0,
-            pilot: 50,
+            pilot: 100,
         }
     }
 }

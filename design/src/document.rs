@@ -2,6 +2,7 @@
 //! `leeway.design`): the design's report with its verification, when run
 //! (docs/json.md).
 
+use crate::compare::Comparison;
 use crate::report::Design;
 use crate::verify::Verification;
 use serde::Serialize;
@@ -12,13 +13,25 @@ struct Document<'a> {
     #[serde(flatten)]
     design: &'a Design,
     verification: Option<&'a Verification>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    comparison: Option<&'a Comparison>,
 }
 
 /// The document as pretty JSON (non-finite numbers as `null`).
 pub fn json(design: &Design, verification: Option<&Verification>) -> String {
+    json_with(design, verification, None)
+}
+
+/// [`json`], with the comparison of a given input (`design --compare`).
+pub fn json_with(
+    design: &Design,
+    verification: Option<&Verification>,
+    comparison: Option<&Comparison>,
+) -> String {
     let doc = Document {
         design,
         verification,
+        comparison,
     };
     // Serialising plain data with string keys cannot fail; an error
     // would still be reported as a document rather than lost.

@@ -10,6 +10,7 @@
 //! Seeded throughout: the same plan and seed give the same design and the
 //! same verification, whatever the thread count.
 
+pub mod compare;
 pub mod design;
 pub mod document;
 pub mod error;

@@ -180,8 +180,8 @@ fn plan_mean(model: &dyn Model, c: &Conditions, medium: &str, component: &str) -
         .map_or(f64::NAN, |i| c.mean[i])
 }
 
-/// Replaces the asymptotic standard errors by the root-mean-square error
-/// of `trials` pilot realisations of the design (seeded, on the study
+/// Replaces the asymptotic standard errors by the (trimmed) root-mean-square
+/// error of `trials` pilot realisations of the design (seeded, on the study
 /// engine): the estimator's own covariance can be off by a factor when the
 /// residuals are correlated beyond its lags or dominated by measurement
 /// noise, and a design is judged by the spread the trial will see. Keeps
@@ -230,14 +230,7 @@ pub fn calibrate(
     if ok.len() * 2 < trials.max(1) {
         return;
     }
-    let rms = |errors: &mut dyn Iterator<Item = f64>| {
-        let (mut n, mut sum) = (0.0, 0.0);
-        for e in errors {
-            n += 1.0;
-            sum += e * e;
-        }
-        (sum / f64::max(n, 1.0)).sqrt()
-    };
+    let rms = |errors: &mut dyn Iterator<Item = f64>| trimmed_rms(errors.collect());
     prediction.std_errors = (0..prediction.theta.len())
         .map(|p| {
             prediction.asymptotic[p]?;
@@ -252,6 +245,30 @@ pub fn calibrate(
             .map(|m| m - mean)));
     }
     prediction.trials = ok.len();
+}
+
+/// The root-mean-square of the errors within four robust standard
+/// deviations (`1.4826·median|e|`) of zero: the spread of the bulk, which
+/// ±2σ intervals are about, without the rare trial whose refinement ran
+/// away inflating it.
+fn trimmed_rms(mut errors: Vec<f64>) -> f64 {
+    if errors.is_empty() {
+        return f64::NAN;
+    }
+    let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let m = abs.len() / 2;
+    let median = if abs.len() % 2 == 1 {
+        abs[m]
+    } else {
+        0.5 * (abs[m - 1] + abs[m])
+    };
+    let limit = 4.0 * 1.4826 * median;
+    if limit > 0.0 {
+        errors.retain(|e| e.abs() <= limit);
+    }
+    let n = errors.len().max(1) as f64;
+    (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt()
 }
 
 /// An estimate's failure in a line: its code and, for a rank deficiency,

@@ -248,6 +248,10 @@ fn summarise(
         })
         .collect();
     let predicted = design.predicted.as_ref().map(|p| p.at(design.samples));
+    let held_by_design = design
+        .predicted
+        .as_ref()
+        .map_or(Vec::new(), |p| p.undetermined());
     let methods = methods
         .iter()
         .enumerate()
@@ -259,10 +263,7 @@ fn summarise(
             let failure = outcomes.iter().find_map(|o| o.as_ref().err().cloned());
             let rank_deficient = ok
                 .iter()
-                .filter(|(e, _)| {
-                    e.diagnostics.rank < e.diagnostics.estimated
-                        || !e.diagnostics.unexcited.is_empty()
-                })
+                .filter(|(e, _)| deficient(e, &held_by_design))
                 .count();
             let parameters = ir
                 .parameters
@@ -326,6 +327,21 @@ fn summarise(
         signs,
         methods,
     }
+}
+
+/// A rank deficiency beyond what the design holds: a numerically
+/// dependent system, or a θ not excited that the design did not plan to
+/// hold (`--aggregate`). Nuisance columns held at 0 are the estimator's
+/// business.
+fn deficient(e: &Estimate, held_by_design: &[String]) -> bool {
+    e.diagnostics.rank < e.diagnostics.estimated
+        || e.parameters.iter().any(|name| {
+            !held_by_design.contains(name)
+                && e.diagnostics
+                    .unexcited
+                    .iter()
+                    .any(|u| u.starts_with(&format!("{name} ")))
+        })
 }
 
 fn mean_std(v: &[f64]) -> (f64, f64) {

@@ -28,12 +28,16 @@ pub struct DesignArgs {
     /// Write the runs' input files, their margins, design.json and the figure here.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// An input of your own (the CSV `simulate` reads, one per experiment):
+    /// its held signs and standard errors per sample beside the design's.
+    #[arg(long, value_name = "IN.csv")]
+    pub compare: Vec<PathBuf>,
     /// Verify the design by M Monte Carlo trials (every method), seeded.
     #[arg(long, value_name = "M", value_parser = runs)]
     pub verify: Option<usize>,
     /// Pilot trials that calibrate the predicted standard errors (0: the
     /// estimator's asymptotic ones alone).
-    #[arg(long, value_name = "K", default_value_t = 50, value_parser = pilot)]
+    #[arg(long, value_name = "K", default_value_t = 100, value_parser = pilot)]
     pub pilot: usize,
     /// Seed of the excitation, the prediction and the verification.
     #[arg(long, value_name = "S", default_value_t = 0)]

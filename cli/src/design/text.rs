@@ -338,3 +338,60 @@ fn verification(s: &mut String, v: &Verification) {
         }
     }
 }
+
+/// The design beside the engineer's own input, per sample.
+pub fn comparison(c: &leeway_design::compare::Comparison, files: &[std::path::PathBuf]) -> String {
+    let mut s = String::new();
+    let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+    let _ = writeln!(
+        s,
+        "\ncompared with {} ({} samples per experiment)",
+        names.join(", "),
+        c.samples
+    );
+    for a in &c.held {
+        let _ = writeln!(
+            s,
+            "  held        {} {} 0 in experiment {}: smallest nominal margin {}{}",
+            a.argument,
+            if a.side == "-" { "<" } else { ">" },
+            a.experiment,
+            num(a.min_margin),
+            if a.min_margin < 0.0 { "  (short)" } else { "" }
+        );
+    }
+    if let Some(f) = &c.failure {
+        let _ = writeln!(s, "  its estimate fails: {f}");
+        return s;
+    }
+    let width = c
+        .parameters
+        .iter()
+        .map(|q| q.name.len())
+        .max()
+        .unwrap_or(4)
+        .max(9);
+    let _ = writeln!(s, "  σ·√N per parameter (lower is better):");
+    let _ = writeln!(
+        s,
+        "  {:width$}  {:>10}  {:>10}  {:>8}",
+        "parameter", "design", "yours", "ratio"
+    );
+    for q in &c.parameters {
+        let _ = writeln!(
+            s,
+            "  {:width$}  {:>10}  {:>10}  {:>8}",
+            q.name,
+            q.design.map_or("-".into(), num),
+            q.given.map_or("-".into(), num),
+            q.ratio.map_or("-".into(), num)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "  mean ln(σ√N/|θ|): design {}, yours {}",
+        num(c.scores.0),
+        num(c.scores.1)
+    );
+    s
+}

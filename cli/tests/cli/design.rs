@@ -1,0 +1,243 @@
+//! `leeway design`: the runs it prints and writes, the input files
+//! `simulate` replays, exit codes and located plan errors.
+
+use crate::common::{Scratch, code, json, leeway, no_panic, root, stderr, stdout};
+
+/// The ROV's plan with a short budget (tests run short trials).
+fn rov_plan(dir: &Scratch) -> String {
+    let text = std::fs::read_to_string(root().join("examples/plans/rov.toml")).expect("plan");
+    let short = text.replace("time = 1200", "time = 100");
+    assert_ne!(text, short);
+    dir.write("rov.toml", &short)
+}
+
+#[test]
+fn design_prints_the_runs_and_writes_files_simulate_replays() {
+    let dir = Scratch::new("design-out");
+    let plan = rov_plan(&dir);
+    let out = dir.path("out").display().to_string();
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "5",
+        "--out",
+        &out,
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}{}", stdout(&o), stderr(&o));
+    let text = stdout(&o);
+    for line in [
+        "design for Rov (iv3, instrument centring experiment): 2 experiments of 50 s (1000 samples at 0.05 s)",
+        "experiment 1 {+water.u +water.v}",
+        "experiment 2 {+water.u -water.v}",
+        "held        water.u > 0",
+        "held        water.v < 0",
+        "pointwise   r:",
+        "predicted standard errors (iv3), 50 s per experiment (root-mean-square error of 5 simulated trials)",
+        "signs iv3: keeps water.u, water.v on their sides in every nominal run",
+    ] {
+        assert!(text.contains(line), "missing `{line}` in\n{text}");
+    }
+    for file in [
+        "run-1.csv",
+        "run-2.csv",
+        "run-1-margins.csv",
+        "design.json",
+        "design.svg",
+        "design.png",
+    ] {
+        assert!(dir.path("out").join(file).exists(), "{file}");
+    }
+    // run-1.csv is a simulation input: the nominal model, holding the
+    // plan's mean current, replays its nominal states.
+    let params = dir.write(
+        "nominal.json",
+        r#"{"X_u": -0.1, "X_uu": -0.3, "X_vr": 1.0, "X_t": 0.00025, "Y_v": -0.2, "Y_vv": -0.6, "Y_ur": -1.0, "Y_vr": -0.1, "Y_rv": -0.1, "Y_t": 0.00025, "N_r": -0.4, "N_rr": -0.5, "N_uv": 0.05, "N_t": 0.0002}"#,
+    );
+    let run = dir.path("out").join("run-1.csv").display().to_string();
+    let sim = dir.path("sim.csv").display().to_string();
+    let o = leeway(&[
+        "simulate",
+        "examples/models/rov.som",
+        "--params",
+        &params,
+        "--input",
+        &run,
+        "--disturbance",
+        "current.north=0.3,current.east=0.1",
+        "--out",
+        &sim,
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let read = |p: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .expect("csv")
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().expect("number")).collect())
+            .collect()
+    };
+    let (planned, replayed) = (read(&run), read(&sim));
+    assert_eq!(planned.len(), replayed.len());
+    // Columns time, u, v, r, psi: the same trajectory up to the rotation's
+    // round-off (the simulation re-anchors its heading's rotation).
+    for (a, b) in planned.iter().zip(&replayed) {
+        for j in 1..5 {
+            assert!((a[j] - b[j]).abs() < 1e-6, "{a:?} {b:?}");
+        }
+    }
+}
+
+#[test]
+fn design_json_is_the_document() {
+    let dir = Scratch::new("design-json");
+    let plan = rov_plan(&dir);
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--json",
+        "--target",
+        "5%",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let d = json(&o);
+    assert_eq!(d["model"], "Rov");
+    assert_eq!(d["feasible"], true);
+    assert_eq!(d["experiments"].as_array().map(Vec::len), Some(2));
+    assert_eq!(
+        d["prediction"]["parameters"].as_array().map(Vec::len),
+        Some(14)
+    );
+    assert_eq!(d["prediction"]["trials"], 0);
+    assert_eq!(d["prediction"]["target"]["relative"], 0.05);
+    assert!(d["verification"].is_null());
+    assert_eq!(d["noise"]["psi"], 0.005);
+}
+
+#[test]
+fn a_plan_no_craft_can_fly_exits_1_with_what_would_work() {
+    let dir = Scratch::new("design-windy");
+    let text = std::fs::read_to_string(root().join("examples/plans/blimp.toml")).expect("plan");
+    let windy = text
+        .replace("mean = [0.5, 0.3]", "mean = [1.5, 0.5]")
+        .replace("std = 0.1\n", "std = 0.3\n")
+        .replace("time = 1200", "time = 100");
+    let plan = dir.write("windy.toml", &windy);
+    let o = leeway(&[
+        "design",
+        "examples/models/blimp.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--verify",
+        "5",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 1, "{}", stdout(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("no plan within the limits keeps every held sign"),
+        "{text}"
+    );
+    assert!(
+        text.contains("measure wind (declare it `measured` and log it)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("not verified: the design does not keep its signs"),
+        "{text}"
+    );
+}
+
+#[test]
+fn plan_errors_are_located_and_exit_2() {
+    let dir = Scratch::new("design-bad");
+    let plan = dir.write("bad.toml", "step = 0.05\n[inputs.tau_x]\nrange = [0, \n");
+    let o = leeway(&["design", "examples/models/rov.som", "--plan", &plan]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2);
+    let err = stderr(&o);
+    assert!(err.contains(&format!("{plan}:3:")), "{err}");
+    assert!(err.contains("docs/design.md"), "{err}");
+    let plan = dir.write("unknown.toml", "[inputs.rudder]\nrange = [0, 1]\n");
+    let o = leeway(&["design", "examples/models/rov.som", "--plan", &plan]);
+    assert_eq!(code(&o), 2);
+    assert!(
+        stderr(&o).contains("no input named `rudder`"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("tau_x, tau_y, tau_n"), "{}", stderr(&o));
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--target",
+        "120%",
+    ]);
+    assert_eq!(code(&o), 2);
+    let o = leeway(&[
+        "design",
+        "examples/models/ship_iv2.som",
+        "--plan",
+        "examples/plans/ship-iv2.toml",
+    ]);
+    assert_eq!(code(&o), 1, "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("not identifiable from any set of experiments"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn compare_sets_an_input_of_ones_own_beside_the_design() {
+    let dir = Scratch::new("design-compare");
+    let plan = rov_plan(&dir);
+    let out = dir.path("out").display().to_string();
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--out",
+        &out,
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let run1 = dir.path("out").join("run-1.csv").display().to_string();
+    let run2 = dir.path("out").join("run-2.csv").display().to_string();
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--compare",
+        &run1,
+        "--compare",
+        &run2,
+        "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let d = json(&o);
+    // The design's own runs, given back: the same errors per sample.
+    for p in d["comparison"]["parameters"]
+        .as_array()
+        .expect("parameters")
+    {
+        let ratio = p["ratio"].as_f64().expect("ratio");
+        assert!((ratio - 1.0).abs() < 1e-9, "{p}");
+    }
+}
