@@ -66,6 +66,10 @@ pub struct MethodVerification {
     pub fits: Vec<(String, f64)>,
     /// Runs whose model diverged on the validation run.
     pub diverged: usize,
+    /// Runs whose refinement did not settle (the runaway guard stopped it
+    /// and reported an earlier iterate): their estimates are the tails of
+    /// the spread.
+    pub unconverged: usize,
 }
 
 /// One θ over the runs.
@@ -317,6 +321,7 @@ fn summarise(
                 parameters,
                 fits,
                 diverged: ok.len() - fitted.len(),
+                unconverged: ok.iter().filter(|(e, _)| !e.diagnostics.converged).count(),
             }
         })
         .collect();
