@@ -9,4 +9,5 @@ mod data;
 mod estimate;
 mod parquet;
 mod reproduce;
+mod simulate;
 mod words;
