@@ -406,7 +406,7 @@ mod tests {
         let (n, h) = (20_000, 0.5);
         let mut process = GaussMarkov::new(3, h, &[0.2, 1.5, 0.7], &[5.0, 0.5]);
         let mut draws = Draws::stream(4, 1);
-        let mut series = vec![Vec::with_capacity(n); 3];
+        let mut series = vec![Vec::new(); 3];
         for _ in 0..n {
             for (s, d) in series.iter_mut().zip(process.next(&mut draws)) {
                 s.push(*d);
