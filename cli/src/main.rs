@@ -38,6 +38,7 @@ mod estimate;
 mod files;
 mod input;
 mod model;
+mod noise;
 mod options;
 mod output;
 mod params;

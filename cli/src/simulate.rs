@@ -1,12 +1,15 @@
 //! `leeway simulate MODEL --params EST.json --input IN.csv [--out OUT.csv]`:
 //! simulate the model with the given θ on an input file, from its first row
 //! (see `input.rs` for what the file holds), and write the trajectory as a
-//! CSV data file. Exit 0 on success, 1 when the simulation diverges (the rows
+//! CSV data file; with `--disturbance-std` or `--noise` (`noise.rs`), the
+//! craft under varying disturbances as its sensors record it, seeded
+//! (`leeway_scenarios::noisy`). Exit 0 on success, 1 when the simulation diverges (the rows
 //! before the divergence are still written), 2 on any model, file or option error.
 
 use crate::disturbances;
 use crate::input::{initial_values, load_input};
 use crate::model::load;
+use crate::noise;
 use crate::options::load_options;
 use crate::options::positive;
 use crate::output::{Status, err, headline, out, plain, stderr_style, warning_text};
@@ -17,6 +20,7 @@ use leeway_model::given::Origin;
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
 use leeway_model::warning::Warning;
+use leeway_scenarios::noisy::simulate_noisy;
 use std::path::PathBuf;
 
 /// Arguments of `leeway simulate`.
@@ -48,6 +52,26 @@ pub struct SimulateArgs {
     /// Sample time for an input without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,
+    /// How much a disturbance component varies about its mean (std), e.g.
+    /// `current.north=0.03`; a medium's name (`current=0.03`) gives all its
+    /// components. The mean is --disturbance's (unmeasured) or the input's
+    /// values (measured: the craft feels and the sensor records the
+    /// variation).
+    #[arg(long = "disturbance-std", value_name = "NAME=STD,...")]
+    pub disturbance_std: Vec<String>,
+    /// Correlation time of a varying component in seconds (first-order
+    /// Gauss–Markov), e.g. `current=60`; default 0: independent samples.
+    #[arg(long = "correlation-time", value_name = "NAME=SECONDS,...")]
+    pub correlation_time: Vec<String>,
+    /// Measurement noise (std) of a state, the heading or a measured
+    /// disturbance's sensor, e.g. `u=0.01,psi=0.005,wind=0.2`: the output
+    /// holds the measured values.
+    #[arg(long = "noise", value_name = "NAME=STD,...")]
+    pub noise: Vec<String>,
+    /// Seed of the varying disturbances and the noise: the same seed, the
+    /// same output.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub seed: u64,
 }
 
 /// Runs `leeway simulate`.
@@ -75,6 +99,12 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
     let file = crate::params::read_file(&args.params, &ir, "--params")?;
     let x0 = initial_values(&ir, &args.x0)?;
     let given = disturbances::given(&ir, &args.disturbances)?;
+    let noise = noise::given(
+        &ir,
+        &args.disturbance_std,
+        &args.correlation_time,
+        &args.noise,
+    )?;
     let (held, warning) = disturbances::held(&ir, &given, &file, &args.params);
     // Said when values came from the estimate (the user may not expect it);
     // a default zero is warned of.
@@ -95,7 +125,12 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
     let input = load_input(&args.input, &ir, &options, &x0)?;
     let model = Interpreter::new(ir.clone());
     let e = &input.experiment;
-    let written = simulate_written(&model, &file.theta, e, Disturbances::Constant(&held.values));
+    // Without noise, the plain simulation: the bits it always wrote.
+    let written = if noise.is_quiet() {
+        simulate_written(&model, &file.theta, e, Disturbances::Constant(&held.values))
+    } else {
+        simulate_noisy(&model, &file.theta, e, &held.values, &noise, args.seed)
+    };
     let (result, finite) = (written.experiment, written.samples);
     let mut buffer = Vec::new();
     write_csv(&ir, &[&result], input.t0, &mut buffer)

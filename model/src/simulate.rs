@@ -27,6 +27,9 @@ pub enum Disturbances<'a> {
     /// Constant values per global component (earth frame for earth disturbances);
     /// measured components are taken from the data when present.
     Constant(&'a [f64]),
+    /// Every component, measured or not, as the data's row holds it: a
+    /// source that made up the unmeasured ones puts them there.
+    Recorded,
 }
 
 impl Disturbances<'_> {
@@ -40,6 +43,7 @@ impl Disturbances<'_> {
                 match self {
                     Disturbances::None => 0.0,
                     Disturbances::Constant(v) => v.get(c).copied().unwrap_or(0.0),
+                    Disturbances::Recorded => recorded[c],
                 }
             };
         }
@@ -155,7 +159,12 @@ pub fn simulate_written(
     e: &Experiment,
     disturbances: Disturbances,
 ) -> Written {
-    let trajectory = simulate(model, theta, e, disturbances);
+    written(e, simulate(model, theta, e, disturbances))
+}
+
+/// The input `e` with a simulation's states and heading, cut before the
+/// first sample whose states are not finite.
+pub fn written(e: &Experiment, trajectory: Trajectory) -> Written {
     let samples = trajectory
         .states
         .first()

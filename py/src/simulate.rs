@@ -18,13 +18,17 @@ use leeway_data::write;
 use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::experiment::column_name;
-use leeway_model::given::{components_hint, disturbance_slots, given_value_ok, held_disturbances};
+use leeway_model::given::{
+    NoiseOption, SimulationNoise, components_hint, disturbance_slots, given_value_ok,
+    held_disturbances, simulation_noise,
+};
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
 use leeway_model::validation::compare;
 use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
 use leeway_report::unit_warnings;
+use leeway_scenarios::noisy::simulate_noisy;
 use leeway_structure::grammar::and_list;
 use leeway_structure::ir::{Ir, Rotation};
 use numpy::PyArray1;
@@ -130,6 +134,40 @@ pub(crate) fn held(
     Ok((held.values, named, warning))
 }
 
+/// Values by name as `leeway_model::given` takes them.
+fn named(given: &[(String, f64)]) -> Vec<(&str, f64)> {
+    given.iter().map(|(n, v)| (n.as_str(), *v)).collect()
+}
+
+/// The noises of a simulation as `simulation_noise` reads them, its
+/// problems in Python's spelling (`noise["w"]: ...`).
+fn noise(
+    ir: &Ir,
+    disturbance_std: &[(String, f64)],
+    correlation_time: &[(String, f64)],
+    sensors: &[(String, f64)],
+) -> Result<SimulationNoise, Failure> {
+    simulation_noise(
+        ir,
+        &named(disturbance_std),
+        &named(correlation_time),
+        &named(sensors),
+    )
+    .map_err(|p| {
+        let (keyword, given) = match p.option {
+            NoiseOption::DisturbanceStd => ("disturbance_std", disturbance_std),
+            NoiseOption::CorrelationTime => ("correlation_time", correlation_time),
+            NoiseOption::Sensor => ("noise", sensors),
+        };
+        let name = given.get(p.index).map_or("", |(n, _)| n.as_str());
+        let mut hint = p.option.hint(ir);
+        if p.option == NoiseOption::CorrelationTime {
+            hint.push_str("; a correlation time shapes a component given a disturbance_std");
+        }
+        Failure::option(format!("{keyword}[{name:?}]: {}", p.reason), Some(hint))
+    })
+}
+
 /// A simulated trajectory: the columns of `leeway simulate`'s output
 /// (`leeway_data::write::header`), when it diverged, why (the columns then
 /// hold the samples before), the disturbances held and the warnings.
@@ -143,10 +181,12 @@ type Simulated<'py> = (
 /// `leeway simulate` of `model` with `theta` on the input frame: `x0` gives
 /// or overrides initial values, `disturbances` constant unmeasured
 /// components (`zero`: all not given are zero), the others the estimate's
-/// `means` when θ is an estimate (see [`held`]). The GIL is released while
+/// `means` when θ is an estimate (see [`held`]); `disturbance_std`,
+/// `correlation_time`, `noise` and `seed` as `--disturbance-std`,
+/// `--correlation-time`, `--noise` and `--seed`. The GIL is released while
 /// the frame is read and simulated.
 #[pyfunction]
-#[pyo3(signature = (model, frame, theta, x0, disturbances, zero=false, means=None, step=None))]
+#[pyo3(signature = (model, frame, theta, x0, disturbances, zero=false, means=None, step=None, disturbance_std=Vec::new(), correlation_time=Vec::new(), noise=Vec::new(), seed=0))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_columns<'py>(
     py: Python<'py>,
@@ -158,12 +198,17 @@ pub fn simulate_columns<'py>(
     zero: bool,
     means: Option<Vec<(String, f64)>>,
     step: Option<f64>,
+    disturbance_std: Vec<(String, f64)>,
+    correlation_time: Vec<(String, f64)>,
+    noise: Vec<(String, f64)>,
+    seed: u64,
 ) -> PyResult<Simulated<'py>> {
     let ir = &model.ir;
     check_theta(ir, &theta)?;
     let options = load_options(ir, step, None, None)?;
     let x0 = initial_values(ir, &x0)?;
     let (dist, named, warning) = held(ir, &disturbances, zero, means.as_deref(), "theta")?;
+    let noise = self::noise(ir, &disturbance_std, &correlation_time, &noise)?;
     let frames = borrow_frames(std::slice::from_ref(&frame))?;
     let frame = &frames[0];
     let (header, columns, diverged) = py.detach(|| -> Result<_, Failure> {
@@ -179,8 +224,13 @@ pub fn simulate_columns<'py>(
         let input = read_input(&mut table, ir, &options, &x0, &NAMES).map_err(read)?;
         let interpreter = Interpreter::new(ir.clone());
         let e = &input.experiment;
-        // As the CLI: the samples before a divergence.
-        let written = simulate_written(&interpreter, &theta, e, Disturbances::Constant(&dist));
+        // As the CLI: the samples before a divergence; without noise, the
+        // plain simulation.
+        let written = if noise.is_quiet() {
+            simulate_written(&interpreter, &theta, e, Disturbances::Constant(&dist))
+        } else {
+            simulate_noisy(&interpreter, &theta, e, &dist, &noise, seed)
+        };
         let (result, finite) = (written.experiment, written.samples);
         let diverged = written.diverged.then(|| {
             let t = input.t0 + finite as f64 * e.h;

@@ -127,6 +127,45 @@ def test_simulate_is_bit_identical_to_the_cli(ship: leeway.Model, tmp_path: Path
                               disturbances={"current.north": 0.2, "current.east": 0.2}), ours)
 
 
+def test_a_noisy_simulation_is_bit_identical_to_the_cli(ship: leeway.Model, tmp_path: Path) -> None:
+    u = inputs(400)
+    x0 = {"u": 5, "v": 3.3, "r": 0.15, "psi": 0}
+    noisy = {
+        "disturbance_std": {"current": 0.05, "wind.wind_n": 0.3},
+        "correlation_time": {"current.north": 60.0},
+        "noise": {"u": 0.01, "psi": 0.005, "wind": 0.1},
+    }
+    ours = leeway.simulate(ship, TRUE, u, x0=x0, disturbances={"north": 0.2, "east": -0.1}, seed=7, **noisy)
+    cli = cli_simulate(
+        tmp_path, u, json.dumps(TRUE), "--x0", "u=5,v=3.3,r=0.15,psi=0",
+        "--disturbance", "current.north=0.2,current.east=-0.1",
+        "--disturbance-std", "current=0.05,wind.wind_n=0.3", "--correlation-time", "current.north=60",
+        "--noise", "u=0.01,psi=0.005,wind=0.1", "--seed", "7",
+    )
+    same_bits(ours, cli)
+    plain = leeway.simulate(ship, TRUE, u, x0=x0, disturbances={"north": 0.2, "east": -0.1})
+    assert not np.array_equal(ours["u"].to_numpy(), plain["u"].to_numpy())
+    assert not np.array_equal(ours["wind_n"].to_numpy(), u["wind_n"].to_numpy())
+    assert np.array_equal(ours["tau1"].to_numpy(), plain["tau1"].to_numpy())
+    other = leeway.simulate(ship, TRUE, u, x0=x0, disturbances={"north": 0.2, "east": -0.1}, seed=8, **noisy)
+    assert not np.array_equal(ours["u"].to_numpy(), other["u"].to_numpy())
+
+
+def test_noise_keywords_are_checked(ship: leeway.Model) -> None:
+    x0 = {"u": 5, "v": 0, "r": 0, "psi": 0}
+    u = inputs(20)
+    with pytest.raises(leeway.OptionError) as e:
+        leeway.simulate(ship, TRUE, u, x0=x0, noise={"w": 0.1})
+    assert e.value.message == 'noise["w"]: `w` is not a state, the heading or a measured disturbance of model `Ship`'
+    assert (e.value.hint or "").startswith("the measured signals are u, v, r, psi")
+    with pytest.raises(leeway.OptionError, match="negative"):
+        leeway.simulate(ship, TRUE, u, x0=x0, disturbance_std={"current": -0.1})
+    with pytest.raises(leeway.OptionError, match="no standard deviation given"):
+        leeway.simulate(ship, TRUE, u, x0=x0, correlation_time={"current": 60})
+    with pytest.raises(leeway.OptionError, match="seed"):
+        leeway.simulate(ship, TRUE, u, x0=x0, seed=-1)
+
+
 def test_simulate_with_an_estimate_and_initial_values_from_the_first_row(
     ship: leeway.Model, est: leeway.Estimate, tmp_path: Path
 ) -> None:

@@ -10,4 +10,5 @@ mod design;
 mod estimate;
 mod parquet;
 mod reproduce;
+mod simulate;
 mod words;

@@ -615,6 +615,10 @@ def simulate(
     x0: Mapping[str, float] | None = None,
     disturbances: Disturbances = None,
     step: float | None = None,
+    disturbance_std: Mapping[str, float] | None = None,
+    correlation_time: Mapping[str, float] | None = None,
+    noise: Mapping[str, float] | None = None,
+    seed: int = 0,
 ) -> pd.DataFrame:
     """Simulates ``model`` with ``theta`` on ``inputs`` from its first row, as
     ``leeway simulate`` does (docs/cli.md, "leeway simulate"), and returns the
@@ -633,11 +637,27 @@ def simulate(
     ``{"current.north": {"value": 0.2, "from": "estimate"}}`` (``from``:
     ``given``, ``estimate`` or ``default``). When the simulation diverges, a
     ``LeewayWarning`` says where, and the rows before are returned
-    (``frame.attrs["diverged"]`` is then true)."""
+    (``frame.attrs["diverged"]`` is then true).
+
+    A trial's data as a logger would record them, as ``leeway simulate``'s
+    ``--disturbance-std``, ``--correlation-time``, ``--noise`` and
+    ``--seed`` give them: ``disturbance_std={"current": 0.03}`` makes a
+    component (or every component of a medium) vary about its mean (the
+    held value; for a measured medium the input's values, and the craft
+    feels and its sensor records the variation), ``correlation_time=
+    {"current": 60}`` in seconds (first-order Gauss–Markov; 0, the default:
+    independent samples), ``noise={"u": 0.01, "psi": 0.005, "wind": 0.2}``
+    the sensor noise of a state, the heading or a measured disturbance (the
+    frame holds the measured values), ``seed`` (default 0): the same seed,
+    the same bits, as the CLI's."""
     checked_theta = _theta(model, theta)
     checked_x0 = _named_values(x0, "x0")
     given, zero = _disturbances(disturbances)
     checked_step = _seconds("step", step)
+    checked_std = _named_values(disturbance_std, "disturbance_std")
+    checked_time = _named_values(correlation_time, "correlation_time")
+    checked_noise = _named_values(noise, "noise")
+    checked_seed = _integer("seed", seed, 0, 2**64 - 1)
     (name, columns, labels), = _handover(model, {"inputs": inputs})
     values, diverged, held, issued = _native(
         _leeway.simulate_columns,
@@ -649,6 +669,10 @@ def simulate(
         zero,
         _means(theta),
         checked_step,
+        checked_std,
+        checked_time,
+        checked_noise,
+        checked_seed,
     )
     frame = pd.DataFrame(dict(values))
     frame.attrs["diverged"] = diverged is not None

@@ -98,6 +98,10 @@ def simulate_columns(
     zero: bool = False,
     means: list[tuple[str, float]] | None = None,
     step: float | None = None,
+    disturbance_std: list[tuple[str, float]] = ...,
+    correlation_time: list[tuple[str, float]] = ...,
+    noise: list[tuple[str, float]] = ...,
+    seed: int = 0,
 ) -> tuple[
     list[tuple[str, npt.NDArray[np.float64]]],
     str | None,
