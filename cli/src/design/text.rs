@@ -293,7 +293,7 @@ fn verification(s: &mut String, v: &Verification) {
         let fits: Vec<String> = m.fits.iter().map(|(_, f)| num(*f)).collect();
         let _ = writeln!(
             s,
-            "  {}{}: {} failed, {} rank-deficient, {} diverged; validation fit {} %{}",
+            "  {}{}: {} failed, {} rank-deficient, {} unsettled, {} diverged; validation fit {} %{}",
             m.method,
             if m.designed_for {
                 " (designed for)"
@@ -302,6 +302,7 @@ fn verification(s: &mut String, v: &Verification) {
             },
             m.failed,
             m.rank_deficient,
+            m.unconverged,
             m.diverged,
             fits.join("/"),
             m.failure
