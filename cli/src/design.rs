@@ -41,6 +41,11 @@ pub fn run(args: &DesignArgs) -> Status {
     match execute(args) {
         Ok(status) => status,
         Err(f) => {
+            // A script reading --json gets a document for every outcome.
+            if args.json {
+                let doc = serde_json::json!({ "feasible": false, "errors": f.json() });
+                out(&serde_json::to_string_pretty(&doc).unwrap_or_default());
+            }
             err(&f.render(style, "designed"));
             f.status()
         }
