@@ -474,6 +474,7 @@ fn noise(model: &dyn Model, c: &Conditions, runs: &[Run], assumptions: &mut Vec<
         .iter()
         .map(|r| simulate(model, &system, r, "nominal", 0.0, 0).1)
         .collect();
+    let mut defaulted: Vec<String> = Vec::new();
     let states = (0..ir.states.len())
         .map(|s| {
             c.state_noise[s].unwrap_or_else(|| {
@@ -486,8 +487,8 @@ fn noise(model: &dyn Model, c: &Conditions, runs: &[Run], assumptions: &mut Vec<
                 let mean = sum / f64::max(n, 1.0);
                 let std = (sq / f64::max(n, 1.0) - mean * mean).max(0.0).sqrt();
                 let sigma = 0.01 * std.max(1e-6 * (1.0 + mean.abs()));
-                assumptions.push(format!(
-                    "noise on {}: {} (1 % of its planned excursion; the plan gives none)",
+                defaulted.push(format!(
+                    "{} {}",
                     ir.states[s],
                     leeway_model::number::short_number(sigma)
                 ));
@@ -495,6 +496,12 @@ fn noise(model: &dyn Model, c: &Conditions, runs: &[Run], assumptions: &mut Vec<
             })
         })
         .collect();
+    if !defaulted.is_empty() {
+        assumptions.push(format!(
+            "measurement noise {} (1 % of each state's planned excursion; the plan gives none)",
+            defaulted.join(", ")
+        ));
+    }
     let heading = match (&ir.rotation, c.heading_noise) {
         (leeway_structure::ir::Rotation::Planar { heading, .. }, None) => {
             assumptions.push(format!(
