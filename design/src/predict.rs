@@ -7,9 +7,11 @@
 use crate::plan::Conditions;
 use crate::trial::{Run, simulate, true_system};
 use leeway_estimate::{EstimateOptions, estimate};
+use leeway_model::experiment::Experiment;
 use leeway_model::experiment::Source;
 use leeway_model::model::Model;
 use leeway_scenarios::engine::{campaign, keyed_seed};
+use leeway_scenarios::synth::TrueSystem;
 
 /// Standard errors at one run length, and how to scale them.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -119,21 +121,7 @@ pub fn predict(model: &dyn Model, setting: Setting, seed: u64) -> Result<Predict
         options,
     } = setting;
     let system = true_system(c, &noise.states, noise.heading, true);
-    let experiments: Vec<_> = runs
-        .iter()
-        .enumerate()
-        .map(|(e, run)| {
-            simulate(
-                model,
-                &system,
-                run,
-                &format!("run{}", e + 1),
-                0.0,
-                keyed_seed(seed, "predict", e),
-            )
-            .0
-        })
-        .collect();
+    let experiments = realise(model, &system, runs, keyed_seed(seed, "predict", 0));
     let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
     let options = EstimateOptions {
         covariance: true,
@@ -169,6 +157,26 @@ pub fn predict(model: &dyn Model, setting: Setting, seed: u64) -> Result<Predict
         unexcited: est.diagnostics.unexcited.clone(),
         aggregated: options.aggregate,
     })
+}
+
+/// The runs realised on `system`, run `e` from `keyed_seed(seed,
+/// "experiment", e)` and heading 0: what a trial's logger records.
+pub fn realise(model: &dyn Model, system: &TrueSystem, runs: &[Run], seed: u64) -> Vec<Experiment> {
+    runs.iter()
+        .enumerate()
+        .map(|(e, run)| {
+            let name = format!("run{}", e + 1);
+            simulate(
+                model,
+                system,
+                run,
+                &name,
+                0.0,
+                keyed_seed(seed, "experiment", e),
+            )
+            .0
+        })
+        .collect()
 }
 
 /// The plan's mean of a component named by medium and component.
@@ -207,21 +215,7 @@ pub fn calibrate(
     };
     let outcomes: Vec<Option<(Vec<f64>, Vec<f64>)>> = campaign(trials, &|| (), &|t| {
         let trial = keyed_seed(seed, "pilot", t);
-        let experiments: Vec<_> = runs
-            .iter()
-            .enumerate()
-            .map(|(e, run)| {
-                simulate(
-                    model,
-                    &system,
-                    run,
-                    &format!("run{}", e + 1),
-                    0.0,
-                    keyed_seed(trial, "experiment", e),
-                )
-                .0
-            })
-            .collect();
+        let experiments = realise(model, &system, runs, trial);
         let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
         let est = estimate(model, &sources, &options).ok()?;
         Some((est.theta, est.disturbances.iter().map(|d| d.mean).collect()))
