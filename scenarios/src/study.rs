@@ -5,7 +5,7 @@
 //!
 //! One run estimates every method on longer and longer prefixes of one
 //! record, through passes continued along them ([`evaluate_continuing`]),
-//! on the study engine ([`campaign`](crate::engine::campaign));
+//! on the study engine ([`campaign`]);
 //! [`run_study_inspecting`] hands each run's true trajectory to a caller
 //! that measures it, as the design check does. Every run has its own seed
 //! and results are merged in run order, so they do not depend on the thread
