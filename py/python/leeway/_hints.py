@@ -35,6 +35,7 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--strict": ("strict", "flag"),
     "--no-runaway-guard": ("runaway_guard", "off"),
     "--pattern": ("patterns", "name"),
+    "--patterns": ("patterns", "name"),
     "--data": ("data", "name"),
     "--params": ("theta", "name"),
     "--input": ("inputs", "name"),
