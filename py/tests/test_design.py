@@ -7,7 +7,6 @@ workers equal to the local one."""
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -91,6 +90,7 @@ def test_a_target_reads_as_a_fraction_or_a_percentage(rov: leeway.Model, verifie
 
 
 def test_a_dict_or_json_plan_is_the_toml_plan(rov: leeway.Model, tmp_path: Path) -> None:
+    tomllib = pytest.importorskip("tomllib")  # Python 3.11+
     fields = tomllib.loads(ROV_PLAN.read_text())
     from_file = leeway.design(rov, ROV_PLAN, pilot=0)
     from_dict = leeway.design(rov, fields, pilot=0)
