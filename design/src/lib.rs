@@ -5,13 +5,15 @@
 //! point per pattern ([`operating`]), an excitation around it
 //! ([`excitation`]) — predicts the standard errors of θ against run length
 //! ([`predict`]), reports it ([`report`]) and checks it by Monte Carlo
-//! ([`verify`], on the study engine of `leeway_scenarios::engine`).
+//! ([`verify`], on the study engine of `leeway_scenarios::engine`; run by
+//! run on a cluster with [`distributed`]).
 //!
 //! Seeded throughout: the same plan and seed give the same design and the
 //! same verification, whatever the thread count.
 
 pub mod compare;
 pub mod design;
+pub mod distributed;
 pub mod document;
 pub mod error;
 pub mod excitation;

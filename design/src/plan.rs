@@ -229,7 +229,7 @@ impl PlanFile {
         if matches!(ir.rotation, Rotation::Measured { .. }) {
             return Err(DesignError::cannot(
                 "the rotation is measured entry by entry (`rotation { }`): a design cannot predict R along a trial",
-                "give the craft a heading (`heading psi integrates r`) if it turns in the plane, or design its runs by hand and check them with `leeway check --patterns`",
+                "give the craft a heading (`heading psi integrates r`) if it turns in the plane, or design its runs by hand and check them with `leeway check --pattern`",
             ));
         }
         let mut assumptions = Vec::new();

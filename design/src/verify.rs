@@ -17,7 +17,7 @@ use leeway_model::model::Model;
 use leeway_model::simulate::{Disturbances, fits};
 use leeway_scenarios::engine::{campaign, keyed_seed};
 use leeway_structure::identify::Centring;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The verification of a design.
 #[derive(Clone, Debug, Serialize)]
@@ -92,15 +92,90 @@ pub struct ParameterVerification {
     pub reported: Option<f64>,
 }
 
-/// One method's estimate in a run and its validation fits (`None`:
-/// diverged), or why it failed.
-type Outcome = Result<(Estimate, Option<Vec<f64>>), String>;
+/// One method's estimate in a run as the summary reads it, or why it
+/// failed.
+pub type Outcome = Result<Estimated, String>;
+
+/// What the summary reads of one estimate: plain data, so that a run can
+/// be made on another machine ([`crate::distributed`]) and summarised here.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Estimated {
+    /// θ̂.
+    pub theta: Vec<f64>,
+    /// The estimator's own standard errors.
+    pub std_errors: Vec<Option<f64>>,
+    /// The data left the system rank deficient, or a θ not excited that
+    /// the design did not plan to hold.
+    pub rank_deficient: bool,
+    /// The refinement settled (not stopped by the runaway guard).
+    pub converged: bool,
+    /// Validation fits per state (`None`: the model diverged).
+    pub fits: Option<Vec<f64>>,
+}
 
 /// One run's results: per method the estimate (or its error), per
 /// experiment and held argument the fraction kept.
-struct RunResult {
-    estimates: Vec<Outcome>,
-    kept: Vec<Vec<f64>>,
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct RunResult {
+    /// Per method, in the order of `Method::ALL`.
+    pub estimates: Vec<Outcome>,
+    /// Per experiment and held argument, the fraction of samples on its side.
+    pub kept: Vec<Vec<f64>>,
+}
+
+/// What every run of a verification shares: the noise designed for, the
+/// validation run, the methods and the one designed for.
+pub struct Bench<'a> {
+    noise: &'a Noise,
+    validation: Experiment,
+    methods: &'static [Method],
+    designed: Method,
+}
+
+impl<'a> Bench<'a> {
+    /// The bench of `design`; `None` when the design has nothing to verify
+    /// (no noise resolved, no validation run or no method).
+    pub fn new(model: &dyn Model, design: &'a Design) -> Option<Bench<'a>> {
+        let noise = design.noise_used.as_ref()?;
+        Some(Bench {
+            noise,
+            validation: validation_experiment(model, design, noise)?,
+            methods: &Method::ALL,
+            designed: design.method_used?,
+        })
+    }
+
+    /// Run `r` of a verification seeded by `seed`.
+    pub fn run(&self, model: &dyn Model, design: &Design, seed: u64, r: usize) -> RunResult {
+        one_run(
+            model,
+            design,
+            self.noise,
+            &self.validation,
+            self.methods,
+            self.designed,
+            keyed_seed(seed, "verify", r),
+        )
+    }
+
+    /// The verification from every run's results, in run order.
+    pub fn summarise(
+        &self,
+        model: &dyn Model,
+        design: &Design,
+        seed: u64,
+        results: &[RunResult],
+    ) -> Verification {
+        summarise(
+            model,
+            design,
+            self.methods,
+            self.designed,
+            results.len(),
+            seed,
+            results,
+        )
+    }
 }
 
 /// Verifies `design` by `runs` Monte Carlo runs, seeded by `seed`;
@@ -112,24 +187,9 @@ pub fn verify(
     seed: u64,
     progress: &(dyn Fn() + Sync),
 ) -> Option<Verification> {
-    let noise = design.noise_used.as_ref()?;
-    let validation = validation_experiment(model, design, noise)?;
-    let designed = design.method_used?;
-    let methods = Method::ALL;
-    let results = campaign(runs, progress, &|r| {
-        one_run(
-            model,
-            design,
-            noise,
-            &validation,
-            &methods,
-            designed,
-            keyed_seed(seed, "verify", r),
-        )
-    });
-    Some(summarise(
-        model, design, &methods, designed, runs, seed, &results,
-    ))
+    let bench = Bench::new(model, design)?;
+    let results = campaign(runs, progress, &|r| bench.run(model, design, seed, r));
+    Some(bench.summarise(model, design, seed, &results))
 }
 
 fn one_run(
@@ -178,8 +238,14 @@ fn one_run(
             };
             let est = estimate(model, &sources, &options)
                 .map_err(|e| format!("{}: {}", e.code, e.message))?;
-            let fit = validate(model, &est, validation);
-            Ok((est, fit))
+            let fits = validate(model, &est, validation);
+            Ok(Estimated {
+                rank_deficient: deficient(&est, &held_by_design(design)),
+                converged: est.diagnostics.converged,
+                theta: est.theta,
+                std_errors: est.std_errors,
+                fits,
+            })
         })
         .collect();
     RunResult {
@@ -252,29 +318,21 @@ fn summarise(
         })
         .collect();
     let predicted = design.predicted.as_ref().map(|p| p.at(design.samples));
-    let held_by_design = design
-        .predicted
-        .as_ref()
-        .map_or(Vec::new(), |p| p.undetermined());
     let methods = methods
         .iter()
         .enumerate()
         .map(|(mi, m)| {
             let outcomes: Vec<&Outcome> =
                 results.iter().filter_map(|r| r.estimates.get(mi)).collect();
-            let ok: Vec<&(Estimate, Option<Vec<f64>>)> =
-                outcomes.iter().filter_map(|o| o.as_ref().ok()).collect();
+            let ok: Vec<&Estimated> = outcomes.iter().filter_map(|o| o.as_ref().ok()).collect();
             let failure = outcomes.iter().find_map(|o| o.as_ref().err().cloned());
-            let rank_deficient = ok
-                .iter()
-                .filter(|(e, _)| deficient(e, &held_by_design))
-                .count();
+            let rank_deficient = ok.iter().filter(|e| e.rank_deficient).count();
             let parameters = ir
                 .parameters
                 .iter()
                 .enumerate()
                 .map(|(p, param)| {
-                    let values: Vec<f64> = ok.iter().map(|(e, _)| e.theta[p]).collect();
+                    let values: Vec<f64> = ok.iter().map(|e| e.theta[p]).collect();
                     let (mean, std) = mean_std(&values);
                     let truth = design.conditions.as_ref().map_or(f64::NAN, |c| c.theta[p]);
                     let sigma = if *m == designed {
@@ -289,7 +347,7 @@ fn summarise(
                             .count() as f64
                             / values.len() as f64
                     });
-                    let own: Vec<f64> = ok.iter().filter_map(|(e, _)| e.std_errors[p]).collect();
+                    let own: Vec<f64> = ok.iter().filter_map(|e| e.std_errors[p]).collect();
                     let reported = (!own.is_empty()).then(|| mean_std(&own).0);
                     ParameterVerification {
                         name: param.name.clone(),
@@ -302,7 +360,7 @@ fn summarise(
                     }
                 })
                 .collect();
-            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|(_, f)| f.as_ref()).collect();
+            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.fits.as_ref()).collect();
             let fits = ir
                 .states
                 .iter()
@@ -321,7 +379,7 @@ fn summarise(
                 parameters,
                 fits,
                 diverged: ok.len() - fitted.len(),
-                unconverged: ok.iter().filter(|(e, _)| !e.diagnostics.converged).count(),
+                unconverged: ok.iter().filter(|e| !e.converged).count(),
             }
         })
         .collect();
@@ -332,6 +390,15 @@ fn summarise(
         signs,
         methods,
     }
+}
+
+/// The θ the design holds at nominal (`--aggregate`): not excited apart
+/// from others by any excitation within the limits.
+fn held_by_design(design: &Design) -> Vec<String> {
+    design
+        .predicted
+        .as_ref()
+        .map_or(Vec::new(), |p| p.undetermined())
 }
 
 /// A rank deficiency beyond what the design holds: a numerically

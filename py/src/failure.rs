@@ -147,6 +147,25 @@ impl Failure {
         }))
     }
 
+    /// A design that cannot be made: `class` is `PlanError` (the plan
+    /// file, located), `Unidentifiable` or `DesignError`.
+    pub fn design(
+        class: &'static str,
+        code: &str,
+        message: &str,
+        hint: &str,
+        location: Option<String>,
+    ) -> Failure {
+        Failure(Box::new(Details {
+            class,
+            code: code.to_string(),
+            message: message.to_string(),
+            hint: Some(hint.to_string()),
+            location,
+            report: None,
+        }))
+    }
+
     fn exception(&self, py: Python<'_>) -> PyResult<PyErr> {
         let f = &self.0;
         // Ctrl-C stopped the estimate: Python's own exception, as after any

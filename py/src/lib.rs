@@ -6,7 +6,8 @@
 //! validates with the library functions `leeway simulate` and `leeway
 //! validate` call (`simulate.rs`), answering with columns and fits, and
 //! analyses one-step residuals as `leeway validate --resid` does
-//! (`residuals.rs`). The Python half turns
+//! (`residuals.rs`); it designs trials as `leeway design` does, answering
+//! with its JSON document (`design.rs`). The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 //!
@@ -26,6 +27,7 @@
 static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod data;
+mod design;
 mod distributed;
 mod estimate;
 mod failure;
@@ -51,5 +53,6 @@ fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::study_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_run, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_summary, m)?)?;
+    m.add_class::<design::Designed>()?;
     Ok(())
 }

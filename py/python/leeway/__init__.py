@@ -10,27 +10,32 @@ instrumental variables from pandas DataFrames.
 >>> leeway.simulate(model, est, inputs)                      # doctest: +SKIP
 >>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
 >>> leeway.residuals(model, est, held_out).tests             # doctest: +SKIP
+>>> leeway.design(model, "plan.toml", verify=100).prediction # doctest: +SKIP
 
 Everything is computed by the same Rust code as the ``leeway`` command:
 ``Estimate.to_json()`` is the document of ``leeway estimate --json``,
 ``simulate`` returns what ``leeway simulate`` writes, ``validate`` the
-fits ``leeway validate`` prints and ``residuals`` the analysis of
-``leeway validate --resid``, bit for bit. Figures: ``leeway.plot``
+fits ``leeway validate`` prints, ``residuals`` the analysis of
+``leeway validate --resid`` and ``design`` the trial design of ``leeway
+design --json``, bit for bit. Figures: ``leeway.plot``
 (matplotlib, imported only when used).
 """
 
 from . import errors
 from ._api import Check, Estimate, Model, Theta, estimate, simulate, validate
+from ._design import Design, Verification, design
 from ._leeway import __version__
 from ._residuals import ResidualAnalysis, predict, residuals
 from ._summary import Summary
 from .errors import (
     DataError,
+    DesignError,
     EstimateError,
     LeewayError,
     LeewayWarning,
     ModelError,
     OptionError,
+    PlanError,
     RankDeficient,
     SignViolation,
     Unidentifiable,
@@ -42,11 +47,14 @@ __all__ = [
     "Estimate",
     "Summary",
     "ResidualAnalysis",
+    "Design",
+    "Verification",
     "estimate",
     "simulate",
     "validate",
     "residuals",
     "predict",
+    "design",
     "Theta",
     "__version__",
     *errors.__all__,

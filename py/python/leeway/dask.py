@@ -42,12 +42,12 @@ from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from . import _leeway
+from . import _design, _leeway
 from ._api import Estimate, Model, _flag, _integer, _native, _number, _text
 from . import mapreduce
 from .errors import DataError, EstimateError, LeewayError, OptionError
 
-__all__ = ["estimate", "study"]
+__all__ = ["estimate", "study", "verify_design"]
 
 # What a file was when a task opened it: size, modification and change
 # times (ns), inode, device, and a hash of its size and first and last
@@ -473,3 +473,72 @@ def study(
     )
     result: dict[str, Any] = json.loads(_native(_leeway.study_summary, config, runs_done))
     return result
+
+
+# Designs made on this worker, by model, plan and options, least recently
+# used first: a worker's trials of one verification share one design.
+_designs: OrderedDict[tuple[Any, ...], _leeway.Designed] = OrderedDict()
+_designs_lock = threading.Lock()
+_DESIGNS_KEPT = 4
+
+
+def _worker_design(model: Model, plan: tuple[str, bool, str, bool], options: dict[str, Any]) -> _leeway.Designed:
+    """The design of (model, plan, options) on this worker: made once (a
+    design is deterministic, so it is the driver's), then reused."""
+    key = (model.source, model.file, model.aggregate, plan[:2], tuple(sorted(options.items())))
+    # Held while designing: the worker's other threads wait for this design
+    # rather than make it again.
+    with _designs_lock:
+        found = _designs.get(key)
+        if found is None:
+            found = _native(_leeway.Designed.make, model._core, *plan, options)
+            _designs[key] = found
+            while len(_designs) > _DESIGNS_KEPT:
+                _designs.popitem(last=False)
+        _designs.move_to_end(key)
+        return found
+
+
+def _design_trial(
+    model: Model, plan: tuple[str, bool, str, bool], options: dict[str, Any], index: int
+) -> Answer:
+    return _answer(lambda: _native(_worker_design(model, plan, options).trial, index))
+
+
+def verify_design(
+    model: Model,
+    plan: _design.Plan,
+    client: Any = None,
+    *,
+    runs: int,
+    seed: int = 0,
+    target: float | str | None = None,
+    pilot: int = 50,
+    method: str = "iv3",
+) -> _design.Design:
+    """:func:`leeway.design` with ``verify=runs``, the Monte Carlo trials of
+    the verification spread over the workers of ``client`` (one task per
+    trial; each worker makes the design once from the model, the plan and
+    the options, as the driver does, rather than receive it). Returns the
+    same ``Design`` as ``leeway.design(model, plan, verify=runs, …)``, its
+    verification bit for bit. A design that does not keep every held sign
+    is returned unverified (``verification`` is ``None``), as locally."""
+    client = _client(client)
+    options = _design._options(target, seed, pilot, method)
+    count = _design._runs("runs", runs, optional=False)
+    assert count is not None  # not optional
+    plan_text = _design._plan(plan)
+    core = _design._designed(model, plan_text, options)
+    if not core.verifiable:
+        return _design._design(core, _native(core.document, None))
+    trials = _mapped(
+        client,
+        "verification",
+        _design_trial,
+        None,  # trials take what they take; a lost worker is retried
+        [model] * count,
+        [plan_text] * count,
+        [options] * count,
+        list(range(count)),
+    )
+    return _design._design(core, _native(core.summarise, trials))

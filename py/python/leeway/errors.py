@@ -83,6 +83,19 @@ class SignViolation(EstimateError):
     """A sign assumption (paper A7) is violated under ``strict=True`` (``sign-violation``)."""
 
 
+class PlanError(LeewayError, ValueError):
+    """A trial plan (``leeway.design``'s ``plan``) cannot be read: a syntax
+    error at ``location`` ``plan.toml:line:col``, an unknown name, a value
+    out of range (``plan``)."""
+
+
+class DesignError(LeewayError):
+    """Model and plan are valid, but no trial can be designed for them
+    (``cannot-design``: no steady state within the input limits, a rotation
+    measured entry by entry). A model no trial can identify raises
+    ``Unidentifiable`` (``not-identifiable``)."""
+
+
 class LeewayWarning(UserWarning):
     """A warning of the model, the data checks or the estimator."""
 
@@ -96,5 +109,7 @@ __all__ = [
     "Unidentifiable",
     "RankDeficient",
     "SignViolation",
+    "PlanError",
+    "DesignError",
     "LeewayWarning",
 ]
