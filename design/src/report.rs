@@ -406,7 +406,7 @@ pub fn assemble(p: Parts) -> Design {
         prediction: p
             .prediction
             .as_ref()
-            .map(|pr| prediction_report(ir, pr, n, c.h, p.options.target)),
+            .map(|pr| prediction_report(ir, pr, (n, c.h), p.options.target, p.fitted.scale)),
         methods: method_signs(p.model, c, p.bases, &p.runs, kind),
         shortfalls,
         proposals,
@@ -507,9 +507,9 @@ fn side(sign: f64) -> String {
 fn prediction_report(
     ir: &Ir,
     p: &Prediction,
-    n: usize,
-    h: f64,
+    (n, h): (usize, f64),
     target: Option<f64>,
+    room_used: f64,
 ) -> PredictionReport {
     let at_n = p.at(n);
     let f = (p.samples as f64 / n.max(1) as f64).sqrt();
@@ -589,9 +589,10 @@ fn prediction_report(
                     name: q.name.clone(),
                     relative: r,
                     help: format!(
-                        "run {} samples per experiment for {:.0} %, or excite {term} more (a larger amplitude on the inputs that move it)",
+                        "run {} samples per experiment for {:.0} %, or excite {term} more: {}",
                         (n as f64 * (r / limit) * (r / limit)).ceil(),
-                        limit * 100.0
+                        limit * 100.0,
+                        excite_help(ir, i, room_used)
                     ),
                     term,
                 }
@@ -607,6 +608,45 @@ fn prediction_report(
         curve,
         target,
         poorly_determined,
+    }
+}
+
+/// Which inputs move parameter `p`'s regressor: those acting directly in
+/// the equations of the states its term holds, and how much of their room
+/// the excitation already uses.
+fn excite_help(ir: &Ir, p: usize, scale: f64) -> String {
+    let states: Vec<usize> = ir
+        .terms
+        .iter()
+        .filter(|t| t.parameter == p)
+        .flat_map(|t| t.factors.iter())
+        .filter_map(|f| match f.arg.signal {
+            leeway_structure::ir::Signal::State(s) => Some(s),
+            leeway_structure::ir::Signal::Input(_) => None,
+        })
+        .collect();
+    let mut inputs: Vec<&str> = Vec::new();
+    for t in ir.terms.iter().filter(|t| states.contains(&t.output)) {
+        for f in &t.factors {
+            if let leeway_structure::ir::Signal::Input(i) = f.arg.signal
+                && !inputs.contains(&ir.inputs[i].as_str())
+            {
+                inputs.push(&ir.inputs[i]);
+            }
+        }
+    }
+    let room = if scale < 0.999 {
+        format!(
+            " (the excitation uses {:.0} % of their room, limited by the held signs: offsets farther from zero, or wider ranges, leave more)",
+            scale * 100.0
+        )
+    } else {
+        " (the excitation already uses their whole room: a wider range would help)".to_string()
+    };
+    if inputs.is_empty() {
+        "a larger amplitude on the inputs that move its states".to_string()
+    } else {
+        format!("a larger amplitude on {}{room}", inputs.join(", "))
     }
 }
 
