@@ -350,7 +350,7 @@ def design(
     target: float | str | None = None,
     verify: int | None = None,
     seed: int = 0,
-    pilot: int = 50,
+    pilot: int = 100,
     method: str = "iv3",
 ) -> Design:
     """Designs the trial for ``model`` as ``leeway design MODEL --plan PLAN``

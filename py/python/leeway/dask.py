@@ -513,7 +513,7 @@ def verify_design(
     runs: int,
     seed: int = 0,
     target: float | str | None = None,
-    pilot: int = 50,
+    pilot: int = 100,
     method: str = "iv3",
 ) -> _design.Design:
     """:func:`leeway.design` with ``verify=runs``, the Monte Carlo trials of
