@@ -33,14 +33,16 @@ def tiled(frame: pd.DataFrame, rows: int) -> pd.DataFrame:
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to oneself")
 def test_ctrl_c_stops_a_running_estimate_within_a_second(ship_frame: pd.DataFrame) -> None:
     model = leeway.Model.load(SHIP)
-    big = tiled(ship_frame, 400_000)
+    # Long enough that the estimate is still running when the signal comes
+    # (400 000 rows took about 0.3 s on an idle machine: a race).
+    big = tiled(ship_frame, 2_000_000)
     fired: list[float] = []
 
     def interrupt() -> None:
         fired.append(time.perf_counter())
         os.kill(os.getpid(), signal.SIGINT)
 
-    timer = threading.Timer(0.3, interrupt)
+    timer = threading.Timer(0.2, interrupt)
     start = time.perf_counter()
     timer.start()
     with pytest.raises(KeyboardInterrupt), warnings.catch_warnings():
