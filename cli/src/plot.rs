@@ -37,7 +37,7 @@ pub struct Segment {
 }
 
 /// The colours of the models' lines, in order (the measurement is grey).
-const MODEL_COLOURS: [RGBColor; 6] = [
+pub const MODEL_COLOURS: [RGBColor; 6] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
     RGBColor(44, 160, 44),

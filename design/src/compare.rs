@@ -4,9 +4,9 @@
 //! the design's per sample (`σ·√N`, so runs of different lengths compare).
 
 use crate::predict::{Prediction, Setting, calibrate, predict};
-use crate::report::{ArgumentMargin, Design};
-use crate::signs::{Held, held};
-use crate::trial::{Run, margins, simulate, start_headings, true_system};
+use crate::report::{ArgumentMargin, Design, argument_margins};
+
+use crate::trial::Run;
 use leeway_estimate::EstimateOptions;
 use leeway_model::model::Model;
 use serde::Serialize;
@@ -54,39 +54,12 @@ pub fn compare(
     let noise = design.noise_used.as_ref()?;
     let ir = model.ir();
     let kind = design.method_used?.predictor();
-    let system = true_system(c, &[], 0.0, false);
-    let headings = start_headings(model, c);
-    let mut held_margins = Vec::new();
-    for (e, run) in runs.iter().enumerate() {
-        let truths: Vec<_> = headings
-            .iter()
-            .map(|psi| simulate(model, &system, run, "given", *psi, 0).1)
-            .collect();
-        // The side each held argument mostly takes in the nominal run.
-        let mut pattern = vec![1i8; ir.sign_args.len()];
-        for a in held(ir, kind, &pattern, c) {
-            let plain = Held { band: 0.0, ..a };
-            let m = margins(model, &truths[0], &run.inputs, std::slice::from_ref(&plain));
-            if m[0].iter().sum::<f64>() < 0.0 {
-                pattern[plain.index] = -1;
-            }
-        }
-        let h = held(ir, kind, &pattern, c);
-        let mut worst = vec![f64::INFINITY; h.len()];
-        for t in &truths {
-            for (w, ms) in worst.iter_mut().zip(margins(model, t, &run.inputs, &h)) {
-                *w = ms.into_iter().fold(*w, f64::min);
-            }
-        }
-        for (a, w) in h.iter().zip(worst) {
-            held_margins.push(ArgumentMargin {
-                experiment: e + 1,
-                argument: a.name.clone(),
-                side: if a.sign < 0.0 { "-".into() } else { "+".into() },
-                min_margin: w,
-            });
-        }
-    }
+    let unfixed = vec![1i8; ir.sign_args.len()];
+    let held_margins: Vec<ArgumentMargin> = runs
+        .iter()
+        .enumerate()
+        .flat_map(|(e, run)| argument_margins(model, c, kind, run, (&unfixed, &[]), e))
+        .collect();
     let options = EstimateOptions {
         method: design.method_used?,
         centring: design.centring_used,

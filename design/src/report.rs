@@ -661,8 +661,6 @@ fn method_signs(
     designed: PredictorKind,
 ) -> Vec<MethodSigns> {
     let ir = model.ir();
-    let system = true_system(c, &[], 0.0, false);
-    let headings = start_headings(model, c);
     let any_measured = ir.disturbances.iter().any(|d| d.measured);
     let methods: &[Method] = if any_measured {
         &[Method::Iv3, Method::Iv2]
@@ -673,49 +671,72 @@ fn method_signs(
         .iter()
         .map(|m| {
             let kind = m.predictor();
-            let mut arguments = Vec::new();
-            for (e, (b, run)) in bases.iter().zip(runs).enumerate() {
-                let truths: Vec<Truth> = headings
-                    .iter()
-                    .map(|psi| simulate(model, &system, run, "nominal", *psi, 0).1)
-                    .collect();
-                let mut pattern = b.pattern.clone();
-                let own = relevant_signs(ir, designed);
-                let free = held(ir, kind, &pattern, c);
-                for a in &free {
-                    if !own.contains(&a.index) {
-                        let plain = Held {
-                            band: 0.0,
-                            sign: 1.0,
-                            ..a.clone()
-                        };
-                        let m =
-                            margins(model, &truths[0], &run.inputs, std::slice::from_ref(&plain));
-                        let mean = m[0].iter().sum::<f64>();
-                        pattern[a.index] = if mean < 0.0 { -1 } else { 1 };
-                    }
-                }
-                let h = held(ir, kind, &pattern, c);
-                let mut worst = vec![f64::INFINITY; h.len()];
-                for t in &truths {
-                    for (w, ms) in worst.iter_mut().zip(margins(model, t, &run.inputs, &h)) {
-                        *w = ms.into_iter().fold(*w, f64::min);
-                    }
-                }
-                for (a, w) in h.iter().zip(worst) {
-                    arguments.push(ArgumentMargin {
-                        experiment: e + 1,
-                        argument: a.name.clone(),
-                        side: side(a.sign),
-                        min_margin: w,
-                    });
-                }
-            }
+            let own = relevant_signs(ir, designed);
+            let arguments: Vec<ArgumentMargin> = bases
+                .iter()
+                .zip(runs)
+                .enumerate()
+                .flat_map(|(e, (b, run))| {
+                    argument_margins(model, c, kind, run, (&b.pattern, &own), e)
+                })
+                .collect();
             MethodSigns {
                 method: m.name().to_string(),
                 holds: arguments.iter().all(|a| a.min_margin >= 0.0),
                 arguments,
             }
+        })
+        .collect()
+}
+
+/// The smallest nominal margin, over the starting headings, of every
+/// argument `kind` holds in run `e`: those in `fixed.1` on the side
+/// `fixed.0` gives them, the others on the side their nominal run from
+/// heading 0 mostly takes.
+pub(crate) fn argument_margins(
+    model: &dyn Model,
+    c: &Conditions,
+    kind: PredictorKind,
+    run: &Run,
+    fixed: (&[i8], &[usize]),
+    e: usize,
+) -> Vec<ArgumentMargin> {
+    let ir = model.ir();
+    let system = true_system(c, &[], 0.0, false);
+    let truths: Vec<Truth> = start_headings(model, c)
+        .iter()
+        .map(|psi| simulate(model, &system, run, "nominal", *psi, 0).1)
+        .collect();
+    let mut pattern = fixed.0.to_vec();
+    for a in held(ir, kind, &pattern, c) {
+        if !fixed.1.contains(&a.index) {
+            let plain = Held {
+                band: 0.0,
+                sign: 1.0,
+                ..a
+            };
+            let m = margins(model, &truths[0], &run.inputs, std::slice::from_ref(&plain));
+            pattern[plain.index] = if m[0].iter().sum::<f64>() < 0.0 {
+                -1
+            } else {
+                1
+            };
+        }
+    }
+    let h = held(ir, kind, &pattern, c);
+    let mut worst = vec![f64::INFINITY; h.len()];
+    for t in &truths {
+        for (w, ms) in worst.iter_mut().zip(margins(model, t, &run.inputs, &h)) {
+            *w = ms.into_iter().fold(*w, f64::min);
+        }
+    }
+    h.iter()
+        .zip(worst)
+        .map(|(a, w)| ArgumentMargin {
+            experiment: e + 1,
+            argument: a.name.clone(),
+            side: side(a.sign),
+            min_margin: w,
         })
         .collect()
 }

@@ -416,18 +416,10 @@ fn deficient(e: &Estimate, held_by_design: &[String]) -> bool {
         })
 }
 
+/// Mean and standard deviation (n − 1) of the finite values: the study's.
 fn mean_std(v: &[f64]) -> (f64, f64) {
-    if v.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = if v.len() > 1 {
-        v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0)
-    } else {
-        0.0
-    };
-    (mean, var.sqrt())
+    let (mean, std, _) = leeway_scenarios::study::mean_std(v.iter().copied());
+    (mean, std)
 }
 
 /// The centring a method's estimate uses in a verification: the design's

@@ -3,7 +3,7 @@
 //! with its band shaded; below, the predicted relative standard errors of
 //! θ against run length (log–log), the budget marked.
 
-use crate::plot::{Figure, decimate_to, save as save_figure, styled_mesh};
+use crate::plot::{Figure, MODEL_COLOURS, decimate_to, save as save_figure, styled_mesh};
 use leeway_design::report::Design;
 use leeway_design::trial::margins;
 use leeway_model::Interpreter;
@@ -12,14 +12,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
 
-const COLOURS: [RGBColor; 6] = [
-    RGBColor(31, 119, 180),
-    RGBColor(214, 39, 40),
-    RGBColor(44, 160, 44),
-    RGBColor(148, 103, 189),
-    RGBColor(255, 127, 14),
-    RGBColor(23, 190, 207),
-];
+/// The line colours, as every figure of leeway draws them.
+const COLOURS: [RGBColor; 6] = MODEL_COLOURS;
 /// Runs drawn (a design rarely needs more).
 const MAX_RUNS: usize = 4;
 const ROW: u32 = 240;
