@@ -1,0 +1,1 @@
+//! ROS 2 bags in MCAP: signals named `topic.field.path`.
