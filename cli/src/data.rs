@@ -3,7 +3,8 @@
 //! `--resample`); `validate` loads them.
 
 use crate::problem::{Failure, Problem};
-use leeway_data::{FileNotes, FileSource, LoadOptions, load_file_noted, open_file};
+use leeway_data::{FileNotes, FileSource, LoadOptions};
+use leeway_logs::{load_path, open_path};
 use leeway_model::{Experiment, Source};
 use leeway_structure::ir::Ir;
 use std::path::PathBuf;
@@ -53,7 +54,7 @@ fn load_files(
     options: &LoadOptions,
 ) -> Result<(Held, Vec<FileNotes>), Failure> {
     let loaded = each_file(files, |path| {
-        load_file_noted(path, ir, options).map(|f| (path.display().to_string(), f))
+        load_path(path, ir, options).map(|f| (path.display().to_string(), f))
     })?;
     let mut held = Held {
         experiments: Vec::new(),
@@ -116,7 +117,7 @@ pub fn open_data(
         return load_files(ir, files, options)
             .map(|(h, n)| (DataSet::Held(h.experiments, h.files), n));
     }
-    let opened = each_file(files, |path| open_file(path, ir, options))?;
+    let opened = each_file(files, |path| open_path(path, ir, options))?;
     let mut sources = Vec::new();
     let mut notes = Vec::with_capacity(opened.len());
     for f in opened {
@@ -163,7 +164,53 @@ pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
                     }
                 ));
             }
+            lines.extend(split_notes(&f.file, e));
         }
     }
+    lines
+}
+
+/// Most lines of gaps, and of pieces, a file's notes print (`--json` lists all).
+const MAX_SPLIT_LINES: usize = 8;
+
+/// The gaps that split an experiment and the pieces they left, one line
+/// each, at most [`MAX_SPLIT_LINES`] of each.
+fn split_notes(file: &str, e: &leeway_data::TimeNotes) -> Vec<String> {
+    use leeway_model::number::short_number as num;
+    let more = |n: usize, what: &str| {
+        (n > MAX_SPLIT_LINES).then(|| {
+            format!(
+                "{file}: … and {} more {what} (--json lists them all)",
+                n - MAX_SPLIT_LINES
+            )
+        })
+    };
+    let mut lines = Vec::new();
+    for g in e.gaps.iter().take(MAX_SPLIT_LINES) {
+        let what = g
+            .signal
+            .as_ref()
+            .map_or(String::new(), |s| format!(" of {s}"));
+        lines.push(format!(
+            "{file}: experiment `{}` split: no samples{what} from t = {} to {} s ({} s, beyond the gap limit of {} s); not interpolated across",
+            e.experiment,
+            num(g.from),
+            num(g.to),
+            num(g.to - g.from),
+            num(g.limit)
+        ));
+    }
+    lines.extend(more(e.gaps.len(), "gaps"));
+    for p in e.pieces.iter().take(MAX_SPLIT_LINES) {
+        let span = format!("t = {} to {} s", num(p.from), num(p.to));
+        lines.push(match &p.experiment {
+            Some(name) => format!("{file}: `{name}`: {span}, {} samples", p.samples),
+            None => format!(
+                "{file}: dropped {span} of `{}`: {} samples, too few for an experiment",
+                e.experiment, p.samples
+            ),
+        });
+    }
+    lines.extend(more(e.pieces.len(), "pieces"));
     lines
 }

@@ -4,6 +4,7 @@
 
 use crate::problem::Problem;
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use leeway_data::gaps::GapLimit;
 use leeway_data::{
     DEFAULT_TIME_TOLERANCE, LoadOptionError, LoadOptions, STEP_RANGE, TIME_TOLERANCE_HINT,
     sample_time_ok, time_tolerance_ok,
@@ -23,6 +24,12 @@ pub struct TimeArgs {
     /// from its first time stamp (needs a time column; the heading along the short arc).
     #[arg(long, value_name = "H", value_parser = positive)]
     pub resample: Option<f64>,
+    /// The longest stretch without samples that `--resample` and a joined
+    /// log (a `.toml` manifest) may interpolate across, in seconds; a
+    /// longer one splits the experiment. Default: 5 steps of each signal's
+    /// own median step.
+    #[arg(long, value_name = "SECONDS", value_parser = positive)]
+    pub max_gap: Option<f64>,
 }
 
 /// `--time-tolerance`: a fraction in (0, 0.5) ([`time_tolerance_ok`]).
@@ -47,7 +54,12 @@ pub fn load_options(
 ) -> Result<LoadOptions, Problem> {
     let tolerance = time.map_or(DEFAULT_TIME_TOLERANCE, |t| t.time_tolerance);
     let resample = time.and_then(|t| t.resample);
-    LoadOptions::for_model(ir, step, tolerance, resample).map_err(|e| {
+    let max_gap = time
+        .and_then(|t| t.max_gap)
+        .map_or(GapLimit::default(), GapLimit::Seconds);
+    LoadOptions::for_model(ir, step, tolerance, resample)
+        .and_then(|o| o.with_max_gap(max_gap))
+        .map_err(|e| {
         let (message, help) = match e {
             LoadOptionError::SampleTime { option, value } => (
                 format!("--{option} {value} is outside 1e-6..=1e6 seconds, the sample times leeway accepts"),
@@ -56,6 +68,10 @@ pub fn load_options(
             LoadOptionError::TimeTolerance(v) => (
                 format!("--time-tolerance {v} is not a fraction in (0, 0.5)"),
                 TIME_TOLERANCE_HINT.to_string(),
+            ),
+            LoadOptionError::MaxGap(g) => (
+                format!("--max-gap {g} is not a positive number of seconds"),
+                "give the longest hole to interpolate across, in seconds, e.g. --max-gap 2".to_string(),
             ),
             LoadOptionError::StepConflict { given, declared } => (
                 format!("--step {given} conflicts with the model's `step {declared}`"),

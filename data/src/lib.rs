@@ -32,6 +32,7 @@ pub mod columns;
 pub mod csv;
 pub mod error;
 pub mod file;
+pub mod gaps;
 pub mod input;
 pub mod notes;
 mod open;
@@ -48,7 +49,7 @@ pub use columns::{Columns, Labels, load_columns, open_columns};
 pub use csv::{Records, load_csv, load_csv_noted, open_csv, parse_csv, parse_csv_noted};
 pub use error::DataError;
 pub use file::{load_file_noted, open_file, with_table};
-pub use notes::{FileNotes, LoadedFile, TimeNotes};
+pub use notes::{FileNotes, GapNote, LoadedFile, PieceNote, SignalNote, TimeNotes};
 pub use options::{
     DEFAULT_TIME_TOLERANCE, LoadOptionError, LoadOptions, STEP_RANGE, TIME_TOLERANCE_HINT,
     sample_time_ok, time_tolerance_ok,

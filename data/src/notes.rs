@@ -14,6 +14,34 @@ pub struct FileNotes {
     pub blank_lines: usize,
     /// Per experiment of the file, in order.
     pub experiments: Vec<TimeNotes>,
+    /// A joined log's first stamp, ISO-8601 UTC: what its noted times
+    /// count from (`None` for one file).
+    #[serde(default)]
+    pub origin: Option<String>,
+    /// A joined log's signals as read, one per model signal (empty for one file).
+    #[serde(default)]
+    pub signals: Vec<SignalNote>,
+}
+
+/// One signal of a joined log as its source had it.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SignalNote {
+    /// The model's signal.
+    pub signal: String,
+    /// Where it was read: `file:column`, or a bag's `file:topic.field.path`.
+    pub source: String,
+    /// Its samples.
+    pub samples: usize,
+    /// Its median step, seconds.
+    pub median_step: f64,
+    /// Its first and last stamps, seconds from the origin.
+    pub first: f64,
+    /// See `first`.
+    pub last: f64,
+    /// Samples whose stamp repeated the previous one (the later kept).
+    pub repeated_stamps: usize,
+    /// `hold` or `linear` (`angle` for a heading) between samples.
+    pub between: String,
 }
 
 /// How one experiment's time stamps were read.
@@ -28,6 +56,40 @@ pub struct TimeNotes {
     pub max_step_deviation: Option<f64>,
     /// Samples after resampling (`None` when not resampled).
     pub resampled: Option<usize>,
+    /// Stretches without samples longer than the gap limit, where the
+    /// experiment was split rather than interpolated across.
+    #[serde(default)]
+    pub gaps: Vec<GapNote>,
+    /// The pieces a split left, kept or dropped (empty when not split).
+    #[serde(default)]
+    pub pieces: Vec<PieceNote>,
+}
+
+/// A stretch without samples that split an experiment: times in seconds,
+/// as the file's time column reads (for a joined log: since its first stamp).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GapNote {
+    /// The signal that had no samples (for one file: every column).
+    pub signal: Option<String>,
+    /// The last stamp before the hole.
+    pub from: f64,
+    /// The first stamp after it.
+    pub to: f64,
+    /// The limit it exceeded, in seconds.
+    pub limit: f64,
+}
+
+/// A piece of an experiment split at its gaps.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PieceNote {
+    /// The experiment it became (`None`: dropped as too short).
+    pub experiment: Option<String>,
+    /// Its first time, in the times of [`GapNote`].
+    pub from: f64,
+    /// Its last time.
+    pub to: f64,
+    /// Its samples on the grid.
+    pub samples: usize,
 }
 
 /// A loaded file: its experiments and what was noted while reading it.

@@ -1,6 +1,7 @@
 //! How files are loaded: step, time tolerance, resampling, and the rules
 //! those options obey whoever gives them (the CLI, Python).
 
+use crate::gaps::GapLimit;
 use leeway_structure::ir::Ir;
 
 /// The default relative tolerance of each time step against the nominal
@@ -19,6 +20,9 @@ pub struct LoadOptions {
     /// Resample every experiment onto a uniform grid of this step (seconds),
     /// by linear interpolation (needs a time column).
     pub resample: Option<f64>,
+    /// The longest step resampling may interpolate across: a longer one
+    /// splits the experiment ([`GapLimit`]; by default 5 median steps).
+    pub max_gap: GapLimit,
 }
 
 impl Default for LoadOptions {
@@ -27,6 +31,7 @@ impl Default for LoadOptions {
             step: None,
             time_tolerance: DEFAULT_TIME_TOLERANCE,
             resample: None,
+            max_gap: GapLimit::default(),
         }
     }
 }
@@ -64,6 +69,8 @@ pub enum LoadOptionError {
     },
     /// A time tolerance outside (0, 0.5).
     TimeTolerance(f64),
+    /// A gap limit that is not positive and finite, or under 1.5 steps.
+    MaxGap(GapLimit),
     /// `step` differs from the model's own `step`.
     StepConflict {
         /// The step given.
@@ -82,6 +89,14 @@ pub enum LoadOptionError {
 }
 
 impl LoadOptions {
+    /// These options with the gap limit `max_gap`, which must be positive
+    /// and finite ([`GapLimit::is_valid`]).
+    pub fn with_max_gap(self, max_gap: GapLimit) -> Result<LoadOptions, LoadOptionError> {
+        if !max_gap.is_valid() {
+            return Err(LoadOptionError::MaxGap(max_gap));
+        }
+        Ok(LoadOptions { max_gap, ..self })
+    }
     /// The load options for `ir`: `step` and `resample` within
     /// [`STEP_RANGE`], the time tolerance within (0, 0.5), `step` equal to
     /// the model's own `step` and `resample` to the sample time when both
@@ -117,6 +132,7 @@ impl LoadOptions {
             step,
             time_tolerance,
             resample,
+            max_gap: GapLimit::default(),
         })
     }
 }

@@ -683,6 +683,14 @@ impl Table for ParquetFile {
     fn stamps(&self, i: usize) -> Option<String> {
         matches!(self.readings.get(i), Some(Reading::Stamp(_))).then(|| self.type_name(i))
     }
+    fn stamp_origin(&self, i: usize) -> Option<i64> {
+        let first = (*self.origins.get(i)?)?;
+        match self.readings.get(i)? {
+            Reading::Stamp(StampUnit::PerSecond(n)) => first.checked_mul(1_000_000_000 / n),
+            Reading::Stamp(StampUnit::Day) => first.checked_mul(86_400_000_000_000),
+            _ => None,
+        }
+    }
     fn label(&self, i: usize) -> Result<Cow<'_, [u8]>, DataError> {
         Ok(match self.cell(i) {
             Cell::Num(v) => Cow::Owned(v.to_string().into_bytes()),

@@ -211,4 +211,54 @@ mod tests {
             assert!((u - k as f64).abs() < 1e-9, "{k}: {u}");
         }
     }
+
+    #[test]
+    fn resampling_splits_at_a_hole_instead_of_bridging_it() {
+        let ir = ship();
+        let mut text = String::from("time,u,v,r,d,psi\n");
+        // 30 samples, a 5.8 s hole, 40 samples, a 3 s hole, 4 samples.
+        let stamps = (0..30)
+            .map(|k| f64::from(k) * 0.5)
+            .chain((0..40).map(|k| 20.3 + f64::from(k) * 0.5))
+            .chain((0..4).map(|k| 42.8 + f64::from(k) * 0.5));
+        for t in stamps {
+            text.push_str(&format!("{t},{t},0,0,1,0\n"));
+        }
+        let options = LoadOptions {
+            resample: Some(0.5),
+            ..LoadOptions::default()
+        };
+        let loaded = parse_csv_noted("hole.csv", text.as_bytes(), &ir, &options)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let names: Vec<&str> = loaded.experiments.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["hole/1", "hole/2"]);
+        let notes = &loaded.notes.experiments[0];
+        let gaps: Vec<(f64, f64)> = notes.gaps.iter().map(|g| (g.from, g.to)).collect();
+        assert_eq!(gaps, [(14.5, 20.3), (39.8, 42.8)]);
+        assert_eq!(notes.pieces.len(), 3);
+        assert_eq!(
+            notes.pieces[2].experiment, None,
+            "the 4-sample tail is dropped"
+        );
+        assert_eq!(notes.pieces[2].samples, 4);
+        // Nothing in the hole: u is the stamp, and every grid time lies in a piece.
+        for e in &loaded.experiments {
+            assert!(
+                e.states[0].iter().all(|u| *u <= 14.5 || *u >= 20.3),
+                "{:?}",
+                e.states[0]
+            );
+        }
+        let strict = LoadOptions {
+            max_gap: crate::gaps::GapLimit::Seconds(10.0),
+            ..options
+        };
+        let loaded = parse_csv_noted("hole.csv", text.as_bytes(), &ir, &strict)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(
+            loaded.experiments.len(),
+            1,
+            "a 10 s limit bridges both holes"
+        );
+    }
 }

@@ -3,17 +3,24 @@
 use leeway_model::experiment::Source;
 use leeway_structure::ir::{Ir, Rotation};
 
-/// The signals a model reads from data, as (signal name, role).
+/// What a signal read from data is to the model (an index into its list).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) enum Role {
+pub enum Role {
+    /// A state.
     State(usize),
+    /// An input.
     Input(usize),
+    /// The planar heading.
     Heading,
+    /// An entry of a measured rotation.
     Rotation(usize),
+    /// A component of a measured disturbance.
     Disturbance(usize),
 }
 
-pub(crate) fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
+/// The signals a model reads from data, as (signal name, role), in the
+/// order of a row.
+pub fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
     let mut v: Vec<(String, Role)> = Vec::new();
     v.extend(
         ir.states
@@ -47,7 +54,7 @@ pub(crate) fn required_signals(ir: &Ir) -> Vec<(String, Role)> {
 
 /// The factor converting a signal's declared unit to the base unit (1 when
 /// none is declared).
-pub(crate) fn unit_factor(ir: &Ir, signal: &str) -> f64 {
+pub fn unit_factor(ir: &Ir, signal: &str) -> f64 {
     ir.data_units
         .get(signal)
         .map_or(1.0, |u| leeway_structure::units::factor(u))

@@ -13,7 +13,7 @@
 use crate::checks::{BlockTimes, Extremes, Outlier, TimeScan, sample_time};
 pub use crate::checks::{OUTLIER_FACTOR, ZERO_OUTLIER, ZERO_OUTLIER_INPUT};
 use crate::error::DataError;
-use crate::notes::{FileNotes, LoadedFile, TimeNotes};
+use crate::notes::{FileNotes, GapNote, LoadedFile, PieceNote, TimeNotes};
 use crate::options::LoadOptions;
 use crate::signals::{Role, required_signals, unit_factor};
 use leeway_model::experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
@@ -100,6 +100,11 @@ pub trait Table {
     /// The type of column `i` when it holds dates or times (read as
     /// seconds since its first stamp, which only a time column may be).
     fn stamps(&self, _i: usize) -> Option<String> {
+        None
+    }
+    /// For a date or time column once its first stamp is read: that stamp
+    /// in nanoseconds since the Unix epoch (what its seconds count from).
+    fn stamp_origin(&self, _i: usize) -> Option<i64> {
         None
     }
     /// Only these columns will be read (a columnar format may skip the
@@ -386,7 +391,7 @@ pub(super) fn scan(
         file,
         comment_lines,
         blank_lines,
-        experiments: Vec::new(),
+        ..FileNotes::default()
     };
     if blocks.is_empty() {
         return Err(DataError::new(
@@ -415,7 +420,7 @@ pub(super) fn scan(
             experiment: block.name.clone(),
             rows: block.rows,
             max_step_deviation: deviation,
-            resampled: None,
+            ..TimeNotes::default()
         });
     }
     Ok(Scanned {
@@ -563,6 +568,94 @@ fn outlier_error(
     )
 }
 
+/// `e` (stamped `times`) resampled every `step` seconds, split at every
+/// stretch without samples longer than `options.max_gap` rather than
+/// interpolated across it: the pieces long enough become experiments
+/// (`name/1`, `name/2`, … when split), the others are dropped; both are
+/// noted in `notes`. `first` locates the experiment in messages.
+fn resample_split(
+    ir: &Ir,
+    e: Experiment,
+    times: &[f64],
+    step: f64,
+    options: &LoadOptions,
+    first: &str,
+    notes: &mut TimeNotes,
+) -> Result<Vec<Experiment>, DataError> {
+    let span = times[times.len() - 1] - times[0];
+    let count = span / step + 1.0;
+    if count > MAX_RESAMPLE_RATIO * e.len() as f64 {
+        return Err(DataError::new(
+            first,
+            format!(
+                "--resample {step} would make {count:.0} samples of experiment `{}` from its {} rows; at most {MAX_RESAMPLE_RATIO} per row",
+                e.name,
+                e.len()
+            ),
+            "choose a resampling step near the logger's own step",
+        ));
+    }
+    let limit = options.max_gap.seconds(&crate::gaps::steps(times), step);
+    let holes = crate::gaps::holes(times, limit);
+    let mut bounds = vec![0];
+    for &i in &holes {
+        notes.gaps.push(GapNote {
+            signal: None,
+            from: times[i],
+            to: times[i + 1],
+            limit,
+        });
+        bounds.push(i + 1);
+    }
+    bounds.push(times.len());
+    let mut kept = Vec::new();
+    for (j, w) in bounds.windows(2).enumerate() {
+        let mut piece =
+            crate::resample::resample(ir, &e.slice(w[0]..w[1]), &times[w[0]..w[1]], step);
+        let note = PieceNote {
+            experiment: None,
+            from: times[w[0]],
+            to: times[w[1] - 1],
+            samples: piece.len(),
+        };
+        if !holes.is_empty() {
+            piece.name = format!("{}/{}", e.name, j + 1);
+        }
+        if piece.len() >= MIN_SAMPLES {
+            if !holes.is_empty() {
+                notes.pieces.push(PieceNote {
+                    experiment: Some(piece.name.clone()),
+                    ..note
+                });
+            }
+            kept.push(piece);
+        } else if !holes.is_empty() {
+            notes.pieces.push(note);
+        }
+    }
+    if kept.is_empty() {
+        let why = if holes.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (split at {} gaps longer than {})",
+                holes.len(),
+                num(limit)
+            )
+        };
+        return Err(DataError::new(
+            first,
+            format!(
+                "experiment `{}` has fewer than {MIN_SAMPLES} samples at --resample {step}{why}",
+                e.name
+            ),
+            "choose a smaller --resample step, or a larger --max-gap if the holes are known to be harmless",
+        ));
+    }
+    notes.resampled = Some(kept.iter().map(Experiment::len).sum());
+    Ok(kept)
+}
+
 /// Most samples `--resample` may make per row read: a finer grid only
 /// interpolates, and memory would follow the grid.
 pub const MAX_RESAMPLE_RATIO: f64 = 100.0;
@@ -595,7 +688,6 @@ pub fn load_table(
         e.name = block.name.clone();
         e.h = block.h;
         if let Some(step) = options.resample {
-            let first = table.at(block.first, None);
             if times.len() != e.len() {
                 return Err(DataError::new(
                     scanned.header_at.clone(),
@@ -606,32 +698,11 @@ pub fn load_table(
                     ),
                 ));
             }
-            let span = times[times.len() - 1] - times[0];
-            let count = span / step + 1.0;
-            if count > MAX_RESAMPLE_RATIO * e.len() as f64 {
-                return Err(DataError::new(
-                    first.clone(),
-                    format!(
-                        "--resample {step} would make {count:.0} samples of experiment `{}` from its {} rows; at most {MAX_RESAMPLE_RATIO} per row",
-                        e.name,
-                        e.len()
-                    ),
-                    "choose a resampling step near the logger's own step",
-                ));
-            }
-            e = crate::resample::resample(ir, &e, &times, step);
-            if e.len() < MIN_SAMPLES {
-                return Err(DataError::new(
-                    first.clone(),
-                    format!(
-                        "experiment `{}` has {} samples at --resample {step}; at least {MIN_SAMPLES} are needed",
-                        e.name,
-                        e.len()
-                    ),
-                    "choose a smaller --resample step",
-                ));
-            }
-            time_notes.resampled = Some(e.len());
+            let first = table.at(block.first, None);
+            out.extend(resample_split(
+                ir, e, &times, step, options, &first, time_notes,
+            )?);
+            continue;
         }
         out.push(e);
     }

@@ -4,3 +4,11 @@
 //! never bridged.
 
 pub mod bag;
+mod bag_source;
+pub mod join;
+pub mod load;
+pub mod manifest;
+pub mod series;
+pub mod stamps;
+
+pub use load::{is_log, load_log, load_path, open_log, open_path};

@@ -143,15 +143,24 @@ impl Experiment {
 
     /// The first `n` samples.
     pub fn truncated(&self, n: usize) -> Experiment {
-        let cut = |v: &Vec<Vec<f64>>| v.iter().map(|c| c[..n.min(c.len())].to_vec()).collect();
+        self.slice(0..n)
+    }
+
+    /// The samples `range` (clamped to the experiment).
+    pub fn slice(&self, range: std::ops::Range<usize>) -> Experiment {
+        let cut = |c: &[f64]| {
+            let end = range.end.min(c.len());
+            c[range.start.min(end)..end].to_vec()
+        };
+        let cut_all = |v: &Vec<Vec<f64>>| v.iter().map(|c| cut(c)).collect();
         Experiment {
             name: self.name.clone(),
             h: self.h,
-            states: cut(&self.states),
-            inputs: cut(&self.inputs),
-            heading: self.heading[..n.min(self.heading.len())].to_vec(),
-            rotation: cut(&self.rotation),
-            disturbances: cut(&self.disturbances),
+            states: cut_all(&self.states),
+            inputs: cut_all(&self.inputs),
+            heading: cut(&self.heading),
+            rotation: cut_all(&self.rotation),
+            disturbances: cut_all(&self.disturbances),
         }
     }
 }

@@ -16,8 +16,6 @@ use crate::model::Model;
 use crate::options::EstimateOptions;
 use leeway_data::FileNotes;
 use leeway_data::LoadOptions;
-use leeway_data::load_file_noted;
-use leeway_data::open_file;
 use leeway_estimate::EstimateError;
 use leeway_estimate::ExperimentFacts;
 use leeway_estimate::FactsRequest;
@@ -28,6 +26,7 @@ use leeway_estimate::Passes;
 use leeway_estimate::decode;
 use leeway_estimate::encode;
 use leeway_estimate::estimate_with;
+use leeway_logs::{load_path, open_path};
 use leeway_model::Experiment;
 use leeway_model::Interpreter;
 use leeway_model::Source;
@@ -80,10 +79,10 @@ impl Dataset {
     fn open_file(model: &Model, path: &str, options: &LoadOptions) -> Result<Dataset, Failure> {
         let ir = &model.ir;
         let (experiments, notes) = if options.resample.is_some() {
-            let f = load_file_noted(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            let f = load_path(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
             (Experiments::Held(f.experiments), f.notes)
         } else {
-            let f = open_file(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
+            let f = open_path(Path::new(path), ir, options).map_err(|e| Failure::data(&e))?;
             (Experiments::Streamed(f.sources), f.notes)
         };
         Ok(Dataset::new(ir, experiments, notes))

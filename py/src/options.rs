@@ -100,6 +100,10 @@ pub(crate) fn load_options(
             format!("time_tolerance={v} is not a fraction in (0, 0.5)"),
             Some(TIME_TOLERANCE_HINT.into()),
         ),
+        LoadOptionError::MaxGap(g) => Failure::option(
+            format!("max_gap={g} is not a positive number of seconds"),
+            Some("give the longest hole to interpolate across, in seconds, e.g. max_gap=2.0".into()),
+        ),
         LoadOptionError::StepConflict { given, declared } => Failure::option(
             format!("step={given} conflicts with the model's `step {declared}`"),
             Some("drop step= (the model's step is used), or change `step` in the model".into()),

@@ -224,6 +224,14 @@ pub struct DataExperimentJson {
     pub max_step_deviation: Option<f64>,
     /// Samples after `--resample` (null when not resampled).
     pub resampled: Option<usize>,
+    /// Stretches without samples beyond the gap limit, where the experiment
+    /// was split (omitted when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gaps: Vec<leeway_data::GapNote>,
+    /// The pieces a split left, kept (`experiment` named) or dropped
+    /// (`experiment` null) (omitted when not split).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<leeway_data::PieceNote>,
 }
 
 /// [`FileNotes`] as JSON.
@@ -242,6 +250,8 @@ pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
                     rows: e.rows,
                     max_step_deviation: e.max_step_deviation,
                     resampled: e.resampled,
+                    gaps: e.gaps.clone(),
+                    pieces: e.pieces.clone(),
                 })
                 .collect(),
         })

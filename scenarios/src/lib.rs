@@ -10,6 +10,7 @@
 
 pub mod design;
 pub mod engine;
+pub mod ferry;
 pub mod noisy;
 pub mod study;
 pub mod synth;

@@ -1,0 +1,442 @@
+//! The log manifest: a small TOML file, written once per log, that says
+//! which file (or bag) each of the model's signals comes from and how each
+//! file's clock is written. Documented in docs/logs.md.
+//!
+//! ```toml
+//! experiment = "run3"          # default: the manifest's file name
+//! step = 0.1                   # the grid; default: the model's step
+//! max_gap = 2.0                # seconds; default: 5 of each signal's median steps
+//!
+//! [sources.twist]
+//! file = "twist.csv"
+//! time = ["secs", "nsecs"]     # seconds + nanoseconds columns
+//! [sources.tau]
+//! file = "tau.csv"
+//! time = "stamp"               # one column: numbers (time_unit) or ISO-8601 text
+//! time_unit = "ns"
+//! [sources.bag]
+//! file = "ferry.mcap"          # a ROS 2 bag: header stamps
+//!
+//! [signals]
+//! u = "twist:u"
+//! tau_x = { from = "tau:Fx", interpolate = "linear" }
+//! psi = { from = "bag:/imu.orientation", as = "yaw" }
+//! ```
+
+use crate::stamps::TimeUnit;
+use leeway_data::DataError;
+use leeway_data::gaps::GapLimit;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// The hint every manifest error carries.
+const SEE_DOCS: &str = "docs/logs.md describes the manifest";
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ManifestFile {
+    experiment: Option<String>,
+    step: Option<Spanned<f64>>,
+    max_gap: Option<Spanned<f64>>,
+    max_gap_steps: Option<Spanned<f64>>,
+    #[serde(default)]
+    sources: BTreeMap<String, Spanned<SourceFile>>,
+    #[serde(default)]
+    signals: BTreeMap<String, Spanned<SignalEntry>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SourceFile {
+    file: String,
+    time: Option<TimeColumns>,
+    time_unit: Option<Spanned<String>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum TimeColumns {
+    One(String),
+    Pair([String; 2]),
+}
+
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum SignalEntry {
+    Path(String),
+    Full(FullEntry),
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FullEntry {
+    from: String,
+    interpolate: Option<String>,
+    #[serde(rename = "as")]
+    kind: Option<String>,
+}
+
+/// A source's kind and clock.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Clock {
+    /// One column: decimal numbers in a unit, or ISO-8601 text.
+    Column {
+        /// The column.
+        name: String,
+        /// The unit of numbers.
+        unit: TimeUnit,
+    },
+    /// Seconds and nanoseconds in two integer columns.
+    Pair {
+        /// Seconds.
+        secs: String,
+        /// Nanoseconds.
+        nanos: String,
+    },
+    /// A ROS 2 bag: each message's header stamp (else its log time).
+    Bag,
+}
+
+/// One file of the log.
+#[derive(Clone, Debug)]
+pub struct SourceSpec {
+    /// Its key in `[sources]`.
+    pub key: String,
+    /// The file, relative to the manifest's folder.
+    pub file: PathBuf,
+    /// Its clock.
+    pub clock: Clock,
+    /// Where it is declared (`manifest:line:col`).
+    pub at: String,
+}
+
+/// How a signal is put on the grid between its samples.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolate {
+    /// The last sample holds until the next (a command, an actuator set point).
+    Hold,
+    /// Straight lines between samples (a measurement).
+    Linear,
+}
+
+/// One model signal and where it is read.
+#[derive(Clone, Debug)]
+pub struct SignalSpec {
+    /// The model's signal.
+    pub signal: String,
+    /// Index into [`Manifest::sources`].
+    pub source: usize,
+    /// The column, or the bag's `topic.field.path`.
+    pub field: String,
+    /// As declared (`None`: the role's default).
+    pub interpolate: Option<Interpolate>,
+    /// A quaternion read as its heading (yaw).
+    pub yaw: bool,
+    /// Where it is declared.
+    pub at: String,
+}
+
+/// A log manifest, read and checked against itself (the model's names are
+/// checked when the log is joined).
+#[derive(Clone, Debug)]
+pub struct Manifest {
+    /// The manifest file as named in messages.
+    pub file: String,
+    /// The experiment's name.
+    pub experiment: String,
+    /// The grid's step, when the manifest gives one.
+    pub step: Option<f64>,
+    /// The gap limit, when the manifest gives one.
+    pub max_gap: Option<GapLimit>,
+    /// The files, in key order.
+    pub sources: Vec<SourceSpec>,
+    /// The signals, in name order.
+    pub signals: Vec<SignalSpec>,
+}
+
+/// `file:line:col` of byte `at` in `text`.
+fn place(file: &str, text: &str, at: usize) -> String {
+    let before = &text[..at.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    format!("{file}:{line}:{col}")
+}
+
+/// Reads the manifest at `path`.
+pub fn read(path: &Path) -> Result<Manifest, DataError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        DataError::new(
+            &file,
+            format!("cannot read the log manifest: {e}"),
+            "check the path given to --data",
+        )
+    })?;
+    let stem = path
+        .file_stem()
+        .map_or("log".to_string(), |s| s.to_string_lossy().into_owned());
+    let folder = path.parent().unwrap_or(Path::new(""));
+    parse(&file, &text, &stem, folder)
+}
+
+/// Parses a manifest's `text` (`file` names it in messages; `stem` is the
+/// default experiment name; files are relative to `folder`).
+pub fn parse(file: &str, text: &str, stem: &str, folder: &Path) -> Result<Manifest, DataError> {
+    let raw: ManifestFile = toml::from_str(text).map_err(|e| {
+        let at = e
+            .span()
+            .map_or(file.to_string(), |s| place(file, text, s.start));
+        DataError::new(at, e.message().trim().to_string(), SEE_DOCS)
+    })?;
+    let at = |s: &std::ops::Range<usize>| place(file, text, s.start);
+    let positive = |v: &Option<Spanned<f64>>, what: &str| -> Result<Option<f64>, DataError> {
+        match v {
+            Some(v) if !(v.get_ref().is_finite() && *v.get_ref() > 0.0) => Err(DataError::new(
+                at(&v.span()),
+                format!(
+                    "`{what}` must be a positive number of seconds (steps for max_gap_steps), not {}",
+                    v.get_ref()
+                ),
+                SEE_DOCS,
+            )),
+            v => Ok(v.as_ref().map(|v| *v.get_ref())),
+        }
+    };
+    let step = positive(&raw.step, "step")?;
+    let max_gap = match (positive(&raw.max_gap, "max_gap")?, &raw.max_gap_steps) {
+        (Some(_), Some(s)) => {
+            return Err(DataError::new(
+                at(&s.span()),
+                "both `max_gap` and `max_gap_steps` are given",
+                "give one: seconds (max_gap) or median steps (max_gap_steps)",
+            ));
+        }
+        (Some(s), None) => Some(GapLimit::Seconds(s)),
+        (None, Some(n)) if !GapLimit::Steps(*n.get_ref()).is_valid() => {
+            return Err(DataError::new(
+                at(&n.span()),
+                format!("`max_gap_steps = {}` must be at least 1.5", n.get_ref()),
+                "a hole shorter than one and a half steps is jitter, not a gap",
+            ));
+        }
+        (None, Some(n)) => Some(GapLimit::Steps(*n.get_ref())),
+        (None, None) => None,
+    };
+    let mut sources = Vec::new();
+    for (key, spec) in &raw.sources {
+        sources.push(source(key, spec, folder, &at)?);
+    }
+    let mut signals = Vec::new();
+    for (signal, entry) in &raw.signals {
+        signals.push(signal_spec(signal, entry, &sources, &at)?);
+    }
+    if signals.is_empty() {
+        return Err(DataError::new(
+            file,
+            "the manifest maps no signals",
+            "add a [signals] table: each model signal = \"source:column\"",
+        ));
+    }
+    Ok(Manifest {
+        file: file.to_string(),
+        experiment: raw.experiment.unwrap_or_else(|| stem.to_string()),
+        step,
+        max_gap,
+        sources,
+        signals,
+    })
+}
+
+fn source(
+    key: &str,
+    spec: &Spanned<SourceFile>,
+    folder: &Path,
+    at: &dyn Fn(&std::ops::Range<usize>) -> String,
+) -> Result<SourceSpec, DataError> {
+    let here = at(&spec.span());
+    let s = spec.get_ref();
+    let is_bag = Path::new(&s.file)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"));
+    let unit = match &s.time_unit {
+        None => TimeUnit::Seconds,
+        Some(u) => TimeUnit::parse(u.get_ref()).ok_or_else(|| {
+            DataError::new(
+                at(&u.span()),
+                format!("unknown time unit `{}`", u.get_ref()),
+                "one of s, ms, us, ns",
+            )
+        })?,
+    };
+    let clock = match (&s.time, is_bag) {
+        (None, true) => Clock::Bag,
+        (Some(_), true) => {
+            return Err(DataError::new(
+                here,
+                format!("source `{key}` is a bag, whose stamps are its messages' headers"),
+                "drop `time` from a bag source",
+            ));
+        }
+        (None, false) => Clock::Column {
+            name: "time".into(),
+            unit,
+        },
+        (Some(TimeColumns::One(name)), false) => Clock::Column {
+            name: name.clone(),
+            unit,
+        },
+        (Some(TimeColumns::Pair([secs, nanos])), false) => Clock::Pair {
+            secs: secs.clone(),
+            nanos: nanos.clone(),
+        },
+    };
+    Ok(SourceSpec {
+        key: key.to_string(),
+        file: folder.join(&s.file),
+        clock,
+        at: here,
+    })
+}
+
+fn signal_spec(
+    signal: &str,
+    entry: &Spanned<SignalEntry>,
+    sources: &[SourceSpec],
+    at: &dyn Fn(&std::ops::Range<usize>) -> String,
+) -> Result<SignalSpec, DataError> {
+    let here = at(&entry.span());
+    let (from, interpolate, kind) = match entry.get_ref() {
+        SignalEntry::Path(p) => (p.as_str(), None, None),
+        SignalEntry::Full(f) => (f.from.as_str(), f.interpolate.as_deref(), f.kind.as_deref()),
+    };
+    let keys = || {
+        sources
+            .iter()
+            .map(|s| s.key.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let Some((key, field)) = from.split_once(':') else {
+        return Err(DataError::new(
+            here,
+            format!("`{signal} = \"{from}\"` names no source"),
+            format!(
+                "write \"source:column\" with a source of [sources] ({})",
+                keys()
+            ),
+        ));
+    };
+    let Some(source) = sources.iter().position(|s| s.key == key) else {
+        return Err(DataError::new(
+            here,
+            format!("`{signal}` reads from source `{key}`, which [sources] does not declare"),
+            format!("the sources are: {}", keys()),
+        ));
+    };
+    let interpolate = match interpolate {
+        None => None,
+        Some("hold") => Some(Interpolate::Hold),
+        Some("linear") => Some(Interpolate::Linear),
+        Some(other) => {
+            return Err(DataError::new(
+                here,
+                format!("unknown interpolation `{other}` for `{signal}`"),
+                "\"hold\" (the last sample until the next) or \"linear\"",
+            ));
+        }
+    };
+    let yaw = match kind {
+        None => false,
+        Some("yaw") => true,
+        Some(other) => {
+            return Err(DataError::new(
+                here,
+                format!("unknown conversion `as = \"{other}\"` for `{signal}`"),
+                "\"yaw\" reads a quaternion (a bag's orientation) as its heading",
+            ));
+        }
+    };
+    Ok(SignalSpec {
+        signal: signal.to_string(),
+        source,
+        field: field.to_string(),
+        interpolate,
+        yaw,
+        at: here,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parsed(text: &str) -> Result<Manifest, DataError> {
+        parse("m.toml", text, "m", Path::new("logs"))
+    }
+
+    #[test]
+    fn a_manifest_reads_with_its_defaults() {
+        let m = parsed(
+            "step = 0.1\n[sources.twist]\nfile = \"twist.csv\"\ntime = [\"secs\", \"nsecs\"]\n\
+             [sources.tau]\nfile = \"tau.csv\"\ntime = \"stamp\"\ntime_unit = \"ns\"\n\
+             [sources.bag]\nfile = \"f.mcap\"\n\
+             [signals]\nu = \"twist:u\"\ntau_x = { from = \"tau:Fx\", interpolate = \"linear\" }\n\
+             psi = { from = \"bag:/imu.orientation\", as = \"yaw\" }\n",
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(m.experiment, "m");
+        assert_eq!(m.step, Some(0.1));
+        assert_eq!(m.max_gap, None);
+        let keys: Vec<&str> = m.sources.iter().map(|s| s.key.as_str()).collect();
+        assert_eq!(keys, ["bag", "tau", "twist"]);
+        assert_eq!(m.sources[0].clock, Clock::Bag);
+        assert_eq!(m.sources[2].file, Path::new("logs/twist.csv"));
+        let psi = &m.signals[0];
+        assert_eq!(
+            (psi.signal.as_str(), psi.field.as_str(), psi.yaw),
+            ("psi", "/imu.orientation", true)
+        );
+        assert_eq!(m.signals[1].interpolate, Some(Interpolate::Linear));
+    }
+
+    #[test]
+    fn every_mistake_is_located() {
+        let cases = [
+            (
+                "[signals]\nu = \"twist:u\"\n",
+                "m.toml:2:5",
+                "does not declare",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"u\"\n",
+                "m.toml:4:5",
+                "names no source",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\ntime_unit = \"h\"\n[signals]\nu = \"a:u\"\n",
+                "m.toml:3:13",
+                "unknown time unit",
+            ),
+            ("stepp = 1\n", "m.toml:1:1", "unknown field"),
+            ("step = -1\n[signals]\n", "m.toml:1:8", "positive"),
+            (
+                "max_gap_steps = 1\n[signals]\n",
+                "m.toml:1:17",
+                "at least 1.5",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = { from = \"a:u\", interpolate = \"cubic\" }\n",
+                "m.toml:4:5",
+                "unknown interpolation",
+            ),
+        ];
+        for (text, at, says) in cases {
+            let e = parsed(text)
+                .err()
+                .unwrap_or_else(|| panic!("{text} is refused"));
+            assert_eq!(e.location, at, "{text}: {e}");
+            assert!(e.message.contains(says), "{text}: {e}");
+        }
+    }
+}

@@ -1,0 +1,370 @@
+//! A small autonomous ferry's log as its robot writes it: ROS 2 topics
+//! exported one CSV per topic, each at its own rate with jitter, stamps in
+//! two integer columns (`secs`, `nsecs`), a human-readable local time that
+//! goes backwards, the thrust allocator's forces stalling for a second, a
+//! 5.8 s hole in the velocities, the thrusters answering a second late, and
+//! a stretch under dynamic positioning (the forces then computed from the
+//! measured motion: closed loop). The truth is integrated by RK4 at 100 Hz
+//! in continuous time — not the model's own Euler step — so an estimate
+//! meets model error, as on real data. With `aligned`, every topic is
+//! stamped on the model's grid (velocities and forces at 10 Hz, heading at
+//! 20 Hz, no stalls) and `uniform.csv` holds the same samples on one grid,
+//! split at the same hole: reading the topics must give exactly it.
+//! `examples/models/ferry.som` is the model; docs/logs.md walks through it.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use std::f64::consts::PI;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The log's first stamp: 2026-05-14T08:00:00Z.
+pub const EPOCH_SECONDS: i64 = 1_778_745_600;
+/// The model's sample time.
+pub const GRID: f64 = 0.1;
+/// The RK4 step of the truth.
+const FINE: f64 = 0.01;
+
+/// The true parameters, per unit mass and inertia (a 15 t ferry with 3 kN
+/// thrusters), in the order of `ferry.som`'s `nominal { }`.
+pub const TRUTH: [(&str, f64); 12] = [
+    ("X_u", -0.05),
+    ("X_uu", -0.05),
+    ("X_vr", 0.4),
+    ("X_t", 6.7e-5),
+    ("Y_v", -0.15),
+    ("Y_vv", -0.3),
+    ("Y_ur", -0.5),
+    ("Y_t", 6e-5),
+    ("N_r", -0.3),
+    ("N_rr", -0.6),
+    ("N_uv", 0.02),
+    ("N_t", 2e-5),
+];
+
+/// What to write.
+#[derive(Clone, Debug)]
+pub struct FerryLog {
+    /// The seed of every draw.
+    pub seed: u64,
+    /// The log's length, seconds.
+    pub seconds: f64,
+    /// The thrusters' dead time, seconds.
+    pub dead_time: f64,
+    /// Every topic on the grid, and `uniform.csv` beside them.
+    pub aligned: bool,
+    /// The stretch under dynamic positioning, seconds from the start.
+    pub closed_loop: (f64, f64),
+    /// The hole in the velocity topic, seconds from the start.
+    pub hole: (f64, f64),
+}
+
+impl Default for FerryLog {
+    fn default() -> FerryLog {
+        FerryLog {
+            seed: 1,
+            seconds: 1200.0,
+            dead_time: 1.0,
+            aligned: false,
+            closed_loop: (700.0, 850.0),
+            hole: (400.0, 405.8),
+        }
+    }
+}
+
+/// The state `(u, v, r, psi)` and its derivative under `tau`.
+fn derivative(x: [f64; 4], tau: [f64; 3]) -> [f64; 4] {
+    let p: Vec<f64> = TRUTH.iter().map(|(_, v)| *v).collect();
+    let [u, v, r, _] = x;
+    [
+        p[0] * u + p[1] * u * u.abs() + p[2] * v * r + p[3] * tau[0],
+        p[4] * v + p[5] * v * v.abs() + p[6] * u * r + p[7] * tau[1],
+        p[8] * r + p[9] * r * r.abs() + p[10] * u * v + p[11] * tau[2],
+        r,
+    ]
+}
+
+fn rk4(x: [f64; 4], tau: [f64; 3], h: f64) -> [f64; 4] {
+    let add = |a: [f64; 4], b: [f64; 4], s: f64| std::array::from_fn(|i| a[i] + s * b[i]);
+    let k1 = derivative(x, tau);
+    let k2 = derivative(add(x, k1, h / 2.0), tau);
+    let k3 = derivative(add(x, k2, h / 2.0), tau);
+    let k4 = derivative(add(x, k3, h), tau);
+    std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
+}
+
+/// The truth at every fine step: states, and the commands as logged
+/// (changed on the grid; the thrusters apply them `dead_time` later).
+struct Truth {
+    states: Vec<[f64; 4]>,
+    commands: Vec<[f64; 3]>,
+}
+
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// Open-loop commands: levels held 3–12 s, every sign visited; under
+/// dynamic positioning, forces against the measured motion and heading.
+fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
+    const RANGE: [f64; 3] = [3000.0, 2500.0, 1500.0];
+    let per_grid = (GRID / FINE).round() as usize;
+    let n = (spec.seconds / FINE).round() as usize + 1;
+    let delay = (spec.dead_time / FINE).round() as usize;
+    let mut x = [0.5, 0.0, 0.0, 0.3];
+    let (mut states, mut commands) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut level, mut until) = ([0.0; 3], 0.0);
+    let mut held = [0.0; 3];
+    for k in 0..n {
+        let t = k as f64 * FINE;
+        if k % per_grid == 0 {
+            let dp = (spec.closed_loop.0..spec.closed_loop.1).contains(&t);
+            if t >= until {
+                level = std::array::from_fn(|i| RANGE[i] * rng.random_range(-1.0..1.0));
+                until = t + rng.random_range(3.0..12.0);
+            }
+            held = if dp {
+                // Dynamic positioning on the measured (noisy) motion.
+                let m = |s: f64, sd: f64, rng: &mut ChaCha8Rng| s + sd * normal(rng);
+                let (u, v, r) = (m(x[0], 0.01, rng), m(x[1], 0.01, rng), m(x[2], 0.002, rng));
+                [
+                    -4000.0 * u,
+                    -4000.0 * v,
+                    -6000.0 * r - 2000.0 * wrap(x[3] - 0.3),
+                ]
+                .map(|f| f.clamp(-3000.0, 3000.0))
+            } else {
+                level
+            };
+        }
+        states.push(x);
+        commands.push(held);
+        let acting = if k >= delay {
+            commands[k - delay]
+        } else {
+            [0.0; 3]
+        };
+        x = rk4(x, acting, FINE);
+    }
+    Truth { states, commands }
+}
+
+/// An angle in (−π, π].
+fn wrap(a: f64) -> f64 {
+    let w = a - 2.0 * PI * (a / (2.0 * PI)).round();
+    if w <= -PI { w + 2.0 * PI } else { w }
+}
+
+/// Stamps of a topic (seconds from the start) at `rate` Hz with relative
+/// jitter `jitter`, the rate redrawn every minute within `rates` when given.
+fn stamps(spec: &FerryLog, rng: &mut ChaCha8Rng, rates: (f64, f64), jitter: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let (mut t, mut rate, mut minute) = (0.0, rates.0, -1.0);
+    while t <= spec.seconds {
+        if (t / 60.0).floor() > minute {
+            minute = (t / 60.0).floor();
+            rate = if rates.1 > rates.0 {
+                rng.random_range(rates.0..rates.1)
+            } else {
+                rates.0
+            };
+        }
+        out.push(t);
+        t += (1.0 + jitter * rng.random_range(-1.0..1.0)) / rate;
+    }
+    out
+}
+
+/// Grid-aligned stamps every `every` seconds (whole milliseconds).
+fn aligned_stamps(spec: &FerryLog, every: f64) -> Vec<f64> {
+    let n = (spec.seconds / every).floor() as usize;
+    (0..=n)
+        .map(|k| (k as f64 * every * 1000.0).round() / 1000.0)
+        .collect()
+}
+
+/// The truth at `t` seconds: linear between fine steps.
+fn state_at(truth: &Truth, t: f64) -> [f64; 4] {
+    let s = t / FINE;
+    let k = (s.floor() as usize).min(truth.states.len() - 2);
+    let w = s - k as f64;
+    let (a, b) = (truth.states[k], truth.states[k + 1]);
+    std::array::from_fn(|i| a[i] + w * (b[i] - a[i]))
+}
+
+/// The command in effect at `t` (logged when issued, on the grid).
+fn command_at(truth: &Truth, t: f64) -> [f64; 3] {
+    let k = ((t / FINE + 1e-9).floor() as usize).min(truth.commands.len() - 1);
+    truth.commands[k]
+}
+
+/// `secs,nsecs` of `t` seconds from the start (whole nanoseconds).
+fn stamp_columns(t: f64) -> (i64, i64) {
+    let ns = (t * 1e9).round() as i64;
+    (
+        EPOCH_SECONDS + ns.div_euclid(1_000_000_000),
+        ns.rem_euclid(1_000_000_000),
+    )
+}
+
+/// A local time (UTC+2) as the export writes it: the fraction's leading
+/// zeros dropped (10:00:01.05 reads 10:00:01.50, after 10:00:01.100): it
+/// goes backwards.
+fn local_time(t: f64) -> String {
+    let ns = (t * 1e9).round() as i64;
+    let day = (ns / 1_000_000_000 + 2 * 3600 + 8 * 3600) % 86_400;
+    let ms = (ns / 1_000_000) % 1000;
+    format!("{}:{:02}:{:02}.{ms}", day / 3600, day / 60 % 60, day % 60)
+}
+
+/// The three topics as CSV text.
+struct Topics {
+    twist: String,
+    heading: String,
+    tau: String,
+}
+
+fn topics(spec: &FerryLog, truth: &Truth, rng: &mut ChaCha8Rng) -> Topics {
+    let (twist_t, heading_t, tau_t) = if spec.aligned {
+        (
+            aligned_stamps(spec, GRID),
+            aligned_stamps(spec, GRID / 2.0),
+            aligned_stamps(spec, GRID),
+        )
+    } else {
+        (
+            stamps(spec, rng, (2.0, 7.5), 0.2),
+            stamps(spec, rng, (20.0, 20.0), 0.05),
+            stamps(spec, rng, (6.0, 41.0), 0.3),
+        )
+    };
+    let mut twist = String::from("secs,nsecs,u,v,r\n");
+    for &t in twist_t
+        .iter()
+        .filter(|t| **t <= spec.hole.0 || **t >= spec.hole.1)
+    {
+        let x = state_at(truth, t);
+        let (s, n) = stamp_columns(t);
+        let m = |v: f64, sd: f64, rng: &mut ChaCha8Rng| v + sd * normal(rng);
+        let (u, v, r) = (m(x[0], 0.01, rng), m(x[1], 0.01, rng), m(x[2], 0.002, rng));
+        let _ = writeln!(twist, "{s},{n},{u},{v},{r}");
+    }
+    let mut heading = String::from("secs,nsecs,time_local,psi\n");
+    for &t in &heading_t {
+        let (s, n) = stamp_columns(t);
+        let psi = wrap(state_at(truth, t)[3] + 0.003 * normal(rng));
+        let _ = writeln!(heading, "{s},{n},{},{psi}", local_time(t));
+    }
+    let mut tau = String::from("secs,nsecs,Fx,Fy,Mz\n");
+    let stalled =
+        |t: f64| !spec.aligned && ((300.0..301.0).contains(&t) || (950.0..951.2).contains(&t));
+    for &t in tau_t.iter().filter(|t| !stalled(**t)) {
+        let f = command_at(truth, t);
+        let (s, n) = stamp_columns(t);
+        let _ = writeln!(tau, "{s},{n},{},{},{}", f[0], f[1], f[2]);
+    }
+    Topics {
+        twist,
+        heading,
+        tau,
+    }
+}
+
+/// The manifest that reads the topics.
+pub const MANIFEST: &str = "# The ferry's run: one CSV per ROS 2 topic (docs/logs.md).
+experiment = \"ferry\"
+
+[sources.twist]
+file = \"twist.csv\"
+time = [\"secs\", \"nsecs\"]
+
+[sources.heading]
+file = \"heading.csv\"
+time = [\"secs\", \"nsecs\"]
+
+[sources.tau]
+file = \"tau.csv\"
+time = [\"secs\", \"nsecs\"]
+
+[signals]
+u = \"twist:u\"
+v = \"twist:v\"
+r = \"twist:r\"
+psi = \"heading:psi\"
+tau_x = \"tau:Fx\"
+tau_y = \"tau:Fy\"
+tau_n = \"tau:Mz\"
+";
+
+/// Writes the log into `dir`: `twist.csv`, `heading.csv`, `tau.csv`,
+/// `ferry.toml` and, when aligned, `uniform.csv`.
+pub fn write_ferry_log(dir: &Path, spec: &FerryLog) -> std::io::Result<()> {
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    let truth = simulate(spec, &mut rng);
+    let t = topics(spec, &truth, &mut rng);
+    std::fs::create_dir_all(dir)?;
+    std::fs::write(dir.join("twist.csv"), &t.twist)?;
+    std::fs::write(dir.join("heading.csv"), &t.heading)?;
+    std::fs::write(dir.join("tau.csv"), &t.tau)?;
+    std::fs::write(dir.join("ferry.toml"), MANIFEST)?;
+    if spec.aligned {
+        std::fs::write(dir.join("uniform.csv"), uniform(&t))?;
+    }
+    Ok(())
+}
+
+/// The aligned topics on one grid, split at the velocities' hole: each grid
+/// time's samples as the topics hold them.
+fn uniform(t: &Topics) -> String {
+    let rows = |text: &str| -> Vec<(i64, Vec<String>)> {
+        text.lines()
+            .skip(1)
+            .filter_map(|l| {
+                let cells: Vec<&str> = l.split(',').collect();
+                let ns = cells.first()?.parse::<i64>().ok()? * 1_000_000_000
+                    + cells.get(1)?.parse::<i64>().ok()?;
+                Some((ns, cells[2..].iter().map(|c| c.to_string()).collect()))
+            })
+            .collect()
+    };
+    let (twist, heading, tau) = (rows(&t.twist), rows(&t.heading), rows(&t.tau));
+    let find = |rows: &[(i64, Vec<String>)], ns: i64| {
+        rows.binary_search_by_key(&ns, |r| r.0)
+            .ok()
+            .map(|i| rows[i].1.clone())
+    };
+    let mut out = String::from("time,experiment,u,v,r,psi,tau_x,tau_y,tau_n\n");
+    let mut piece = 1;
+    let mut last = twist.first().map_or(0, |r| r.0);
+    let start = last;
+    for (ns, v) in &twist {
+        if ns - last > 500_000_000 {
+            piece += 1;
+        }
+        last = *ns;
+        let (Some(h), Some(f)) = (find(&heading, *ns), find(&tau, *ns)) else {
+            continue;
+        };
+        let time = (ns - start) as f64 / 1e9;
+        let _ = writeln!(
+            out,
+            "{time},ferry/{piece},{},{},{},{},{},{},{}",
+            v[0], v[1], v[2], h[1], f[0], f[1], f[2]
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_local_time_goes_backwards_and_the_stamps_do_not() {
+        assert_eq!(local_time(1.05), "10:00:01.50");
+        assert_eq!(local_time(1.5), "10:00:01.500");
+        assert_eq!(stamp_columns(1.05), (EPOCH_SECONDS + 1, 50_000_000));
+        assert!((wrap(3.0 * PI) - PI).abs() < 1e-12 && (wrap(-PI) - PI).abs() < 1e-12);
+    }
+}
