@@ -211,6 +211,13 @@ pub struct DataFileJson {
     pub blank_lines: usize,
     /// Per experiment: rows read, largest relative step deviation, samples after resampling.
     pub experiments: Vec<DataExperimentJson>,
+    /// A joined log's first stamp, ISO-8601 UTC, from which its times count
+    /// (omitted for one file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<String>,
+    /// A joined log's signals as read (omitted for one file).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub signals: Vec<leeway_data::SignalNote>,
 }
 
 /// One experiment of [`DataFileJson`].
@@ -254,6 +261,8 @@ pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
                     pieces: e.pieces.clone(),
                 })
                 .collect(),
+            origin: f.origin.clone(),
+            signals: f.signals.clone(),
         })
         .collect()
 }

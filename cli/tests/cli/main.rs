@@ -8,6 +8,7 @@ mod csv_layouts;
 mod data;
 mod design;
 mod estimate;
+mod logs;
 mod parquet;
 mod reproduce;
 mod simulate;

@@ -1,0 +1,190 @@
+//! Robot logs read as written (docs/logs.md): topics in files of their own,
+//! joined on the model's grid, gaps split and reported, every malformed
+//! variant one located error.
+
+use crate::common::{Scratch, code, json, leeway, no_panic, stderr, stdout};
+use leeway_scenarios::ferry::{FerryLog, write_ferry_log};
+
+const FERRY: &str = "examples/models/ferry.som";
+
+fn ferry_log(name: &str, aligned: bool) -> Scratch {
+    let dir = Scratch::new(name);
+    let spec = FerryLog {
+        aligned,
+        seconds: 600.0,
+        closed_loop: (450.0, 520.0),
+        ..FerryLog::default()
+    };
+    write_ferry_log(&dir.0, &spec).unwrap_or_else(|e| panic!("{e}"));
+    dir
+}
+
+fn estimate_json(data: &str, method: &str) -> serde_json::Value {
+    let o = leeway(&["estimate", FERRY, "--data", data, "--method", method, "--json"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    json(&o)
+}
+
+#[test]
+fn the_topics_joined_give_the_estimate_of_the_same_samples_on_one_grid() {
+    let dir = ferry_log("aligned", true);
+    for method in ["ls", "iv3"] {
+        let joined = estimate_json(&dir.path("ferry.toml").display().to_string(), method);
+        let uniform = estimate_json(&dir.path("uniform.csv").display().to_string(), method);
+        assert_eq!(joined["parameters"], uniform["parameters"], "{method}");
+        let names = |v: &serde_json::Value| v["experiments"].clone();
+        assert_eq!(names(&joined), names(&uniform));
+    }
+}
+
+#[test]
+fn every_split_is_reported_with_its_time_range() {
+    let dir = ferry_log("realistic", false);
+    let manifest = dir.path("ferry.toml").display().to_string();
+    let v = estimate_json(&manifest, "ls");
+    let e = &v["data_files"][0]["experiments"][0];
+    let gaps: Vec<(String, f64, f64)> = e["gaps"]
+        .as_array()
+        .unwrap_or_else(|| panic!("{e}"))
+        .iter()
+        .map(|g| {
+            (
+                g["signal"].as_str().unwrap_or_default().to_string(),
+                g["from"].as_f64().unwrap_or_default(),
+                g["to"].as_f64().unwrap_or_default(),
+            )
+        })
+        .collect();
+    // The allocator's one-second stall and the velocities' 5.8 s hole.
+    assert_eq!(gaps.len(), 2, "{gaps:?}");
+    assert_eq!(gaps[0].0, "tau_x, tau_y, tau_n");
+    assert!(gaps[0].1 < 300.0 && gaps[0].2 > 301.0 && gaps[0].2 < 301.3, "{gaps:?}");
+    assert_eq!(gaps[1].0, "u, v, r");
+    assert!(gaps[1].1 <= 400.0 && gaps[1].2 >= 405.8, "{gaps:?}");
+    assert_eq!(e["pieces"].as_array().map(Vec::len), Some(3));
+    let signals = v["data_files"][0]["signals"].as_array().map(Vec::len);
+    assert_eq!(signals, Some(7));
+    let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls"]);
+    assert!(stdout(&o).contains("split: no samples of u, v, r from t = 399.8 to 406 s"), "{}", stdout(&o));
+    // A wider limit bridges the stall, never the hole.
+    let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls", "--max-gap", "2", "--json"]);
+    let gaps = json(&o)["data_files"][0]["experiments"][0]["gaps"].clone();
+    assert_eq!(gaps.as_array().map(Vec::len), Some(1), "{gaps}");
+}
+
+/// Runs the estimate on the ferry log after `edit` and returns its one error.
+fn refused(name: &str, edit: impl FnOnce(&Scratch)) -> (String, String) {
+    let dir = ferry_log(name, false);
+    edit(&dir);
+    let manifest = dir.path("ferry.toml").display().to_string();
+    let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls", "--json"]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stdout(&o));
+    let v = json(&o);
+    let errors = v["errors"].as_array().cloned().unwrap_or_default();
+    assert_eq!(errors.len(), 1, "{v}");
+    let at = errors[0]["location"].as_str().unwrap_or_default().to_string();
+    let message = errors[0]["message"].as_str().unwrap_or_default().to_string();
+    (at.replace(&dir.0.display().to_string(), "DIR"), message)
+}
+
+fn rewrite(dir: &Scratch, file: &str, f: impl FnOnce(String) -> String) {
+    let path = dir.path(file);
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::write(&path, f(text)).unwrap_or_else(|e| panic!("{e}"));
+}
+
+#[test]
+fn stamps_going_backwards_are_located() {
+    let (at, message) = refused("backwards", |d| {
+        rewrite(d, "twist.csv", |t| {
+            let mut lines: Vec<&str> = t.lines().collect();
+            lines.swap(100, 101);
+            lines.join("\n") + "\n"
+        });
+    });
+    assert_eq!(at, "DIR/twist.csv:102:1 (secs)");
+    assert!(message.starts_with("time goes backwards"), "{message}");
+}
+
+#[test]
+fn a_local_time_column_is_refused_with_the_reason() {
+    let (at, message) = refused("local-time", |d| {
+        rewrite(d, "ferry.toml", |t| {
+            t.replacen("[sources.heading]\nfile = \"heading.csv\"\ntime = [\"secs\", \"nsecs\"]", "[sources.heading]\nfile = \"heading.csv\"\ntime = \"time_local\"", 1)
+        });
+    });
+    assert_eq!(at, "DIR/heading.csv:2:3 (time_local)");
+    assert!(message.contains("not an ISO-8601 date"), "{message}");
+}
+
+#[test]
+fn a_missing_file_column_or_mapping_is_one_error() {
+    let (at, message) = refused("missing-file", |d| {
+        std::fs::remove_file(d.path("tau.csv")).unwrap_or_else(|e| panic!("{e}"));
+    });
+    assert!(at.contains("tau.csv"), "{at}: {message}");
+    let (at, message) = refused("missing-column", |d| {
+        rewrite(d, "ferry.toml", |t| t.replace("\"twist:u\"", "\"twist:surge\""));
+    });
+    assert_eq!(at, "DIR/twist.csv:1");
+    assert!(message.contains("no column `surge`"), "{message}");
+    let (at, message) = refused("unmapped", |d| {
+        rewrite(d, "ferry.toml", |t| t.replace("tau_n = \"tau:Mz\"\n", ""));
+    });
+    assert_eq!(at, "DIR/ferry.toml");
+    assert!(message.contains("`tau_n` is not mapped"), "{message}");
+    let (at, message) = refused("unknown-source", |d| {
+        rewrite(d, "ferry.toml", |t| t.replace("\"tau:Mz\"", "\"allocator:Mz\""));
+    });
+    assert!(at.starts_with("DIR/ferry.toml:"), "{at}");
+    assert!(message.contains("`allocator`"), "{message}");
+}
+
+#[test]
+fn clocks_that_never_overlap_are_refused() {
+    let (at, message) = refused("time-zone", |d| {
+        // The heading logged two hours late: local time taken for UTC.
+        rewrite(d, "heading.csv", |t| {
+            t.lines()
+                .enumerate()
+                .map(|(i, l)| match (i, l.split_once(',')) {
+                    (0, _) | (_, None) => l.to_string(),
+                    (_, Some((s, rest))) => {
+                        format!("{},{rest}", s.parse::<i64>().unwrap_or(0) + 7200)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+                + "\n"
+        });
+    });
+    assert_eq!(at, "DIR/ferry.toml");
+    assert!(message.contains("never overlap"), "{message}");
+}
+
+#[test]
+fn a_gap_in_every_topic_splits_the_log() {
+    let dir = ferry_log("all-gap", false);
+    for file in ["twist.csv", "heading.csv", "tau.csv"] {
+        rewrite(&dir, file, |t| {
+            t.lines()
+                .filter(|l| {
+                    let secs = l.split(',').next().and_then(|s| s.parse::<i64>().ok());
+                    !secs.is_some_and(|s| {
+                        let t = s - leeway_scenarios::ferry::EPOCH_SECONDS;
+                        (200..220).contains(&t)
+                    })
+                })
+                .collect::<Vec<_>>()
+                .join("\n")
+                + "\n"
+        });
+    }
+    let v = estimate_json(&dir.path("ferry.toml").display().to_string(), "ls");
+    let gaps = v["data_files"][0]["experiments"][0]["gaps"].clone();
+    let covers = gaps.as_array().into_iter().flatten().any(|g| {
+        g["from"].as_f64().is_some_and(|f| f < 200.0) && g["to"].as_f64().is_some_and(|t| t >= 220.0)
+    });
+    assert!(covers, "{gaps}");
+}
