@@ -20,6 +20,7 @@ use crate::problem::{Failure, Problem};
 use leeway_estimate::estimate;
 use leeway_model::Interpreter;
 use leeway_model::warning::Warning;
+use leeway_report::feedback::{closed_loop, closed_loop_alerts};
 use leeway_report::{heading_alerts, heading_gains, unit_alerts};
 
 /// Runs `leeway estimate`.
@@ -85,6 +86,7 @@ fn execute(
     warnings.extend(unit_alerts(&ir, &sources));
     let gains = heading_gains(&ir, &sources);
     warnings.extend(heading_alerts(&ir, &gains));
+    warnings.extend(closed_loop_alerts(&closed_loop(&ir, &sources)));
     let model = Interpreter::new(ir.clone());
     let result = estimate(&model, &sources, &args.options(nominal));
     // A file that changed between passes voids whatever was computed.

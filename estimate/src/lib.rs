@@ -32,6 +32,7 @@ mod cache;
 mod covariance;
 mod disturbances;
 mod estimator;
+pub mod feedback;
 mod free_run;
 mod local;
 mod method;

@@ -3,6 +3,7 @@
 use crate::estimator::Estimator;
 use crate::estimator::stop_if_interrupted;
 use crate::local::LocalPasses;
+use crate::method::Method;
 use crate::options::EstimateOptions;
 use crate::outcome::{Estimate, EstimateError, err};
 use crate::protocol::{FactsRequest, Passes};
@@ -127,8 +128,19 @@ pub fn estimate_with(
     )?;
     est.check_length()?;
     let mut estimate = est.run(sign_patterns)?;
+    notes.extend(same_estimate_note(ir, options.method));
     estimate.notes = notes;
     Ok(estimate)
+}
+
+/// Said once when other methods must give this very estimate: on a model
+/// with no disturbance the basic, augmented and measured predictors have the
+/// same columns and the same instruments, so IV1, IV2 and IV3 coincide (LS
+/// differs: it has no instruments).
+fn same_estimate_note(ir: &Ir, method: Method) -> Option<String> {
+    (ir.disturbances.is_empty() && method != Method::Ls).then(|| {
+        "iv1, iv2 and iv3 give this same estimate on this model: it has no disturbance, so their predictors and instruments coincide (ls differs: it has no instruments)".to_string()
+    })
 }
 
 /// The nominal θ: the options' (one value per parameter), else the model's;

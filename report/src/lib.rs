@@ -8,6 +8,8 @@
 
 pub mod check;
 
+pub mod feedback;
+
 use leeway_data::{FileNotes, heading_gain};
 use leeway_estimate::{ColumnEstimate, Diagnostics, Estimate, Method};
 use leeway_model::experiment::Source;

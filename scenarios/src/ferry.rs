@@ -94,12 +94,18 @@ fn rk4(x: [f64; 4], tau: [f64; 3], h: f64) -> [f64; 4] {
     std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
 }
 
-/// The truth at every fine step: states, and the commands as logged
-/// (changed on the grid; the thrusters apply them `dead_time` later).
+/// The truth at every fine step: states, the navigation filter's error on
+/// `(u, v, r)` (what both the log and the controller see), and the commands
+/// as logged (changed on the grid; the thrusters apply them `dead_time` later).
 struct Truth {
     states: Vec<[f64; 4]>,
+    errors: Vec<[f64; 3]>,
     commands: Vec<[f64; 3]>,
 }
+
+/// The navigation filter's error: Gauss–Markov, σ per velocity, 1 s correlation.
+const NAV_ERROR: [f64; 3] = [0.01, 0.01, 0.002];
+const NAV_CORRELATION: f64 = 1.0;
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
     StandardNormal.sample(rng)
@@ -113,7 +119,11 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
     let n = (spec.seconds / FINE).round() as usize + 1;
     let delay = (spec.dead_time / FINE).round() as usize;
     let mut x = [0.5, 0.0, 0.0, 0.3];
+    let a = (-FINE / NAV_CORRELATION).exp();
+    let b = (1.0 - a * a).sqrt();
+    let mut e: [f64; 3] = std::array::from_fn(|i| NAV_ERROR[i] * normal(rng));
     let (mut states, mut commands) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut errors = Vec::with_capacity(n);
     let (mut level, mut until) = ([0.0; 3], 0.0);
     let mut held = [0.0; 3];
     for k in 0..n {
@@ -125,9 +135,8 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
                 until = t + rng.random_range(3.0..12.0);
             }
             held = if dp {
-                // Dynamic positioning on the measured (noisy) motion.
-                let m = |s: f64, sd: f64, rng: &mut ChaCha8Rng| s + sd * normal(rng);
-                let (u, v, r) = (m(x[0], 0.01, rng), m(x[1], 0.01, rng), m(x[2], 0.002, rng));
+                // Dynamic positioning on the navigation filter's output.
+                let (u, v, r) = (x[0] + e[0], x[1] + e[1], x[2] + e[2]);
                 [
                     -4000.0 * u,
                     -4000.0 * v,
@@ -139,7 +148,9 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
             };
         }
         states.push(x);
+        errors.push(e);
         commands.push(held);
+        e = std::array::from_fn(|i| a * e[i] + b * NAV_ERROR[i] * normal(rng));
         let acting = if k >= delay {
             commands[k - delay]
         } else {
@@ -147,7 +158,11 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
         };
         x = rk4(x, acting, FINE);
     }
-    Truth { states, commands }
+    Truth {
+        states,
+        errors,
+        commands,
+    }
 }
 
 /// An angle in (−π, π].
@@ -184,13 +199,18 @@ fn aligned_stamps(spec: &FerryLog, every: f64) -> Vec<f64> {
         .collect()
 }
 
-/// The truth at `t` seconds: linear between fine steps.
-fn state_at(truth: &Truth, t: f64) -> [f64; 4] {
+/// `series` at `t` seconds: linear between fine steps.
+fn at<const N: usize>(series: &[[f64; N]], t: f64) -> [f64; N] {
     let s = t / FINE;
-    let k = (s.floor() as usize).min(truth.states.len() - 2);
+    let k = (s.floor() as usize).min(series.len() - 2);
     let w = s - k as f64;
-    let (a, b) = (truth.states[k], truth.states[k + 1]);
+    let (a, b) = (series[k], series[k + 1]);
     std::array::from_fn(|i| a[i] + w * (b[i] - a[i]))
+}
+
+/// The truth at `t` seconds.
+fn state_at(truth: &Truth, t: f64) -> [f64; 4] {
+    at(&truth.states, t)
 }
 
 /// The command in effect at `t` (logged when issued, on the grid).
@@ -244,10 +264,9 @@ fn topics(spec: &FerryLog, truth: &Truth, rng: &mut ChaCha8Rng) -> Topics {
         .iter()
         .filter(|t| **t <= spec.hole.0 || **t >= spec.hole.1)
     {
-        let x = state_at(truth, t);
+        let (x, e) = (state_at(truth, t), at(&truth.errors, t));
         let (s, n) = stamp_columns(t);
-        let m = |v: f64, sd: f64, rng: &mut ChaCha8Rng| v + sd * normal(rng);
-        let (u, v, r) = (m(x[0], 0.01, rng), m(x[1], 0.01, rng), m(x[2], 0.002, rng));
+        let (u, v, r) = (x[0] + e[0], x[1] + e[1], x[2] + e[2]);
         let _ = writeln!(twist, "{s},{n},{u},{v},{r}");
     }
     let mut heading = String::from("secs,nsecs,time_local,psi\n");

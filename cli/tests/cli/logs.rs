@@ -38,6 +38,33 @@ fn the_topics_joined_give_the_estimate_of_the_same_samples_on_one_grid() {
 }
 
 #[test]
+fn the_methods_that_must_agree_say_so_and_a_controller_is_found() {
+    let dir = ferry_log("agree", true);
+    let data = dir.path("ferry.toml").display().to_string();
+    let iv1 = estimate_json(&data, "iv1");
+    let iv3 = estimate_json(&data, "iv3");
+    assert_eq!(iv1["parameters"], iv3["parameters"]);
+    let said = |v: &serde_json::Value| {
+        v["notes"].as_array().into_iter().flatten().any(|n| {
+            n.as_str().is_some_and(|n| n.starts_with("iv1, iv2 and iv3 give this same estimate"))
+        })
+    };
+    assert!(said(&iv1) && said(&iv3));
+    assert!(!said(&estimate_json(&data, "ls")));
+    // Dynamic positioning from 450 to 520 s, 44.2 to 114.2 s into `ferry/2`.
+    let closed: Vec<&str> = iv3["warnings"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|w| w.as_str())
+        .filter(|w| w.contains("the past motion explains"))
+        .collect();
+    assert_eq!(closed.len(), 1, "{}", iv3["warnings"]);
+    assert!(closed[0].starts_with("experiment `ferry/2`, samples 600–899 (t = 60 to 89.9 s"), "{}", closed[0]);
+}");
+}
+
+#[test]
 fn every_split_is_reported_with_its_time_range() {
     let dir = ferry_log("realistic", false);
     let manifest = dir.path("ferry.toml").display().to_string();
