@@ -20,7 +20,9 @@ fn ferry_log(name: &str, aligned: bool) -> Scratch {
 }
 
 fn estimate_json(data: &str, method: &str) -> serde_json::Value {
-    let o = leeway(&["estimate", FERRY, "--data", data, "--method", method, "--json"]);
+    let o = leeway(&[
+        "estimate", FERRY, "--data", data, "--method", method, "--json",
+    ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     json(&o)
 }
@@ -46,7 +48,8 @@ fn the_methods_that_must_agree_say_so_and_a_controller_is_found() {
     assert_eq!(iv1["parameters"], iv3["parameters"]);
     let said = |v: &serde_json::Value| {
         v["notes"].as_array().into_iter().flatten().any(|n| {
-            n.as_str().is_some_and(|n| n.starts_with("iv1, iv2 and iv3 give this same estimate"))
+            n.as_str()
+                .is_some_and(|n| n.starts_with("iv1, iv2 and iv3 give this same estimate"))
         })
     };
     assert!(said(&iv1) && said(&iv3));
@@ -60,8 +63,11 @@ fn the_methods_that_must_agree_say_so_and_a_controller_is_found() {
         .filter(|w| w.contains("the past motion explains"))
         .collect();
     assert_eq!(closed.len(), 1, "{}", iv3["warnings"]);
-    assert!(closed[0].starts_with("experiment `ferry/2`, samples 600–899 (t = 60 to 89.9 s"), "{}", closed[0]);
-}");
+    assert!(
+        closed[0].starts_with("experiment `ferry/2`, samples 600–899 (t = 60 to 89.9 s"),
+        "{}",
+        closed[0]
+    );
 }
 
 #[test]
@@ -85,16 +91,33 @@ fn every_split_is_reported_with_its_time_range() {
     // The allocator's one-second stall and the velocities' 5.8 s hole.
     assert_eq!(gaps.len(), 2, "{gaps:?}");
     assert_eq!(gaps[0].0, "tau_x, tau_y, tau_n");
-    assert!(gaps[0].1 < 300.0 && gaps[0].2 > 301.0 && gaps[0].2 < 301.3, "{gaps:?}");
+    assert!(
+        gaps[0].1 < 300.0 && gaps[0].2 > 301.0 && gaps[0].2 < 301.3,
+        "{gaps:?}"
+    );
     assert_eq!(gaps[1].0, "u, v, r");
     assert!(gaps[1].1 <= 400.0 && gaps[1].2 >= 405.8, "{gaps:?}");
     assert_eq!(e["pieces"].as_array().map(Vec::len), Some(3));
     let signals = v["data_files"][0]["signals"].as_array().map(Vec::len);
     assert_eq!(signals, Some(7));
     let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls"]);
-    assert!(stdout(&o).contains("split: no samples of u, v, r from t = 399.8 to 406 s"), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("split: no samples of u, v, r from t = 399.8 to 406 s"),
+        "{}",
+        stdout(&o)
+    );
     // A wider limit bridges the stall, never the hole.
-    let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls", "--max-gap", "2", "--json"]);
+    let o = leeway(&[
+        "estimate",
+        FERRY,
+        "--data",
+        &manifest,
+        "--method",
+        "ls",
+        "--max-gap",
+        "2",
+        "--json",
+    ]);
     let gaps = json(&o)["data_files"][0]["experiments"][0]["gaps"].clone();
     assert_eq!(gaps.as_array().map(Vec::len), Some(1), "{gaps}");
 }
@@ -104,14 +127,22 @@ fn refused(name: &str, edit: impl FnOnce(&Scratch)) -> (String, String) {
     let dir = ferry_log(name, false);
     edit(&dir);
     let manifest = dir.path("ferry.toml").display().to_string();
-    let o = leeway(&["estimate", FERRY, "--data", &manifest, "--method", "ls", "--json"]);
+    let o = leeway(&[
+        "estimate", FERRY, "--data", &manifest, "--method", "ls", "--json",
+    ]);
     no_panic(&o);
     assert_eq!(code(&o), 2, "{}", stdout(&o));
     let v = json(&o);
     let errors = v["errors"].as_array().cloned().unwrap_or_default();
     assert_eq!(errors.len(), 1, "{v}");
-    let at = errors[0]["location"].as_str().unwrap_or_default().to_string();
-    let message = errors[0]["message"].as_str().unwrap_or_default().to_string();
+    let at = errors[0]["location"]
+        .as_str()
+        .unwrap_or_default()
+        .to_string();
+    let message = errors[0]["message"]
+        .as_str()
+        .unwrap_or_default()
+        .to_string();
     (at.replace(&dir.0.display().to_string(), "DIR"), message)
 }
 
@@ -138,7 +169,11 @@ fn stamps_going_backwards_are_located() {
 fn a_local_time_column_is_refused_with_the_reason() {
     let (at, message) = refused("local-time", |d| {
         rewrite(d, "ferry.toml", |t| {
-            t.replacen("[sources.heading]\nfile = \"heading.csv\"\ntime = [\"secs\", \"nsecs\"]", "[sources.heading]\nfile = \"heading.csv\"\ntime = \"time_local\"", 1)
+            t.replacen(
+                "[sources.heading]\nfile = \"heading.csv\"\ntime = [\"secs\", \"nsecs\"]",
+                "[sources.heading]\nfile = \"heading.csv\"\ntime = \"time_local\"",
+                1,
+            )
         });
     });
     assert_eq!(at, "DIR/heading.csv:2:3 (time_local)");
@@ -152,7 +187,9 @@ fn a_missing_file_column_or_mapping_is_one_error() {
     });
     assert!(at.contains("tau.csv"), "{at}: {message}");
     let (at, message) = refused("missing-column", |d| {
-        rewrite(d, "ferry.toml", |t| t.replace("\"twist:u\"", "\"twist:surge\""));
+        rewrite(d, "ferry.toml", |t| {
+            t.replace("\"twist:u\"", "\"twist:surge\"")
+        });
     });
     assert_eq!(at, "DIR/twist.csv:1");
     assert!(message.contains("no column `surge`"), "{message}");
@@ -162,7 +199,9 @@ fn a_missing_file_column_or_mapping_is_one_error() {
     assert_eq!(at, "DIR/ferry.toml");
     assert!(message.contains("`tau_n` is not mapped"), "{message}");
     let (at, message) = refused("unknown-source", |d| {
-        rewrite(d, "ferry.toml", |t| t.replace("\"tau:Mz\"", "\"allocator:Mz\""));
+        rewrite(d, "ferry.toml", |t| {
+            t.replace("\"tau:Mz\"", "\"allocator:Mz\"")
+        });
     });
     assert!(at.starts_with("DIR/ferry.toml:"), "{at}");
     assert!(message.contains("`allocator`"), "{message}");
@@ -211,7 +250,8 @@ fn a_gap_in_every_topic_splits_the_log() {
     let v = estimate_json(&dir.path("ferry.toml").display().to_string(), "ls");
     let gaps = v["data_files"][0]["experiments"][0]["gaps"].clone();
     let covers = gaps.as_array().into_iter().flatten().any(|g| {
-        g["from"].as_f64().is_some_and(|f| f < 200.0) && g["to"].as_f64().is_some_and(|t| t >= 220.0)
+        g["from"].as_f64().is_some_and(|f| f < 200.0)
+            && g["to"].as_f64().is_some_and(|t| t >= 220.0)
     });
     assert!(covers, "{gaps}");
 }
