@@ -31,6 +31,7 @@ mod design;
 mod distributed;
 mod estimate;
 mod failure;
+mod logs;
 mod model;
 mod options;
 mod residuals;
@@ -54,5 +55,6 @@ fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::study_run, m)?)?;
     m.add_function(wrap_pyfunction!(study::study_summary, m)?)?;
     m.add_class::<design::Designed>()?;
+    m.add_function(wrap_pyfunction!(logs::read_log, m)?)?;
     Ok(())
 }

@@ -11,6 +11,7 @@ instrumental variables from pandas DataFrames.
 >>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
 >>> leeway.residuals(model, est, held_out).tests             # doctest: +SKIP
 >>> leeway.design(model, "plan.toml", verify=100).prediction # doctest: +SKIP
+>>> log = leeway.read_log(model, "ferry.toml")               # doctest: +SKIP
 
 Everything is computed by the same Rust code as the ``leeway`` command:
 ``Estimate.to_json()`` is the document of ``leeway estimate --json``,
@@ -25,6 +26,7 @@ from . import errors
 from ._api import Check, Estimate, Model, Theta, estimate, simulate, validate
 from ._design import Design, Verification, design
 from ._leeway import __version__
+from ._logs import Log, read_log
 from ._residuals import ResidualAnalysis, predict, residuals
 from ._summary import Summary
 from .errors import (
@@ -49,12 +51,14 @@ __all__ = [
     "ResidualAnalysis",
     "Design",
     "Verification",
+    "Log",
     "estimate",
     "simulate",
     "validate",
     "residuals",
     "predict",
     "design",
+    "read_log",
     "Theta",
     "__version__",
     *errors.__all__,

@@ -22,6 +22,7 @@ __all__ = [
     "study_run",
     "study_summary",
     "Designed",
+    "read_log",
 ]
 
 @final
@@ -107,6 +108,9 @@ class Designed:
     def summarise(self, trials: list[bytes]) -> str: ...
     def runs(self) -> list[list[tuple[str, npt.NDArray[np.float64]]]]: ...
 
+def read_log(
+    model: Model, path: str, max_gap: float | None = None
+) -> tuple[list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]]]], str]: ...
 def simulate_columns(
     model: Model,
     frame: tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None],
