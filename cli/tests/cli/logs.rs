@@ -255,3 +255,45 @@ fn a_gap_in_every_topic_splits_the_log() {
     });
     assert!(covers, "{gaps}");
 }
+
+#[test]
+fn resampling_one_file_splits_at_its_hole() {
+    // The aligned log's own samples, one file, with the velocities' hole.
+    let dir = ferry_log("resample-hole", true);
+    let text = std::fs::read_to_string(dir.path("uniform.csv")).unwrap_or_else(|e| panic!("{e}"));
+    // One experiment whose time column jumps across the hole.
+    let joined: String = text
+        .lines()
+        .map(|l| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            if cells.len() > 1 && cells[1].starts_with("ferry/") {
+                cells[1] = "ferry";
+            }
+            cells.join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let file = dir.write("one.csv", &(joined + "\n"));
+    let o = leeway(&[
+        "estimate",
+        FERRY,
+        "--data",
+        &file,
+        "--method",
+        "ls",
+        "--resample",
+        "0.1",
+        "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let e = &v["data_files"][0]["experiments"][0];
+    assert_eq!(e["gaps"].as_array().map(Vec::len), Some(1), "{e}");
+    let names: Vec<&str> = v["experiments"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|x| x["name"].as_str())
+        .collect();
+    assert_eq!(names, ["ferry/1", "ferry/2"]);
+}
