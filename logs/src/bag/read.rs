@@ -69,9 +69,11 @@ pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<St
         )
     })?;
     let mut pass = Pass::new(path, requests);
+    // Each chunk is checked (CRC) whole before any of its messages is
+    // decoded: a corrupt chunk is an error, never garbage values.
     let mut reader = LinearReader::new_with_options(
         LinearReaderOptions::default()
-            .with_validate_chunk_crcs(true)
+            .with_prevalidate_chunk_crcs(true)
             .with_record_length_limit(RECORD_LIMIT),
     );
     while let Some(event) = reader.next_event() {
