@@ -25,6 +25,8 @@ pub enum DecodeError {
     },
     /// An encapsulation other than plain CDR or plain CDR2.
     Encapsulation(u16),
+    /// A 64-bit integer beyond ±2⁵³, which an `f64` cannot hold exactly.
+    Inexact(String),
 }
 
 impl DecodeError {
@@ -38,6 +40,9 @@ impl DecodeError {
             DecodeError::IndexOutOfRange { index, len } => {
                 format!("element {index} asked for, and the sequence holds {len}")
             }
+            DecodeError::Inexact(value) => {
+                format!("the integer {value} is beyond ±2^53: an f64 cannot hold it exactly")
+            }
             DecodeError::Encapsulation(kind) => format!(
                 "CDR encapsulation {kind:#06x} is not plain CDR \
                  (0x0000/0x0001, or CDR2 0x0006/0x0007)"
@@ -45,6 +50,9 @@ impl DecodeError {
         }
     }
 }
+
+/// The largest integer magnitude an `f64` holds exactly with its neighbours.
+const EXACT: u64 = 1 << 53;
 
 /// A position in one CDR message.
 #[derive(Clone, Debug)]
@@ -133,7 +141,8 @@ impl<'a> Reader<'a> {
         self.bytes::<8>().map(f64::from_le_bytes)
     }
 
-    /// A primitive as an `f64` (64-bit integers round beyond 2⁵³).
+    /// A primitive as an `f64`; a 64-bit integer beyond ±2⁵³ is an error,
+    /// not a silent rounding (as in Parquet files).
     pub fn read_number(&mut self, primitive: Primitive) -> Result<f64, DecodeError> {
         Ok(match primitive {
             Primitive::Float64 => self.read_f64()?,
@@ -146,9 +155,21 @@ impl<'a> Reader<'a> {
             Primitive::Uint16 => f64::from(self.bytes::<2>().map(u16::from_le_bytes)?),
             Primitive::Int32 => f64::from(self.read_i32()?),
             Primitive::Uint32 => f64::from(self.read_u32()?),
-            // As f64 on purpose: signals are f64; exact below 2^53.
-            Primitive::Int64 => self.bytes::<8>().map(i64::from_le_bytes)? as f64,
-            Primitive::Uint64 => self.bytes::<8>().map(u64::from_le_bytes)? as f64,
+            Primitive::Int64 => {
+                let value = self.bytes::<8>().map(i64::from_le_bytes)?;
+                if value.unsigned_abs() > EXACT {
+                    return Err(DecodeError::Inexact(value.to_string()));
+                }
+                // Exact: |value| ≤ 2^53.
+                value as f64
+            }
+            Primitive::Uint64 => {
+                let value = self.bytes::<8>().map(u64::from_le_bytes)?;
+                if value > EXACT {
+                    return Err(DecodeError::Inexact(value.to_string()));
+                }
+                value as f64
+            }
         })
     }
 }

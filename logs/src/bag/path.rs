@@ -116,7 +116,7 @@ pub enum Extract {
     Number,
     /// The heading of a `geometry_msgs/Quaternion` (x, y, z, w), in rad:
     /// the yaw of the ZYX (yaw–pitch–roll) convention,
-    /// `atan2(2(w·z + x·y), 1 − 2(y² + z²))`, in (−π, π].
+    /// `atan2(2(w·z + x·y), 1 − 2(y² + z²))`, in [−π, π].
     ///
     /// The path names the quaternion (`/imu.orientation`,
     /// `/odom.pose.pose.orientation`) or a message with a field

@@ -106,7 +106,11 @@ impl Plan {
         for segment in fields {
             let BaseType::Message(owner) = &current else {
                 return Err(plan_error(
-                    format!("`{walked}` is a {}, it has no field `{}`", base_name(&current), segment.name),
+                    format!(
+                        "`{walked}` is a {}, it has no field `{}`",
+                        base_name(&current),
+                        segment.name
+                    ),
                     "end the path at the number",
                 ));
             };
@@ -209,7 +213,10 @@ fn element_step(
             format!("drop the index: `{walked}`"),
         )),
         (Some(index), Count::Fixed(length)) if index >= length => Err(plan_error(
-            format!("`{walked}[{index}]` is past the end of a {}", field.type_name()),
+            format!(
+                "`{walked}[{index}]` is past the end of a {}",
+                field.type_name()
+            ),
             format!("indices run from 0 to {}", length.saturating_sub(1)),
         )),
         (Some(index), count) => Ok(Some(Step::Element {
@@ -233,7 +240,11 @@ fn number_leaf(current: &BaseType, walked: &str) -> Result<Leaf, PlanError> {
         BaseType::Message(_) => Err(plan_error(
             format!(
                 "`{}` is a {}, not a number",
-                if walked.is_empty() { "the topic" } else { walked },
+                if walked.is_empty() {
+                    "the topic"
+                } else {
+                    walked
+                },
                 base_name(current)
             ),
             "name one of its numeric fields (the next error lists them if the name is wrong)",
@@ -256,7 +267,11 @@ fn yaw_leaf(
         plan_error(
             format!(
                 "`{}` is a {}: neither a `{QUATERNION}` nor a message with a field `orientation` of that type",
-                if walked.is_empty() { "the topic" } else { walked },
+                if walked.is_empty() {
+                    "the topic"
+                } else {
+                    walked
+                },
                 base_name(current)
             ),
             "a heading is read from a quaternion, e.g. `/imu.orientation` or `/odom.pose.pose.orientation`",

@@ -79,7 +79,7 @@ pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<St
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| pass.container_error(&e))? {
             LinearReadEvent::ReadRequest(need) => {
-                let buffer = reader.insert(need.max(READ_SIZE).min(RECORD_LIMIT));
+                let buffer = reader.insert(need.clamp(READ_SIZE, RECORD_LIMIT));
                 let read = file.read(buffer).map_err(|e| {
                     DataError::new(
                         pass.at_byte(),
@@ -185,13 +185,14 @@ impl<'a> Pass<'a> {
                     .entry(header.id)
                     .or_insert_with(|| (header.name, header.encoding, data.into_owned()));
             }
-            Record::Channel(channel) => {
-                if !self.channels.contains_key(&channel.id) {
-                    let plan = self.channel(&channel)?;
-                    self.channels.insert(channel.id, plan);
-                }
+            // The summary repeats the channels: the first record counts.
+            Record::Channel(channel) if !self.channels.contains_key(&channel.id) => {
+                let plan = self.channel(&channel)?;
+                self.channels.insert(channel.id, plan);
             }
-            Record::Message { header, data } => self.message(header.channel_id, header.log_time, &data)?,
+            Record::Message { header, data } => {
+                self.message(header.channel_id, header.log_time, &data)?
+            }
             _ => {}
         }
         Ok(())
@@ -212,7 +213,10 @@ impl<'a> Pass<'a> {
         let Some((name, encoding, text)) = self.schemas.get(&channel.schema_id) else {
             return Err(DataError::new(
                 at,
-                format!("the channel refers to schema {}, which the bag does not define", channel.schema_id),
+                format!(
+                    "the channel refers to schema {}, which the bag does not define",
+                    channel.schema_id
+                ),
                 "the bag is corrupt or was written without schemas; record it again with rosbag2",
             ));
         };
@@ -244,13 +248,18 @@ impl<'a> Pass<'a> {
         let mut signals = Vec::new();
         for &i in &wanted {
             let (field, extract) = &self.requests[i];
-            let plan = Plan::compile(&schema, &field.fields, *extract).map_err(|e| located(i, e))?;
+            let plan =
+                Plan::compile(&schema, &field.fields, *extract).map_err(|e| located(i, e))?;
             signals.push((i, plan));
         }
         let stamp = header_stamp(&schema).map_err(|e| located(wanted[0], e))?;
         for &i in &wanted {
             let out = &mut self.out[i];
-            out.stamp = if stamp.is_some() { StampKind::Header } else { StampKind::LogTime };
+            out.stamp = if stamp.is_some() {
+                StampKind::Header
+            } else {
+                StampKind::LogTime
+            };
             if out.message_type.is_empty() {
                 out.message_type = name.clone();
             }
@@ -306,9 +315,18 @@ impl<'a> Pass<'a> {
     fn finish(self) -> Result<Vec<Stamped>, DataError> {
         for (field, _) in self.requests {
             if !self.topics.contains(&field.topic) {
-                let mut listed: Vec<&str> = self.topics.iter().take(LISTED_TOPICS).map(String::as_str).collect();
+                let mut listed: Vec<&str> = self
+                    .topics
+                    .iter()
+                    .take(LISTED_TOPICS)
+                    .map(String::as_str)
+                    .collect();
                 let more = self.topics.len().saturating_sub(LISTED_TOPICS);
-                let more = if more > 0 { format!(" and {more} more") } else { String::new() };
+                let more = if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                };
                 listed.sort_unstable();
                 return Err(DataError::new(
                     format!("{}: signal {field}", self.file()),

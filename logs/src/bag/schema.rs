@@ -174,7 +174,10 @@ pub fn short_name(name: &str) -> String {
 const BUILTINS: &[(&str, &str)] = &[
     ("builtin_interfaces/Time", "int32 sec\nuint32 nanosec\n"),
     ("builtin_interfaces/Duration", "int32 sec\nuint32 nanosec\n"),
-    ("std_msgs/Header", "builtin_interfaces/Time stamp\nstring frame_id\n"),
+    (
+        "std_msgs/Header",
+        "builtin_interfaces/Time stamp\nstring frame_id\n",
+    ),
 ];
 
 impl Schema {
@@ -280,7 +283,8 @@ fn parse_line(package: &str, line: &str) -> Result<Option<Field>, String> {
 /// The type token (which may hold a space inside `sequence<T, N>`) and the rest.
 fn split_type(line: &str) -> Result<(&str, &str), String> {
     let from = if line.starts_with("sequence<") {
-        line.find('>').ok_or("`sequence<` without its closing `>`")?
+        line.find('>')
+            .ok_or("`sequence<` without its closing `>`")?
     } else {
         0
     };
@@ -312,11 +316,9 @@ fn parse_type(package: &str, text: &str) -> Result<(BaseType, Count), String> {
             let count = if inside.is_empty() || inside.starts_with("<=") {
                 Count::Sequence
             } else {
-                Count::Fixed(
-                    inside
-                        .parse()
-                        .map_err(|_| format!("`{text}`: the array length `{inside}` is not a number"))?,
-                )
+                Count::Fixed(inside.parse().map_err(|_| {
+                    format!("`{text}`: the array length `{inside}` is not a number")
+                })?)
             };
             (&text[..open], count)
         }

@@ -227,7 +227,11 @@ pub struct BagWriter {
 }
 
 fn write_error(path: &str, error: impl std::fmt::Display) -> DataError {
-    DataError::new(path, format!("cannot write the bag: {error}"), "check the path and the free space")
+    DataError::new(
+        path,
+        format!("cannot write the bag: {error}"),
+        "check the path and the free space",
+    )
 }
 
 impl BagWriter {
@@ -297,7 +301,11 @@ impl BagWriter {
         if values.len() != expected {
             return Err(DataError::new(
                 at(),
-                format!("{} values for a {}, which takes {expected}", values.len(), entry.kind.type_name()),
+                format!(
+                    "{} values for a {}, which takes {expected}",
+                    values.len(),
+                    entry.kind.type_name()
+                ),
                 format!("pass {}", entry.kind.columns().join(", ")),
             ));
         }
@@ -306,11 +314,15 @@ impl BagWriter {
         let (true, Some(log_time)) = (i32::try_from(sec).is_ok(), log_time) else {
             return Err(DataError::new(
                 at(),
-                format!("the stamp {stamp} ns or the log time is outside ROS 2's time (int32 seconds, from 1970)"),
+                format!(
+                    "the stamp {stamp} ns or the log time is outside ROS 2's time (int32 seconds, from 1970)"
+                ),
                 "stamps are ns since the Unix epoch",
             ));
         };
-        entry.kind.encode(stamp, &entry.frame_id, values, &mut self.cdr);
+        entry
+            .kind
+            .encode(stamp, &entry.frame_id, values, &mut self.cdr);
         let header = MessageHeader {
             channel_id: entry.channel,
             sequence: entry.sequence,
@@ -325,7 +337,9 @@ impl BagWriter {
 
     /// Writes the summary and closes the file.
     pub fn finish(mut self) -> Result<(), DataError> {
-        self.writer.finish().map_err(|e| write_error(&self.path, e))?;
+        self.writer
+            .finish()
+            .map_err(|e| write_error(&self.path, e))?;
         Ok(())
     }
 }
@@ -356,7 +370,11 @@ pub fn write_bag(path: &Path, series: &[TopicSeries]) -> Result<(), DataError> {
         if !lengths_agree {
             return Err(DataError::new(
                 format!("{}: topic {}", path.display(), s.topic),
-                format!("{} needs {} columns as long as the stamps", s.kind.type_name(), s.kind.columns().len()),
+                format!(
+                    "{} needs {} columns as long as the stamps",
+                    s.kind.type_name(),
+                    s.kind.columns().len()
+                ),
                 format!("pass {}", s.kind.columns().join(", ")),
             ));
         }

@@ -50,11 +50,20 @@ fn a_corrupt_chunk_is_found_by_its_checksum_or_its_codec() {
 fn a_missing_topic_lists_the_bags_topics() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let bag = ferry_bag(dir.path(), 1);
-    let error = read(&bag, &[("/twist.twist.linear.x", Extract::Number), ("/gps.latitude", Extract::Number)])
-        .expect_err("no /gps");
+    let error = read(
+        &bag,
+        &[
+            ("/twist.twist.linear.x", Extract::Number),
+            ("/gps.latitude", Extract::Number),
+        ],
+    )
+    .expect_err("no /gps");
     assert_eq!(error.message, "the bag has no topic `/gps`");
     assert_eq!(error.hint, "its topics: /depth, /imu, /twist, /wrench");
-    assert!(error.location.ends_with("ferry.mcap: signal /gps.latitude"), "{error:?}");
+    assert!(
+        error.location.ends_with("ferry.mcap: signal /gps.latitude"),
+        "{error:?}"
+    );
 }
 
 #[test]
@@ -63,31 +72,65 @@ fn a_wrong_field_lists_the_fields_at_the_level_that_failed() {
     let bag = ferry_bag(dir.path(), 1);
     let error = read(&bag, &[("/twist.twist.linaer.x", Extract::Number)]).expect_err("a typo");
     assert_eq!(error.message, "`geometry_msgs/Twist` has no field `linaer`");
-    assert_eq!(error.hint, "its fields: linear (geometry_msgs/Vector3), angular (geometry_msgs/Vector3)");
-    assert!(error.location.ends_with("ferry.mcap: topic /twist, signal /twist.twist.linaer.x"), "{error:?}");
+    assert_eq!(
+        error.hint,
+        "its fields: linear (geometry_msgs/Vector3), angular (geometry_msgs/Vector3)"
+    );
+    assert!(
+        error
+            .location
+            .ends_with("ferry.mcap: topic /twist, signal /twist.twist.linaer.x"),
+        "{error:?}"
+    );
     let error = read(&bag, &[("/twist.header.frame_id", Extract::Number)]).expect_err("a string");
     assert_eq!(error.message, "`header.frame_id` is a string, not a number");
     let error = read(&bag, &[("/twist.twist.linear", Extract::Number)]).expect_err("a message");
-    assert_eq!(error.message, "`twist.linear` is a `geometry_msgs/Vector3` message, not a number");
+    assert_eq!(
+        error.message,
+        "`twist.linear` is a `geometry_msgs/Vector3` message, not a number"
+    );
     let error = read(&bag, &[("/imu.orientation", Extract::Number)]).expect_err("a quaternion");
     assert!(error.hint.contains("yaw"), "{error:?}");
     let error = read(&bag, &[("/twist", Extract::Yaw)]).expect_err("no orientation");
-    assert!(error.message.contains("nor a message with a field `orientation`"), "{error:?}");
+    assert!(
+        error
+            .message
+            .contains("nor a message with a field `orientation`"),
+        "{error:?}"
+    );
 }
 
 /// A bag written with the `mcap` crate directly: one channel of `encoding`
 /// schemas and `message_encoding` messages, holding `payload`.
-fn raw_bag(dir: &std::path::Path, encoding: &str, message_encoding: &str, payload: &[u8]) -> std::path::PathBuf {
+fn raw_bag(
+    dir: &std::path::Path,
+    encoding: &str,
+    message_encoding: &str,
+    payload: &[u8],
+) -> std::path::PathBuf {
     let path = dir.join("raw.mcap");
     let file = std::io::BufWriter::new(std::fs::File::create(&path).expect("created"));
     let mut writer = mcap::Writer::new(file).expect("a writer");
     let schema = writer
-        .add_schema("geometry_msgs/msg/Vector3", encoding, b"float64 x\nfloat64 y\nfloat64 z\n")
+        .add_schema(
+            "geometry_msgs/msg/Vector3",
+            encoding,
+            b"float64 x\nfloat64 y\nfloat64 z\n",
+        )
         .expect("a schema");
-    let channel = writer.add_channel(schema, "/v", message_encoding, &BTreeMap::new()).expect("a channel");
+    let channel = writer
+        .add_channel(schema, "/v", message_encoding, &BTreeMap::new())
+        .expect("a channel");
     for sequence in 0..3 {
-        let header = MessageHeader { channel_id: channel, sequence, log_time: T0 as u64, publish_time: T0 as u64 };
-        writer.write_to_known_channel(&header, payload).expect("a message");
+        let header = MessageHeader {
+            channel_id: channel,
+            sequence,
+            log_time: T0 as u64,
+            publish_time: T0 as u64,
+        };
+        writer
+            .write_to_known_channel(&header, payload)
+            .expect("a message");
     }
     writer.finish().expect("finished");
     path
@@ -104,7 +147,10 @@ fn a_message_shorter_than_its_schema_names_topic_and_message() {
     assert_eq!(signals[0].values, [2.5, 2.5, 2.5]);
     assert_eq!(signals[0].stamps, [T0, T0, T0]);
     let error = read(&bag, &[("/v.z", Extract::Number)]).expect_err("z is not");
-    assert!(error.location.ends_with("raw.mcap: topic /v, message 0"), "{error:?}");
+    assert!(
+        error.location.ends_with("raw.mcap: topic /v, message 0"),
+        "{error:?}"
+    );
     assert_eq!(
         error.message,
         "the message is shorter than its schema: it has 16 payload bytes, its fields need at least 24"
@@ -116,10 +162,18 @@ fn schemas_other_than_ros2msg_with_cdr_are_named() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let bag = raw_bag(dir.path(), "jsonschema", "json", b"{}");
     let error = read(&bag, &[("/v.x", Extract::Number)]).expect_err("JSON");
-    assert!(error.message.starts_with("schema encoding `jsonschema` with message encoding `json`"), "{error:?}");
+    assert!(
+        error
+            .message
+            .starts_with("schema encoding `jsonschema` with message encoding `json`"),
+        "{error:?}"
+    );
     let bag = raw_bag(dir.path(), "ros2idl", "cdr", b"{}");
     let error = read(&bag, &[("/v.x", Extract::Number)]).expect_err("IDL");
-    assert!(error.message.starts_with("schema encoding `ros2idl`"), "{error:?}");
+    assert!(
+        error.message.starts_with("schema encoding `ros2idl`"),
+        "{error:?}"
+    );
     // Topics nobody asked for are not checked.
     assert!(read(&bag, &[]).expect("nothing asked").is_empty());
 }

@@ -22,21 +22,35 @@ fn every_written_column_reads_back_exactly_with_its_stamps() {
             .iter()
             .zip(series.kind.columns())
             .map(|(path, column)| {
-                let extract = if *column == "orientation" { Extract::Yaw } else { Extract::Number };
+                let extract = if *column == "orientation" {
+                    Extract::Yaw
+                } else {
+                    Extract::Number
+                };
                 (path.as_str(), extract)
             })
             .collect();
         let signals = read(&bag, &requests).expect("the bag reads");
-        for (signal, (column, written)) in signals.iter().zip(series.kind.columns().iter().zip(&series.columns)) {
+        for (signal, (column, written)) in signals
+            .iter()
+            .zip(series.kind.columns().iter().zip(&series.columns))
+        {
             assert_eq!(signal.topic, series.topic);
             assert_eq!(signal.message_type, series.kind.type_name());
             assert_eq!(signal.stamps, series.stamps, "{} {column}", series.topic);
-            let expected_kind = if series.kind == MessageKind::Float64 { StampKind::LogTime } else { StampKind::Header };
+            let expected_kind = if series.kind == MessageKind::Float64 {
+                StampKind::LogTime
+            } else {
+                StampKind::Header
+            };
             assert_eq!(signal.stamp, expected_kind);
             if *column == "orientation" {
                 // The heading goes through a quaternion: equal to rounding.
                 for (read, written) in signal.values.iter().zip(written) {
-                    assert!((read - written).abs() < 1e-12, "yaw {read} for heading {written}");
+                    assert!(
+                        (read - written).abs() < 1e-12,
+                        "yaw {read} for heading {written}"
+                    );
                 }
                 assert_eq!(signal.values.len(), written.len());
             } else {
@@ -78,17 +92,31 @@ fn a_log_time_other_than_the_header_stamp_is_kept_apart() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let bag = dir.path().join("late.mcap");
     let mut writer = BagWriter::create(&bag).expect("created");
-    let twist = writer.add_topic("/twist", MessageKind::TwistStamped, "base").expect("added");
-    let depth = writer.add_topic("/depth", MessageKind::Float64, "").expect("added");
+    let twist = writer
+        .add_topic("/twist", MessageKind::TwistStamped, "base")
+        .expect("added");
+    let depth = writer
+        .add_topic("/depth", MessageKind::Float64, "")
+        .expect("added");
     for i in 0..5 {
         let stamp = T0 + i * 1_000_000;
         // Received 3 ms after the sensor stamped it.
-        writer.write_logged(twist, stamp, stamp + 3_000_000, &[i as f64; 6]).expect("written");
-        writer.write_logged(depth, stamp, stamp + 3_000_000, &[-(i as f64)]).expect("written");
+        writer
+            .write_logged(twist, stamp, stamp + 3_000_000, &[i as f64; 6])
+            .expect("written");
+        writer
+            .write_logged(depth, stamp, stamp + 3_000_000, &[-(i as f64)])
+            .expect("written");
     }
     writer.finish().expect("finished");
-    let signals = read(&bag, &[("/twist.twist.angular.z", Extract::Number), ("/depth.data", Extract::Number)])
-        .expect("the bag reads");
+    let signals = read(
+        &bag,
+        &[
+            ("/twist.twist.angular.z", Extract::Number),
+            ("/depth.data", Extract::Number),
+        ],
+    )
+    .expect("the bag reads");
     let stamps: Vec<i64> = (0..5).map(|i| T0 + i * 1_000_000).collect();
     let logged: Vec<i64> = stamps.iter().map(|s| s + 3_000_000).collect();
     assert_eq!(signals[0].stamps, stamps);
@@ -100,10 +128,21 @@ fn a_log_time_other_than_the_header_stamp_is_kept_apart() {
 fn the_writer_refuses_values_that_do_not_fit_the_type() {
     let dir = tempfile::tempdir().expect("a temporary directory");
     let mut writer = BagWriter::create(&dir.path().join("bad.mcap")).expect("created");
-    let twist = writer.add_topic("/twist", MessageKind::TwistStamped, "base").expect("added");
-    let error = writer.write(twist, T0, &[1.0, 2.0]).expect_err("2 values for 6 columns");
-    assert!(error.message.contains("2 values for a geometry_msgs/msg/TwistStamped, which takes 6"), "{error:?}");
+    let twist = writer
+        .add_topic("/twist", MessageKind::TwistStamped, "base")
+        .expect("added");
+    let error = writer
+        .write(twist, T0, &[1.0, 2.0])
+        .expect_err("2 values for 6 columns");
+    assert!(
+        error
+            .message
+            .contains("2 values for a geometry_msgs/msg/TwistStamped, which takes 6"),
+        "{error:?}"
+    );
     assert!(error.hint.contains("twist.linear.x"), "{error:?}");
-    let error = writer.write(twist, i64::MAX, &[0.0; 6]).expect_err("past int32 seconds");
+    let error = writer
+        .write(twist, i64::MAX, &[0.0; 6])
+        .expect_err("past int32 seconds");
     assert!(error.message.contains("outside ROS 2's time"), "{error:?}");
 }

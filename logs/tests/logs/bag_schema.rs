@@ -35,11 +35,22 @@ fn the_parser_keeps_fields_and_skips_constants_defaults_and_comments() {
     assert_eq!(schema.root, "test_msgs/Sample");
     let fields = schema.fields("test_msgs/Sample").expect("the root");
     let names: Vec<&str> = fields.iter().map(|f| f.name.as_str()).collect();
-    assert_eq!(names, ["name", "counts", "gains", "points", "more", "flag", "value", "big", "ok"]);
+    assert_eq!(
+        names,
+        [
+            "name", "counts", "gains", "points", "more", "flag", "value", "big", "ok"
+        ]
+    );
     assert_eq!(fields[0].base, BaseType::String);
-    assert_eq!((fields[1].base.clone(), fields[1].count), (BaseType::Primitive(Primitive::Int32), Count::Sequence));
+    assert_eq!(
+        (fields[1].base.clone(), fields[1].count),
+        (BaseType::Primitive(Primitive::Int32), Count::Sequence)
+    );
     assert_eq!(fields[2].count, Count::Fixed(3));
-    assert_eq!(fields[3].base, BaseType::Message("geometry_msgs/Vector3".into()));
+    assert_eq!(
+        fields[3].base,
+        BaseType::Message("geometry_msgs/Vector3".into())
+    );
     assert_eq!(fields[3].count, Count::Sequence);
     // A bare type name is in the package of the message that uses it.
     assert_eq!(fields[4].base, BaseType::Message("test_msgs/Point".into()));
@@ -54,11 +65,15 @@ struct Message {
 
 impl Message {
     fn new(kind: u8) -> Message {
-        Message { bytes: vec![0, kind, 0, 0], big: kind & 1 == 0, max_align: if kind >= 6 { 4 } else { 8 } }
+        Message {
+            bytes: vec![0, kind, 0, 0],
+            big: kind & 1 == 0,
+            max_align: if kind >= 6 { 4 } else { 8 },
+        }
     }
     fn put(&mut self, le: &[u8]) {
         let align = le.len().min(self.max_align);
-        while (self.bytes.len() - 4) % align != 0 {
+        while !(self.bytes.len() - 4).is_multiple_of(align) {
             self.bytes.push(0xAA);
         }
         if self.big {
@@ -127,12 +142,36 @@ fn a_sequence_shorter_than_the_index_and_a_short_message_are_decode_errors() {
         Plan::compile(&schema, &field.fields, Extract::Number).expect("compiles")
     };
     let error = plan("counts[2]").read(&sample(1)).expect_err("2 counts");
-    assert_eq!(error.message(), "element 2 asked for, and the sequence holds 2");
+    assert_eq!(
+        error.message(),
+        "element 2 asked for, and the sequence holds 2"
+    );
     let message = sample(1);
-    let error = plan("big").read(&message[..message.len() - 4]).expect_err("cut");
-    assert!(error.message().starts_with("the message is shorter than its schema"), "{error:?}");
+    let error = plan("big")
+        .read(&message[..message.len() - 4])
+        .expect_err("cut");
+    assert!(
+        error
+            .message()
+            .starts_with("the message is shorter than its schema"),
+        "{error:?}"
+    );
     let error = plan("big").read(&[0, 3, 0, 0, 1, 2]).expect_err("PL_CDR");
-    assert!(error.message().contains("0x0003 is not plain CDR"), "{error:?}");
+    assert!(
+        error.message().contains("0x0003 is not plain CDR"),
+        "{error:?}"
+    );
+    // `big` is the 8 bytes before the final `bool`: 2^53 + 1 is refused, 2^53 read.
+    let mut message = sample(1);
+    let at = message.len() - 9;
+    message[at..at + 8].copy_from_slice(&((1_i64 << 53) + 1).to_le_bytes());
+    let error = plan("big").read(&message).expect_err("not exact");
+    assert_eq!(
+        error.message(),
+        "the integer 9007199254740993 is beyond ±2^53: an f64 cannot hold it exactly"
+    );
+    message[at..at + 8].copy_from_slice(&(-(1_i64 << 53)).to_le_bytes());
+    assert_eq!(plan("big").read(&message), Ok(-9007199254740992.0));
 }
 
 #[test]
@@ -144,16 +183,41 @@ fn compile_errors_name_the_level_and_its_fields() {
     };
     let error = compile("/t.points[0].q", Extract::Number);
     assert_eq!(error.message, "`geometry_msgs/Vector3` has no field `q`");
-    assert_eq!(error.hint, "its fields: x (float64), y (float64), z (float64)");
+    assert_eq!(
+        error.hint,
+        "its fields: x (float64), y (float64), z (float64)"
+    );
     let error = compile("/t.points", Extract::Number);
     assert!(error.message.contains("`points` is an array"), "{error:?}");
     assert_eq!(error.hint, "pick an element: `points[0]`");
-    assert!(compile("/t.gains[3]", Extract::Number).message.contains("past the end of a float32[3]"));
-    assert!(compile("/t.value[0]", Extract::Number).message.contains("not an array"));
-    assert_eq!(compile("/t.name", Extract::Number).message, "`name` is a string, not a number");
-    assert_eq!(compile("/t.ok", Extract::Number).message, "`ok` is a bool, not a number");
-    assert!(compile("/t.value.x", Extract::Number).message.contains("is a float64, it has no field `x`"));
-    assert!(compile("/t.points[0]", Extract::Yaw).message.contains("neither a `geometry_msgs/Quaternion`"));
+    assert!(
+        compile("/t.gains[3]", Extract::Number)
+            .message
+            .contains("past the end of a float32[3]")
+    );
+    assert!(
+        compile("/t.value[0]", Extract::Number)
+            .message
+            .contains("not an array")
+    );
+    assert_eq!(
+        compile("/t.name", Extract::Number).message,
+        "`name` is a string, not a number"
+    );
+    assert_eq!(
+        compile("/t.ok", Extract::Number).message,
+        "`ok` is a bool, not a number"
+    );
+    assert!(
+        compile("/t.value.x", Extract::Number)
+            .message
+            .contains("is a float64, it has no field `x`")
+    );
+    assert!(
+        compile("/t.points[0]", Extract::Yaw)
+            .message
+            .contains("neither a `geometry_msgs/Quaternion`")
+    );
 }
 
 #[test]
@@ -161,7 +225,10 @@ fn malformed_schemas_are_errors_not_panics() {
     for (text, expected) in [
         ("float64[x] a", "the array length `x` is not a number"),
         ("float64[2 a", "`[` without its closing `]`"),
-        ("Missing a", "has type `test_msgs/Missing`, which the schema does not define"),
+        (
+            "Missing a",
+            "has type `test_msgs/Missing`, which the schema does not define",
+        ),
         ("float64", "no field name after the type"),
         ("sequence<int32 a", "`sequence<` without its closing `>`"),
     ] {

@@ -14,7 +14,9 @@ pub const T0: i64 = 1_700_000_000_000_000_000;
 pub fn ferry_series(seconds: i64) -> Vec<TopicSeries> {
     let series = |topic: &str, kind: MessageKind, period_ms: i64| {
         let n = (seconds * 1000 / period_ms) as usize;
-        let stamps: Vec<i64> = (0..n as i64).map(|i| T0 + i * period_ms * 1_000_000 + 7).collect();
+        let stamps: Vec<i64> = (0..n as i64)
+            .map(|i| T0 + i * period_ms * 1_000_000 + 7)
+            .collect();
         let columns = (0..kind.columns().len())
             .map(|c| {
                 (0..n)
