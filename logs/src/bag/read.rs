@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use leeway_data::error::DataError;
 use mcap::McapError;
@@ -60,7 +60,10 @@ const LISTED_TOPICS: usize = 20;
 /// path does not exist (the fields at the level that failed listed) or its
 /// value is not a number; when a message is shorter than its schema; when a
 /// channel is not `ros2msg`/`cdr`.
+///
+/// `path` is the `.mcap` file, or a rosbag2 folder holding exactly one.
 pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<Stamped>, DataError> {
+    let path = &mcap_file(path)?;
     let mut file = File::open(path).map_err(|e| {
         DataError::new(
             path.display().to_string(),
@@ -98,6 +101,47 @@ pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<St
         }
     }
     pass.finish()
+}
+
+/// The `.mcap` file of a rosbag2 folder (the path itself if it is a file).
+fn mcap_file(path: &Path) -> Result<PathBuf, DataError> {
+    if !path.is_dir() {
+        return Ok(path.to_path_buf());
+    }
+    let shown = path.display().to_string();
+    let entries = std::fs::read_dir(path).map_err(|e| {
+        DataError::new(
+            &shown,
+            format!("cannot list the bag's folder: {e}"),
+            "check the path",
+        )
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|entry| entry.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "mcap"))
+        .collect();
+    files.sort();
+    match files.as_slice() {
+        [one] => Ok(one.clone()),
+        [] => Err(DataError::new(
+            shown,
+            "the folder holds no .mcap file",
+            "record with `ros2 bag record -s mcap`, or `ros2 bag convert` a sqlite3 bag to MCAP",
+        )),
+        several => Err(DataError::new(
+            shown,
+            format!(
+                "the folder holds {} .mcap files (a split bag): {}",
+                several.len(),
+                several
+                    .iter()
+                    .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            "read each file as its own source",
+        )),
+    }
 }
 
 /// A channel with requested signals: how to read its messages.

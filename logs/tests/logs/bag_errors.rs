@@ -177,3 +177,29 @@ fn schemas_other_than_ros2msg_with_cdr_are_named() {
     // Topics nobody asked for are not checked.
     assert!(read(&bag, &[]).expect("nothing asked").is_empty());
 }
+
+#[test]
+fn a_bag_folder_is_read_through_its_one_mcap_file() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    ferry_bag(dir.path(), 1);
+    std::fs::write(
+        dir.path().join("metadata.yaml"),
+        "rosbag2_bagfile_information: {}",
+    )
+    .expect("written");
+    let signals = read(dir.path(), &[("/depth.data", Extract::Number)]).expect("the folder reads");
+    assert_eq!(signals[0].values.len(), 2);
+    std::fs::copy(
+        dir.path().join("ferry.mcap"),
+        dir.path().join("ferry_1.mcap"),
+    )
+    .expect("copied");
+    let error = read(dir.path(), &[("/depth.data", Extract::Number)]).expect_err("a split bag");
+    assert_eq!(
+        error.message,
+        "the folder holds 2 .mcap files (a split bag): ferry.mcap, ferry_1.mcap"
+    );
+    let empty = tempfile::tempdir().expect("a temporary directory");
+    let error = read(empty.path(), &[("/depth.data", Extract::Number)]).expect_err("no file");
+    assert_eq!(error.message, "the folder holds no .mcap file");
+}
