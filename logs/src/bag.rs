@@ -6,7 +6,7 @@
 //! [`path::Extract`] says whether to take the number or a quaternion's
 //! heading. The container is the `mcap` crate's; the `ros2msg` schemas
 //! ([`schema`]) and CDR messages ([`cdr`]) are read here, each path
-//! compiled once per channel ([`plan`]). [`write`] writes bags of common
+//! compiled once per channel ([`plan`]). [`write`](mod@write) writes bags of common
 //! message types, for tests and examples.
 //!
 //! ```
