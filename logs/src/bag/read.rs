@@ -41,7 +41,9 @@ pub struct Stamped {
     pub message_type: String,
 }
 
-/// Bytes asked of the file at once: large reads, whatever the record size.
+/// Bytes asked of the file at once, whatever the reader needs: large reads
+/// for small records, and a buffer that grows only with data the file has
+/// (a corrupt length asks for more than is there).
 const READ_SIZE: usize = 1 << 20;
 
 /// A record longer than this is corrupt (images and point clouds are far smaller).
@@ -81,8 +83,8 @@ pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<St
     );
     while let Some(event) = reader.next_event() {
         match event.map_err(|e| pass.container_error(&e))? {
-            LinearReadEvent::ReadRequest(need) => {
-                let buffer = reader.insert(need.clamp(READ_SIZE, RECORD_LIMIT));
+            LinearReadEvent::ReadRequest(_) => {
+                let buffer = reader.insert(READ_SIZE);
                 let read = file.read(buffer).map_err(|e| {
                     DataError::new(
                         pass.at_byte(),

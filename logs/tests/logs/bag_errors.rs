@@ -203,3 +203,18 @@ fn a_bag_folder_is_read_through_its_one_mcap_file() {
     let error = read(empty.path(), &[("/depth.data", Extract::Number)]).expect_err("no file");
     assert_eq!(error.message, "the folder holds no .mcap file");
 }
+
+#[test]
+fn a_record_claiming_more_bytes_than_the_file_has_is_truncation() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let path = dir.path().join("claims.mcap");
+    // The MCAP magic, then a Header record (opcode 1) claiming 900 MB.
+    let mut bytes = b"\x89MCAP0\r\n".to_vec();
+    bytes.push(0x01);
+    bytes.extend_from_slice(&900_000_000_u64.to_le_bytes());
+    bytes.extend_from_slice(&[0; 64]);
+    std::fs::write(&path, &bytes).expect("written");
+    let error = read(&path, &[("/twist.twist.linear.x", Extract::Number)]).expect_err("cut short");
+    assert!(error.message.contains("truncated"), "{error:?}");
+    assert_eq!(error.location, format!("{}: near byte 81", path.display()));
+}
