@@ -167,6 +167,21 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
         }
     }
     series.sort_by_key(|(_, k)| *k);
+    for (s, k) in &series {
+        if s.stamps.len() < 2 {
+            let spec = specs[*k].0;
+            return Err(DataError::new(
+                &spec.at,
+                format!(
+                    "signal `{}` has {} samples in `{}`",
+                    spec.signal,
+                    s.stamps.len(),
+                    m.sources[spec.source].file.display()
+                ),
+                "a signal needs samples along the experiment: check the topic or column",
+            ));
+        }
+    }
     let mut signal_notes = Vec::with_capacity(series.len());
     let mut tracks = Vec::with_capacity(series.len());
     let mut converted: Vec<Vec<f64>> = Vec::with_capacity(series.len());

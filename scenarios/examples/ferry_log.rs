@@ -1,7 +1,8 @@
 //! Writes the synthetic ferry log (`leeway_scenarios::ferry`):
-//! `cargo run -p leeway-scenarios --example ferry_log -- DIR [--aligned] [--seed N] [--seconds S]`.
+//! `cargo run -p leeway-scenarios --example ferry_log -- DIR [--aligned] [--seed N] [--seconds S] [--bag]`
+//! (`--bag`: also `ferry.mcap`, the topics as a ROS 2 bag, and its manifest `ferry-bag.toml`).
 
-use leeway_scenarios::ferry::{FerryLog, write_ferry_log};
+use leeway_scenarios::ferry::{FerryLog, write_ferry_bag, write_ferry_log};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -21,7 +22,14 @@ fn main() {
         seconds: value("--seconds").unwrap_or(1200.0),
         ..FerryLog::default()
     };
-    if let Err(e) = write_ferry_log(std::path::Path::new(dir), &spec) {
+    let dir = std::path::Path::new(dir);
+    if let Err(e) = write_ferry_log(dir, &spec) {
+        eprintln!("ferry_log: {e}");
+        std::process::exit(1);
+    }
+    if args.iter().any(|a| a == "--bag")
+        && let Err(e) = write_ferry_bag(dir)
+    {
         eprintln!("ferry_log: {e}");
         std::process::exit(1);
     }

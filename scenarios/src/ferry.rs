@@ -12,6 +12,8 @@
 //! split at the same hole: reading the topics must give exactly it.
 //! `examples/models/ferry.som` is the model; docs/logs.md walks through it.
 
+use leeway_data::DataError;
+use leeway_logs::bag::write::{MessageKind, TopicSeries, write_bag};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -373,6 +375,105 @@ fn uniform(t: &Topics) -> String {
         );
     }
     out
+}
+
+/// The manifest that reads the bag [`write_ferry_bag`] writes: the same
+/// signals by `topic.field.path`, the heading from the IMU's quaternion.
+pub const BAG_MANIFEST: &str = "# The ferry's run as a ROS 2 bag (docs/logs.md).
+experiment = \"ferry\"
+
+[sources.bag]
+file = \"ferry.mcap\"
+
+[signals]
+u = \"bag:/navigation/twist_body.twist.linear.x\"
+v = \"bag:/navigation/twist_body.twist.linear.y\"
+r = \"bag:/navigation/twist_body.twist.angular.z\"
+psi = { from = \"bag:/imu.orientation\", as = \"yaw\" }
+tau_x = \"bag:/allocator/wrench.wrench.force.x\"
+tau_y = \"bag:/allocator/wrench.wrench.force.y\"
+tau_n = \"bag:/allocator/wrench.wrench.torque.z\"
+";
+
+/// A topic file's stamps (ns since the epoch) and value columns.
+fn read_topic(path: &Path) -> Result<(Vec<i64>, Vec<Vec<f64>>), DataError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        DataError::new(
+            path.display().to_string(),
+            e.to_string(),
+            "write the log first",
+        )
+    })?;
+    let mut stamps = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    for line in text.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let number = |i: usize| cells.get(i).and_then(|c| c.parse::<f64>().ok());
+        let (Some(s), Some(n)) = (number(0), number(1)) else {
+            continue;
+        };
+        stamps.push(s as i64 * 1_000_000_000 + n as i64);
+        // The heading's file has a text column (local time) before its value.
+        let values: Vec<f64> = (2..cells.len()).filter_map(number).collect();
+        columns.resize(values.len(), Vec::new());
+        for (c, v) in columns.iter_mut().zip(values) {
+            c.push(v);
+        }
+    }
+    Ok((stamps, columns))
+}
+
+/// Writes the log's three topics, read back from the CSV files in `dir`,
+/// as one ROS 2 bag `ferry.mcap` (TwistStamped, Imu, WrenchStamped) with
+/// its manifest `ferry-bag.toml`: the same log, as a robot records it.
+pub fn write_ferry_bag(dir: &Path) -> Result<(), DataError> {
+    let (twist_t, twist) = read_topic(&dir.join("twist.csv"))?;
+    let (heading_t, heading) = read_topic(&dir.join("heading.csv"))?;
+    let (tau_t, tau) = read_topic(&dir.join("tau.csv"))?;
+    let zeros = |n: usize| vec![0.0; n];
+    let (nt, nh, nf) = (twist_t.len(), heading_t.len(), tau_t.len());
+    let series = [
+        TopicSeries {
+            topic: "/navigation/twist_body".into(),
+            kind: MessageKind::TwistStamped,
+            frame_id: "base_link".into(),
+            stamps: twist_t,
+            columns: vec![
+                twist[0].clone(),
+                twist[1].clone(),
+                zeros(nt),
+                zeros(nt),
+                zeros(nt),
+                twist[2].clone(),
+            ],
+        },
+        TopicSeries {
+            topic: "/imu".into(),
+            kind: MessageKind::Imu,
+            frame_id: "imu_link".into(),
+            stamps: heading_t,
+            columns: std::iter::once(heading[0].clone())
+                .chain((0..6).map(|_| zeros(nh)))
+                .collect(),
+        },
+        TopicSeries {
+            topic: "/allocator/wrench".into(),
+            kind: MessageKind::WrenchStamped,
+            frame_id: "base_link".into(),
+            stamps: tau_t,
+            columns: vec![
+                tau[0].clone(),
+                tau[1].clone(),
+                zeros(nf),
+                zeros(nf),
+                zeros(nf),
+                tau[2].clone(),
+            ],
+        },
+    ];
+    write_bag(&dir.join("ferry.mcap"), &series)?;
+    std::fs::write(dir.join("ferry-bag.toml"), BAG_MANIFEST)
+        .map_err(|e| DataError::new(dir.display().to_string(), e.to_string(), "check the folder"))
 }
 
 #[cfg(test)]

@@ -297,3 +297,56 @@ fn resampling_one_file_splits_at_its_hole() {
         .collect();
     assert_eq!(names, ["ferry/1", "ferry/2"]);
 }
+
+#[test]
+fn the_same_log_as_a_bag_gives_the_same_estimate() {
+    let dir = ferry_log("bag", false);
+    leeway_scenarios::ferry::write_ferry_bag(&dir.0).unwrap_or_else(|e| panic!("{e}"));
+    let files = estimate_json(&dir.path("ferry.toml").display().to_string(), "iv3");
+    let bag = estimate_json(&dir.path("ferry-bag.toml").display().to_string(), "iv3");
+    let values = |v: &serde_json::Value| -> Vec<f64> {
+        v["parameters"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|p| p["value"].as_f64())
+            .collect()
+    };
+    // The heading goes through a quaternion and back: equal to round-off.
+    for (a, b) in values(&files).iter().zip(values(&bag)) {
+        assert!((a - b).abs() <= 1e-9 * a.abs(), "{a} {b}");
+    }
+    assert_eq!(values(&files).len(), 12);
+    assert_eq!(
+        files["data_files"][0]["experiments"][0]["gaps"],
+        bag["data_files"][0]["experiments"][0]["gaps"]
+    );
+}
+
+#[test]
+fn a_bag_with_a_wrong_path_or_damaged_is_one_located_error() {
+    let (at, message) = refused("bag-path", |d| {
+        leeway_scenarios::ferry::write_ferry_bag(&d.0).unwrap_or_else(|e| panic!("{e}"));
+        let manifest = std::fs::read_to_string(d.path("ferry-bag.toml")).unwrap_or_default();
+        std::fs::write(
+            d.path("ferry.toml"),
+            manifest.replace("wrench.force.x", "wrench.force.q"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+    });
+    assert!(at.contains("ferry.mcap"), "{at}: {message}");
+    assert!(
+        message.contains("force.q") || message.contains("`q`"),
+        "{message}"
+    );
+    let (at, _) = refused("bag-damaged", |d| {
+        leeway_scenarios::ferry::write_ferry_bag(&d.0).unwrap_or_else(|e| panic!("{e}"));
+        let mut bytes = std::fs::read(d.path("ferry.mcap")).unwrap_or_default();
+        let n = bytes.len();
+        bytes.truncate(n / 2);
+        std::fs::write(d.path("ferry.mcap"), bytes).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::rename(d.path("ferry-bag.toml"), d.path("ferry.toml"))
+            .unwrap_or_else(|e| panic!("{e}"));
+    });
+    assert!(at.contains("ferry.mcap"), "{at}");
+}

@@ -1,0 +1,8 @@
+//! leeway-logs' integration tests (one binary).
+
+mod bag_errors;
+mod bag_fuzz;
+mod bag_python;
+mod bag_round_trip;
+mod bag_schema;
+mod common;
