@@ -321,6 +321,14 @@ fn the_same_log_as_a_bag_gives_the_same_estimate() {
         files["data_files"][0]["experiments"][0]["gaps"],
         bag["data_files"][0]["experiments"][0]["gaps"]
     );
+    // Without a manifest: the model's data block names the field paths.
+    let source = std::fs::read_to_string(crate::common::root().join(FERRY)).unwrap_or_default();
+    let paths = "data { u = \"/navigation/twist_body.twist.linear.x\", v = \"/navigation/twist_body.twist.linear.y\", r = \"/navigation/twist_body.twist.angular.z\", psi = \"/imu.orientation\", tau_x = \"/allocator/wrench.wrench.force.x\", tau_y = \"/allocator/wrench.wrench.force.y\", tau_n = \"/allocator/wrench.wrench.torque.z\" }\n    nominal {";
+    let model = dir.write("ferry-bag.som", &source.replacen("nominal {", paths, 1));
+    let bag_file = dir.path("ferry.mcap").display().to_string();
+    let bare = leeway(&["estimate", &model, "--data", &bag_file, "--json"]);
+    assert_eq!(code(&bare), 0, "{}", stdout(&bare));
+    assert_eq!(values(&json(&bare)), values(&bag));
 }
 
 #[test]
