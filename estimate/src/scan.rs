@@ -3,6 +3,7 @@
 //! a criterion ([`ScanBy`]), the best one kept. One implementation for
 //! `leeway estimate --scan-delay` and Python.
 
+use crate::method::{Choice, Named, choice};
 use crate::options::EstimateOptions;
 use crate::outcome::{Estimate, EstimateError, err};
 use crate::run::estimate;
@@ -10,6 +11,7 @@ use leeway_model::delay::delayed;
 use leeway_model::experiment::Source;
 use leeway_model::interp::Interpreter;
 use leeway_model::model::{HeadingRotation, Model, Signals};
+use leeway_model::number::short_number;
 use leeway_model::simulate::Disturbances;
 use leeway_structure::ir::{Delay, Ir, Lag, MAX_DELAY_SAMPLES, Rotation, samples_in};
 use serde::Serialize;
@@ -91,13 +93,15 @@ impl DelayRange {
                 }
             ));
         }
-        let samples = |b: Bound| {
-            match b {
+        let samples = |b: Bound| match b {
             Bound::Samples(n) => Ok(n),
             Bound::Seconds(s) => samples_in(s, h).map_err(|_| {
-                format!("{s} s is no whole number of sample times of {h} s (at most {MAX_DELAY_SAMPLES})")
+                format!(
+                    "{} s is no whole number of sample times of {} s (at most {MAX_DELAY_SAMPLES})",
+                    short_number(s),
+                    short_number(h)
+                )
             }),
-        }
         };
         let (lo, hi) = (samples(self.lo)?, samples(self.hi)?);
         if lo > hi {
@@ -114,8 +118,7 @@ impl DelayRange {
 }
 
 /// What a scan judges each candidate's estimate by (larger is better).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ScanBy {
     /// The estimate's simulation on its data, fitted as `validate` fits
     /// (the mean of the states' fits, %).
@@ -126,14 +129,20 @@ pub enum ScanBy {
     Residual,
 }
 
-impl ScanBy {
-    /// Its name (`fit`, `residual`).
-    pub fn name(self) -> &'static str {
-        match self {
-            ScanBy::Fit => "fit",
-            ScanBy::Residual => "residual",
-        }
-    }
+impl Named for ScanBy {
+    const OPTION: &'static str = "scan-by";
+    const CHOICES: &'static [Choice<ScanBy>] = &[
+        choice(
+            "fit",
+            ScanBy::Fit,
+            "the estimate's simulation on its data, fitted as `validate` fits",
+        ),
+        choice(
+            "residual",
+            ScanBy::Residual,
+            "the estimate's one-step-ahead prediction on its data, fitted the same way",
+        ),
+    ];
 }
 
 /// One candidate of a scan.

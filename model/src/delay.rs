@@ -11,6 +11,7 @@
 //! one's view holds the last `d_max + 1` input rows, nothing more.
 
 use crate::experiment::{Experiment, Row, Source};
+use crate::number::short_number;
 use leeway_structure::ir::{Ir, LagProblem};
 
 /// A dead time that is no whole number of a record's sample times.
@@ -46,10 +47,12 @@ pub fn dead_times(ir: &Ir, experiment: &str, h: f64) -> Result<DeadTimes, DelayE
         experiment: experiment.to_string(),
         message: match p {
             LagProblem::NotWhole { ratio } => format!(
-                "the dead time of `{input}` is {ratio:.3} sample times of {h} s, not a whole number"
+                "the dead time of `{input}` is {ratio:.3} sample times of {} s, not a whole number",
+                short_number(h)
             ),
             LagProblem::TooLong { samples } => format!(
-                "the dead time of `{input}` is {samples} samples of {h} s, more than {}",
+                "the dead time of `{input}` is {samples} samples of {} s, more than {}",
+                short_number(h),
                 leeway_structure::ir::MAX_DELAY_SAMPLES
             ),
         },
