@@ -82,7 +82,7 @@ impl DelayRange {
     /// `lo ≤ hi`, whole numbers of samples, at most
     /// [`MAX_SCAN_CANDIDATES`], on an input of `ir`.
     pub fn candidates(&self, ir: &Ir, h: f64) -> Result<Vec<usize>, String> {
-        if !ir.inputs.iter().any(|i| *i == self.input) {
+        if !ir.inputs.contains(&self.input) {
             return Err(format!(
                 "`{}` is not an input of the model (inputs: {})",
                 self.input,

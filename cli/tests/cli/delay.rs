@@ -26,14 +26,9 @@ fn input_csv(n: usize) -> String {
         }
     }
     let mut text = "time,tau_x,tau_n,u,r\n".to_string();
-    for k in 0..n {
+    for (k, (a, b)) in columns[0].iter().zip(&columns[1]).take(n).enumerate() {
         let x0 = if k == 0 { "0" } else { "" };
-        text.push_str(&format!(
-            "{:.1},{},{},{x0},{x0}\n",
-            k as f64 * 0.1,
-            columns[0][k],
-            columns[1][k]
-        ));
+        text.push_str(&format!("{:.1},{a},{b},{x0},{x0}\n", k as f64 * 0.1));
     }
     text
 }
