@@ -154,7 +154,7 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
         None => out(&String::from_utf8_lossy(&buffer)),
     }
     if written.diverged {
-        let t = input.t0 + finite as f64 * e.h;
+        let t = t0 + finite as f64 * e.h;
         return Err(Problem {
             status: Status::Unsupported,
             ..Problem::error(

@@ -335,5 +335,6 @@ pub fn estimate_mapped(
         &gains,
         &notes,
         warnings,
+        None,
     )?)
 }

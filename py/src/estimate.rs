@@ -7,9 +7,11 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::options::{EstimateOptions, load_options};
 use leeway_data::LoadOptions;
-use leeway_estimate::estimate;
+use leeway_estimate::{DelayRange, DelayScan, ScanBy, estimate, scan_delay};
 use leeway_model::Interpreter;
-use leeway_report::{Estimated, estimate_report, heading_gains, heading_warnings};
+use leeway_report::{
+    DelayScanJson, Estimated, estimate_report, heading_gains, heading_warnings,
+};
 use pyo3::prelude::*;
 
 /// `leeway estimate --json` of `model` on the frames: each frame is
@@ -24,6 +26,7 @@ pub(crate) fn estimate_json(
     options: EstimateOptions,
 ) -> PyResult<String> {
     let runtime_options = options.runtime()?;
+    let scan = options.scan()?;
     // `aggregate` changes what the structure compiler keeps: the CLI compiles
     // with it, so does this.
     let model = &*model.for_aggregate(options.aggregate)?;
@@ -34,7 +37,15 @@ pub(crate) fn estimate_json(
         options.resample,
     )?;
     let borrowed = borrow_frames(&frames)?;
-    let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
+    let document = py.detach(|| {
+        run_estimate(
+            model,
+            &borrowed,
+            &load_options,
+            &runtime_options,
+            scan.as_ref(),
+        )
+    })?;
     Ok(document)
 }
 
@@ -43,6 +54,7 @@ fn run_estimate(
     frames: &[data::Frame<'_>],
     load_options: &LoadOptions,
     options: &leeway_estimate::EstimateOptions,
+    scan: Option<&(DelayRange, ScanBy)>,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
     let (loaded, notes) =
@@ -52,8 +64,13 @@ fn run_estimate(
     warnings.extend(leeway_report::unit_warnings(ir, &sources));
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
-    let interpreter = Interpreter::new(ir.clone());
-    let result = estimate(&interpreter, &sources, options);
+    let (result, scanned) = match scan {
+        None => (estimate(&Interpreter::new(ir.clone()), &sources, options), None),
+        Some((range, by)) => match scan_delay(ir, &sources, options, range, *by) {
+            Ok(s) => (Ok(s.estimate.clone()), Some(s)),
+            Err(e) => (Err(e), None),
+        },
+    };
     // A spill file that could not be read back voids whatever was computed.
     if let Some(f) = loaded.failure() {
         return Err(f);
@@ -81,6 +98,7 @@ fn run_estimate(
         &gains,
         &notes,
         warnings,
+        scanned.as_ref(),
     )
 }
 
@@ -94,9 +112,10 @@ pub(crate) fn estimate_document(
     gains: &[(String, Option<f64>)],
     notes: &[leeway_data::FileNotes],
     warnings: Vec<String>,
+    scan: Option<&DelayScan>,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
-    let report = estimate_report::<serde_json::Value>(
+    let mut report = estimate_report::<serde_json::Value>(
         model.file.clone(),
         data,
         est.method,
@@ -111,6 +130,7 @@ pub(crate) fn estimate_document(
         }),
         warnings,
     );
+    report.delay_scan = scan.map(DelayScanJson::of);
     report
         .to_json()
         .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None))
