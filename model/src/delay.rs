@@ -101,11 +101,9 @@ pub fn shift(e: &Experiment, lags: &DeadTimes) -> Experiment {
         .iter()
         .zip(&lags.lags)
         .map(|(c, d)| {
-            if n <= m {
-                Vec::new()
-            } else {
-                c[m - d..n - d].to_vec()
-            }
+            // d ≤ m; a column shorter than the record gives what it has.
+            c.get(m.saturating_sub(*d)..n.saturating_sub(*d).max(m.saturating_sub(*d)))
+                .map_or_else(Vec::new, <[f64]>::to_vec)
         })
         .collect();
     Experiment {
@@ -155,7 +153,9 @@ impl Source for Delayed<'_> {
         let mut k = 0usize;
         self.inner.visit(&mut |row| {
             let slot = (k % ring) * n_in;
-            past[slot..slot + n_in].copy_from_slice(row.inputs);
+            for (p, u) in past[slot..slot + n_in].iter_mut().zip(row.inputs) {
+                *p = *u;
+            }
             if k >= lags.max {
                 for (i, (u, d)) in inputs.iter_mut().zip(&lags.lags).enumerate() {
                     *u = past[((k - d) % ring) * n_in + i];

@@ -335,6 +335,5 @@ pub fn estimate_mapped(
         &gains,
         &notes,
         warnings,
-        None,
     )?)
 }

@@ -7,10 +7,10 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::options::{EstimateOptions, load_options};
 use leeway_data::LoadOptions;
-use leeway_estimate::{DelayRange, DelayScan, ScanBy, estimate, scan_delay};
+use leeway_estimate::{DelayRange, ScanBy, estimate, scan_delay};
 use leeway_model::Interpreter;
 use leeway_report::{
-    DelayScanJson, Estimated, estimate_report, heading_gains, heading_warnings,
+    DelayScanJson, EstimateReport, Estimated, estimate_report, heading_gains, heading_warnings,
 };
 use pyo3::prelude::*;
 
@@ -65,7 +65,10 @@ fn run_estimate(
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
     let (result, scanned) = match scan {
-        None => (estimate(&Interpreter::new(ir.clone()), &sources, options), None),
+        None => (
+            estimate(&Interpreter::new(ir.clone()), &sources, options),
+            None,
+        ),
         Some((range, by)) => match scan_delay(ir, &sources, options, range, *by) {
             Ok(s) => (Ok(s.estimate.clone()), Some(s)),
             Err(e) => (Err(e), None),
@@ -90,7 +93,7 @@ fn run_estimate(
         .iter()
         .map(|e| (e.name().to_string(), e.len()))
         .collect();
-    estimate_document(
+    let mut report = estimate_report_of(
         model,
         frames.iter().map(|f| f.name.to_string()).collect(),
         &est,
@@ -98,8 +101,9 @@ fn run_estimate(
         &gains,
         &notes,
         warnings,
-        scanned.as_ref(),
-    )
+    );
+    report.delay_scan = scanned.as_ref().map(DelayScanJson::of);
+    json(&report)
 }
 
 /// `leeway estimate --json`'s document of an estimate of `model` from the
@@ -112,10 +116,30 @@ pub(crate) fn estimate_document(
     gains: &[(String, Option<f64>)],
     notes: &[leeway_data::FileNotes],
     warnings: Vec<String>,
-    scan: Option<&DelayScan>,
 ) -> Result<String, Failure> {
+    json(&estimate_report_of(
+        model,
+        data,
+        est,
+        experiments,
+        gains,
+        notes,
+        warnings,
+    ))
+}
+
+/// The report [`estimate_document`] writes.
+fn estimate_report_of(
+    model: &Model,
+    data: Vec<String>,
+    est: &leeway_estimate::Estimate,
+    experiments: &[(String, usize)],
+    gains: &[(String, Option<f64>)],
+    notes: &[leeway_data::FileNotes],
+    warnings: Vec<String>,
+) -> EstimateReport<serde_json::Value> {
     let ir = &model.ir;
-    let mut report = estimate_report::<serde_json::Value>(
+    estimate_report::<serde_json::Value>(
         model.file.clone(),
         data,
         est.method,
@@ -129,8 +153,11 @@ pub(crate) fn estimate_document(
             data_units: &ir.data_units,
         }),
         warnings,
-    );
-    report.delay_scan = scan.map(DelayScanJson::of);
+    )
+}
+
+/// A report's JSON text.
+fn json(report: &EstimateReport<serde_json::Value>) -> Result<String, Failure> {
     report
         .to_json()
         .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None))
