@@ -67,7 +67,33 @@ fn load_files(
         held.experiments.extend(f.experiments);
         notes.push(f.notes);
     }
+    let sources: Vec<&dyn Source> = held.experiments.iter().map(|e| e as &dyn Source).collect();
+    check_dead_times(ir, &sources, &held.files)?;
     Ok((held, notes))
+}
+
+/// Every experiment's sample time holds the model's dead times in whole
+/// samples (a dead time in seconds on a model without `step`); every
+/// record where it does not is reported, located at its file.
+fn check_dead_times(ir: &Ir, sources: &[&dyn Source], files: &[String]) -> Result<(), Failure> {
+    let problems: Vec<Problem> = sources
+        .iter()
+        .zip(files)
+        .filter_map(|(e, file)| {
+            leeway_model::delay::dead_times(ir, e.name(), e.step())
+                .err()
+                .map(|d| {
+                    Problem::error("invalid-delay", d.to_string())
+                        .at(file.as_str())
+                        .help("declare the dead time in steps, or in seconds that are a whole number of every record's sample time (or resample with --resample)")
+                })
+        })
+        .collect();
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Failure::Problems(problems))
+    }
 }
 
 /// Experiments for an estimate: streamed from their files (validated once,
@@ -124,7 +150,10 @@ pub fn open_data(
         sources.extend(f.sources);
         notes.push(f.notes);
     }
-    Ok((DataSet::Streamed(sources), notes))
+    let set = DataSet::Streamed(sources);
+    let files: Vec<String> = set.files().into_iter().map(str::to_string).collect();
+    check_dead_times(ir, &set.sources(), &files)?;
+    Ok((set, notes))
 }
 
 /// Below this relative step deviation, time stamps count as uniform: decimal

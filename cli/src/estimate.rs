@@ -17,7 +17,7 @@ use crate::model::load;
 use crate::options::load_options;
 use crate::output::{Status, err, headline, out, print_json, stderr_style, warning_text};
 use crate::problem::{Failure, Problem};
-use leeway_estimate::estimate;
+use leeway_estimate::{Bound, DelayRange, estimate, scan_delay};
 use leeway_model::Interpreter;
 use leeway_model::warning::Warning;
 use leeway_report::feedback::{closed_loop, closed_loop_alerts};
@@ -71,6 +71,7 @@ fn execute(
     let ir = loaded.ir;
     *model_name = Some(ir.name.clone());
     let load_options = load_options(&ir, args.step, Some(&args.time))?;
+    check_scan(&ir, args.scan_delay.as_ref())?;
     let nominal = match &args.nominal {
         Some(path) => Some(crate::params::read(path, &ir, "--nominal")?),
         None => None,
@@ -87,8 +88,17 @@ fn execute(
     let gains = heading_gains(&ir, &sources);
     warnings.extend(heading_alerts(&ir, &gains));
     warnings.extend(closed_loop_alerts(&closed_loop(&ir, &sources)));
-    let model = Interpreter::new(ir.clone());
-    let result = estimate(&model, &sources, &args.options(nominal));
+    let options = args.options(nominal);
+    let (result, scan) = match &args.scan_delay {
+        None => (
+            estimate(&Interpreter::new(ir.clone()), &sources, &options),
+            None,
+        ),
+        Some(range) => match scan_delay(&ir, &sources, &options, range, args.scan_by) {
+            Ok(scan) => (Ok(scan.estimate.clone()), Some(scan)),
+            Err(e) => (Err(e), None),
+        },
+    };
     // A file that changed between passes voids whatever was computed.
     if let Some(p) = data.failure() {
         return Err(Failure::from(p));
@@ -106,6 +116,26 @@ fn execute(
         data_notes,
         units: crate::units::unit_lines(&ir),
         data_units: ir.data_units.clone(),
+        scan,
+    })
+}
+
+/// A `--scan-delay` range checked before any work where the model decides
+/// its grid (samples, or seconds with a declared `step`); one in seconds on
+/// a model without `step` is checked against the data's sample time.
+fn check_scan(ir: &leeway_structure::ir::Ir, range: Option<&DelayRange>) -> Result<(), Failure> {
+    let Some(range) = range else {
+        return Ok(());
+    };
+    let seconds = matches!(range.lo, Bound::Seconds(_)) || matches!(range.hi, Bound::Seconds(_));
+    let Some(h) = ir.step.or((!seconds).then_some(1.0)) else {
+        return Ok(());
+    };
+    range.candidates(ir, h).map(|_| ()).map_err(|m| {
+        Failure::from(
+            Problem::error("invalid-option", format!("--scan-delay: {m}"))
+                .help("scan an input of the model over at most 200 dead times, e.g. --scan-delay tau=0..20 or tau=0..2s"),
+        )
     })
 }
 

@@ -125,6 +125,17 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
     let input = load_input(&args.input, &ir, &options, &x0)?;
     let model = Interpreter::new(ir.clone());
     let e = &input.experiment;
+    // With dead times the simulation starts `d_max` rows in: the rows before
+    // only supply the delayed inputs, and the output's time starts there.
+    let lead = leeway_model::delay::dead_times(&ir, &e.name, e.h).map_err(|d| {
+        Problem::error("invalid-delay", d.to_string())
+            .at(args.input.display().to_string())
+            .help("declare the dead time in steps, or in seconds that are a whole number of the input's sample time")
+    })?;
+    let t0 = match lead.max {
+        0 => input.t0,
+        d => input.t0 + d as f64 * e.h,
+    };
     // Without noise, the plain simulation: the bits it always wrote.
     let written = if noise.is_quiet() {
         simulate_written(&model, &file.theta, e, Disturbances::Constant(&held.values))
@@ -133,7 +144,7 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
     };
     let (result, finite) = (written.experiment, written.samples);
     let mut buffer = Vec::new();
-    write_csv(&ir, &[&result], input.t0, &mut buffer)
+    write_csv(&ir, &[&result], t0, &mut buffer)
         .map_err(|error| Problem::error("io", format!("cannot write the trajectory: {error}")))?;
     match &args.out {
         Some(path) => std::fs::write(path, &buffer).map_err(|error| {
@@ -143,7 +154,7 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
         None => out(&String::from_utf8_lossy(&buffer)),
     }
     if written.diverged {
-        let t = input.t0 + finite as f64 * e.h;
+        let t = t0 + finite as f64 * e.h;
         return Err(Problem {
             status: Status::Unsupported,
             ..Problem::error(

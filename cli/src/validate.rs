@@ -433,7 +433,10 @@ fn add_simulated(panels: &mut [Panel], k: usize, sim: &Trajectory, n_states: usi
             sim.heading.clone()
         };
         if let Some(seg) = panel.segments.get_mut(k) {
-            seg.simulated.push(simulated);
+            // With dead times the simulation starts `d_max` samples in.
+            let late = seg.measured.len().saturating_sub(simulated.len());
+            let drawn = std::iter::repeat_n(f64::NAN, late).chain(simulated);
+            seg.simulated.push(drawn.collect());
         }
     }
 }

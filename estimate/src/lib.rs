@@ -48,6 +48,7 @@ mod refine;
 mod report;
 mod run;
 mod runner;
+mod scan;
 mod solve;
 mod walk;
 
@@ -56,8 +57,8 @@ pub use local::{LocalPasses, PrefixRows};
 pub use method::{Choice, Combine, Initial, Instruments, Method, Named, UnknownName};
 pub use options::{EstimateOptions, Interrupt, MAX_LAGS, MAX_REFINEMENTS, OutOfRange, Start};
 pub use outcome::{
-    ColumnEstimate, Diagnostics, DisturbanceMoment, Estimate, EstimateError, InstrumentSimulation,
-    OwnSimulation, StateFit,
+    ColumnEstimate, Diagnostics, DisturbanceMoment, DroppedAtStart, Estimate, EstimateError,
+    InstrumentSimulation, OwnSimulation, StateFit,
 };
 pub use plan::{PlanKey, StructuralPlan};
 pub use protocol::{
@@ -65,4 +66,8 @@ pub use protocol::{
 };
 pub use run::{NOMINAL_LIMIT, estimate, estimate_with};
 pub use runner::PassRunner;
+pub use scan::{
+    Bound, DelayRange, DelayScan, MAX_SCAN_CANDIDATES, ScanBy, ScanPoint, scan_delay,
+    with_dead_time,
+};
 pub use walk::REGRESSOR_LIMIT;

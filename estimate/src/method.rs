@@ -125,7 +125,7 @@ pub struct UnknownName {
     pub names: Vec<&'static str>,
 }
 
-const fn choice<T>(name: &'static str, value: T, help: &'static str) -> Choice<T> {
+pub(crate) const fn choice<T>(name: &'static str, value: T, help: &'static str) -> Choice<T> {
     Choice { name, value, help }
 }
 

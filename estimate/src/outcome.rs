@@ -71,6 +71,25 @@ pub struct Diagnostics {
     /// The estimate's own simulation on its data (`None` when not asked:
     /// [`EstimateOptions::own_simulation`](crate::EstimateOptions::own_simulation)).
     pub own_simulation: Option<OwnSimulation>,
+    /// Per experiment, the equations left out at its start, when the model
+    /// declares dead times (empty, and left out of the JSON, otherwise).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dropped_at_start: Vec<DroppedAtStart>,
+}
+
+/// The equations one experiment loses at its start: the method's, then the
+/// dead time's.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DroppedAtStart {
+    /// The experiment.
+    pub experiment: String,
+    /// Samples that only supply delayed inputs (the longest dead time).
+    pub dead_time: usize,
+    /// Equations every method leaves out after those (the first, so that
+    /// no instrument uses a same-sample measurement).
+    pub method: usize,
+    /// Their sum.
+    pub equations: usize,
 }
 
 /// The reported θ simulated on its own data (a free run from each

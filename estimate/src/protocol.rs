@@ -48,9 +48,22 @@ impl FactsRequest {
 pub struct ExperimentFacts {
     /// The experiment's name.
     pub name: String,
-    /// Samples.
+    /// Samples the equations see: the record's, less its dead time.
     pub len: usize,
     pub(super) read: Option<(ExperimentSigns, ExperimentInfo)>,
+    /// The samples at the record's start that only supply delayed inputs
+    /// (the model's longest dead time; left out at 0, so a model without
+    /// dead times exchanges the same bytes as before).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub dead_time: usize,
+    /// Why the model's dead times are no whole number of this record's
+    /// samples, if they are not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) delay_error: Option<String>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// One pass over the data as the driver asks it of every experiment: the

@@ -2,13 +2,18 @@
 
 use crate::estimator::Estimator;
 use crate::method::{Initial, Instruments, Method};
-use crate::outcome::{ColumnEstimate, Diagnostics, Estimate, EstimateError};
+use crate::outcome::{ColumnEstimate, Diagnostics, DroppedAtStart, Estimate, EstimateError};
 use crate::solve::{BlockSolution, CONDITION_WARNING};
 use leeway_model::signs::ExperimentSigns;
 use leeway_model::warning::{Warning, names_capped};
 use leeway_structure::identify::Centring;
 use leeway_structure::ir::{ColumnKind, PredictorKind, Rotation};
 use std::collections::BTreeMap;
+
+/// The equations every method leaves out at an experiment's start: the
+/// first (regressors at sample 0), so that no instrument — the delayed
+/// measurement of IV's bootstrap included — uses a same-sample measurement.
+const METHOD_DROPS: usize = 1;
 
 impl Estimator<'_> {
     #[allow(clippy::too_many_arguments)]
@@ -68,6 +73,7 @@ impl Estimator<'_> {
                 unexcited: self.unexcited.clone(),
                 aggregates: self.aggregates.clone(),
                 own_simulation: None,
+                dropped_at_start: self.dropped_at_start(),
             },
             warnings: self.warnings.iter().map(|w| w.detail.clone()).collect(),
             warning_summaries: self.warnings.clone(),
@@ -178,6 +184,23 @@ impl Estimator<'_> {
 
     /// Warns of each ill-conditioned block, naming the columns of its
     /// weakest direction.
+    /// Per experiment, the equations it loses at its start when the model
+    /// declares dead times; nothing otherwise.
+    fn dropped_at_start(&self) -> Vec<DroppedAtStart> {
+        if self.ir.delays.is_empty() {
+            return Vec::new();
+        }
+        self.facts
+            .iter()
+            .map(|f| DroppedAtStart {
+                experiment: f.name.clone(),
+                dead_time: f.dead_time,
+                method: METHOD_DROPS,
+                equations: f.dead_time + METHOD_DROPS,
+            })
+            .collect()
+    }
+
     fn warn_ill_conditioned(&mut self, sol: &[BlockSolution]) {
         let cols = self.ir.predictors.get(self.kind);
         for s in sol.iter().filter(|s| s.condition > CONDITION_WARNING) {

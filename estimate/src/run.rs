@@ -86,6 +86,13 @@ pub fn estimate_with(
     let mut sign_patterns = Vec::new();
     let mut infos = Vec::new();
     for f in &facts {
+        if let Some(why) = &f.delay_error {
+            return Err(err(
+                "invalid-delay",
+                why.clone(),
+                "give the dead time in steps, or in seconds that are a whole number of this record's sample times",
+            ));
+        }
         let Some((s, info)) = f.read.clone() else {
             return Err(err(
                 "too-few-samples",

@@ -6,6 +6,7 @@ use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bit
 use crate::method::Instruments;
 use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
 use crate::prefix::{Checkpoint, Wanted};
+use leeway_model::delay::delayed;
 use leeway_model::experiment::Source;
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
@@ -400,6 +401,20 @@ impl<'a> PassRunner<'a> {
         from: Option<FactsState>,
     ) -> (ExperimentFacts, Option<FactsState>) {
         let ir = self.model.ir();
+        let view = match delayed(ir, e) {
+            Ok(view) => view,
+            Err(error) => {
+                let facts = ExperimentFacts {
+                    name: e.name().to_string(),
+                    len: e.len(),
+                    read: None,
+                    dead_time: 0,
+                    delay_error: Some(error.to_string()),
+                };
+                return (facts, None);
+            }
+        };
+        let e: &dyn Source = &view;
         let kind = request.method.predictor();
         let mut stands = None;
         let read = (e.len() >= leeway_model::experiment::MIN_SAMPLES).then(|| {
@@ -458,6 +473,8 @@ impl<'a> PassRunner<'a> {
             name: e.name().to_string(),
             len: e.len(),
             read,
+            dead_time: view.dropped(),
+            delay_error: None,
         };
         (facts, stands)
     }
@@ -501,6 +518,12 @@ impl<'a> PassRunner<'a> {
         request: &PassRequest,
         cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> PassSummary {
+        // The facts pass reported a dead time that is no whole number of
+        // samples, and the driver stopped: no pass gets here with one.
+        let Ok(view) = delayed(self.model.ir(), e) else {
+            return PassSummary(Summary::Diverged { bad: None });
+        };
+        let e: &dyn Source = &view;
         let info = &request.infos[index];
         let plan = &request.plan;
         PassSummary(match &request.pass {

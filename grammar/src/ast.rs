@@ -101,6 +101,15 @@ pub struct RotationRow {
     pub span: Span,
 }
 
+/// The unit of a declared dead time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DelayUnit {
+    /// Samples (`steps`).
+    Steps,
+    /// Seconds (`s`).
+    Seconds,
+}
+
 /// A declaration inside `model { ... }`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Item {
@@ -141,6 +150,17 @@ pub enum Item {
         measurement: Measurement,
         /// Earth or body frame with its components.
         frame: Frame,
+        /// The declaration.
+        span: Span,
+    },
+    /// `delay input amount steps` or `delay input amount s`.
+    Delay {
+        /// The delayed input.
+        input: Ident,
+        /// The dead time as written (may carry a sign: checked later).
+        amount: Number,
+        /// Samples or seconds.
+        unit: DelayUnit,
         /// The declaration.
         span: Span,
     },

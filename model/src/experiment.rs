@@ -60,6 +60,13 @@ pub trait Source: Sync {
     fn in_memory(&self) -> Option<&Experiment> {
         None
     }
+    /// True for a view that already gives the model's dead times
+    /// ([`Delayed`](crate::delay::Delayed)): its samples are the equations'.
+    /// Note that the [`Experiment`] an in-memory view holds says `false`:
+    /// hand consumers the view, not its columns.
+    fn dead_time_applied(&self) -> bool {
+        false
+    }
 }
 
 /// An experiment held in memory, column by column.
@@ -139,6 +146,20 @@ impl Experiment {
             && self.heading.is_empty() == prefix.heading.is_empty()
             && columns(&self.rotation, &prefix.rotation)
             && columns(&self.disturbances, &prefix.disturbances)
+    }
+
+    /// The samples from sample `first` on.
+    pub fn from_sample(&self, first: usize) -> Experiment {
+        let cut = |c: &Vec<f64>| c.get(first.min(c.len())..).unwrap_or(&[]).to_vec();
+        Experiment {
+            name: self.name.clone(),
+            h: self.h,
+            states: self.states.iter().map(cut).collect(),
+            inputs: self.inputs.iter().map(cut).collect(),
+            heading: cut(&self.heading),
+            rotation: self.rotation.iter().map(cut).collect(),
+            disturbances: self.disturbances.iter().map(cut).collect(),
+        }
     }
 
     /// The first `n` samples.

@@ -1,7 +1,8 @@
 //! leeway-model: what every later stage shares about a craft. The [`Model`]
 //! trait that generated (`include_model!`) and interpreted models implement,
 //! the IR [`Interpreter`], samples and experiments as estimators read them
-//! ([`experiment`]), the sign patterns found in data ([`signs`]), simulation
+//! ([`experiment`]) and as the equations see them, inputs' dead times
+//! applied ([`delay`]), the sign patterns found in data ([`signs`]), simulation
 //! and fits ([`simulate`]), validation of θ on recorded experiments — the
 //! one implementation `leeway validate` and `leeway.validate` share
 //! ([`validation`]) —, one-step-ahead residuals and their whiteness and
@@ -12,6 +13,7 @@
 //! randomness.
 
 pub mod correlation;
+pub mod delay;
 pub mod experiment;
 pub mod given;
 pub mod interp;

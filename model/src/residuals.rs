@@ -16,6 +16,7 @@
 use crate::correlation::{
     autocorrelation, centred, chi_squared_tail, cross_correlation, ljung_box,
 };
+use crate::delay::delayed;
 use crate::experiment::{Experiment, Row, Source};
 use crate::model::{Model, Signals, planar_rotation};
 use crate::simulate::Disturbances;
@@ -59,11 +60,49 @@ pub struct OneStep {
     pub residuals: Vec<Vec<f64>>,
 }
 
-/// The one-step-ahead predictions of `model` with `theta` on `data`.
+/// The one-step-ahead predictions of `model` with `theta` on `data`,
+/// aligned with its samples: with dead times the equations start at sample
+/// `d_max` ([`delay`](crate::delay)), so the first `d_max + 1` entries are
+/// `NaN` (all of them when a dead time is no whole number of samples).
 pub fn one_step(
     model: &dyn Model,
     theta: &[f64],
     data: &Experiment,
+    disturbances: Disturbances,
+) -> OneStep {
+    match delayed(model.ir(), data) {
+        Ok(view) => padded(
+            one_step_on(model, theta, &view, disturbances),
+            view.dropped(),
+        ),
+        Err(_) => padded(
+            OneStep {
+                predicted: vec![Vec::new(); model.ir().states.len()],
+                residuals: vec![Vec::new(); model.ir().states.len()],
+            },
+            data.len(),
+        ),
+    }
+}
+
+/// `one` with `n` more `NaN` samples at its start.
+fn padded(one: OneStep, n: usize) -> OneStep {
+    let pad = |v: Vec<Vec<f64>>| {
+        v.into_iter()
+            .map(|c| std::iter::repeat_n(f64::NAN, n).chain(c).collect())
+            .collect()
+    };
+    OneStep {
+        predicted: pad(one.predicted),
+        residuals: pad(one.residuals),
+    }
+}
+
+/// [`one_step`] on the samples the equations see.
+fn one_step_on(
+    model: &dyn Model,
+    theta: &[f64],
+    data: &dyn Source,
     disturbances: Disturbances,
 ) -> OneStep {
     let ir = model.ir();
@@ -190,10 +229,22 @@ pub fn analyse(
     disturbances: &[f64],
     lags: usize,
 ) -> Result<Analysis, String> {
-    let one: Vec<OneStep> = experiments
+    // The tests run on the samples the equations see (dead times applied);
+    // the predictions are handed back aligned with the records.
+    let views = experiments
         .iter()
-        .map(|e| one_step(model, theta, e, Disturbances::Constant(disturbances)))
+        .map(|e| delayed(model.ir(), e).map_err(|e| e.to_string()))
+        .collect::<Result<Vec<_>, String>>()?;
+    let shifted: Vec<&Experiment> = views
+        .iter()
+        .zip(experiments)
+        .map(|(v, e)| v.in_memory().unwrap_or(e))
         .collect();
+    let one: Vec<OneStep> = views
+        .iter()
+        .map(|v| one_step_on(model, theta, v, Disturbances::Constant(disturbances)))
+        .collect();
+    let experiments = shifted;
     let samples: usize = experiments.iter().map(|e| e.len().saturating_sub(1)).sum();
     if lags == 0 || lags >= samples {
         return Err(format!(
@@ -227,7 +278,11 @@ pub fn analyse(
         })
         .collect();
     Ok(Analysis {
-        one_step: one,
+        one_step: one
+            .into_iter()
+            .zip(&views)
+            .map(|(o, v)| padded(o, v.dropped()))
+            .collect(),
         tests: ResidualTests {
             lags,
             samples,

@@ -4,6 +4,7 @@
 //! unwrapped, integrated heading, `NaN` after a divergence. Validating θ on
 //! recorded experiments is [`validation`](crate::validation).
 
+use crate::delay::delayed;
 use crate::experiment::{Experiment, Row, Source};
 use crate::model::{HeadingRotation, Model, Signals, next_heading};
 use leeway_structure::ir::{Ir, Rotation};
@@ -53,7 +54,10 @@ impl Disturbances<'_> {
 /// Simulates `model` with parameters `theta` from the data's first sample,
 /// driven by the data's inputs (and, for a measured `R`, its rotation; for
 /// measured disturbances, their recorded values). A planar heading is
-/// integrated from the first measured heading.
+/// integrated from the first measured heading. With dead times the
+/// simulation runs on the samples the equations see ([`delayed`]): it
+/// starts at sample `d_max`, and the trajectory covers the data's last
+/// samples, from `d_max` on ([`fits`] aligns them).
 pub fn simulate(
     model: &dyn Model,
     theta: &[f64],
@@ -82,7 +86,11 @@ pub fn simulate(
 /// Simulates as [`simulate`] does, handing `each` every sample's row with
 /// the simulated states and heading at that sample (NaN once diverged)
 /// instead of keeping them: memory flat in the samples, for a simulation
-/// over a streamed record. Returns whether the simulation diverged.
+/// over a streamed record. Returns whether the simulation diverged. Rows
+/// are the samples the equations see (dead times applied, [`delayed`]); a
+/// dead time that is no whole number of the data's sample times (a model
+/// without `step`, a record its loader did not check) gives no sample and
+/// counts as diverged.
 pub fn simulate_each(
     model: &dyn Model,
     theta: &[f64],
@@ -91,6 +99,10 @@ pub fn simulate_each(
     each: &mut dyn FnMut(&Row, &[f64], f64),
 ) -> bool {
     let ir = model.ir();
+    let Ok(view) = delayed(ir, data) else {
+        return true;
+    };
+    let data: &dyn Source = &view;
     let n_out = ir.states.len();
     let n_comp = ir.components.len();
     let h = data.step();
@@ -163,8 +175,21 @@ pub fn simulate_written(
 }
 
 /// The input `e` with a simulation's states and heading, cut before the
-/// first sample whose states are not finite.
+/// first sample whose states are not finite; with dead times, from sample
+/// `d_max` on (the trajectory's first sample), the earlier rows being only
+/// the delayed inputs' history.
 pub fn written(e: &Experiment, trajectory: Trajectory) -> Written {
+    let first = trajectory
+        .states
+        .first()
+        .map_or(0, |s| e.len().saturating_sub(s.len()));
+    let shifted;
+    let e = if first > 0 {
+        shifted = e.from_sample(first);
+        &shifted
+    } else {
+        e
+    };
     let samples = trajectory
         .states
         .first()
@@ -209,20 +234,31 @@ pub fn fit(y: &[f64], yhat: &[f64]) -> f64 {
 
 /// Fit of every output of a simulation against an experiment, in the
 /// model's state order: [`fit`] of each measured state against its
-/// simulation, as `leeway validate` reports it.
+/// simulation, as `leeway validate` reports it. A trajectory shorter than
+/// the data (dead times: it starts at sample `d_max`) is compared with the
+/// data's last samples.
 pub fn fits(data: &Experiment, sim: &Trajectory) -> Vec<f64> {
     data.states
         .iter()
         .zip(&sim.states)
-        .map(|(y, s)| fit(y, s))
+        .map(|(y, s)| fit(tail(y, s.len()), s))
         .collect()
+}
+
+/// The last `n` values of `y` (all of them when it is shorter).
+fn tail(y: &[f64], n: usize) -> &[f64] {
+    &y[y.len().saturating_sub(n)..]
 }
 
 /// Fit of the integrated heading of a simulation against the measured one
 /// ([`unwrap_heading`]), as `leeway validate` reports it; `NaN` when the
-/// model has no planar heading (the simulation integrates none).
+/// model has no planar heading (the simulation integrates none). Aligned
+/// as [`fits`] aligns the states.
 pub fn heading_fit(data: &Experiment, sim: &Trajectory) -> f64 {
-    fit(&unwrap_heading(&data.heading), &sim.heading)
+    fit(
+        &unwrap_heading(tail(&data.heading, sim.heading.len())),
+        &sim.heading,
+    )
 }
 
 /// The measured heading unwrapped (steps taken along the short arc), so that

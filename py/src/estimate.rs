@@ -7,9 +7,11 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::options::{EstimateOptions, load_options};
 use leeway_data::LoadOptions;
-use leeway_estimate::estimate;
+use leeway_estimate::{DelayRange, ScanBy, estimate, scan_delay};
 use leeway_model::Interpreter;
-use leeway_report::{Estimated, estimate_report, heading_gains, heading_warnings};
+use leeway_report::{
+    DelayScanJson, EstimateReport, Estimated, estimate_report, heading_gains, heading_warnings,
+};
 use pyo3::prelude::*;
 
 /// `leeway estimate --json` of `model` on the frames: each frame is
@@ -24,6 +26,7 @@ pub(crate) fn estimate_json(
     options: EstimateOptions,
 ) -> PyResult<String> {
     let runtime_options = options.runtime()?;
+    let scan = options.scan()?;
     // `aggregate` changes what the structure compiler keeps: the CLI compiles
     // with it, so does this.
     let model = &*model.for_aggregate(options.aggregate)?;
@@ -34,7 +37,15 @@ pub(crate) fn estimate_json(
         options.resample,
     )?;
     let borrowed = borrow_frames(&frames)?;
-    let document = py.detach(|| run_estimate(model, &borrowed, &load_options, &runtime_options))?;
+    let document = py.detach(|| {
+        run_estimate(
+            model,
+            &borrowed,
+            &load_options,
+            &runtime_options,
+            scan.as_ref(),
+        )
+    })?;
     Ok(document)
 }
 
@@ -43,6 +54,7 @@ fn run_estimate(
     frames: &[data::Frame<'_>],
     load_options: &LoadOptions,
     options: &leeway_estimate::EstimateOptions,
+    scan: Option<&(DelayRange, ScanBy)>,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
     let (loaded, notes) =
@@ -52,8 +64,16 @@ fn run_estimate(
     warnings.extend(leeway_report::unit_warnings(ir, &sources));
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
-    let interpreter = Interpreter::new(ir.clone());
-    let result = estimate(&interpreter, &sources, options);
+    let (result, scanned) = match scan {
+        None => (
+            estimate(&Interpreter::new(ir.clone()), &sources, options),
+            None,
+        ),
+        Some((range, by)) => match scan_delay(ir, &sources, options, range, *by) {
+            Ok(s) => (Ok(s.estimate.clone()), Some(s)),
+            Err(e) => (Err(e), None),
+        },
+    };
     // A spill file that could not be read back voids whatever was computed.
     if let Some(f) = loaded.failure() {
         return Err(f);
@@ -73,7 +93,7 @@ fn run_estimate(
         .iter()
         .map(|e| (e.name().to_string(), e.len()))
         .collect();
-    estimate_document(
+    let mut report = estimate_report_of(
         model,
         frames.iter().map(|f| f.name.to_string()).collect(),
         &est,
@@ -81,7 +101,9 @@ fn run_estimate(
         &gains,
         &notes,
         warnings,
-    )
+    );
+    report.delay_scan = scanned.as_ref().map(DelayScanJson::of);
+    json(&report)
 }
 
 /// `leeway estimate --json`'s document of an estimate of `model` from the
@@ -95,8 +117,29 @@ pub(crate) fn estimate_document(
     notes: &[leeway_data::FileNotes],
     warnings: Vec<String>,
 ) -> Result<String, Failure> {
+    json(&estimate_report_of(
+        model,
+        data,
+        est,
+        experiments,
+        gains,
+        notes,
+        warnings,
+    ))
+}
+
+/// The report [`estimate_document`] writes.
+fn estimate_report_of(
+    model: &Model,
+    data: Vec<String>,
+    est: &leeway_estimate::Estimate,
+    experiments: &[(String, usize)],
+    gains: &[(String, Option<f64>)],
+    notes: &[leeway_data::FileNotes],
+    warnings: Vec<String>,
+) -> EstimateReport<serde_json::Value> {
     let ir = &model.ir;
-    let report = estimate_report::<serde_json::Value>(
+    estimate_report::<serde_json::Value>(
         model.file.clone(),
         data,
         est.method,
@@ -110,7 +153,11 @@ pub(crate) fn estimate_document(
             data_units: &ir.data_units,
         }),
         warnings,
-    );
+    )
+}
+
+/// A report's JSON text.
+fn json(report: &EstimateReport<serde_json::Value>) -> Result<String, Failure> {
     report
         .to_json()
         .map_err(|e| Failure::option(format!("cannot serialise the report: {e}"), None))

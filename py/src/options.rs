@@ -25,6 +25,12 @@ pub(crate) struct EstimateOptions {
     pub(crate) step: Option<f64>,
     pub(crate) time_tolerance: f64,
     pub(crate) resample: Option<f64>,
+    /// `scan_delay="tau_x=0..2s"`: the dead-time scan (`--scan-delay`).
+    #[pyo3(default)]
+    pub(crate) scan_delay: Option<String>,
+    /// `scan_by="fit"` or `"residual"` (`--scan-by`).
+    #[pyo3(default)]
+    pub(crate) scan_by: Option<String>,
 }
 
 /// The value named `given` of a named option, or an `OptionError` listing
@@ -52,6 +58,24 @@ impl EstimateOptions {
     /// The load options these options give, checked against the model.
     pub(crate) fn load_options(&self, ir: &Ir) -> Result<LoadOptions, Failure> {
         load_options(ir, self.step, Some(self.time_tolerance), self.resample)
+    }
+
+    /// The dead-time scan asked for, if any: its range read as the CLI
+    /// reads `--scan-delay`, and its criterion.
+    pub(crate) fn scan(
+        &self,
+    ) -> Result<Option<(leeway_estimate::DelayRange, leeway_estimate::ScanBy)>, Failure> {
+        let Some(text) = &self.scan_delay else {
+            return Ok(None);
+        };
+        let range = leeway_estimate::DelayRange::parse(text).map_err(|m| {
+            Failure::option(
+                format!("scan_delay: {m}"),
+                Some("give the input and a range of dead times, e.g. scan_delay=\"tau_x=0..20\" (samples) or \"tau_x=0..2s\" (seconds)".into()),
+            )
+        })?;
+        let by = choice(self.scan_by.as_deref().unwrap_or("fit"))?;
+        Ok(Some((range, by)))
     }
 
     /// The estimator's options, on the bounds the CLI applies

@@ -224,6 +224,19 @@ pub fn simulate_columns<'py>(
         let input = read_input(&mut table, ir, &options, &x0, &NAMES).map_err(read)?;
         let interpreter = Interpreter::new(ir.clone());
         let e = &input.experiment;
+        // As the CLI: with dead times the output starts `d_max` rows in.
+        let lead = leeway_model::delay::dead_times(ir, &e.name, e.h)
+            .map_err(|d| {
+                Failure::option(
+                    d.to_string(),
+                    Some("declare the dead time in steps, or in seconds that are a whole number of the input's sample time".into()),
+                )
+            })?
+            .max;
+        let t0 = match lead {
+            0 => input.t0,
+            d => input.t0 + d as f64 * e.h,
+        };
         // As the CLI: the samples before a divergence; without noise, the
         // plain simulation.
         let written = if noise.is_quiet() {
@@ -233,14 +246,14 @@ pub fn simulate_columns<'py>(
         };
         let (result, finite) = (written.experiment, written.samples);
         let diverged = written.diverged.then(|| {
-            let t = input.t0 + finite as f64 * e.h;
+            let t = t0 + finite as f64 * e.h;
             format!(
                 "the simulation diverged at sample {finite} (time {t}): the states left the finite numbers; the {finite} rows before are returned"
             )
         });
         Ok((
             write::header(ir, 1),
-            write::columns(ir, &result, input.t0),
+            write::columns(ir, &result, t0),
             diverged,
         ))
     })?;

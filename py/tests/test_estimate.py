@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 import leeway
-from conftest import SHIP, SHIP_IV2, TRUE, run_leeway, ship_data, ticks_during
+from conftest import ROOT, SHIP, SHIP_IV2, TRUE, run_leeway, ship_data, ticks_during
 
 
 @pytest.fixture(scope="module")
@@ -177,3 +177,36 @@ def test_the_gil_is_released_while_estimating(ship: leeway.Model, ship_frame: pd
     # A thread that could not run while Rust held the GIL would tick only
     # before and after; it ticks throughout instead.
     assert ticks > 0.3 * elapsed / 0.0011, (ticks, elapsed)
+
+
+def thruster_data(n: int = 1200) -> pd.DataFrame:
+    """The fixture `tests/models/thruster.som` (dead times of 10 and 3
+    samples) simulated on held levels of either sign, measured with noise."""
+    rng = np.random.default_rng(5)
+
+    def telegraph(scale: float) -> np.ndarray:
+        out: list[float] = []
+        while len(out) < n:
+            out += [scale * rng.normal()] * int(rng.integers(5, 61))
+        return np.array(out[:n])
+
+    model = leeway.Model.load(ROOT / "tests/models/thruster.som")
+    inputs = pd.DataFrame({"time": np.arange(n) * 0.1, "tau_x": telegraph(20.0), "tau_n": telegraph(10.0)})
+    truth = {"X_u": -0.2, "X_uu": -0.05, "X_tau": 0.05, "N_r": -0.3, "N_tau": 0.02}
+    return leeway.simulate(model, truth, inputs, x0={"u": 0.0, "r": 0.0}, noise={"u": 0.02, "r": 0.005}, seed=1)
+
+
+def test_scan_delay_finds_the_dead_time_as_the_cli_does() -> None:
+    model = leeway.Model.load(ROOT / "tests/models/thruster.som")
+    data = thruster_data()
+    # The simulation starts at the longest dead time: 10 samples, 1 s in.
+    assert len(data) == 1200 - 10 and data["time"].iloc[0] == pytest.approx(1.0)
+    est = leeway.estimate(model, data, scan_delay="tau_x=0..15")
+    assert est.delay_scan is not None
+    assert est.delay_scan["samples"] == 10 and est.delay_scan["by"] == "fit"
+    assert [p["samples"] for p in est.delay_scan["curve"]] == list(range(16))
+    assert est.theta["X_tau"] == pytest.approx(0.05, rel=0.05)
+    assert est.diagnostics["dropped_at_start"][0]["equations"] == 11
+    assert leeway.estimate(model, data).delay_scan is None
+    with pytest.raises(leeway.OptionError, match="scan_delay"):
+        leeway.estimate(model, data, scan_delay="tau_x")

@@ -333,6 +333,40 @@ pub struct EstimateReport<E> {
     notes: Vec<String>,
     /// Why nothing was estimated.
     pub errors: Vec<E>,
+    /// `--scan-delay`: the curve of the criterion over the candidate dead
+    /// times and the one chosen (absent without a scan).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_scan: Option<DelayScanJson>,
+}
+
+/// A dead-time scan as `estimate --json` gives it (docs/json.md).
+#[derive(Debug, Serialize)]
+pub struct DelayScanJson {
+    /// The input scanned.
+    pub input: String,
+    /// `fit` or `residual`.
+    pub by: &'static str,
+    /// The dead time chosen, in samples.
+    pub samples: usize,
+    /// In seconds.
+    pub seconds: f64,
+    /// Every candidate: `samples`, `seconds`, `criterion` (%, null when
+    /// undefined), `error` (null, or why no estimate there).
+    pub curve: Vec<leeway_estimate::ScanPoint>,
+}
+
+impl DelayScanJson {
+    /// The JSON of a scan.
+    pub fn of(scan: &leeway_estimate::DelayScan) -> DelayScanJson {
+        let chosen = scan.points.get(scan.chosen);
+        DelayScanJson {
+            input: scan.input.clone(),
+            by: leeway_estimate::Named::name(scan.by),
+            samples: chosen.map_or(0, |p| p.samples),
+            seconds: chosen.map_or(0.0, |p| p.seconds),
+            curve: scan.points.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -579,6 +613,7 @@ pub fn estimate_report_warned<E>(
         warning_summaries: warnings,
         notes: Vec::new(),
         errors: Vec::new(),
+        delay_scan: None,
     };
     let o = match result {
         Ok(o) => o,

@@ -54,8 +54,104 @@ pub struct Ir {
     /// without units embed the same JSON as before.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub data_units: BTreeMap<String, String>,
+    /// The declared dead times of inputs (`delay tau 10 steps`), at most one
+    /// per input: the equation at sample k sees `tau(k − d)`. Absent from
+    /// older IR, and left out when empty so that models without a dead time
+    /// embed the same JSON as before.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub delays: Vec<Delay>,
     /// The identifiability report computed at compile time.
     pub report: Report,
+}
+
+/// The longest dead time, in samples: a record then starts its equations
+/// that many samples late, and a longer one is a typing slip (a dead time
+/// in samples where seconds were meant).
+pub const MAX_DELAY_SAMPLES: usize = 100_000;
+
+/// The relative tolerance within which a dead time in seconds must be a
+/// whole number of sample times.
+pub const DELAY_TOLERANCE: f64 = 1e-9;
+
+/// The dead time of one input.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Delay {
+    /// The input (index into [`Ir::inputs`]).
+    pub input: usize,
+    /// How long.
+    pub lag: Lag,
+}
+
+/// A dead time, in samples or (when the model declares no `step`) in
+/// seconds, to be resolved against each record's sample time.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Lag {
+    /// Whole samples.
+    Samples(usize),
+    /// Seconds, a whole number of the record's sample times.
+    Seconds(f64),
+}
+
+/// Why a dead time in seconds is no number of samples at a sample time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LagProblem {
+    /// `seconds / h` is not within [`DELAY_TOLERANCE`] of a whole number.
+    NotWhole {
+        /// `seconds / h`.
+        ratio: f64,
+    },
+    /// More than [`MAX_DELAY_SAMPLES`] samples.
+    TooLong {
+        /// `seconds / h`, rounded.
+        samples: f64,
+    },
+}
+
+impl Lag {
+    /// The samples of this dead time at the sample time `h`.
+    pub fn samples(self, h: f64) -> Result<usize, LagProblem> {
+        match self {
+            Lag::Samples(n) => Ok(n),
+            Lag::Seconds(s) => samples_in(s, h),
+        }
+    }
+}
+
+/// `seconds` as a whole number of sample times `h` (within
+/// [`DELAY_TOLERANCE`] relative), at most [`MAX_DELAY_SAMPLES`]: the one rule
+/// the compiler (with `step`) and the loading of records (without) apply.
+pub fn samples_in(seconds: f64, h: f64) -> Result<usize, LagProblem> {
+    let ratio = seconds / h;
+    if !ratio.is_finite() || ratio < 0.0 {
+        return Err(LagProblem::NotWhole { ratio });
+    }
+    let n = ratio.round();
+    if (ratio - n).abs() > DELAY_TOLERANCE * n.max(1.0) {
+        return Err(LagProblem::NotWhole { ratio });
+    }
+    if n > MAX_DELAY_SAMPLES as f64 {
+        return Err(LagProblem::TooLong { samples: n });
+    }
+    Ok(n as usize)
+}
+
+impl Ir {
+    /// Each input's dead time in samples at the sample time `h` (0 where
+    /// none is declared), or the first input whose dead time is no whole
+    /// number of samples there.
+    pub fn dead_times(&self, h: f64) -> Result<Vec<usize>, (String, LagProblem)> {
+        let mut out = vec![0; self.inputs.len()];
+        for d in &self.delays {
+            let n = d
+                .lag
+                .samples(h)
+                .map_err(|p| (self.inputs.get(d.input).cloned().unwrap_or_default(), p))?;
+            if let Some(slot) = out.get_mut(d.input) {
+                *slot = n;
+            }
+        }
+        Ok(out)
+    }
 }
 
 /// Where the rotation matrix `R` (body ← earth) comes from.

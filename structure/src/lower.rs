@@ -88,6 +88,14 @@ pub fn lower(
             .iter()
             .map(|(id, unit, _)| (id.name.clone(), unit.clone()))
             .collect(),
+        delays: r
+            .delays
+            .iter()
+            .map(|(input, lag, _)| ir::Delay {
+                input: *input,
+                lag: *lag,
+            })
+            .collect(),
         report: Report::default(),
     }
 }

@@ -1,7 +1,9 @@
 //! The arguments of `leeway estimate` and the estimator options they give.
 
 use crate::options::{TimeArgs, choices, positive, refinements};
-use leeway_estimate::{Centring, Combine, EstimateOptions, Initial, Instruments, Method};
+use leeway_estimate::{
+    Centring, Combine, DelayRange, EstimateOptions, Initial, Instruments, Method, ScanBy,
+};
 use std::path::PathBuf;
 
 /// Arguments of `leeway estimate`.
@@ -63,6 +65,16 @@ pub struct EstimateArgs {
     /// the data markedly worse than an earlier iterate (docs/estimation.md).
     #[arg(long)]
     pub no_runaway_guard: bool,
+    /// Find an input's dead time: estimate at every dead time from LO to HI (in
+    /// samples, or in seconds with a trailing `s`: `tau_x=0..2s`, at most 200
+    /// candidates) and keep the best by --scan-by; the curve is printed, then
+    /// the estimate at the chosen dead time.
+    #[arg(long, value_name = "INPUT=LO..HI[s]", value_parser = DelayRange::parse)]
+    pub scan_delay: Option<DelayRange>,
+    /// What --scan-delay judges each dead time by: the estimate's simulation on
+    /// the data (fit, as `validate` computes it) or its one-step prediction (residual).
+    #[arg(long, default_value = "fit", value_parser = choices::<ScanBy>(), requires = "scan_delay")]
+    pub scan_by: ScanBy,
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = positive)]
     pub step: Option<f64>,

@@ -9,9 +9,9 @@ use crate::estimate::args::EstimateArgs;
 use crate::estimate::outcome::Outcome;
 use crate::problem::{Failure, JsonError};
 use leeway_model::warning::Warning;
-use leeway_report::EstimateReport;
 use leeway_report::Estimated;
 use leeway_report::estimate_report_warned;
+use leeway_report::{DelayScanJson, EstimateReport};
 
 /// The whole document.
 pub type Report = EstimateReport<JsonError>;
@@ -23,6 +23,7 @@ pub fn report(
     result: &Result<Outcome, Failure>,
     warnings: Vec<Warning>,
 ) -> Report {
+    let scan = result.as_ref().ok().and_then(|o| o.scan.as_ref());
     let result = match result {
         Ok(o) => Ok(Estimated {
             model: &o.model,
@@ -34,12 +35,14 @@ pub fn report(
         }),
         Err(f) => Err(f.json()),
     };
-    estimate_report_warned(
+    let mut report = estimate_report_warned(
         args.model.display().to_string(),
         args.data.iter().map(|p| p.display().to_string()).collect(),
         args.options(None).method,
         model,
         result,
         warnings,
-    )
+    );
+    report.delay_scan = scan.map(DelayScanJson::of);
+    report
 }

@@ -18,4 +18,6 @@ pub struct Outcome {
     pub units: Vec<String>,
     /// The declared units by signal, as written.
     pub data_units: std::collections::BTreeMap<String, String>,
+    /// `--scan-delay`: the scan whose chosen dead time `estimate` is at.
+    pub scan: Option<leeway_estimate::DelayScan>,
 }

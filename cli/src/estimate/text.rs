@@ -60,12 +60,45 @@ pub fn render(o: &Outcome) -> String {
         if n == 1 { "" } else { "s" },
         d.equations
     );
+    if let Some(scan) = &o.scan {
+        delay_scan(&mut s, scan);
+    }
     parameters(&mut s, e);
     nuisance(&mut s, e);
     disturbances(&mut s, e);
     sign_patterns(&mut s, e);
     diagnostics(&mut s, o);
     s
+}
+
+/// The scan's curve, one row per candidate dead time, the chosen one marked.
+fn delay_scan(s: &mut String, scan: &leeway_estimate::DelayScan) {
+    let by = leeway_estimate::Named::name(scan.by);
+    let _ = writeln!(s, "dead time of {} (scanned by {by})", scan.input);
+    let mut rows = vec![vec![
+        "samples".to_string(),
+        "seconds".to_string(),
+        format!("{by} %"),
+        String::new(),
+    ]];
+    for (i, p) in scan.points.iter().enumerate() {
+        rows.push(vec![
+            p.samples.to_string(),
+            leeway_model::number::short_number(p.seconds),
+            match (&p.error, p.criterion) {
+                (Some(_), _) => "no estimate".to_string(),
+                (None, Some(c)) => format!("{c:.2}"),
+                (None, None) => "-".to_string(),
+            },
+            if i == scan.chosen {
+                "<- chosen".to_string()
+            } else {
+                String::new()
+            },
+        ]);
+    }
+    s.push_str(&table(&rows));
+    s.push('\n');
 }
 
 /// θ, an aggregate's sum on the row under it.
@@ -220,6 +253,22 @@ fn diagnostics(s: &mut String, o: &Outcome) {
             ),
         ],
         vec!["condition number".to_string(), number(d.condition_number)],
+    ];
+    if !d.dropped_at_start.is_empty() {
+        rows.push(vec![
+            "dropped at start".to_string(),
+            leeway_structure::grammar::join_capped(
+                d.dropped_at_start.iter().map(|x| {
+                    format!(
+                        "{}: {} equations (dead time {}, method {})",
+                        x.experiment, x.equations, x.dead_time, x.method
+                    )
+                }),
+                ", ",
+            ),
+        ]);
+    }
+    rows.extend([
         vec![
             "refinements".to_string(),
             format!(
@@ -247,7 +296,7 @@ fn diagnostics(s: &mut String, o: &Outcome) {
             },
         ],
         vec!["covariance lags".to_string(), d.lags.to_string()],
-    ];
+    ]);
     for (name, gain) in &o.heading_gains {
         rows.push(vec![
             "heading gain".to_string(),

@@ -6,6 +6,7 @@ mod common;
 mod check;
 mod csv_layouts;
 mod data;
+mod delay;
 mod design;
 mod estimate;
 mod logs;

@@ -2,8 +2,8 @@
 //! the expressions of its equations, each with its span.
 
 use crate::ast::{
-    BinOp, BodyComponent, DataEntry, EquationKind, Expr, Frame, Ident, Item, Measurement,
-    ModelSyntax, Number, Path, RotationRow, Span,
+    BinOp, BodyComponent, DataEntry, DelayUnit, EquationKind, Expr, Frame, Ident, Item,
+    Measurement, ModelSyntax, Number, Path, RotationRow, Span,
 };
 use crate::parse::rules::Rule;
 use pest::iterators::{Pair, Pairs};
@@ -73,6 +73,21 @@ fn build_item(p: Pair<Rule>) -> Option<Item> {
             Item::Rotation { rows, span }
         }
         Rule::disturbance_decl => build_disturbance(inner, span)?,
+        Rule::delay_decl => {
+            let mut inner = inner.filter(|q| q.as_rule() != Rule::delay_word);
+            let input = ident(inner.next()?);
+            let amount = number(inner.next()?);
+            let unit = match inner.next()?.as_str() {
+                "s" => DelayUnit::Seconds,
+                _ => DelayUnit::Steps,
+            };
+            Item::Delay {
+                input,
+                amount,
+                unit,
+                span,
+            }
+        }
         Rule::relative_decl => {
             let name = ident(inner.next()?);
             let disturbance = ident(inner.next()?);

@@ -23,7 +23,10 @@ fn rule_name(rule: &Rule) -> &'static str {
         | Rule::disturbance_decl
         | Rule::nominal_block
         | Rule::data_block
+        | Rule::delay_decl
         | Rule::equation_kind => "a declaration",
+        Rule::delay_word => "a declaration",
+        Rule::delay_unit => "`steps` or `s`",
         Rule::axes => "`axes(..)`",
         Rule::rotation_row => "a rotation row `state = [a, b]`",
         Rule::rotation_entry => "a data column name or 0",
@@ -187,7 +190,7 @@ fn help(found: &str, expected: &str, keyword: bool, unclosed: bool) -> Option<St
         Some("a model ends with `}`; check for an unclosed `{`, `(` or `|`".to_string())
     } else if expected.contains("a declaration") || expected.contains("end of file") {
         Some(
-            "declarations are: step, state, input, heading, rotation, disturbance, `name = relative(..)`, der, next, nominal, data"
+            "declarations are: step, state, input, heading, rotation, disturbance, `name = relative(..)`, der, next, nominal, data, delay"
                 .to_string(),
         )
     } else {

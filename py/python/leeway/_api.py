@@ -234,6 +234,10 @@ class Estimate:
         self.warnings: list[str] = [python_spelling(w) for w in d["warnings"]]
         """The estimate's warnings, in Python's spelling (``document`` keeps the CLI's)."""
         self.notes: list[str] = [python_spelling(n) for n in d["notes"]]
+        self.delay_scan: dict[str, Any] | None = d.get("delay_scan")
+        """With ``scan_delay``: the input, the criterion (``by``), the chosen
+        dead time (``samples``, ``seconds``) and the ``curve`` of every
+        candidate (docs/json.md); None otherwise."""
 
     @property
     def theta(self) -> dict[str, float]:
@@ -381,7 +385,7 @@ def _seconds(what: str, v: Any, optional: bool = True) -> float | None:
     return _number(what, v, hint=f"give {what} as a finite number" + (" (or None)" if optional else ""))
 
 
-_EXAMPLES = {"method": "iv3", "instruments": "simulated", "initial": "delayed", "centring": "experiment", "combine": "summed"}
+_EXAMPLES = {"scan_delay": "tau_x=0..2s", "scan_by": "fit", "method": "iv3", "instruments": "simulated", "initial": "delayed", "centring": "experiment", "combine": "summed"}
 
 # The CLI's bounds (cli/src/estimate.rs, py/src/lib.rs), checked here too so
 # that an integer too large for the native half is the same OptionError.
@@ -404,6 +408,9 @@ def _checked_options(options: dict[str, Any]) -> dict[str, Any]:
     out["step"] = _seconds("step", options["step"])
     out["resample"] = _seconds("resample", options["resample"])
     out["time_tolerance"] = _seconds("time_tolerance", options["time_tolerance"], optional=False)
+    for key in ("scan_delay", "scan_by"):
+        if key in options:
+            out[key] = _text(key, options[key], optional=True)
     return out
 
 
@@ -462,13 +469,18 @@ def estimate(
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
+    scan_delay: str | None = None,
+    scan_by: str = "fit",
 ) -> Estimate:
     """Estimates θ, the nuisance parameters and the disturbance means, as
     ``leeway estimate`` does (the options are its flags; docs/cli.md,
     "leeway estimate"). ``data`` is a DataFrame (split on its ``experiment``
     column if it has one), a list or dict of DataFrames (a dict names the
-    experiments), or Arrow/polars tables. Warnings are issued as
-    ``LeewayWarning``; errors raise the classes of ``leeway.errors``."""
+    experiments), or Arrow/polars tables. ``scan_delay="tau_x=0..2s"``
+    (``--scan-delay``) finds an input's dead time: the estimate is at the
+    best one, and ``Estimate.delay_scan`` holds the curve. Warnings are
+    issued as ``LeewayWarning``; errors raise the classes of
+    ``leeway.errors``."""
     options = _estimate_options(
         model,
         method=method,
@@ -485,6 +497,8 @@ def estimate(
         step=step,
         time_tolerance=time_tolerance,
         resample=resample,
+        scan_delay=scan_delay,
+        scan_by=scan_by,
     )
     result = Estimate(_native(_leeway.estimate_json, model._core, _handover(model, data), options))
     _warn(result)

@@ -113,6 +113,8 @@ pub struct Resolved {
     pub data: Vec<(Ident, String, Span)>,
     /// Declared units of data columns (`data { r in deg/s }`), checked.
     pub units: Vec<(Ident, String, Span)>,
+    /// Declared dead times: (input, lag, declaration).
+    pub delays: Vec<(usize, crate::ir::Lag, Span)>,
     /// Name table.
     pub symbols: BTreeMap<String, (Symbol, Span)>,
 }

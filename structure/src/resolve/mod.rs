@@ -5,9 +5,11 @@
 //! states and inputs; `rotation` the step and the heading or rotation;
 //! `media` the disturbances, then the relative velocities; `equations` the
 //! equations, nominal values and data mapping, then the states without an
-//! equation. `decl` holds what they produce.
+//! equation; `delay` the inputs' dead times (after `step`, which resolves
+//! one in seconds). `decl` holds what they produce.
 
 pub(crate) mod decl;
+pub(crate) mod delay;
 pub(crate) mod equations;
 pub(crate) mod media;
 pub(crate) mod rotation;
@@ -21,6 +23,7 @@ pub use decl::{
 };
 pub use symbols::names;
 
+use delay::resolve_delays;
 use equations::{missing_equations, resolve_equations_and_data};
 use media::{resolve_disturbance, resolve_relative};
 use rotation::resolve_step_and_rotation;
@@ -41,6 +44,7 @@ pub fn resolve(model: &ModelSyntax, diags: &mut Vec<Diagnostic>) -> Resolved {
         nominal: Vec::new(),
         data: Vec::new(),
         units: Vec::new(),
+        delays: Vec::new(),
         symbols: BTreeMap::new(),
     };
     // States and inputs first: other declarations refer to them.
@@ -76,5 +80,6 @@ pub fn resolve(model: &ModelSyntax, diags: &mut Vec<Diagnostic>) -> Resolved {
     }
     resolve_equations_and_data(&mut r, model, diags);
     missing_equations(&r, diags);
+    resolve_delays(&mut r, model, diags);
     r
 }

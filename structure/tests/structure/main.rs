@@ -2,6 +2,7 @@
 //! binary of its own: one link instead of many keeps the test build lean).
 
 mod broken;
+mod delay;
 mod echelon;
 mod identifiability;
 mod limits;
