@@ -96,13 +96,14 @@ fn rk4(x: [f64; 4], tau: [f64; 3], h: f64) -> [f64; 4] {
     std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
 }
 
-/// The truth at every fine step: states, the navigation filter's error on
-/// `(u, v, r)` (what both the log and the controller see), and the commands
-/// as logged (changed on the grid; the thrusters apply them `dead_time` later).
+/// The truth at every fine step: states and the navigation filter's error
+/// on `(u, v, r)` (what both the log and the controller see); and every
+/// command the allocator published, one per stamp of its topic. The
+/// thrusters hold the last published command and apply it `dead_time` later.
 struct Truth {
     states: Vec<[f64; 4]>,
     errors: Vec<[f64; 3]>,
-    commands: Vec<[f64; 3]>,
+    published: Vec<[f64; 3]>,
 }
 
 /// The navigation filter's error: Gauss–Markov, σ per velocity, 1 s correlation.
@@ -113,57 +114,58 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
     StandardNormal.sample(rng)
 }
 
-/// Open-loop commands: levels held 3–12 s, every sign visited; under
-/// dynamic positioning, forces against the measured motion and heading.
-fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Truth {
+/// The command the allocator publishes at `t`: the open-loop level, or
+/// under dynamic positioning forces against the navigation filter's output.
+fn command(spec: &FerryLog, t: f64, level: [f64; 3], x: [f64; 4], e: [f64; 3]) -> [f64; 3] {
+    if !(spec.closed_loop.0..spec.closed_loop.1).contains(&t) {
+        return level;
+    }
+    let (u, v, r) = (x[0] + e[0], x[1] + e[1], x[2] + e[2]);
+    [
+        -4000.0 * u,
+        -4000.0 * v,
+        -6000.0 * r - 2000.0 * wrap(x[3] - 0.3),
+    ]
+    .map(|f| f.clamp(-3000.0, 3000.0))
+}
+
+/// Open-loop levels held 3–12 s, every sign visited, published at the
+/// allocator's stamps `publish` (seconds); the thrusters act on the last
+/// published command `dead_time` later.
+fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng, publish: &[f64]) -> Truth {
     const RANGE: [f64; 3] = [3000.0, 2500.0, 1500.0];
     let per_grid = (GRID / FINE).round() as usize;
     let n = (spec.seconds / FINE).round() as usize + 1;
-    let delay = (spec.dead_time / FINE).round() as usize;
     let mut x = [0.5, 0.0, 0.0, 0.3];
     let a = (-FINE / NAV_CORRELATION).exp();
     let b = (1.0 - a * a).sqrt();
     let mut e: [f64; 3] = std::array::from_fn(|i| NAV_ERROR[i] * normal(rng));
-    let (mut states, mut commands) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    let mut errors = Vec::with_capacity(n);
+    let (mut states, mut errors) = (Vec::with_capacity(n), Vec::with_capacity(n));
+    let mut published = Vec::with_capacity(publish.len());
     let (mut level, mut until) = ([0.0; 3], 0.0);
-    let mut held = [0.0; 3];
+    let mut acting = 0;
     for k in 0..n {
         let t = k as f64 * FINE;
-        if k % per_grid == 0 {
-            let dp = (spec.closed_loop.0..spec.closed_loop.1).contains(&t);
-            if t >= until {
-                level = std::array::from_fn(|i| RANGE[i] * rng.random_range(-1.0..1.0));
-                until = t + rng.random_range(3.0..12.0);
-            }
-            held = if dp {
-                // Dynamic positioning on the navigation filter's output.
-                let (u, v, r) = (x[0] + e[0], x[1] + e[1], x[2] + e[2]);
-                [
-                    -4000.0 * u,
-                    -4000.0 * v,
-                    -6000.0 * r - 2000.0 * wrap(x[3] - 0.3),
-                ]
-                .map(|f| f.clamp(-3000.0, 3000.0))
-            } else {
-                level
-            };
+        if k % per_grid == 0 && t >= until {
+            level = std::array::from_fn(|i| RANGE[i] * rng.random_range(-1.0..1.0));
+            until = t + rng.random_range(3.0..12.0);
         }
+        while published.len() < publish.len() && publish[published.len()] <= t + 1e-9 {
+            published.push(command(spec, t, level, x, e));
+        }
+        while acting < published.len() && publish[acting] <= t - spec.dead_time + 1e-9 {
+            acting += 1;
+        }
+        let force = acting.checked_sub(1).map_or([0.0; 3], |j| published[j]);
         states.push(x);
         errors.push(e);
-        commands.push(held);
         e = std::array::from_fn(|i| a * e[i] + b * NAV_ERROR[i] * normal(rng));
-        let acting = if k >= delay {
-            commands[k - delay]
-        } else {
-            [0.0; 3]
-        };
-        x = rk4(x, acting, FINE);
+        x = rk4(x, force, FINE);
     }
     Truth {
         states,
         errors,
-        commands,
+        published,
     }
 }
 
@@ -215,12 +217,6 @@ fn state_at(truth: &Truth, t: f64) -> [f64; 4] {
     at(&truth.states, t)
 }
 
-/// The command in effect at `t` (logged when issued, on the grid).
-fn command_at(truth: &Truth, t: f64) -> [f64; 3] {
-    let k = ((t / FINE + 1e-9).floor() as usize).min(truth.commands.len() - 1);
-    truth.commands[k]
-}
-
 /// `secs,nsecs` of `t` seconds from the start (whole nanoseconds).
 fn stamp_columns(t: f64) -> (i64, i64) {
     let ns = (t * 1e9).round() as i64;
@@ -247,18 +243,25 @@ struct Topics {
     tau: String,
 }
 
-fn topics(spec: &FerryLog, truth: &Truth, rng: &mut ChaCha8Rng) -> Topics {
-    let (twist_t, heading_t, tau_t) = if spec.aligned {
-        (
-            aligned_stamps(spec, GRID),
-            aligned_stamps(spec, GRID / 2.0),
-            aligned_stamps(spec, GRID),
-        )
+/// The allocator's stamps: on the grid when aligned, else at 6–41 Hz with
+/// two stalls of about a second (no message; the thrusters hold the last).
+fn allocator_stamps(spec: &FerryLog, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    if spec.aligned {
+        return aligned_stamps(spec, GRID);
+    }
+    let stalled = |t: f64| (300.0..301.0).contains(&t) || (950.0..951.2).contains(&t);
+    let mut all = stamps(spec, rng, (6.0, 41.0), 0.3);
+    all.retain(|t| !stalled(*t));
+    all
+}
+
+fn topics(spec: &FerryLog, truth: &Truth, tau_t: &[f64], rng: &mut ChaCha8Rng) -> Topics {
+    let (twist_t, heading_t) = if spec.aligned {
+        (aligned_stamps(spec, GRID), aligned_stamps(spec, GRID / 2.0))
     } else {
         (
             stamps(spec, rng, (2.0, 7.5), 0.2),
             stamps(spec, rng, (20.0, 20.0), 0.05),
-            stamps(spec, rng, (6.0, 41.0), 0.3),
         )
     };
     let mut twist = String::from("secs,nsecs,u,v,r\n");
@@ -278,10 +281,7 @@ fn topics(spec: &FerryLog, truth: &Truth, rng: &mut ChaCha8Rng) -> Topics {
         let _ = writeln!(heading, "{s},{n},{},{psi}", local_time(t));
     }
     let mut tau = String::from("secs,nsecs,Fx,Fy,Mz\n");
-    let stalled =
-        |t: f64| !spec.aligned && ((300.0..301.0).contains(&t) || (950.0..951.2).contains(&t));
-    for &t in tau_t.iter().filter(|t| !stalled(**t)) {
-        let f = command_at(truth, t);
+    for (&t, f) in tau_t.iter().zip(&truth.published) {
         let (s, n) = stamp_columns(t);
         let _ = writeln!(tau, "{s},{n},{},{},{}", f[0], f[1], f[2]);
     }
@@ -322,8 +322,9 @@ tau_n = \"tau:Mz\"
 /// `ferry.toml` and, when aligned, `uniform.csv`.
 pub fn write_ferry_log(dir: &Path, spec: &FerryLog) -> std::io::Result<()> {
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let truth = simulate(spec, &mut rng);
-    let t = topics(spec, &truth, &mut rng);
+    let publish = allocator_stamps(spec, &mut rng);
+    let truth = simulate(spec, &mut rng, &publish);
+    let t = topics(spec, &truth, &publish, &mut rng);
     std::fs::create_dir_all(dir)?;
     std::fs::write(dir.join("twist.csv"), &t.twist)?;
     std::fs::write(dir.join("heading.csv"), &t.heading)?;
