@@ -31,6 +31,10 @@ mod models {
         // Constant terms and pointwise moduli of plain states.
         leeway::include_model!("../examples/models/tanker.som");
     }
+    pub mod ferry {
+        // A dead time of every input, in seconds.
+        leeway::include_model!("../examples/models/ferry.som");
+    }
     pub mod ship_iv2 {
         // θ is not identifiable from one sign pattern when both media are unmeasured.
         leeway::include_model!("../examples/models/ship_iv2.som", aggregate);
@@ -81,6 +85,7 @@ fn cases() -> Vec<Case> {
         case("examples/models/rov.som", &models::rov::Rov, false),
         case("examples/models/ship.som", &models::ship::Ship, false),
         case("examples/models/tanker.som", &models::tanker::Tanker, false),
+        case("examples/models/ferry.som", &models::ferry::Ferry, false),
         case(
             "examples/models/ship_iv2.som",
             &models::ship_iv2::ShipIv2,

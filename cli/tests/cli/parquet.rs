@@ -557,3 +557,62 @@ fn logical_types_are_read_as_what_they_mean_or_refused() {
         "{e}"
     );
 }
+
+#[test]
+fn a_log_source_in_parquet_is_stamped_by_its_timestamp_column() {
+    // The ferry log's velocity topic as Parquet, its stamps a TIMESTAMP(NANOS)
+    // column: the same joined samples, the same estimate, as from the CSV.
+    let dir = Scratch::new("log-parquet");
+    let spec = leeway_scenarios::ferry::FerryLog {
+        seconds: 300.0,
+        hole: (100.0, 105.8),
+        ..Default::default()
+    };
+    leeway_scenarios::ferry::write_ferry_log(&dir.0, &spec).unwrap_or_else(|e| panic!("{e}"));
+    let text = std::fs::read_to_string(dir.path("twist.csv")).unwrap_or_else(|e| panic!("{e}"));
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let stamp = |r: &Vec<&str>| {
+        r[0].parse::<i64>().unwrap_or(0) * 1_000_000_000 + r[1].parse::<i64>().unwrap_or(0)
+    };
+    let column = |i: usize| Data::Double(rows.iter().map(|r| r[i].parse::<f64>().ok()).collect());
+    write_parquet(
+        &dir.path("twist.parquet"),
+        &[
+            (
+                "stamp",
+                Data::Stamps(rows.iter().map(|r| Some(stamp(r))).collect()),
+            ),
+            ("u", column(2)),
+            ("v", column(3)),
+            ("r", column(4)),
+        ],
+        500,
+        Compression::SNAPPY,
+    );
+    let manifest = std::fs::read_to_string(dir.path("ferry.toml")).unwrap_or_default();
+    dir.write(
+        "parquet.toml",
+        &manifest.replace(
+            "file = \"twist.csv\"\ntime = [\"secs\", \"nsecs\"]",
+            "file = \"twist.parquet\"\ntime = \"stamp\"",
+        ),
+    );
+    let run = |m: &str| {
+        let o = leeway(&[
+            "estimate",
+            "examples/models/ferry.som",
+            "--data",
+            &dir.path(m).display().to_string(),
+            "--method",
+            "ls",
+            "--json",
+        ]);
+        assert_eq!(code(&o), 0, "{}", stdout(&o));
+        json(&o)["parameters"].clone()
+    };
+    assert_eq!(run("parquet.toml"), run("ferry.toml"));
+}
