@@ -148,28 +148,74 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
     let specs = match_model(&m, ir)?;
     let h = grid_step(&m, ir, options)?;
     let limit = m.max_gap.unwrap_or(options.max_gap);
+    let series = read_signals(&m, &specs)?;
+    // A quaternion's yaw is in radians: stated in the signal's declared
+    // unit, so that the validating pass converts it back exactly once.
+    let values: Vec<Vec<f64>> = series
+        .iter()
+        .zip(&specs)
+        .map(|(s, (spec, _))| {
+            let factor = if spec.yaw {
+                unit_factor(ir, &spec.signal)
+            } else {
+                1.0
+            };
+            s.values[0].iter().map(|v| v / factor).collect()
+        })
+        .collect();
+    let mut tracks = Vec::with_capacity(series.len());
+    let mut signals = Vec::with_capacity(series.len());
+    for ((s, (spec, role)), values) in series.iter().zip(&specs).zip(&values) {
+        let steps: Vec<f64> = s
+            .stamps
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as f64 / 1e9)
+            .collect();
+        let between = between(spec, role);
+        tracks.push(Track {
+            signal: &spec.signal,
+            stamps: &s.stamps,
+            values,
+            between,
+            limit: limit.seconds(&steps, h) * 1e9,
+        });
+        signals.push(signal_note(&m, spec, s, &steps, between));
+    }
+    let joined = join(&tracks, h, &m.experiment);
+    check_joined(&m, &joined, &tracks)?;
+    for (note, t) in signals.iter_mut().zip(&tracks) {
+        note.first = seconds(t.stamps[0], joined.origin);
+        note.last = seconds(t.stamps[t.stamps.len() - 1], joined.origin);
+    }
+    let notes = join_notes(&m, &joined, signals);
+    Ok(JoinedLog {
+        signals: specs.iter().map(|(s, _)| s.signal.clone()).collect(),
+        joined,
+        h,
+        name: format!("{} (joined)", m.file),
+        options: options.clone(),
+        notes,
+    })
+}
+
+/// Every mapped signal's series, in the order of `specs`, each source read
+/// once; a signal with fewer than two samples is an error.
+fn read_signals(m: &Manifest, specs: &[(&SignalSpec, Role)]) -> Result<Vec<Series>, DataError> {
     let mut series: Vec<(Series, usize)> = Vec::with_capacity(specs.len());
     for (s, source) in m.sources.iter().enumerate() {
-        let wanted: Vec<&SignalSpec> = specs
-            .iter()
-            .map(|(s, _)| *s)
-            .filter(|x| x.source == s)
+        let wanted: Vec<usize> = (0..specs.len())
+            .filter(|k| specs[*k].0.source == s)
             .collect();
         if wanted.is_empty() {
             continue;
         }
-        for (read, spec) in read_source(source, &wanted)?.into_iter().zip(&wanted) {
-            let k = specs
-                .iter()
-                .position(|(x, _)| std::ptr::eq(*x, *spec))
-                .unwrap_or(0);
-            series.push((read, k));
-        }
+        let asked: Vec<&SignalSpec> = wanted.iter().map(|k| specs[*k].0).collect();
+        series.extend(read_source(source, &asked)?.into_iter().zip(wanted));
     }
     series.sort_by_key(|(_, k)| *k);
     for (s, k) in &series {
+        let spec = specs[*k].0;
         if s.stamps.len() < 2 {
-            let spec = specs[*k].0;
             return Err(DataError::new(
                 &spec.at,
                 format!(
@@ -182,65 +228,43 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
             ));
         }
     }
-    let mut signal_notes = Vec::with_capacity(series.len());
-    let mut tracks = Vec::with_capacity(series.len());
-    let mut converted: Vec<Vec<f64>> = Vec::with_capacity(series.len());
-    for (s, k) in &series {
-        let (spec, role) = &specs[*k];
-        // A quaternion's yaw is in radians: stated in the signal's declared
-        // unit, so that the validating pass converts it back exactly once.
-        let factor = if spec.yaw {
-            unit_factor(ir, &spec.signal)
-        } else {
-            1.0
-        };
-        converted.push(s.values[0].iter().map(|v| v / factor).collect());
-        let _ = role;
+    Ok(series.into_iter().map(|(s, _)| s).collect())
+}
+
+/// What the notes say of one signal as read (its first and last stamps are
+/// set once the origin is known).
+fn signal_note(
+    m: &Manifest,
+    spec: &SignalSpec,
+    s: &Series,
+    steps: &[f64],
+    between: Between,
+) -> SignalNote {
+    SignalNote {
+        signal: spec.signal.clone(),
+        source: format!("{}:{}", m.sources[spec.source].file.display(), spec.field),
+        samples: s.stamps.len(),
+        median_step: leeway_data::gaps::median(steps).unwrap_or(0.0),
+        first: 0.0,
+        last: 0.0,
+        repeated_stamps: s.repeated,
+        between: match between {
+            Between::Hold => "hold",
+            Between::Linear => "linear",
+            Between::Angle => "angle",
+        }
+        .into(),
     }
-    for ((s, k), values) in series.iter().zip(&converted) {
-        let (spec, role) = &specs[*k];
-        let between = between(spec, role);
-        let steps: Vec<f64> = s
-            .stamps
-            .windows(2)
-            .map(|w| (w[1] - w[0]) as f64 / 1e9)
-            .collect();
-        let limit_s = limit.seconds(&steps, h);
-        tracks.push(Track {
-            signal: &spec.signal,
-            stamps: &s.stamps,
-            values,
-            between,
-            limit: limit_s * 1e9,
-        });
-        signal_notes.push(SignalNote {
-            signal: spec.signal.clone(),
-            source: format!("{}:{}", m.sources[spec.source].file.display(), spec.field),
-            samples: s.stamps.len(),
-            median_step: leeway_data::gaps::median(&steps).unwrap_or(0.0),
-            first: 0.0,
-            last: 0.0,
-            repeated_stamps: s.repeated,
-            between: match between {
-                Between::Hold => "hold",
-                Between::Linear => "linear",
-                Between::Angle => "angle",
-            }
-            .into(),
-        });
-    }
-    let joined = join(&tracks, h, &m.experiment);
-    for (note, t) in signal_notes.iter_mut().zip(&tracks) {
-        note.first = seconds(t.stamps[0], joined.origin);
-        note.last = seconds(t.stamps[t.stamps.len() - 1], joined.origin);
-    }
-    check_joined(&m, &joined, &tracks)?;
+}
+
+/// The notes of a joined log: its gaps and pieces, its signals, its origin.
+fn join_notes(m: &Manifest, joined: &Joined, signals: Vec<SignalNote>) -> FileNotes {
     let samples = joined
         .pieces
         .iter()
         .map(|p| p.columns.first().map_or(0, Vec::len))
         .sum();
-    let notes = FileNotes {
+    FileNotes {
         file: m.file.clone(),
         experiments: vec![TimeNotes {
             experiment: m.experiment.clone(),
@@ -250,17 +274,9 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
             ..TimeNotes::default()
         }],
         origin: Some(crate::stamps::iso(joined.origin)),
-        signals: signal_notes,
+        signals,
         ..FileNotes::default()
-    };
-    Ok(JoinedLog {
-        signals: specs.iter().map(|(s, _)| s.signal.clone()).collect(),
-        joined,
-        h,
-        name: format!("{} (joined)", m.file),
-        options: options.clone(),
-        notes,
-    })
+    }
 }
 
 #[allow(clippy::cast_precision_loss)]
