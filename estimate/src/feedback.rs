@@ -71,7 +71,13 @@ impl Sums {
     fn residual(&self, columns: usize) -> Option<f64> {
         let g = self.gram.view((0, 0), (columns, columns)).into_owned();
         let c = self.cross.rows(0, columns).into_owned();
-        let b = g.svd(true, true).solve(&c, 1e-12).ok()?;
+        // Squares beyond f64's range (a column of 1e200) make no fit; an SVD
+        // of infinities would not converge.
+        if !(self.square.is_finite() && g.iter().chain(c.iter()).all(|v| v.is_finite())) {
+            return None;
+        }
+        // A bounded number of sweeps: a fit that does not converge is no fit.
+        let b = g.try_svd(true, true, f64::EPSILON, 500)?.solve(&c, 1e-12).ok()?;
         Some((self.square - b.dot(&c)).max(0.0))
     }
     /// The share of the restricted fit's residual the states explain, when
@@ -184,4 +190,55 @@ fn merge(
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use leeway_model::experiment::Experiment;
+
+    fn ir() -> Ir {
+        let src = "model M { step 0.1 state u input tau der u = X*u + T*tau }";
+        leeway_structure::compile(src, &leeway_structure::CompileOptions::default())
+            .ir
+            .unwrap_or_else(|| panic!("the test model compiles"))
+    }
+
+    /// 600 s of `u' = −0.2u + tau` (with noise), `tau` held at random
+    /// levels, or set from the measured `u` where `closed` says.
+    fn record(closed: impl Fn(usize) -> bool, scale: f64) -> Experiment {
+        let ir = ir();
+        let mut e = Experiment::new(&ir, "run", 0.1);
+        let (mut u, mut level, mut seed) = (0.0f64, 1.0f64, 7u64);
+        let mut noise = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for k in 0..6000 {
+            if k % 47 == 0 {
+                level = 2.0 * noise();
+            }
+            let measured = u + 0.01 * noise();
+            let tau = if closed(k) { -3.0 * measured } else { level };
+            e.states[0].push(measured * scale);
+            e.inputs[0].push(tau);
+            u += 0.1 * (-0.2 * u + tau);
+        }
+        e
+    }
+
+    #[test]
+    fn a_controller_is_found_where_it_acts_and_nowhere_else() {
+        let ir = ir();
+        assert_eq!(feedback(&ir, &record(|_| false, 1.0)), vec![]);
+        let found = feedback(&ir, &record(|k| (3000..4200).contains(&k), 1.0));
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].first, found[0].last), (3000, 4199));
+        assert!(found[0].explained > 0.9, "{found:?}");
+    }
+
+    #[test]
+    fn squares_beyond_range_are_no_fit_and_no_hang() {
+        assert_eq!(feedback(&ir(), &record(|_| true, 1e200)), vec![]);
+    }
 }
