@@ -649,7 +649,7 @@ fn resample_split(
                 "experiment `{}` has fewer than {MIN_SAMPLES} samples at --resample {step}{why}",
                 e.name
             ),
-            "choose a smaller --resample step, or a larger --max-gap if the holes are known to be harmless",
+            "choose a smaller --resample step, or raise the gap limit if the holes are known to be harmless",
         ));
     }
     notes.resampled = Some(kept.iter().map(Experiment::len).sum());

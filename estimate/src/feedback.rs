@@ -6,7 +6,11 @@
 //! window of [`WINDOW_SECONDS`] and per input `u`, two least-squares fits of
 //! `u(k)` are compared: on `1, u(k−1), u(k−2)`, and on those plus every
 //! state at `k, k−1, k−2` (a controller acts on the latest measurement; in
-//! open loop the state at `k` depends only on inputs before `k`). A window is flagged when the states explain at
+//! open loop the state at `k` depends only on inputs before `k`). A window
+//! is judged only when the input's innovations there — the samples its own
+//! past does not predict — are many (five per added regressor): an input
+//! that steps a few times a window carries too little evidence, however
+//! well a dozen regressors happen to fit its steps. A window is flagged when the states explain at
 //! least [`EXPLAINED`] of what the input's own past leaves, and the χ² test
 //! of the added terms rejects open loop at 10⁻⁶.
 
@@ -20,12 +24,14 @@ pub const WINDOW_SECONDS: f64 = 30.0;
 /// The fewest samples of a window.
 pub const MIN_WINDOW: usize = 100;
 /// The share of the input's innovation the past motion must explain.
-pub const EXPLAINED: f64 = 0.3;
+pub const EXPLAINED: f64 = 0.5;
 /// Lags of the input and of each state in the fits.
 const LAGS: usize = 2;
+/// The fewest innovations per added regressor a window needs to judge.
+const MIN_INNOVATIONS: usize = 5;
 
 /// A stretch of an experiment whose inputs its outputs predict.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Feedback {
     /// The experiment.
     pub experiment: String,
@@ -44,12 +50,14 @@ pub struct Feedback {
 }
 
 /// One input's sums over a window: `X'X`, `X'u`, `u'u` of the full fit,
-/// whose columns are `1`, the input's lags, then the states' lags.
+/// whose columns are `1`, the input's lags, then the states' lags; and per
+/// sample the input with its own lags (the restricted fit's rows), whose
+/// residuals say how many innovations the window holds.
 struct Sums {
     gram: DMatrix<f64>,
     cross: DVector<f64>,
     square: f64,
-    n: usize,
+    own: Vec<[f64; 1 + LAGS + 1]>,
 }
 
 impl Sums {
@@ -58,17 +66,19 @@ impl Sums {
             gram: DMatrix::zeros(width, width),
             cross: DVector::zeros(width),
             square: 0.0,
-            n: 0,
+            own: Vec::new(),
         }
     }
     fn push(&mut self, x: &DVector<f64>, u: f64) {
         self.gram.ger(1.0, x, x, 1.0);
         self.cross.axpy(u, x, 1.0);
         self.square += u * u;
-        self.n += 1;
+        let mut row = [u; 1 + LAGS + 1];
+        row[..=LAGS].copy_from_slice(&x.as_slice()[..=LAGS]);
+        self.own.push(row);
     }
-    /// The residual sum of squares of the fit on the first `columns`.
-    fn residual(&self, columns: usize) -> Option<f64> {
+    /// The coefficients and residual sum of squares of the fit on the first `columns`.
+    fn fit(&self, columns: usize) -> Option<(DVector<f64>, f64)> {
         let g = self.gram.view((0, 0), (columns, columns)).into_owned();
         let c = self.cross.rows(0, columns).into_owned();
         // Squares beyond f64's range (a column of 1e200) make no fit; an SVD
@@ -77,20 +87,41 @@ impl Sums {
             return None;
         }
         // A bounded number of sweeps: a fit that does not converge is no fit.
-        let b = g.try_svd(true, true, f64::EPSILON, 500)?.solve(&c, 1e-12).ok()?;
-        Some((self.square - b.dot(&c)).max(0.0))
+        let b = g
+            .try_svd(true, true, f64::EPSILON, 500)?
+            .solve(&c, 1e-12)
+            .ok()?;
+        let rss = (self.square - b.dot(&c)).max(0.0);
+        Some((b, rss))
+    }
+    /// The innovations the restricted fit leaves: the samples whose
+    /// residual exceeds 10⁻⁴ of their RMS. Dense noise counts every sample;
+    /// an input held (or smoothed) between steps counts only its steps.
+    fn innovations(&self, b: &DVector<f64>, rss: f64) -> f64 {
+        let floor = 1e-4 * (rss / self.own.len().max(1) as f64).sqrt();
+        let count = self
+            .own
+            .iter()
+            .filter(|row| {
+                let e = row[1 + LAGS] - (0..=LAGS).map(|i| b[i] * row[i]).sum::<f64>();
+                e.abs() > floor
+            })
+            .count();
+        count as f64
     }
     /// The share of the restricted fit's residual the states explain, when
-    /// the χ² test rejects that they add nothing.
+    /// the window holds enough innovations and the χ² test (on them) rejects
+    /// that the states add nothing.
     fn explained(&self, restricted: usize) -> Option<f64> {
         let full_width = self.gram.nrows();
-        let r = self.residual(restricted)?;
-        let f = self.residual(full_width)?;
-        if r <= 1e-12 * self.square || self.n <= full_width {
+        let (b, r) = self.fit(restricted)?;
+        let (_, f) = self.fit(full_width)?;
+        let q = full_width - restricted;
+        let n = self.innovations(&b, r);
+        if r <= 1e-12 * self.square || n < (MIN_INNOVATIONS * q) as f64 {
             return None;
         }
-        let q = full_width - restricted;
-        let stat = (self.n - full_width) as f64 * (r - f) / f.max(f64::MIN_POSITIVE);
+        let stat = (n - full_width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
         (chi_squared_tail(stat, q) < 1e-6).then_some((r - f) / r)
     }
 }
@@ -211,7 +242,9 @@ mod tests {
         let mut e = Experiment::new(&ir, "run", 0.1);
         let (mut u, mut level, mut seed) = (0.0f64, 1.0f64, 7u64);
         let mut noise = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         for k in 0..6000 {

@@ -30,6 +30,7 @@ use leeway_logs::{load_path, open_path};
 use leeway_model::Experiment;
 use leeway_model::Interpreter;
 use leeway_model::Source;
+use leeway_report::feedback::closed_loop_alerts;
 use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
 use leeway_report::input_peaks;
@@ -65,6 +66,7 @@ struct FileSummary {
     notes: FileNotes,
     heading_gains: Vec<(String, Option<f64>)>,
     input_peaks: Vec<f64>,
+    closed_loop: Vec<leeway_estimate::feedback::Feedback>,
 }
 
 /// One data file opened on a worker for the passes of an estimate.
@@ -98,6 +100,7 @@ impl Dataset {
             notes,
             heading_gains: heading_gains(ir, &sources),
             input_peaks: input_peaks(ir, &sources),
+            closed_loop: leeway_report::feedback::closed_loop(ir, &sources),
         };
         let summary = encode(&summary);
         drop(sources);
@@ -306,7 +309,7 @@ pub fn estimate_mapped(
     if let Some(e) = passes.raised.lock().ok().and_then(|mut s| s.take()) {
         return Err(e);
     }
-    let est = result.map_err(failed)?;
+    let mut est = result.map_err(failed)?;
     let mut warnings = model.warnings.clone();
     let mut peaks = vec![0.0f64; ir.inputs.len()];
     for s in &summaries {
@@ -320,7 +323,15 @@ pub fn estimate_mapped(
         .flat_map(|s| s.heading_gains.iter().cloned())
         .collect();
     warnings.extend(heading_warnings(ir, &gains));
+    let stretches: Vec<_> = summaries
+        .iter()
+        .flat_map(|s| s.closed_loop.iter().cloned())
+        .collect();
+    let alerts = closed_loop_alerts(&stretches);
+    warnings.extend(alerts.iter().map(|w| w.detail.clone()));
     warnings.extend(est.warnings.iter().cloned());
+    // The report finds each alert's summary among the estimate's.
+    est.warning_summaries.extend(alerts);
     let experiments: Vec<(String, usize)> = summaries
         .iter()
         .flat_map(|s| s.experiments.iter().cloned())

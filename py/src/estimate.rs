@@ -64,6 +64,12 @@ fn run_estimate(
     warnings.extend(leeway_report::unit_warnings(ir, &sources));
     let gains = heading_gains(ir, &sources);
     warnings.extend(heading_warnings(ir, &gains));
+    // Worded as the CLI words them: the report finds each one's summary
+    // among the estimate's (added below).
+    let alerts = leeway_report::feedback::closed_loop_alerts(
+        &leeway_report::feedback::closed_loop(ir, &sources),
+    );
+    warnings.extend(alerts.iter().map(|w| w.detail.clone()));
     let (result, scanned) = match scan {
         None => (
             estimate(&Interpreter::new(ir.clone()), &sources, options),
@@ -78,7 +84,7 @@ fn run_estimate(
     if let Some(f) = loaded.failure() {
         return Err(f);
     }
-    let est = result.map_err(|mut e| {
+    let mut est = result.map_err(|mut e| {
         if e.code == "too-few-samples" {
             let list: Vec<String> = sources
                 .iter()
@@ -89,6 +95,7 @@ fn run_estimate(
         Failure::estimate(&e)
     })?;
     warnings.extend(est.warnings.iter().cloned());
+    est.warning_summaries.extend(alerts);
     let experiments: Vec<(String, usize)> = sources
         .iter()
         .map(|e| (e.name().to_string(), e.len()))

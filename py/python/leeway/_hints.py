@@ -24,6 +24,7 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--centring": ("centring", "text"),
     "--combine": ("combine", "text"),
     "--resample": ("resample", "number"),
+    "--max-gap": ("max_gap", "number"),
     "--step": ("step", "number"),
     "--time-tolerance": ("time_tolerance", "number"),
     "--lags": ("lags", "number"),
