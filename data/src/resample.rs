@@ -52,8 +52,9 @@ fn linear(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
         .collect()
 }
 
-/// The angle difference `b − a` brought into `[−π, π)`.
-fn short_arc(a: f64, b: f64) -> f64 {
+/// The angle difference `b − a` brought into `[−π, π)`: the short arc a
+/// heading turns between two samples (also the join of a robot log's).
+pub fn short_arc(a: f64, b: f64) -> f64 {
     let d = b - a;
     d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor()
 }

@@ -11,6 +11,7 @@
 
 use crate::stamps::Nanos;
 use leeway_data::notes::{GapNote, PieceNote};
+use leeway_data::resample::short_arc;
 use leeway_model::experiment::MIN_SAMPLES;
 
 /// How a signal is read between its samples.
@@ -101,7 +102,7 @@ fn intersect(a: &[(Nanos, Nanos)], b: &[(Nanos, Nanos)]) -> Vec<(Nanos, Nanos)> 
 
 /// Seconds from `origin` to `t`.
 #[allow(clippy::cast_precision_loss)]
-fn seconds(t: Nanos, origin: Nanos) -> f64 {
+pub(crate) fn seconds(t: Nanos, origin: Nanos) -> f64 {
     (t - origin) as f64 / 1e9
 }
 
@@ -119,13 +120,6 @@ fn grid(a: Nanos, b: Nanos, h: f64) -> Vec<Nanos> {
         .map(|k| a + (k as f64 * step).round() as Nanos)
         .filter(|t| *t <= b)
         .collect()
-}
-
-/// The difference `b − a` brought into `[−π, π)`.
-fn short_arc(a: f64, b: f64) -> f64 {
-    use std::f64::consts::PI;
-    let d = b - a;
-    d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor()
 }
 
 /// A track's values at `times` (increasing, within its samples).

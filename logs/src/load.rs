@@ -4,10 +4,9 @@
 //! pass — units, outliers, minimum lengths — loaded or streamed like any
 //! data file.
 
-use crate::join::{Between, Joined, Track, join};
+use crate::join::{Between, Joined, Track, join, seconds};
 use crate::manifest::{Clock, Interpolate, Manifest, SignalSpec, SourceSpec};
 use crate::series::{Series, read_table};
-use crate::stamps::Nanos;
 use leeway_data::columns::{Columns, Labels};
 use leeway_data::signals::{Role, required_signals, unit_factor};
 use leeway_data::validate::load_table;
@@ -277,11 +276,6 @@ fn join_notes(m: &Manifest, joined: &Joined, signals: Vec<SignalNote>) -> FileNo
         signals,
         ..FileNotes::default()
     }
-}
-
-#[allow(clippy::cast_precision_loss)]
-fn seconds(t: Nanos, origin: Nanos) -> f64 {
-    (t - origin) as f64 / 1e9
 }
 
 /// How a signal is read between samples: a command held, a measurement
