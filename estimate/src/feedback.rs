@@ -49,41 +49,115 @@ pub struct Feedback {
     pub explained: f64,
 }
 
-/// One input's sums over a window: `X'X`, `X'u`, `u'u` of the full fit,
-/// whose columns are `1`, the input's lags, then the states' lags; and per
-/// sample the input with its own lags (the restricted fit's rows), whose
-/// residuals say how many innovations the window holds.
+/// The sums of one window. The full fit of input `j` has the columns `1`,
+/// `u_j`'s lags (its own block, `own` wide), then the states' lags (shared
+/// by every input's fit): the Gram matrix of the states' lags is summed
+/// once for all inputs, each input's rows of its own columns against every
+/// column apart. Each entry is the sum of the same products in the same
+/// order as a full rank-1 update would make it, so the fits' bits are those
+/// of one Gram matrix per input.
 struct Sums {
-    gram: DMatrix<f64>,
-    cross: DVector<f64>,
-    square: f64,
-    own: Vec<[f64; 1 + LAGS + 1]>,
+    /// Columns of the full fit.
+    width: usize,
+    /// Upper triangle of the states' lags' Gram matrix, row by row
+    /// (`width − own` square).
+    states: Vec<f64>,
+    inputs: Vec<InputSums>,
 }
 
+/// One input's sums over a window: its own columns' rows of `X'X`, `X'u`,
+/// `u'u`; and per sample the input with its own lags (the restricted fit's
+/// rows), whose residuals say how many innovations the window holds.
+struct InputSums {
+    /// `own × width`, row by row.
+    rows: Vec<f64>,
+    cross: Vec<f64>,
+    square: f64,
+    own: Vec<[f64; OWN + 1]>,
+}
+
+/// The restricted fit's columns: `1` and the input's lags.
+const OWN: usize = 1 + LAGS;
+
 impl Sums {
-    fn new(width: usize) -> Sums {
+    fn new(width: usize, inputs: usize) -> Sums {
+        let s = width - OWN;
         Sums {
-            gram: DMatrix::zeros(width, width),
-            cross: DVector::zeros(width),
-            square: 0.0,
-            own: Vec::new(),
+            width,
+            states: vec![0.0; s * (s + 1) / 2],
+            inputs: (0..inputs)
+                .map(|_| InputSums {
+                    rows: vec![0.0; OWN * width],
+                    cross: vec![0.0; width],
+                    square: 0.0,
+                    own: Vec::new(),
+                })
+                .collect(),
         }
     }
-    fn push(&mut self, x: &DVector<f64>, u: f64) {
-        self.gram.ger(1.0, x, x, 1.0);
-        self.cross.axpy(u, x, 1.0);
-        self.square += u * u;
-        let mut row = [u; 1 + LAGS + 1];
-        row[..=LAGS].copy_from_slice(&x.as_slice()[..=LAGS]);
-        self.own.push(row);
+    fn clear(&mut self) {
+        self.states.fill(0.0);
+        for i in &mut self.inputs {
+            i.rows.fill(0.0);
+            i.cross.fill(0.0);
+            i.square = 0.0;
+            i.own.clear();
+        }
     }
-    /// The coefficients and residual sum of squares of the fit on the first `columns`.
-    fn fit(&self, columns: usize) -> Option<(DVector<f64>, f64)> {
-        let g = self.gram.view((0, 0), (columns, columns)).into_owned();
-        let c = self.cross.rows(0, columns).into_owned();
+    /// Adds a sample: `x` holds the states' lags from column `OWN` on;
+    /// its first `OWN` columns are each input's own, written here.
+    fn push(&mut self, x: &mut [f64], lags: &[[f64; LAGS]], inputs: &[f64]) {
+        let mut at = 0;
+        for (i, a) in x[OWN..].iter().enumerate() {
+            for b in &x[OWN + i..] {
+                self.states[at] += a * b;
+                at += 1;
+            }
+        }
+        for (j, sums) in self.inputs.iter_mut().enumerate() {
+            x[0] = 1.0;
+            x[1..OWN].copy_from_slice(&lags[j]);
+            let u = inputs[j];
+            for (r, a) in x[..OWN].iter().enumerate() {
+                for (g, b) in sums.rows[r * x.len()..(r + 1) * x.len()]
+                    .iter_mut()
+                    .zip(&*x)
+                {
+                    *g += b * a;
+                }
+            }
+            for (c, a) in sums.cross.iter_mut().zip(&*x) {
+                *c += u * a;
+            }
+            sums.square += u * u;
+            let mut row = [u; OWN + 1];
+            row[..OWN].copy_from_slice(&x[..OWN]);
+            sums.own.push(row);
+        }
+    }
+    /// Input `j`'s Gram matrix of the first `columns` columns.
+    fn gram(&self, j: usize, columns: usize) -> DMatrix<f64> {
+        let rows = &self.inputs[j].rows;
+        let s = self.width - OWN;
+        DMatrix::from_fn(columns, columns, |a, b| {
+            let (lo, hi) = (a.min(b), a.max(b));
+            if lo < OWN {
+                rows[lo * self.width + hi]
+            } else {
+                let (i, k) = (lo - OWN, hi - OWN);
+                self.states[i * s - i * (i.saturating_sub(1)) / 2 + k - i]
+            }
+        })
+    }
+    /// The coefficients and residual sum of squares of input `j`'s fit on
+    /// the first `columns`.
+    fn fit(&self, j: usize, columns: usize) -> Option<(DVector<f64>, f64)> {
+        let g = self.gram(j, columns);
+        let sums = &self.inputs[j];
+        let c = DVector::from_column_slice(&sums.cross[..columns]);
         // Squares beyond f64's range (a column of 1e200) make no fit; an SVD
         // of infinities would not converge.
-        if !(self.square.is_finite() && g.iter().chain(c.iter()).all(|v| v.is_finite())) {
+        if !(sums.square.is_finite() && g.iter().chain(c.iter()).all(|v| v.is_finite())) {
             return None;
         }
         // A bounded number of sweeps: a fit that does not converge is no fit.
@@ -91,55 +165,38 @@ impl Sums {
             .try_svd(true, true, f64::EPSILON, 500)?
             .solve(&c, 1e-12)
             .ok()?;
-        let rss = (self.square - b.dot(&c)).max(0.0);
+        let rss = (sums.square - b.dot(&c)).max(0.0);
         Some((b, rss))
     }
     /// The innovations the restricted fit leaves: the samples whose
     /// residual exceeds 10⁻⁴ of their RMS. Dense noise counts every sample;
     /// an input held (or smoothed) between steps counts only its steps.
-    fn innovations(&self, b: &DVector<f64>, rss: f64) -> f64 {
-        let floor = 1e-4 * (rss / self.own.len().max(1) as f64).sqrt();
-        let count = self
-            .own
+    fn innovations(&self, j: usize, b: &DVector<f64>, rss: f64) -> f64 {
+        let own = &self.inputs[j].own;
+        let floor = 1e-4 * (rss / own.len().max(1) as f64).sqrt();
+        let count = own
             .iter()
             .filter(|row| {
-                let e = row[1 + LAGS] - (0..=LAGS).map(|i| b[i] * row[i]).sum::<f64>();
+                let e = row[OWN] - (0..OWN).map(|i| b[i] * row[i]).sum::<f64>();
                 e.abs() > floor
             })
             .count();
         count as f64
     }
-    /// The share of the restricted fit's residual the states explain, when
-    /// the window holds enough innovations and the χ² test (on them) rejects
-    /// that the states add nothing.
-    fn explained(&self, restricted: usize) -> Option<f64> {
-        let full_width = self.gram.nrows();
-        let (b, r) = self.fit(restricted)?;
-        let (_, f) = self.fit(full_width)?;
-        let q = full_width - restricted;
-        let n = self.innovations(&b, r);
-        if r <= 1e-12 * self.square || n < (MIN_INNOVATIONS * q) as f64 {
+    /// The share of input `j`'s restricted fit's residual the states
+    /// explain, when the window holds enough innovations and the χ² test (on
+    /// them) rejects that the states add nothing. The full fit is solved
+    /// only for a window that can be judged.
+    fn explained(&self, j: usize) -> Option<f64> {
+        let (b, r) = self.fit(j, OWN)?;
+        let q = self.width - OWN;
+        let n = self.innovations(j, &b, r);
+        if r <= 1e-12 * self.inputs[j].square || n < (MIN_INNOVATIONS * q) as f64 {
             return None;
         }
-        let stat = (n - full_width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
+        let (_, f) = self.fit(j, self.width)?;
+        let stat = (n - self.width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
         (chi_squared_tail(stat, q) < 1e-6).then_some((r - f) / r)
-    }
-}
-
-/// The regressors of sample `k` for input `j`: `1`, `u_j(k−1..k−LAGS)`,
-/// then every state at `k, k−1, …, k−LAGS` (`past[l]` is sample `k−1−l`).
-fn regressors(now: &[f64], past: &[(Vec<f64>, Vec<f64>)], j: usize, x: &mut DVector<f64>) {
-    let mut i = 0;
-    x[i] = 1.0;
-    for (_, inputs) in past {
-        i += 1;
-        x[i] = inputs[j];
-    }
-    for states in std::iter::once(now).chain(past.iter().map(|(s, _)| s.as_slice())) {
-        for s in states {
-            i += 1;
-            x[i] = *s;
-        }
     }
 }
 
@@ -150,37 +207,41 @@ pub fn feedback(ir: &Ir, source: &dyn Source) -> Vec<Feedback> {
     if ir.inputs.is_empty() || source.len() < MIN_WINDOW {
         return Vec::new();
     }
-    let restricted = 1 + LAGS;
-    let width = restricted + (LAGS + 1) * ir.states.len();
-    let mut sums: Vec<Sums> = ir.inputs.iter().map(|_| Sums::new(width)).collect();
-    let mut past: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(LAGS);
+    let n_states = ir.states.len();
+    let width = OWN + (LAGS + 1) * n_states;
+    let mut sums = Sums::new(width, ir.inputs.len());
+    // The states at k, k−1, …, k−LAGS (the regressors from column OWN on),
+    // and each input's lags k−1, …, k−LAGS.
+    let mut x = vec![0.0; width];
+    let mut lags = vec![[0.0; LAGS]; ir.inputs.len()];
+    let mut seen = 0;
     let mut flagged: Vec<(usize, usize, Vec<usize>, f64)> = Vec::new();
-    let mut x = DVector::zeros(width);
     let mut k = 0;
     let mut start = 0;
     source.visit(&mut |row: &Row| {
-        if past.len() == LAGS {
-            for (j, s) in sums.iter_mut().enumerate() {
-                regressors(row.states, &past, j, &mut x);
-                s.push(&x, row.inputs[j]);
-            }
+        x.copy_within(OWN..width - n_states, OWN + n_states);
+        x[OWN..OWN + n_states].copy_from_slice(row.states);
+        if seen == LAGS {
+            sums.push(&mut x, &lags, row.inputs);
+        } else {
+            seen += 1;
         }
-        past.insert(0, (row.states.to_vec(), row.inputs.to_vec()));
-        past.truncate(LAGS);
+        for (l, u) in lags.iter_mut().zip(row.inputs) {
+            l.copy_within(0..LAGS - 1, 1);
+            l[0] = *u;
+        }
         k += 1;
         let last = k == source.len();
         if k - start == window || (last && k - start >= MIN_WINDOW) {
-            let shares: Vec<(usize, f64)> = sums
-                .iter()
-                .enumerate()
-                .filter_map(|(j, s)| s.explained(restricted).map(|e| (j, e)))
+            let shares: Vec<(usize, f64)> = (0..ir.inputs.len())
+                .filter_map(|j| sums.explained(j).map(|e| (j, e)))
                 .filter(|(_, e)| *e >= EXPLAINED)
                 .collect();
             if !shares.is_empty() {
                 let most = shares.iter().map(|(_, e)| *e).fold(0.0, f64::max);
                 flagged.push((start, k - 1, shares.iter().map(|(j, _)| *j).collect(), most));
             }
-            sums.iter_mut().for_each(|s| *s = Sums::new(width));
+            sums.clear();
             start = k;
         }
     });

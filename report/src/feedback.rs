@@ -14,31 +14,143 @@ pub fn closed_loop(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Feedback> {
     experiments.iter().flat_map(|e| feedback(ir, *e)).collect()
 }
 
-/// One warning per stretch of [`closed_loop`].
+/// An experiment with more flagged stretches than this gets one warning
+/// for all of them: a long record of smoothed random inputs can have dozens
+/// of windows a controller seems to explain, and a terminal is not flooded.
+pub const STRETCHES_APART: usize = 3;
+
+/// Stretches named in the detail of an experiment's one warning.
+const STRETCHES_LISTED: usize = 20;
+
+/// One warning per stretch of [`closed_loop`], or one per experiment with
+/// more than [`STRETCHES_APART`] of them, in experiment order.
 pub fn closed_loop_alerts(stretches: &[Feedback]) -> Vec<Warning> {
-    stretches
+    let mut out = Vec::new();
+    for one in stretches.chunk_by(|a, b| a.experiment == b.experiment) {
+        if one.len() > STRETCHES_APART {
+            out.push(stretches_alert(one));
+        } else {
+            out.extend(one.iter().map(stretch_alert));
+        }
+    }
+    out
+}
+
+fn stretch_alert(f: &Feedback) -> Warning {
+    let inputs = f.inputs.join(", ");
+    let share = format!("{:.0} %", 100.0 * f.explained);
+    Warning::new(
+        "closed-loop",
+        format!(
+            "experiment `{}`, {} to {} s from its start: {inputs} follow the measured motion (closed loop, {share} explained)",
+            f.experiment,
+            num(f.from),
+            num(f.to)
+        ),
+        HELP,
+        format!(
+            "experiment `{}`, samples {}–{} (t = {} to {} s from its start): the past motion explains {share} of what the inputs' own past leaves of {inputs}; {ASSUMES}",
+            f.experiment,
+            f.first,
+            f.last,
+            num(f.from),
+            num(f.to)
+        ),
+    )
+}
+
+/// The help of a closed-loop warning.
+const HELP: &str = "a controller was in the loop there (dynamic positioning, an autopilot); leave the stretch out if the craft met disturbances";
+
+/// One warning for an experiment's many stretches (at least one).
+fn stretches_alert(all: &[Feedback]) -> Warning {
+    let mut inputs: Vec<&str> = Vec::new();
+    for name in all.iter().flat_map(|f| &f.inputs) {
+        if !inputs.contains(&name.as_str()) {
+            inputs.push(name);
+        }
+    }
+    let inputs = inputs.join(", ");
+    let most = all.iter().map(|f| f.explained).fold(0.0, f64::max);
+    let share = format!("{:.0} %", 100.0 * most);
+    let (first, last) = (&all[0], &all[all.len() - 1]);
+    let mut listed: Vec<String> = all
         .iter()
+        .take(STRETCHES_LISTED)
         .map(|f| {
-            let inputs = f.inputs.join(", ");
-            let share = format!("{:.0} %", 100.0 * f.explained);
-            Warning::new(
-                "closed-loop",
-                format!(
-                    "experiment `{}`, {} to {} s from its start: {inputs} follow the measured motion (closed loop, {share} explained)",
-                    f.experiment,
-                    num(f.from),
-                    num(f.to)
-                ),
-                "a controller was in the loop there (dynamic positioning, an autopilot); leave the stretch out if the craft met disturbances",
-                format!(
-                    "experiment `{}`, samples {}–{} (t = {} to {} s from its start): the past motion explains {share} of what the inputs' own past leaves of {inputs}; {ASSUMES}",
-                    f.experiment,
-                    f.first,
-                    f.last,
-                    num(f.from),
-                    num(f.to)
-                ),
+            format!(
+                "samples {}–{} ({} to {} s, {}: {:.0} %)",
+                f.first,
+                f.last,
+                num(f.from),
+                num(f.to),
+                f.inputs.join(", "),
+                100.0 * f.explained
             )
         })
-        .collect()
+        .collect();
+    if all.len() > STRETCHES_LISTED {
+        listed.push(format!("and {} more", all.len() - STRETCHES_LISTED));
+    }
+    Warning::new(
+        "closed-loop",
+        format!(
+            "experiment `{}`, {} stretches from {} to {} s from its start: {inputs} follow the measured motion (closed loop, up to {share} explained)",
+            first.experiment,
+            all.len(),
+            num(first.from),
+            num(last.to)
+        ),
+        HELP,
+        format!(
+            "experiment `{}`: the past motion explains at least half of what the inputs' own past leaves in {} stretches: {}; {ASSUMES}",
+            first.experiment,
+            all.len(),
+            listed.join("; ")
+        ),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stretch(experiment: &str, k: usize, input: &str) -> Feedback {
+        Feedback {
+            experiment: experiment.to_string(),
+            inputs: vec![input.to_string()],
+            first: 1000 * k,
+            last: 1000 * k + 99,
+            from: 1000.0 * k as f64,
+            to: 1000.0 * k as f64 + 99.0,
+            explained: 0.5 + 0.01 * k as f64,
+        }
+    }
+
+    #[test]
+    fn many_stretches_of_one_experiment_are_one_warning() {
+        let mut all: Vec<Feedback> = (0..45)
+            .map(|k| stretch("long", k, if k % 2 == 0 { "tau1" } else { "tau2" }))
+            .collect();
+        all.extend((0..2).map(|k| stretch("short", k, "tau3")));
+        let alerts = closed_loop_alerts(&all);
+        assert_eq!(alerts.len(), 3, "{alerts:?}");
+        assert_eq!(
+            alerts[0].summary,
+            "experiment `long`, 45 stretches from 0 to 44099 s from its start: tau1, tau2 follow the measured motion (closed loop, up to 94 % explained)"
+        );
+        let detail = &alerts[0].detail;
+        assert!(!detail.contains("samples 20000–20099"), "{detail}");
+        assert!(
+            detail.contains("samples 19000–19099 (19000 to 19099 s, tau2: 69 %); and 25 more"),
+            "{detail}"
+        );
+        assert!(
+            alerts[1]
+                .summary
+                .starts_with("experiment `short`, 0 to 99 s")
+        );
+        // Three stretches still get a warning each.
+        assert_eq!(closed_loop_alerts(&all[..3]).len(), 3);
+    }
 }
