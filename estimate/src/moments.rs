@@ -319,6 +319,14 @@ pub struct MomentAccumulator {
     base: usize,
 }
 
+/// The bytes [`MomentAccumulator::keep_rows`] takes for `samples` rows of
+/// `p` regressors (before any room reserved for a longer record).
+pub fn kept_rows_bytes(p: usize, samples: usize) -> usize {
+    (samples.saturating_add(BLOCK))
+        .saturating_mul(padded(p + 2))
+        .saturating_mul(std::mem::size_of::<f64>())
+}
+
 impl MomentAccumulator {
     /// Empty sums for `m` instruments and `p` regressors.
     pub fn new(m: usize, p: usize) -> MomentAccumulator {

@@ -4,7 +4,9 @@
 
 use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
 use crate::method::Instruments;
-use crate::moments::{CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows};
+use crate::moments::{
+    CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows, kept_rows_bytes,
+};
 use crate::prefix::{Checkpoint, Wanted};
 use leeway_model::delay::delayed;
 use leeway_model::experiment::Source;
@@ -276,7 +278,18 @@ impl<'a> MomentPass<'a> {
         // its later passes — and by other estimates' passes with the same
         // plan; least squares makes one pass, and keeps its rows only for
         // others.
-        let keeps = self.scan && (plan.instruments.is_some() || keep_for_others);
+        // Rows the cache could not take are not kept at all: a record whose
+        // rows exceed what is left of the budget would otherwise allocate and
+        // zero them on every pass, only to drop them.
+        let fits = cache.as_ref().is_some_and(|(_, left)| {
+            let bytes = plan
+                .cols
+                .iter()
+                .map(|c| kept_rows_bytes(c.len(), e.len()))
+                .fold(0usize, usize::saturating_add);
+            bytes <= **left
+        });
+        let keeps = self.scan && fits && (plan.instruments.is_some() || keep_for_others);
         let instruments_key = instruments_key(ir, plan, walker, info);
         let reads_means = reads_measured_disturbances(ir, plan.kind);
         let (cache, budget) = cache.unzip();
