@@ -4,7 +4,8 @@
 //!
 //! `cargo run --release -p leeway-bench --bin stream-memory -- 10000000`
 //!
-//! `stream-memory write N FILE.csv` writes the same N samples as a CSV log
+//! `stream-memory write N FILE.csv [SEED]` writes the same N samples as a CSV log
+//! (or, with SEED, another record of the same system)
 //! instead (row by row, in flat memory), for measuring `leeway estimate` on
 //! a file: `/usr/bin/time -v leeway estimate examples/models/ship.som --data FILE.csv`.
 
@@ -74,6 +75,12 @@ fn main() {
         .get(if writing { 2 } else { 1 })
         .and_then(|s| s.parse().ok())
         .unwrap_or(10_000_000);
+    // `write N FILE SEED`: another record of the same system (a campaign's runs).
+    let seed: u64 = args
+        .get(4)
+        .filter(|_| writing)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
     let design = InputDesign::default();
     let stream = Stream {
         model: &Ship,
@@ -82,8 +89,8 @@ fn main() {
         x0: design.x0.to_vec(),
         psi0: 0.0,
         n,
-        seed: 7,
-        input: Box::new(move || Box::new(Pulses::new(&InputDesign::default(), 11))),
+        seed: 7 + 2 * seed,
+        input: Box::new(move || Box::new(Pulses::new(&InputDesign::default(), 11 + 2 * seed))),
     };
     if writing {
         let path = args.get(3).map_or("stream.csv", String::as_str);
