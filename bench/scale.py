@@ -143,7 +143,8 @@ def campaign(args, bench: Path, files: int) -> None:
             csv.unlink()
         paths.append(parquet)
     out = directory / "local.json"
-    cmd = [args.leeway, "estimate", str(MODEL), "--method", "iv3", "--aggregate", "--json", "--data", *map(str, paths)]
+    cmd = [args.leeway, "estimate", str(MODEL), "--method", "iv3", "--aggregate", "--json"]
+    cmd += [a for p in paths for a in ("--data", str(p))]
     wall, cpu, rss = run(cmd, out)
     print(f"\ncampaign of {files} × 10⁶ samples, IV3, one process: {wall:.1f} s wall, {cpu:.1f} s CPU, {rss:.0f} MiB peak")
     try:

@@ -14,6 +14,7 @@
 //! least [`EXPLAINED`] of what the input's own past leaves, and the χ² test
 //! of the added terms rejects open loop at 10⁻⁶.
 
+use crate::parallel::{in_order, threads_for};
 use leeway_model::correlation::chi_squared_tail;
 use leeway_model::experiment::{Row, Source};
 use leeway_structure::ir::Ir;
@@ -198,6 +199,17 @@ impl Sums {
         let stat = (n - self.width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
         (chi_squared_tail(stat, q) < 1e-6).then_some((r - f) / r)
     }
+}
+
+/// The stretches of every experiment where the motion predicts an input,
+/// in experiment order: each experiment checked on its own thread, on the
+/// machine's cores.
+pub fn feedback_each(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Feedback> {
+    let threads = threads_for(experiments.len());
+    in_order(experiments.len(), threads, |i| feedback(ir, experiments[i]))
+        .into_iter()
+        .flatten()
+        .collect()
 }
 
 /// The stretches of `source` where the motion predicts an input.

@@ -3,6 +3,7 @@
 
 use crate::cache::{Continued, KEEP_BUDGET, RecordCache};
 use crate::outcome::EstimateError;
+use crate::parallel::{in_order, threads_for};
 use crate::plan::{PlanKey, StructuralPlan};
 use crate::protocol::{
     ExperimentFacts, FactsRequest, Pass, PassRequest, PassSummary, Passes, Summary,
@@ -25,6 +26,9 @@ pub struct LocalPasses<'a> {
     runner: PassRunner<'a>,
     experiments: &'a [&'a dyn Source],
     kept: std::sync::Mutex<KeptPasses>,
+    /// Threads a pass over streamed experiments uses (in-memory ones are
+    /// passed over in order, on one, for what they keep).
+    threads: usize,
 }
 
 /// What [`LocalPasses`] kept of each in-memory record — its regressor rows
@@ -73,6 +77,27 @@ impl<'a> LocalPasses<'a> {
                 budget: KEEP_BUDGET,
                 for_others: false,
             }),
+            threads: threads_for(experiments.len()),
+        }
+    }
+
+    /// Passes over streamed experiments on at most `threads` threads (the
+    /// default: the machine's cores). The summaries are the same whatever
+    /// the number.
+    pub fn with_threads(self, threads: usize) -> LocalPasses<'a> {
+        LocalPasses {
+            threads: threads.max(1),
+            ..self
+        }
+    }
+
+    /// The threads a pass uses: one when any experiment is held in memory
+    /// (its cache is kept in experiment order, against one budget).
+    fn pass_threads(&self) -> usize {
+        if self.experiments.iter().any(|e| e.in_memory().is_some()) {
+            1
+        } else {
+            self.threads
         }
     }
 
@@ -96,6 +121,7 @@ impl<'a> LocalPasses<'a> {
             runner: self.runner,
             experiments: self.experiments,
             kept: std::sync::Mutex::new(kept),
+            threads: self.threads,
         }
     }
 
@@ -186,11 +212,12 @@ impl Passes for LocalPasses<'_> {
             .iter()
             .map(|c| c.as_ref().and_then(|c| c.facts_state(kind)).cloned())
             .collect();
-        let (facts, stands): (Vec<ExperimentFacts>, Vec<Option<FactsState>>) = self
-            .experiments
-            .iter()
-            .zip(from)
-            .map(|(e, from)| self.runner.facts_from(*e, request, from))
+        let (facts, stands): (Vec<ExperimentFacts>, Vec<Option<FactsState>>) =
+            in_order(self.experiments.len(), self.pass_threads(), |i| {
+                self.runner
+                    .facts_from(self.experiments[i], request, from[i].clone())
+            })
+            .into_iter()
             .unzip();
         for (cache, stands) in self.kept().records.iter_mut().zip(stands) {
             if let (Some(c), Some(s)) = (cache, stands) {
@@ -205,6 +232,22 @@ impl Passes for LocalPasses<'_> {
 
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
         let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
+        let threads = self.pass_threads();
+        if threads > 1 {
+            // Streamed experiments keep nothing: each walked on its own.
+            let mut out = in_order(self.experiments.len(), threads, |i| {
+                self.runner
+                    .pass_keeping(self.experiments[i], i, request, None)
+            });
+            if stop_early
+                && let Some(k) = out
+                    .iter()
+                    .position(|s| matches!(s.0, Summary::Diverged { .. }))
+            {
+                out.truncate(k + 1);
+            }
+            return Ok(out);
+        }
         let mut kept = self.kept();
         let KeptPasses {
             records,

@@ -1,6 +1,6 @@
 //! The closed-loop check's warnings ([`leeway_estimate::feedback`]).
 
-use leeway_estimate::feedback::{Feedback, feedback};
+use leeway_estimate::feedback::{Feedback, feedback_each};
 use leeway_model::experiment::Source;
 use leeway_model::number::short_number as num;
 use leeway_model::warning::Warning;
@@ -11,7 +11,7 @@ const ASSUMES: &str = "the estimators assume the inputs independent of the distu
 
 /// The stretches of every experiment where the motion predicts an input.
 pub fn closed_loop(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Feedback> {
-    experiments.iter().flat_map(|e| feedback(ir, *e)).collect()
+    feedback_each(ir, experiments)
 }
 
 /// An experiment with more flagged stretches than this gets one warning

@@ -9,6 +9,7 @@ use leeway_estimate::EstimateError;
 use leeway_estimate::EstimateOptions;
 use leeway_estimate::ExperimentFacts;
 use leeway_estimate::FactsRequest;
+use leeway_estimate::LocalPasses;
 use leeway_estimate::Method;
 use leeway_estimate::PassRequest;
 use leeway_estimate::PassRunner;
@@ -441,5 +442,49 @@ fn continued_instruments_reach_the_same_fixed_point() {
                 );
             }
         }
+    }
+}
+
+/// A record that hides that it is in memory, as a streamed file does.
+struct Streamed<'a>(&'a Experiment);
+
+impl Source for Streamed<'_> {
+    fn name(&self) -> &str {
+        &self.0.name
+    }
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn step(&self) -> f64 {
+        self.0.h
+    }
+    fn visit(&self, f: &mut dyn FnMut(&leeway_model::Row)) {
+        self.0.visit(f);
+    }
+}
+
+#[test]
+fn streamed_experiments_on_several_threads_give_the_estimate_of_one() {
+    let model = ship();
+    let data = experiments(&model);
+    let streamed: Vec<Streamed> = data.iter().map(Streamed).collect();
+    let sources: Vec<&dyn Source> = streamed.iter().map(|e| e as &dyn Source).collect();
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    for method in [Method::Iv3, Method::Ls, Method::Iv1] {
+        let options = aggregated(method);
+        let one = estimate_with(
+            &model,
+            &LocalPasses::new(&model, &sources).with_threads(1),
+            &options,
+        )
+        .expect("one thread");
+        for threads in [2, 3, 8] {
+            let passes = LocalPasses::new(&model, &sources).with_threads(threads);
+            let many = estimate_with(&model, &passes, &options).expect("several threads");
+            assert_eq!(bits(&one), bits(&many), "{method:?} on {threads} threads");
+        }
+        // And the in-memory records' estimate, which keeps what it computed.
+        let local = estimate(&model, &held, &options).expect("in memory");
+        assert_eq!(bits(&one), bits(&local), "{method:?}");
     }
 }
