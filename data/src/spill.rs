@@ -4,7 +4,7 @@
 //!
 //! Each row is its position and its values in base units, little-endian, in
 //! a temporary file removed when the sources are dropped. A visit reads its
-//! block back through a 64 KiB buffer holding one row at a time, so the
+//! block back a chunk of 8192 rows at a time (one read each), so the
 //! values are the validated ones bit for bit, no pass parses text again, a
 //! file rewritten after validation changes nothing, and memory does not grow
 //! with the file.
@@ -129,28 +129,40 @@ impl FileSource {
         if let Err(e) = handle.seek(SeekFrom::Start((self.first_record + from as u64) * record)) {
             return self.fail(lost(e.to_string()));
         }
-        let mut input = std::io::BufReader::with_capacity(1 << 16, handle);
-        let mut bytes = vec![0u8; 8 * (1 + self.spill.width)];
+        // Rows are read a chunk at a time (one read of a few hundred KiB),
+        // then decoded one by one into the row handed to `f`.
+        let width = record as usize;
+        let rows = self.block.rows;
+        let mut chunk = vec![0u8; width * READ_ROWS.min(rows.saturating_sub(from).max(1))];
         let mut buf = RowBuf::sized(self.n_states, self.n_inputs, self.n_rotation, self.n_comp);
         let word = |b: &[u8], i: usize| -> [u8; 8] {
             let mut w = [0u8; 8];
             w.copy_from_slice(&b[8 * i..8 * i + 8]);
             w
         };
-        for k in from..self.block.rows {
-            if let Err(e) = input.read_exact(&mut bytes) {
-                return self.fail(lost(format!("row {} of {}: {e}", k + 1, self.block.rows)));
+        let mut k = from;
+        while k < rows {
+            let n = READ_ROWS.min(rows - k);
+            let bytes = &mut chunk[..n * width];
+            if let Err(e) = handle.read_exact(bytes) {
+                return self.fail(lost(format!("rows {} to {} of {rows}: {e}", k + 1, k + n)));
             }
-            let line = u64::from_le_bytes(word(&bytes, 0));
-            for (j, role) in self.roles.iter().enumerate() {
-                buf.set(role, f64::from_le_bytes(word(&bytes, j + 1)));
-            }
-            if !f(k, line, &buf.row()) {
-                return;
+            for row in bytes.chunks_exact(width) {
+                let line = u64::from_le_bytes(word(row, 0));
+                for (j, role) in self.roles.iter().enumerate() {
+                    buf.set(role, f64::from_le_bytes(word(row, j + 1)));
+                }
+                if !f(k, line, &buf.row()) {
+                    return;
+                }
+                k += 1;
             }
         }
     }
 }
+
+/// Rows of the spill read at a time.
+const READ_ROWS: usize = 1 << 13;
 
 impl Source for FileSource {
     fn name(&self) -> &str {
