@@ -1,0 +1,175 @@
+//! One chunk of a CSV file's lines parsed into columns, on the fast path of
+//! [`CsvFile`](crate::csv_fast::CsvFile): what one thread does.
+//!
+//! The chunk only takes what it can prove the exact reader
+//! ([`Records`](crate::csv::Records)) reads the same way: comment and blank
+//! lines dropped and counted as its line filter does, and rows that are
+//! plain lines (no `"`, as many cells as the header) split at commas and
+//! trimmed as the csv crate's `Trim::All` does. It stops at the first line
+//! it does not take, for the exact reader to go on from there. A cell is
+//! parsed here only when it is made of `[0-9+-.eE]` and the fast parser
+//! reads all of it to a finite number, which `str::parse::<f64>` (both
+//! correctly rounded) reads to the same bits; any other cell is left for
+//! [`cell`](crate::csv::cell) to read (or refuse) from the line's text.
+
+/// The rows of a chunk: the selected columns' values and where each row is.
+#[derive(Debug, Default)]
+pub(crate) struct Chunk {
+    /// The selected columns' values, row by row; NaN where the cell was
+    /// left for the exact reading (never a value taken: those are finite).
+    pub(crate) values: Vec<f64>,
+    /// Per row: the physical lines of the chunk before its line.
+    pub(crate) lines: Vec<u64>,
+    /// Per row: where its line starts and ends (without the line end) in
+    /// the chunk.
+    pub(crate) spans: Vec<(usize, usize)>,
+    /// `(row, comments, blanks)` for each row after dropped lines: the
+    /// comment and blank lines of the chunk before it.
+    pub(crate) drops: Vec<(usize, usize, usize)>,
+    /// Physical, comment and blank lines of the chunk (before `stop` if any).
+    pub(crate) physical: u64,
+    pub(crate) comments: usize,
+    pub(crate) blanks: usize,
+    /// Where the first line the chunk does not take starts.
+    pub(crate) stop: Option<usize>,
+}
+
+impl Chunk {
+    /// The rows taken.
+    pub(crate) fn rows(&self) -> usize {
+        self.lines.len()
+    }
+    /// The comment and blank lines of the chunk before row `row`.
+    pub(crate) fn dropped_before(&self, row: usize) -> (usize, usize) {
+        let i = self.drops.partition_point(|(r, ..)| *r <= row);
+        match i {
+            0 => (0, 0),
+            _ => (self.drops[i - 1].1, self.drops[i - 1].2),
+        }
+    }
+}
+
+/// The columns a chunk parses: `slots[c]` is the place of column `c` among
+/// a row's values; the header has `cells` cells.
+#[derive(Clone, Debug)]
+pub(crate) struct Selection {
+    pub(crate) cells: usize,
+    pub(crate) slots: Vec<Option<usize>>,
+    /// Values per row.
+    pub(crate) width: usize,
+}
+
+impl Selection {
+    /// Columns `columns` of a header of `cells` cells (each once, in order
+    /// of first mention).
+    pub(crate) fn new(cells: usize, columns: &[usize]) -> Selection {
+        let mut slots = vec![None; cells];
+        let mut width = 0;
+        for &c in columns {
+            if let Some(slot @ None) = slots.get_mut(c) {
+                *slot = Some(width);
+                width += 1;
+            }
+        }
+        Selection {
+            cells,
+            slots,
+            width,
+        }
+    }
+}
+
+/// Parses whole lines (`text` ends at a line end or the file's end).
+pub(crate) fn parse_chunk(text: &[u8], selection: &Selection) -> Chunk {
+    let mut chunk = Chunk::default();
+    let mut pos = 0;
+    let mut dropped = false;
+    while pos < text.len() {
+        let end = text[pos..]
+            .iter()
+            .position(|b| *b == b'\n')
+            .map_or(text.len(), |k| pos + k);
+        let line = &text[pos..end];
+        // As the filter: a line of whitespace is blank, one whose first
+        // other byte is `#` a comment.
+        match line.iter().find(|b| !b.is_ascii_whitespace()) {
+            None => {
+                chunk.blanks += 1;
+                dropped = true;
+            }
+            Some(b'#') => {
+                chunk.comments += 1;
+                dropped = true;
+            }
+            Some(_) => {
+                if !take_row(&mut chunk.values, line, selection) {
+                    chunk.stop = Some(pos);
+                    return chunk;
+                }
+                if dropped {
+                    chunk
+                        .drops
+                        .push((chunk.rows(), chunk.comments, chunk.blanks));
+                    dropped = false;
+                }
+                chunk.lines.push(chunk.physical);
+                chunk.spans.push((pos, end));
+            }
+        }
+        chunk.physical += 1;
+        pos = end + 1;
+    }
+    chunk
+}
+
+/// Appends a plain line's selected values; false (nothing appended) for a
+/// line with a quote or a cell count other than the header's.
+fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
+    if line.contains(&b'"') {
+        return false;
+    }
+    let base = values.len();
+    values.resize(base + selection.width, f64::NAN);
+    let mut cells = 0;
+    for field in line.split(|b| *b == b',') {
+        if let Some(Some(slot)) = selection.slots.get(cells)
+            && let Some(v) = plain_number(trim(field))
+        {
+            values[base + slot] = v;
+        }
+        cells += 1;
+    }
+    if cells != selection.cells {
+        values.truncate(base);
+        return false;
+    }
+    true
+}
+
+/// Cell `i` of a plain line, trimmed as the csv reader trims it (empty if
+/// absent).
+pub(crate) fn field(line: &[u8], i: usize) -> &[u8] {
+    line.split(|b| *b == b',').nth(i).map_or(b"", trim)
+}
+
+/// The csv crate's `Trim::All`: ASCII whitespace off both ends.
+fn trim(bytes: &[u8]) -> &[u8] {
+    bytes.trim_ascii()
+}
+
+/// A cell the fast parser reads to the bits `str::parse::<f64>` gives: a
+/// plain decimal read whole to a finite value. `None` leaves the cell to
+/// the exact reading.
+pub(crate) fn plain_number(cell: &[u8]) -> Option<f64> {
+    let plain = !cell.is_empty()
+        && cell
+            .iter()
+            .all(|b| matches!(b, b'0'..=b'9' | b'+' | b'-' | b'.' | b'e' | b'E'));
+    if !plain {
+        return None;
+    }
+    match fast_float2::parse::<f64, _>(cell) {
+        Ok(v) if v.is_finite() => Some(v),
+        _ => None,
+    }
+}
