@@ -3,6 +3,7 @@
 
 use super::*;
 use crate::csv_chunk::plain_number;
+use leeway_model::experiment::Source;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -266,4 +267,114 @@ fn plain_numbers_are_parsed_to_the_bits_of_str_parse() {
         }
     }
     assert!(taken > 100_000, "{taken}");
+}
+
+/// The test model: time, two states, one input, an experiment column.
+fn model() -> leeway_structure::ir::Ir {
+    let src = "model M { state u, r input delta der u = X*u + T*delta der r = N*r step 1.0 }";
+    leeway_structure::compile(src, &leeway_structure::CompileOptions::default())
+        .ir
+        .unwrap_or_else(|| panic!("the test model compiles"))
+}
+
+/// `n` rows of a valid log, `odd(k)` replacing row k's text when it gives one.
+fn big_log(n: usize, odd: &dyn Fn(usize) -> Option<String>) -> Vec<u8> {
+    let mut text = String::from("# logger\ntime,u,r,delta\n");
+    for k in 0..n {
+        if k % 100_000 == 50_000 {
+            text.push_str("# pause\r\n\n");
+        }
+        match odd(k) {
+            Some(row) => text.push_str(&row),
+            None => text.push_str(&format!(
+                "{k},{},{:e},35\n",
+                1.0 + 1e-3 * (k % 7) as f64,
+                ((k % 1000) as f64 * 1e-3).sin()
+            )),
+        }
+    }
+    text.into_bytes()
+}
+
+/// Every value of the loaded experiments, as bits.
+fn bits(loaded: &crate::notes::LoadedFile) -> Vec<u64> {
+    let mut out = Vec::new();
+    for e in &loaded.experiments {
+        e.visit(&mut |r| {
+            out.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits()));
+        });
+    }
+    out
+}
+
+#[test]
+fn a_quoted_cell_in_a_large_file_and_the_rows_after_it_read_as_today() {
+    let ir = model();
+    let options = crate::options::LoadOptions::default();
+    let text = big_log(300_000, &|k| {
+        (k == 150_001).then(|| format!("{k},\"1.25\",0.5,35\n"))
+    });
+    let f = file_of(&text);
+    let exact = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk: 1 << 16, threads: 3 })
+        .unwrap_or_else(|e| panic!("{e}"));
+    let fast = load_table(&mut table, &ir, &options).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!table.is_fast(), "the quoted cell is read by the exact reader");
+    assert_eq!(fast.notes, exact.notes);
+    assert_eq!(bits(&fast), bits(&exact));
+    assert_eq!(fast.experiments[0].len(), 300_000);
+    // Row 150 001's u is the quoted 1.25.
+    let mut u = Vec::new();
+    fast.experiments[0].visit(&mut |r| u.push(r.states[0]));
+    assert_eq!(u[150_001], 1.25);
+    assert_eq!((fast.notes.comment_lines, fast.notes.blank_lines), (4, 3));
+}
+
+#[test]
+fn a_bad_cell_deep_in_a_large_file_is_located_as_today_whatever_the_threads() {
+    let ir = model();
+    let options = crate::options::LoadOptions::default();
+    let text = big_log(720_000, &|k| (k == 700_000).then(|| format!("{k},1,0.5x,35\n")));
+    let f = file_of(&text);
+    let mut errors = Vec::new();
+    for threads in [1, 2, 5] {
+        let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk: 1 << 18, threads })
+            .unwrap_or_else(|e| panic!("{e}"));
+        let err = load_table(&mut table, &ir, &options)
+            .err()
+            .unwrap_or_else(|| panic!("`0.5x` is not a number"));
+        assert!(table.is_fast(), "a bad cell needs no hand-over");
+        errors.push(err);
+    }
+    // Row k sits on line k + 3 (a comment, the header) plus two dropped
+    // lines before rows 50 000, 150 000, … (7 of them before row 700 000).
+    let at = format!("{}:{}:3 (r)", f.path().display(), 700_000 + 3 + 2 * 7);
+    assert_eq!(errors[0].location, at);
+    assert_eq!(errors[0].message, "`0.5x` is not a number");
+    assert!(errors.iter().all(|e| *e == errors[0]));
+    let exact = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options)
+        .err()
+        .unwrap_or_else(|| panic!("`0.5x` is not a number"));
+    assert_eq!(errors[0], exact);
+}
+
+#[test]
+fn the_loaded_file_does_not_depend_on_batches_or_threads() {
+    let ir = model();
+    let options = crate::options::LoadOptions::default();
+    let text = big_log(20_000, &|k| match k {
+        7_000 => Some(format!("{k}, 1.0 ,\t2e-3,+35\r\n")),
+        9_000 => Some(format!("{k},1,0.5,35,\n")),
+        _ => None,
+    });
+    let f = file_of(&text);
+    let want = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options);
+    for (chunk, threads) in [(1, 1), (97, 2), (4096, 3), (1 << 20, 8)] {
+        let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk, threads })
+            .unwrap_or_else(|e| panic!("{e}"));
+        let got = load_table(&mut table, &ir, &options);
+        assert_eq!(got.as_ref().map(bits), want.as_ref().map(bits));
+        assert_eq!(got.map(|l| l.notes), want.as_ref().map(|l| l.notes.clone()).map_err(Clone::clone));
+    }
 }
