@@ -4,8 +4,9 @@
 //! The chunk only takes what it can prove the exact reader
 //! ([`Records`](crate::csv::Records)) reads the same way: comment and blank
 //! lines dropped and counted as its line filter does, and rows that are
-//! plain lines (no `"`, as many cells as the header) split at commas and
-//! trimmed as the csv crate's `Trim::All` does. It stops at the first line
+//! plain lines (as many cells as the header, each without quotes or quoted
+//! simply: `"run 1"`) split at commas and trimmed as the csv crate's
+//! `Trim::All` does. It stops at the first line
 //! it does not take, for the exact reader to go on from there. A cell is
 //! parsed here only when it is made of `[0-9+-.eE]` and the fast parser
 //! reads all of it to a finite number, which `str::parse::<f64>` (both
@@ -123,17 +124,27 @@ pub(crate) fn parse_chunk(text: &[u8], selection: &Selection) -> Chunk {
 }
 
 /// Appends a plain line's selected values; false (nothing appended) for a
-/// line with a quote or a cell count other than the header's.
+/// line with a quote other than a simply quoted cell's (see [`cell_text`])
+/// or a cell count other than the header's.
 fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
-    if line.contains(&b'"') {
-        return false;
-    }
+    let quoted = line.contains(&b'"');
     let base = values.len();
     values.resize(base + selection.width, f64::NAN);
     let mut cells = 0;
-    for field in line.split(|b| *b == b',') {
+    for piece in line.split(|b| *b == b',') {
+        let text = if quoted {
+            match cell_text(piece) {
+                Some(t) => t,
+                None => {
+                    values.truncate(base);
+                    return false;
+                }
+            }
+        } else {
+            piece.trim_ascii()
+        };
         if let Some(Some(slot)) = selection.slots.get(cells)
-            && let Some(v) = plain_number(trim(field))
+            && let Some(v) = plain_number(text)
         {
             values[base + slot] = v;
         }
@@ -146,15 +157,41 @@ fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
     true
 }
 
-/// Cell `i` of a plain line, trimmed as the csv reader trims it (empty if
-/// absent).
-pub(crate) fn field(line: &[u8], i: usize) -> &[u8] {
-    line.split(|b| *b == b',').nth(i).map_or(b"", trim)
+/// Whether every cell of a line is plain or simply quoted (see
+/// [`cell_text`]): the csv reader then ends the record at the line's end
+/// and the line filter, seeing an even number of quotes, stays outside
+/// quoted cells.
+pub(crate) fn plain_line(line: &[u8]) -> bool {
+    !line.contains(&b'"') || line.split(|b| *b == b',').all(|p| cell_text(p).is_some())
 }
 
-/// The csv crate's `Trim::All`: ASCII whitespace off both ends.
-fn trim(bytes: &[u8]) -> &[u8] {
-    bytes.trim_ascii()
+/// Cell `i` of a line the chunk took, as the csv reader gives it (empty if
+/// absent).
+pub(crate) fn field(line: &[u8], i: usize) -> &[u8] {
+    line.split(|b| *b == b',')
+        .nth(i)
+        .and_then(cell_text)
+        .unwrap_or(b"")
+}
+
+/// A cell's text (the piece of a line between commas) as the csv reader
+/// with `Trim::All` gives it, where the fast path can tell: a piece without
+/// quotes, trimmed of ASCII whitespace; or one quoted simply — a quote as
+/// its first byte, the closing quote, then only whitespace — whose text is
+/// what is between the quotes, trimmed (the reader appends the whitespace
+/// after the closing quote to it, and trims). `None` for any other quote.
+fn cell_text(piece: &[u8]) -> Option<&[u8]> {
+    match piece.split_first() {
+        Some((b'"', rest)) => {
+            let close = rest.iter().position(|b| *b == b'"')?;
+            rest[close + 1..]
+                .iter()
+                .all(u8::is_ascii_whitespace)
+                .then(|| rest[..close].trim_ascii())
+        }
+        _ if piece.contains(&b'"') => None,
+        _ => Some(piece.trim_ascii()),
+    }
 }
 
 /// A cell the fast parser reads to the bits `str::parse::<f64>` gives: a

@@ -6,16 +6,16 @@
 //! ends into chunks parsed on their own threads ([`parse_chunk`]) into the
 //! selected columns' values and each row's line and byte; the validating
 //! pass then reads rows from there. At most one batch is held, never the
-//! file. Whatever a chunk does not take (a quote, a row with a cell count
-//! other than the header's) is read by the exact reader: a [`Records`]
+//! file. Whatever a chunk does not take (a quote other than around a whole
+//! cell, a row with a cell count other than the header's) is read by the exact reader: a [`Records`]
 //! resumed at that line's byte, with the header and the line and
 //! comment/blank counts carried, so the quoted cell's value or the error
 //! is the one reading the whole file with [`Records`] gives. Files whose
-//! lines end in lone CRs, whose header row holds a quote, or that are not
-//! regular files are read by [`Records`] from the start.
+//! lines end in lone CRs, whose header row the fast path would not take,
+//! or that are not regular files are read by [`Records`] from the start.
 
 use crate::csv::{Records, Resume, cell};
-use crate::csv_chunk::{Chunk, Selection, field, parse_chunk};
+use crate::csv_chunk::{Chunk, Selection, field, parse_chunk, plain_line};
 use crate::error::DataError;
 use crate::notes::LoadedFile;
 use crate::open::open_path;
@@ -211,8 +211,9 @@ struct HeaderEnd {
 /// Where the header row (the first line neither blank nor a comment) ends
 /// in the file's first bytes `head`, if the fast path may read on from
 /// there: the first [`FIRST_BUFFER`] bytes hold a LF (so the filter ends
-/// lines at LF), the header row holds no quote (a quoted cell may hold
-/// line ends) and ends in `head` (`eof`: `head` is the whole file).
+/// lines at LF), the header row's names are plain or simply quoted (other
+/// quotes may hold line ends) and it ends in `head` (`eof`: `head` is the
+/// whole file).
 fn header_end(head: &[u8], eof: bool) -> Option<HeaderEnd> {
     if !head[..head.len().min(FIRST_BUFFER)].contains(&b'\n') {
         return None;
@@ -229,7 +230,7 @@ fn header_end(head: &[u8], eof: bool) -> Option<HeaderEnd> {
         physical += 1;
         match line.iter().find(|b| !b.is_ascii_whitespace()) {
             None | Some(b'#') => pos = end,
-            Some(_) if line.contains(&b'"') => return None,
+            Some(_) if !plain_line(line) => return None,
             Some(_) => {
                 return Some(HeaderEnd {
                     byte: end,
