@@ -36,6 +36,15 @@ pub(crate) struct Chunk {
 }
 
 impl Chunk {
+    /// Empty, its buffers kept.
+    fn clear(&mut self) {
+        self.values.clear();
+        self.lines.clear();
+        self.spans.clear();
+        self.drops.clear();
+        (self.physical, self.comments, self.blanks) = (0, 0, 0);
+        self.stop = None;
+    }
     /// The rows taken.
     pub(crate) fn rows(&self) -> usize {
         self.lines.len()
@@ -80,33 +89,36 @@ impl Selection {
     }
 }
 
-/// Parses whole lines (`text` ends at a line end or the file's end).
-pub(crate) fn parse_chunk(text: &[u8], selection: &Selection) -> Chunk {
-    let mut chunk = Chunk::default();
+/// Parses whole lines (`text` ends at a line end or the file's end) into
+/// `chunk`, whose buffers are reused from batch to batch (memory stays
+/// that of one batch, allocated once).
+pub(crate) fn parse_chunk(text: &[u8], selection: &Selection, chunk: &mut Chunk) {
+    chunk.clear();
     let mut pos = 0;
     let mut dropped = false;
     while pos < text.len() {
-        let end = text[pos..]
-            .iter()
-            .position(|b| *b == b'\n')
-            .map_or(text.len(), |k| pos + k);
-        let line = &text[pos..end];
         // As the filter: a line of whitespace is blank, one whose first
         // other byte is `#` a comment.
-        match line.iter().find(|b| !b.is_ascii_whitespace()) {
-            None => {
+        let first = text[pos..]
+            .iter()
+            .position(|b| *b == b'\n' || !b.is_ascii_whitespace())
+            .map_or(text.len(), |k| pos + k);
+        let end = match text.get(first) {
+            None | Some(b'\n') => {
                 chunk.blanks += 1;
                 dropped = true;
+                first
             }
             Some(b'#') => {
                 chunk.comments += 1;
                 dropped = true;
+                line_end(text, first)
             }
             Some(_) => {
-                if !take_row(&mut chunk.values, line, selection) {
+                let Some(end) = take_row(&mut chunk.values, text, pos, selection) else {
                     chunk.stop = Some(pos);
-                    return chunk;
-                }
+                    return;
+                };
                 if dropped {
                     chunk
                         .drops
@@ -115,33 +127,74 @@ pub(crate) fn parse_chunk(text: &[u8], selection: &Selection) -> Chunk {
                 }
                 chunk.lines.push(chunk.physical);
                 chunk.spans.push((pos, end));
+                end
             }
-        }
+        };
         chunk.physical += 1;
         pos = end + 1;
     }
-    chunk
 }
 
-/// Appends a plain line's selected values; false (nothing appended) for a
-/// line with a quote other than a simply quoted cell's (see [`cell_text`])
-/// or a cell count other than the header's.
-fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
-    let quoted = line.contains(&b'"');
+/// Where the line holding `from` ends (its LF, or the text's end).
+fn line_end(text: &[u8], from: usize) -> usize {
+    text[from..]
+        .iter()
+        .position(|b| *b == b'\n')
+        .map_or(text.len(), |k| from + k)
+}
+
+/// Appends the selected values of the row whose line starts at `pos` and
+/// returns the line's end, in one pass over its bytes; `None` (nothing
+/// appended) for a line with a quote other than a simply quoted cell's (see
+/// [`cell_text`]) or a cell count other than the header's.
+fn take_row(values: &mut Vec<f64>, text: &[u8], pos: usize, selection: &Selection) -> Option<usize> {
+    let base = values.len();
+    values.resize(base + selection.width, f64::NAN);
+    let (mut cells, mut from, mut quoted) = (0, pos, false);
+    let mut end = pos;
+    let mut cell = |cells: usize, piece: &[u8]| {
+        if let Some(Some(slot)) = selection.slots.get(cells)
+            && let Some(v) = plain_number(piece.trim_ascii())
+        {
+            values[base + slot] = v;
+        }
+    };
+    loop {
+        match text.get(end) {
+            None | Some(b'\n') => break,
+            Some(b',') => {
+                cell(cells, &text[from..end]);
+                cells += 1;
+                from = end + 1;
+            }
+            Some(b'"') => quoted = true,
+            Some(_) => {}
+        }
+        end += 1;
+    }
+    cell(cells, &text[from..end]);
+    cells += 1;
+    let taken = if quoted {
+        values.truncate(base);
+        take_quoted(values, &text[pos..end], selection)
+    } else {
+        cells == selection.cells
+    };
+    if !taken {
+        values.truncate(base);
+        return None;
+    }
+    Some(end)
+}
+
+/// [`take_row`] for a line holding quotes.
+fn take_quoted(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
     let base = values.len();
     values.resize(base + selection.width, f64::NAN);
     let mut cells = 0;
     for piece in line.split(|b| *b == b',') {
-        let text = if quoted {
-            match cell_text(piece) {
-                Some(t) => t,
-                None => {
-                    values.truncate(base);
-                    return false;
-                }
-            }
-        } else {
-            piece.trim_ascii()
+        let Some(text) = cell_text(piece) else {
+            return false;
         };
         if let Some(Some(slot)) = selection.slots.get(cells)
             && let Some(v) = plain_number(text)
@@ -150,11 +203,7 @@ fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
         }
         cells += 1;
     }
-    if cells != selection.cells {
-        values.truncate(base);
-        return false;
-    }
-    true
+    cells == selection.cells
 }
 
 /// Whether every cell of a line is plain or simply quoted (see

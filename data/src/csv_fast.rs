@@ -282,7 +282,12 @@ impl Fast {
         if self.text.is_empty() {
             return Ok(false);
         }
-        self.chunks = parse_batch(&self.text, &self.selection, self.batching);
+        parse_batch(
+            &self.text,
+            &self.selection,
+            self.batching,
+            &mut self.chunks,
+        );
         self.chunk = 0;
         self.row = None;
         Ok(true)
@@ -325,9 +330,14 @@ impl Fast {
 }
 
 /// Splits a batch at line ends into at most `threads` chunks of about
-/// `chunk` bytes and parses them, each on its own thread (the first on
-/// this one).
-fn parse_batch(text: &[u8], selection: &Selection, batching: Batching) -> Vec<(usize, Chunk)> {
+/// `chunk` bytes and parses them into `chunks` (each with its start in
+/// `text`; buffers reused), each on its own thread (the first on this one).
+fn parse_batch(
+    text: &[u8],
+    selection: &Selection,
+    batching: Batching,
+    chunks: &mut Vec<(usize, Chunk)>,
+) {
     let parts = text.len().div_ceil(batching.chunk).clamp(1, batching.threads);
     let mut starts = vec![0];
     for k in 1..parts {
@@ -342,30 +352,37 @@ fn parse_batch(text: &[u8], selection: &Selection, batching: Batching) -> Vec<(u
         .copied()
         .chain(std::iter::once(text.len()))
         .collect();
-    std::thread::scope(|s| {
-        let spawned: Vec<_> = starts
-            .iter()
-            .zip(&ends)
-            .skip(1)
-            .map(|(&a, &b)| {
-                let part = &text[a..b];
-                std::thread::Builder::new()
-                    .name("leeway-csv".into())
-                    .spawn_scoped(s, move || parse_chunk(part, selection))
-                    .map_err(|_| (a, b))
-            })
-            .collect();
-        let mut chunks = vec![(0, parse_chunk(&text[..ends[0]], selection))];
-        for (handle, &start) in spawned.into_iter().zip(&starts[1..]) {
-            let chunk = match handle {
-                Ok(h) => h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)),
-                // No thread to be had: parsed here.
-                Err((a, b)) => parse_chunk(&text[a..b], selection),
-            };
-            chunks.push((start, chunk));
+    chunks.resize_with(starts.len(), Default::default);
+    let unspawned = std::thread::scope(|s| {
+        let mut jobs = chunks.iter_mut().zip(starts.iter().zip(&ends)).enumerate();
+        let mut unspawned = Vec::new();
+        let mut handles = Vec::new();
+        let first = jobs.next();
+        for (k, ((start, chunk), (&a, &b))) in jobs {
+            *start = a;
+            let part = &text[a..b];
+            match std::thread::Builder::new()
+                .name("leeway-csv".into())
+                .spawn_scoped(s, move || parse_chunk(part, selection, chunk))
+            {
+                Ok(h) => handles.push(h),
+                Err(_) => unspawned.push(k),
+            }
         }
-        chunks
-    })
+        if let Some((_, ((start, chunk), (&a, &b)))) = first {
+            *start = a;
+            parse_chunk(&text[a..b], selection, chunk);
+        }
+        for h in handles {
+            h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+        }
+        unspawned
+    });
+    // No thread to be had: parsed here.
+    for k in unspawned {
+        let (start, chunk) = &mut chunks[k];
+        parse_chunk(&text[*start..ends[k]], selection, chunk);
+    }
 }
 
 impl CsvFile {
