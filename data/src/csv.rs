@@ -347,9 +347,10 @@ impl<R: std::io::BufRead> Records<R> {
         (headers, header_line): (Vec<String>, u64),
         at: &Resume,
     ) -> Result<Self, DataError> {
-        let mut reader = csv_builder()
-            .has_headers(true)
-            .from_reader(Filter::resumed(input, headers.len(), at));
+        let mut reader =
+            csv_builder()
+                .has_headers(true)
+                .from_reader(Filter::resumed(input, headers.len(), at));
         // The filter's stand-in header row, served from memory.
         if let Err(e) = reader.byte_headers() {
             return Err(io_error(file, what, &reader, &e).unwrap_or_else(|| {

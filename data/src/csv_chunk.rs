@@ -147,7 +147,12 @@ fn line_end(text: &[u8], from: usize) -> usize {
 /// returns the line's end, in one pass over its bytes; `None` (nothing
 /// appended) for a line with a quote other than a simply quoted cell's (see
 /// [`cell_text`]) or a cell count other than the header's.
-fn take_row(values: &mut Vec<f64>, text: &[u8], pos: usize, selection: &Selection) -> Option<usize> {
+fn take_row(
+    values: &mut Vec<f64>,
+    text: &[u8],
+    pos: usize,
+    selection: &Selection,
+) -> Option<usize> {
     let base = values.len();
     values.resize(base + selection.width, f64::NAN);
     let (mut cells, mut from, mut quoted) = (0, pos, false);

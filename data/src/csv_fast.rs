@@ -73,10 +73,11 @@ const MAX_THREADS: usize = 8;
 const FIRST_BUFFER: usize = 1 << 16;
 
 impl Default for Batching {
-    /// 4 MiB chunks, a thread per core (at most [`MAX_THREADS`]).
+    /// 1 MiB chunks (a thread's start is some 10 µs, its chunk some ms of
+    /// work), a thread per core (at most [`MAX_THREADS`]).
     fn default() -> Batching {
         Batching {
-            chunk: 4 << 20,
+            chunk: 1 << 20,
             threads: std::thread::available_parallelism()
                 .map_or(1, std::num::NonZeroUsize::get)
                 .min(MAX_THREADS),
@@ -140,8 +141,8 @@ impl CsvFile {
         let (file, mut input) = open_path(path, what)?;
         let read_error = |e: std::io::Error| io_failure(&file, what, &e);
         let regular = input.metadata().is_ok_and(|m| m.is_file());
-        let mut head = Vec::new();
         let want = FIRST_BUFFER.max(batching.chunk.saturating_mul(batching.threads));
+        let mut head = Vec::with_capacity(if regular { want } else { 0 });
         if regular {
             (&mut input)
                 .take(want as u64)
@@ -153,11 +154,7 @@ impl CsvFile {
         let Some(header_end) = header else {
             // The exact reader from the start.
             input.seek(SeekFrom::Start(0)).map_err(read_error)?;
-            let records = Records::new(
-                &file,
-                BufReader::with_capacity(FIRST_BUFFER, input),
-                what,
-            )?;
+            let records = Records::new(&file, BufReader::with_capacity(FIRST_BUFFER, input), what)?;
             return Ok(CsvFile {
                 headers: records.headers().to_vec(),
                 header_line: records.header_line(),
@@ -261,6 +258,8 @@ impl Fast {
         // Whole lines: read on until a line end (or the file's end).
         loop {
             if !self.eof {
+                // Exactly: `read_to_end` would double the buffer.
+                self.text.reserve_exact(want);
                 let n = (&mut self.input)
                     .take(want as u64)
                     .read_to_end(&mut self.text)
@@ -282,12 +281,7 @@ impl Fast {
         if self.text.is_empty() {
             return Ok(false);
         }
-        parse_batch(
-            &self.text,
-            &self.selection,
-            self.batching,
-            &mut self.chunks,
-        );
+        parse_batch(&self.text, &self.selection, self.batching, &mut self.chunks);
         self.chunk = 0;
         self.row = None;
         Ok(true)
@@ -338,7 +332,10 @@ fn parse_batch(
     batching: Batching,
     chunks: &mut Vec<(usize, Chunk)>,
 ) {
-    let parts = text.len().div_ceil(batching.chunk).clamp(1, batching.threads);
+    let parts = text
+        .len()
+        .div_ceil(batching.chunk)
+        .clamp(1, batching.threads);
     let mut starts = vec![0];
     for k in 1..parts {
         let from = (text.len() * k / parts).max(starts[k - 1]);

@@ -9,6 +9,7 @@
 //! `cargo run --release -p leeway-bench --bin ingest -- FILE.csv [MODEL.som] [K]`
 //! (the model defaults to examples/models/ship.som, K to 3).
 
+use leeway::Source;
 use leeway::data::{LoadOptions, Records, load_file_noted, load_table, open_file, open_table};
 use leeway::ir::Ir;
 use std::path::Path;
@@ -27,7 +28,10 @@ fn cpu_seconds() -> Option<f64> {
 }
 
 /// Best wall and CPU seconds of `runs` runs of `f`.
-fn best(runs: usize, f: &mut dyn FnMut() -> Result<usize, String>) -> Result<(f64, Option<f64>, usize), String> {
+fn best(
+    runs: usize,
+    f: &mut dyn FnMut() -> Result<usize, String>,
+) -> Result<(f64, Option<f64>, usize), String> {
     let mut wall = f64::INFINITY;
     let mut cpu: Option<f64> = None;
     let mut rows = 0;
@@ -44,27 +48,70 @@ fn best(runs: usize, f: &mut dyn FnMut() -> Result<usize, String>) -> Result<(f6
 }
 
 fn run(args: &[String]) -> Result<(), String> {
-    let file = args.first().ok_or("usage: ingest FILE.csv [MODEL.som] [K]")?;
-    let model = args.get(1).map_or("examples/models/ship.som", String::as_str);
-    let runs: usize = args.get(2).map_or(Ok(3), |k| k.parse()).map_err(|e| format!("K: {e}"))?;
+    let file = args
+        .first()
+        .ok_or("usage: ingest FILE.csv [MODEL.som] [K]")?;
+    let model = args
+        .get(1)
+        .map_or("examples/models/ship.som", String::as_str);
+    let runs: usize = args
+        .get(2)
+        .map_or(Ok(3), |k| k.parse())
+        .map_err(|e| format!("K: {e}"))?;
     let source = std::fs::read_to_string(model).map_err(|e| format!("{model}: {e}"))?;
     let compiled = leeway::compile(&source, &leeway::CompileOptions::default());
-    let ir: Ir = compiled.ir.ok_or_else(|| format!("{model} does not compile"))?;
+    let ir: Ir = compiled
+        .ir
+        .ok_or_else(|| format!("{model} does not compile"))?;
     let path = Path::new(file);
-    let bytes = std::fs::metadata(path).map_err(|e| format!("{file}: {e}"))?.len();
+    let bytes = std::fs::metadata(path)
+        .map_err(|e| format!("{file}: {e}"))?
+        .len();
     let options = LoadOptions::default();
     let rows_of = |f: &leeway::data::StreamedFile| f.sources.iter().map(|s| s.block().rows).sum();
     let rows_held = |f: &leeway::data::LoadedFile| f.experiments.iter().map(|e| e.len()).sum();
     let err = |e: leeway::DataError| e.to_string();
     let cases: Vec<(&str, Box<dyn FnMut() -> Result<usize, String>>)> = vec![
-        ("stream (validate + spill)", Box::new(|| open_file(path, &ir, &options).map(|f| rows_of(&f)).map_err(err))),
-        ("load into memory", Box::new(|| load_file_noted(path, &ir, &options).map(|f| rows_held(&f)).map_err(err))),
-        ("stream, exact reader only", Box::new(|| {
-            open_table(&mut Records::open(path, "--data").map_err(err)?, &ir, &options).map(|f| rows_of(&f)).map_err(err)
-        })),
-        ("load, exact reader only", Box::new(|| {
-            load_table(&mut Records::open(path, "--data").map_err(err)?, &ir, &options).map(|f| rows_held(&f)).map_err(err)
-        })),
+        (
+            "stream (validate + spill)",
+            Box::new(|| {
+                open_file(path, &ir, &options)
+                    .map(|f| rows_of(&f))
+                    .map_err(err)
+            }),
+        ),
+        (
+            "load into memory",
+            Box::new(|| {
+                load_file_noted(path, &ir, &options)
+                    .map(|f| rows_held(&f))
+                    .map_err(err)
+            }),
+        ),
+        (
+            "stream, exact reader only",
+            Box::new(|| {
+                open_table(
+                    &mut Records::open(path, "--data").map_err(err)?,
+                    &ir,
+                    &options,
+                )
+                .map(|f| rows_of(&f))
+                .map_err(err)
+            }),
+        ),
+        (
+            "load, exact reader only",
+            Box::new(|| {
+                load_table(
+                    &mut Records::open(path, "--data").map_err(err)?,
+                    &ir,
+                    &options,
+                )
+                .map(|f| rows_held(&f))
+                .map_err(err)
+            }),
+        ),
     ];
     println!("{file}: {:.1} MB, best of {runs}", bytes as f64 / 1e6);
     for (name, mut f) in cases {

@@ -96,7 +96,9 @@ fn number_text(rng: &mut ChaCha8Rng) -> String {
         3 => format!("+{}", v.abs()),
         4 => format!("{}", rng.random_range(-50i32..50)),
         5 => format!("{v:.17e}"),
-        6 => format!("{:.1}", v.abs()).trim_start_matches('0').to_string(),
+        6 => format!("{:.1}", v.abs())
+            .trim_start_matches('0')
+            .to_string(),
         _ => format!("{v:?}"),
     }
 }
@@ -196,7 +198,11 @@ fn fast_reading_is_the_exact_reading_for_any_layout_batches_and_threads() {
     let mut stayed_fast = 0;
     for case in 0..300 {
         let rows = rng.random_range(0..60);
-        let odd = if case % 3 == 0 { 0 } else { rng.random_range(0..3) };
+        let odd = if case % 3 == 0 {
+            0
+        } else {
+            rng.random_range(0..3)
+        };
         let text = layout(&mut rng, rows, odd);
         let f = file_of(&text);
         let columns: Vec<usize> = match case % 3 {
@@ -343,12 +349,26 @@ fn a_quoted_cell_in_a_large_file_and_the_rows_after_it_read_as_today() {
         _ => None,
     });
     let f = file_of(&text);
-    let exact = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options)
-        .unwrap_or_else(|e| panic!("{e}"));
-    let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk: 1 << 16, threads: 3 })
-        .unwrap_or_else(|e| panic!("{e}"));
+    let exact = load_table(
+        &mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")),
+        &ir,
+        &options,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let mut table = CsvFile::open_with(
+        f.path(),
+        "--data",
+        Batching {
+            chunk: 1 << 16,
+            threads: 3,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let fast = load_table(&mut table, &ir, &options).unwrap_or_else(|e| panic!("{e}"));
-    assert!(!table.is_fast(), "the quoted cell is read by the exact reader");
+    assert!(
+        !table.is_fast(),
+        "the quoted cell is read by the exact reader"
+    );
     assert_eq!(fast.notes, exact.notes);
     assert_eq!(bits(&fast), bits(&exact));
     assert_eq!(fast.experiments[0].len(), 300_000);
@@ -362,12 +382,21 @@ fn a_quoted_cell_in_a_large_file_and_the_rows_after_it_read_as_today() {
 fn a_bad_cell_deep_in_a_large_file_is_located_as_today_whatever_the_threads() {
     let ir = model();
     let options = crate::options::LoadOptions::default();
-    let text = big_log(720_000, &|k| (k == 700_000).then(|| format!("{k},1,0.5x,35\n")));
+    let text = big_log(720_000, &|k| {
+        (k == 700_000).then(|| format!("{k},1,0.5x,35\n"))
+    });
     let f = file_of(&text);
     let mut errors = Vec::new();
     for threads in [1, 2, 5] {
-        let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk: 1 << 18, threads })
-            .unwrap_or_else(|e| panic!("{e}"));
+        let mut table = CsvFile::open_with(
+            f.path(),
+            "--data",
+            Batching {
+                chunk: 1 << 18,
+                threads,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
         let err = load_table(&mut table, &ir, &options)
             .err()
             .unwrap_or_else(|| panic!("`0.5x` is not a number"));
@@ -380,9 +409,13 @@ fn a_bad_cell_deep_in_a_large_file_is_located_as_today_whatever_the_threads() {
     assert_eq!(errors[0].location, at);
     assert_eq!(errors[0].message, "`0.5x` is not a number");
     assert!(errors.iter().all(|e| *e == errors[0]));
-    let exact = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options)
-        .err()
-        .unwrap_or_else(|| panic!("`0.5x` is not a number"));
+    let exact = load_table(
+        &mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")),
+        &ir,
+        &options,
+    )
+    .err()
+    .unwrap_or_else(|| panic!("`0.5x` is not a number"));
     assert_eq!(errors[0], exact);
 }
 
@@ -396,12 +429,19 @@ fn the_loaded_file_does_not_depend_on_batches_or_threads() {
         _ => None,
     });
     let f = file_of(&text);
-    let want = load_table(&mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")), &ir, &options);
+    let want = load_table(
+        &mut Records::open(f.path(), "--data").unwrap_or_else(|e| panic!("{e}")),
+        &ir,
+        &options,
+    );
     for (chunk, threads) in [(1, 1), (97, 2), (4096, 3), (1 << 20, 8)] {
         let mut table = CsvFile::open_with(f.path(), "--data", Batching { chunk, threads })
             .unwrap_or_else(|e| panic!("{e}"));
         let got = load_table(&mut table, &ir, &options);
         assert_eq!(got.as_ref().map(bits), want.as_ref().map(bits));
-        assert_eq!(got.map(|l| l.notes), want.as_ref().map(|l| l.notes.clone()).map_err(Clone::clone));
+        assert_eq!(
+            got.map(|l| l.notes),
+            want.as_ref().map(|l| l.notes.clone()).map_err(Clone::clone)
+        );
     }
 }
