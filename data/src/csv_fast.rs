@@ -164,7 +164,11 @@ impl CsvFile {
         // The header as the exact reader reads it (messages, BOM, names).
         let records = Records::new(&file, &head[..header_end.byte], what)?;
         let headers = records.headers().to_vec();
+        let header_line = records.header_line();
         let (comments, blanks) = records.dropped();
+        drop(records);
+        // The rest of the head is the first batch's start (kept, not copied).
+        head.drain(..header_end.byte);
         let fast = Fast {
             file,
             what: what.to_string(),
@@ -174,7 +178,7 @@ impl CsvFile {
             selected: false,
             text: Vec::new(),
             text_byte: header_end.byte as u64,
-            carry: head[header_end.byte..].to_vec(),
+            carry: head,
             eof,
             chunks: Vec::new(),
             chunk: 0,
@@ -185,7 +189,7 @@ impl CsvFile {
         };
         Ok(CsvFile {
             headers,
-            header_line: records.header_line(),
+            header_line,
             read: Reading::Fast(Box::new(fast)),
         })
     }

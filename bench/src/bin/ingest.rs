@@ -27,6 +27,9 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks as f64 / 100.0)
 }
 
+/// One way of reading the file: the rows read, or why not.
+type Reading<'a> = Box<dyn FnMut() -> Result<usize, String> + 'a>;
+
 /// Best wall and CPU seconds of `runs` runs of `f`.
 fn best(
     runs: usize,
@@ -71,7 +74,7 @@ fn run(args: &[String]) -> Result<(), String> {
     let rows_of = |f: &leeway::data::StreamedFile| f.sources.iter().map(|s| s.block().rows).sum();
     let rows_held = |f: &leeway::data::LoadedFile| f.experiments.iter().map(|e| e.len()).sum();
     let err = |e: leeway::DataError| e.to_string();
-    let cases: Vec<(&str, Box<dyn FnMut() -> Result<usize, String>>)> = vec![
+    let cases: Vec<(&str, Reading)> = vec![
         (
             "stream (validate + spill)",
             Box::new(|| {

@@ -88,7 +88,8 @@ fn fast(
 
 /// A number as a logger might write it.
 fn number_text(rng: &mut ChaCha8Rng) -> String {
-    let v: f64 = rng.random_range(-1e3..1e3) * 10f64.powi(rng.random_range(-8..8));
+    let scale = [1e-8, 1e-5, 1e-3, 0.1, 1.0, 10.0, 1e3, 1e7][rng.random_range(0..8)];
+    let v: f64 = rng.random_range(-1e3..1e3) * scale;
     match rng.random_range(0..8) {
         0 => format!("{v:e}"),
         1 => format!("{v:E}"),
