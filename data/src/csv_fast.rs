@@ -3,7 +3,7 @@
 //! errors [`Records`] reads, faster.
 //!
 //! The file is read in batches (a few MiB per thread), each split at line
-//! ends into chunks parsed on their own threads ([`parse_chunk`]) into the
+//! ends into chunks parsed on their own threads (`csv_chunk`) into the
 //! selected columns' values and each row's line and byte; the validating
 //! pass then reads rows from there. At most one batch is held, never the
 //! file. Whatever a chunk does not take (a quote other than around a whole
@@ -74,7 +74,7 @@ const FIRST_BUFFER: usize = 1 << 16;
 
 impl Default for Batching {
     /// 1 MiB chunks (a thread's start is some 10 µs, its chunk some ms of
-    /// work), a thread per core (at most [`MAX_THREADS`]).
+    /// work), a thread per core (at most 8).
     fn default() -> Batching {
         Batching {
             chunk: 1 << 20,
