@@ -256,9 +256,10 @@ impl Fast {
     /// Reads and parses the next batch: false at the file's end.
     fn next_batch(&mut self) -> Result<bool, DataError> {
         self.text_byte += self.text.len() as u64;
-        self.text.clear();
-        self.text.append(&mut self.carry);
         let want = self.batching.chunk.saturating_mul(self.batching.threads);
+        self.text.clear();
+        self.text.reserve_exact(self.carry.len() + want);
+        self.text.append(&mut self.carry);
         // Whole lines: read on until a line end (or the file's end).
         loop {
             if !self.eof {
