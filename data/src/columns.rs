@@ -221,7 +221,7 @@ pub fn frame<'a>(
     )
 }
 
-/// Loads columns in memory exactly as [`load_csv_noted`](crate::csv::load_csv_noted)
+/// Loads columns in memory exactly as [`load_csv_noted`](crate::csv_fast::load_csv_noted)
 /// loads a file of the same values: the model's columns found by name
 /// (`data { }` mapping, [`column_name`]), declared units, time steps,
 /// experiments split on `experiment` (the labels, one per row, named

@@ -1,6 +1,8 @@
 //! CSV text: the line filter (comment and blank lines dropped and
 //! counted, CRLF folded, physical lines kept), [`Records`] (a [`Table`] of
-//! the file's records) and the CSV entry points.
+//! the file's records: the exact reader) and the entry points for text in
+//! memory. Files by path are read by [`CsvFile`](crate::csv_fast::CsvFile),
+//! which hands whatever its fast path does not take to [`Records`].
 //!
 //! The filter drops comment and blank lines outside quoted cells and keeps
 //! one entry per run of dropped lines, so the csv crate's positions map back
@@ -13,29 +15,14 @@ use crate::error::DataError;
 use crate::notes::LoadedFile;
 use crate::open::open_path;
 use crate::options::LoadOptions;
-use crate::spill::StreamedFile;
 use crate::validate::Places;
 use crate::validate::{Table, load_table, missing, not_a_number, not_finite, unique_headers};
 use leeway_model::experiment::Experiment;
 use leeway_structure::ir::Ir;
 use std::path::Path;
 
-/// Loads one CSV file: one experiment, or several when it has an
-/// `experiment` column (each experiment's rows contiguous, in file order).
-pub fn load_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Vec<Experiment>, DataError> {
-    load_csv_noted(path, ir, options).map(|f| f.experiments)
-}
-
-/// [`load_csv`], also returning what was noted on the way ([`FileNotes`](crate::notes::FileNotes)).
-pub fn load_csv_noted(
-    path: &Path,
-    ir: &Ir,
-    options: &LoadOptions,
-) -> Result<LoadedFile, DataError> {
-    load_table(&mut Records::open(path, "--data")?, ir, options)
-}
-
-/// Parses CSV text (see [`load_csv`]); `file` names it in errors.
+/// Parses CSV text (see [`load_csv`](crate::csv_fast::load_csv)); `file`
+/// names it in errors.
 pub fn parse_csv(
     file: &str,
     text: &[u8],
@@ -53,16 +40,6 @@ pub fn parse_csv_noted(
     options: &LoadOptions,
 ) -> Result<LoadedFile, DataError> {
     load_table(&mut Records::new(file, text, "--data")?, ir, options)
-}
-
-/// Opens a CSV file for streaming: one validating pass (every check of
-/// [`load_csv`]) that also writes the parsed samples to a temporary spill
-/// file (8 bytes per value and row, in the system's temporary directory,
-/// removed when the sources are dropped); every later visit reads them from
-/// there. Memory is flat in the number of rows. `--resample` is not
-/// streamed: use [`load_csv_noted`] for it.
-pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
-    crate::spill::open_table(&mut Records::open(path, "--data")?, ir, options)
 }
 
 /// A reader that drops comment lines (first non-blank character `#`) and
@@ -111,15 +88,51 @@ impl<R: std::io::BufRead> Filter<R> {
             ends: None,
         }
     }
+    /// A filter that starts reading at the start of a line, `at.byte`
+    /// bytes and `at.physical` physical lines into a file whose line ends
+    /// are LF or CRLF and whose header row has `cells` cells, with the
+    /// comment and blank lines met before counted. It first serves a
+    /// stand-in header row of `cells` empty cells, which the csv reader
+    /// reads as its header (so every later row must have as many cells, as
+    /// in the file, and a UTF-8 BOM is only stripped from that stand-in);
+    /// its lines and bytes then map to the file's as if the csv reader had
+    /// read the file from its start.
+    fn resumed(inner: R, cells: usize, at: &Resume) -> Filter<R> {
+        let mut line = vec![b','; cells.saturating_sub(1)];
+        if line.is_empty() {
+            // One cell: a space, as an empty line is no record to csv.
+            line.push(b' ');
+        }
+        line.push(b'\n');
+        let stand_in = line.len() as u64;
+        Filter {
+            line,
+            physical: at.physical,
+            byte: at.byte,
+            kept: 1,
+            kept_bytes: stand_in,
+            // Kept line 2 is the physical line after `at.physical`, kept
+            // byte `stand_in` is `at.byte` (never less: the header row, of
+            // `cells` cells and a line end, is before it).
+            line_jumps: vec![(1, at.physical.wrapping_sub(1))],
+            byte_jumps: vec![(0, at.byte.wrapping_sub(stand_in))],
+            comments: at.comments,
+            blanks: at.blanks,
+            ends: Some(LineEnds::Feed),
+            ..Filter::new(inner)
+        }
+    }
     /// The physical line (from 1) of a kept line (from 1).
     fn physical_line(&self, kept: u64) -> u64 {
         let i = self.line_jumps.partition_point(|(k, _)| *k <= kept);
-        kept + if i == 0 { 0 } else { self.line_jumps[i - 1].1 }
+        kept.wrapping_add(if i == 0 { 0 } else { self.line_jumps[i - 1].1 })
     }
     /// The physical byte offset of a kept byte offset at the start of a line.
     fn physical_byte(&self, kept: u64) -> u64 {
         let i = self.byte_jumps.partition_point(|(k, _)| *k <= kept);
-        kept + if i == 0 { 0 } else { self.byte_jumps[i - 1].1 }
+        // Wrapping: a resumed filter's first jump may be "negative" (see
+        // `Filter::resumed`); the sum is the physical byte all the same.
+        kept.wrapping_add(if i == 0 { 0 } else { self.byte_jumps[i - 1].1 })
     }
     /// Reads the next kept line into `self.line`; false at the end.
     fn next_line(&mut self) -> std::io::Result<bool> {
@@ -236,6 +249,16 @@ impl<R: std::io::BufRead> std::io::Read for Filter<R> {
     }
 }
 
+/// Where a reader resumes in a file: the byte where a line starts, the
+/// physical lines before it, and the comment and blank lines among them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Resume {
+    pub(crate) byte: u64,
+    pub(crate) physical: u64,
+    pub(crate) comments: usize,
+    pub(crate) blanks: usize,
+}
+
 /// A CSV file read record by record through the line filter (comment and
 /// blank lines dropped and counted, CRLF folded, physical lines kept): the
 /// reader of data files (`estimate`, `validate`) and of `simulate`'s input,
@@ -302,6 +325,42 @@ impl<R: std::io::BufRead> Records<R> {
             ));
         }
         unique_headers(&headers, |i| format!("{file}:{header_line}:{}", i + 1))?;
+        Ok(Records {
+            file: file.to_string(),
+            what: what.to_string(),
+            reader,
+            record: csv::ByteRecord::new(),
+            headers,
+            header_line,
+            line: header_line,
+        })
+    }
+    /// Reads on from the start of a line of a file whose header row
+    /// (`headers`, on physical line `header_line`) was read before, as if
+    /// this reader had read the file from its start: the same rows, values,
+    /// lines, bytes, counts and errors. `input` reads from `at.byte`; the
+    /// file's line ends are LF or CRLF.
+    pub(crate) fn resume(
+        file: &str,
+        input: R,
+        what: &str,
+        (headers, header_line): (Vec<String>, u64),
+        at: &Resume,
+    ) -> Result<Self, DataError> {
+        let mut reader =
+            csv_builder()
+                .has_headers(true)
+                .from_reader(Filter::resumed(input, headers.len(), at));
+        // The filter's stand-in header row, served from memory.
+        if let Err(e) = reader.byte_headers() {
+            return Err(io_error(file, what, &reader, &e).unwrap_or_else(|| {
+                DataError::new(
+                    file,
+                    format!("cannot read the file: {e}"),
+                    format!("check the path passed to {what}"),
+                )
+            }));
+        }
         Ok(Records {
             file: file.to_string(),
             what: what.to_string(),
@@ -418,7 +477,7 @@ impl<R: std::io::BufRead> Table for Records<R> {
         self.byte()
     }
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
-        cell(&self.file, self.line, &self.record, i, name)
+        cell(&self.file, self.line, self.raw(i), i, name)
     }
     fn label(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>, DataError> {
         Ok(std::borrow::Cow::Borrowed(self.raw(i)))
@@ -429,24 +488,27 @@ impl<R: std::io::BufRead> Table for Records<R> {
     }
 }
 
-/// One cell as a finite number, or the located reason it is not.
-fn cell(
+/// One cell (`bytes`, trimmed, as the csv reader splits it) as a finite
+/// number, or the located reason it is not. The exact reading every CSV
+/// value goes through or is proven equal to (the fast path's cells that it
+/// does not parse itself come here too); the cell's text is only built for
+/// a message.
+pub(crate) fn cell(
     file: &str,
     line: u64,
-    record: &csv::ByteRecord,
+    bytes: &[u8],
     i: usize,
     name: &str,
 ) -> Result<f64, DataError> {
-    let bytes = record.get(i).unwrap_or(b"");
-    let raw = String::from_utf8_lossy(bytes);
+    let raw = || String::from_utf8_lossy(bytes);
     let loc = || Places::Lines.at(file, line, Some((i, name)));
     match std::str::from_utf8(bytes).ok().map(str::parse::<f64>) {
         Some(Ok(v)) if v.is_finite() => Ok(v),
-        Some(Ok(_)) => Err(not_finite(loc(), &raw)),
+        Some(Ok(_)) => Err(not_finite(loc(), &raw())),
         _ if bytes.is_empty() => Err(missing(loc(), "empty cell")),
         _ => Err(not_a_number(
             loc(),
-            &raw,
+            &raw(),
             "use a plain decimal such as 0.25 or -1.5e-3",
         )),
     }

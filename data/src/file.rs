@@ -1,6 +1,6 @@
 //! Data files by path: CSV or Parquet, chosen by extension or magic bytes.
 
-use crate::csv::Records;
+use crate::csv_fast::CsvFile;
 use crate::error::DataError;
 use crate::notes::LoadedFile;
 use crate::options::LoadOptions;
@@ -11,7 +11,9 @@ use std::path::Path;
 
 /// Reads a data file as a [`Table`] and hands it to `f`: a Parquet file
 /// (extension `.parquet` or the magic bytes `PAR1`, with the `parquet`
-/// feature), else CSV text. `what` names the option that gave the file.
+/// feature), else CSV text ([`CsvFile`]: parsed in parallel, bit for bit as
+/// [`Records`](crate::csv::Records) reads it). `what` names the option that
+/// gave the file.
 pub fn with_table<T>(
     path: &Path,
     what: &str,
@@ -32,11 +34,11 @@ pub fn with_table<T>(
             "build it with the cargo feature `parquet` (leeway-cli has it by default), or convert the file to CSV",
         ));
     }
-    f(&mut Records::open(path, what)?)
+    f(&mut CsvFile::open(path, what)?)
 }
 
 /// Loads a data file, CSV or Parquet (see [`with_table`]), into memory with
-/// what was noted ([`load_csv_noted`](crate::csv::load_csv_noted) for CSV).
+/// what was noted ([`load_csv_noted`](crate::csv_fast::load_csv_noted) for CSV).
 pub fn load_file_noted(
     path: &Path,
     ir: &Ir,
@@ -46,7 +48,7 @@ pub fn load_file_noted(
 }
 
 /// Opens a data file, CSV or Parquet (see [`with_table`]), for streaming
-/// ([`open_csv`](crate::csv::open_csv) for CSV).
+/// ([`open_csv`](crate::csv_fast::open_csv) for CSV).
 pub fn open_file(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedFile, DataError> {
     with_table(path, "--data", |t| open_table(t, ir, options))
 }

@@ -9,8 +9,9 @@
 //! their memory does not grow with N.
 //!
 //! Loading validates everything and names the place of every problem;
-//! nothing is silently dropped or reordered. Every reader — CSV text
-//! ([`csv`]), columns in memory ([`columns`], what the Python package hands
+//! nothing is silently dropped or reordered. Every reader — CSV files
+//! ([`csv_fast`], parsed in parallel, exact by [`csv`]'s reader where its
+//! fast path does not go) and CSV text ([`csv`]), columns in memory ([`columns`], what the Python package hands
 //! over) and Parquet files (`parquet`, behind the cargo feature `parquet`) —
 //! is a [`Table`] that feeds the one validating pass ([`validate`]: header
 //! and column matching, units, experiments, time steps, gross outliers,
@@ -30,6 +31,8 @@
 mod checks;
 pub mod columns;
 pub mod csv;
+mod csv_chunk;
+pub mod csv_fast;
 pub mod error;
 pub mod file;
 pub mod gaps;
@@ -46,7 +49,8 @@ pub mod validate;
 pub mod write;
 
 pub use columns::{Columns, Labels, load_columns, open_columns};
-pub use csv::{Records, load_csv, load_csv_noted, open_csv, parse_csv, parse_csv_noted};
+pub use csv::{Records, parse_csv, parse_csv_noted};
+pub use csv_fast::{Batching, CsvFile, load_csv, load_csv_noted, open_csv};
 pub use error::DataError;
 pub use file::{load_file_noted, open_file, with_table};
 pub use notes::{FileNotes, GapNote, LoadedFile, PieceNote, SignalNote, TimeNotes};

@@ -58,7 +58,7 @@ impl SpillWriter {
 }
 
 /// An experiment of a file visited in passes: the validating pass wrote
-/// its samples to a spill file ([`open_table`], [`open_csv`](crate::csv::open_csv),
+/// its samples to a spill file ([`open_table`], [`open_csv`](crate::csv_fast::open_csv),
 /// [`open_file`](crate::file::open_file)), and each [`Source::visit`] reads them
 /// back from there (binary, buffered; no text is parsed again), in flat
 /// memory whatever N.
