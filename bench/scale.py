@@ -173,7 +173,8 @@ def main() -> None:
     parser.add_argument("--leeway", default=str(ROOT / "target" / "release" / "leeway"))
     parser.add_argument("--campaign", type=int, default=0, metavar="FILES")
     args = parser.parse_args()
-    bench = Path(args.leeway).parent
+    # The bench binaries (`stream-memory`, `flops`) of this checkout's release build.
+    bench = ROOT / "target" / "release"
     Path(args.dir).mkdir(parents=True, exist_ok=True)
     bw = bandwidth()
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}, memory bandwidth {bw / 1e9:.1f} GB/s (copy)")
