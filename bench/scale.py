@@ -167,7 +167,7 @@ def campaign(args, bench: Path, files: int) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("dir")
-    parser.add_argument("--rows", type=int, nargs="+", default=[1_000_000])
+    parser.add_argument("--rows", type=int, nargs="*", default=[1_000_000])
     parser.add_argument("--methods", nargs="+", default=["ls", "iv1", "iv2", "iv3"])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--leeway", default=str(ROOT / "target" / "release" / "leeway"))
