@@ -324,16 +324,8 @@ impl<R: std::io::BufRead> Records<R> {
                 "the first row names the columns",
             ));
         }
-        unique_headers(&headers, |i| format!("{file}:{header_line}:{}", i + 1))?;
-        Ok(Records {
-            file: file.to_string(),
-            what: what.to_string(),
-            reader,
-            record: csv::ByteRecord::new(),
-            headers,
-            header_line,
-            line: header_line,
-        })
+        unique_headers(&headers, |i| header_place(file, header_line, Some(i)))?;
+        Ok(Records::reading(file, what, reader, headers, header_line))
     }
     /// Reads on from the start of a line of a file whose header row
     /// (`headers`, on physical line `header_line`) was read before, as if
@@ -361,7 +353,18 @@ impl<R: std::io::BufRead> Records<R> {
                 )
             }));
         }
-        Ok(Records {
+        Ok(Records::reading(file, what, reader, headers, header_line))
+    }
+    /// A reader whose header row (`headers`, on physical line
+    /// `header_line`) has been read.
+    fn reading(
+        file: &str,
+        what: &str,
+        reader: csv::Reader<Filter<R>>,
+        headers: Vec<String>,
+        header_line: u64,
+    ) -> Self {
+        Records {
             file: file.to_string(),
             what: what.to_string(),
             reader,
@@ -369,7 +372,7 @@ impl<R: std::io::BufRead> Records<R> {
             headers,
             header_line,
             line: header_line,
-        })
+        }
     }
     /// The header's physical line.
     pub fn header_line(&self) -> u64 {
@@ -459,10 +462,7 @@ impl<R: std::io::BufRead> Table for Records<R> {
         &Places::Lines
     }
     fn header_at(&self, column: Option<usize>) -> String {
-        match column {
-            Some(i) => format!("{}:{}:{}", self.file, self.header_line, i + 1),
-            None => format!("{}:{}", self.file, self.header_line),
-        }
+        header_place(&self.file, self.header_line, column)
     }
     fn first_position(&self) -> u64 {
         self.header_line + 1
@@ -511,6 +511,15 @@ pub(crate) fn cell(
             &raw(),
             "use a plain decimal such as 0.25 or -1.5e-3",
         )),
+    }
+}
+
+/// Where a CSV file's header row is (`file:line`), naming column `column`
+/// (from 0) when given (`file:line:column`, the column from 1).
+pub(crate) fn header_place(file: &str, line: u64, column: Option<usize>) -> String {
+    match column {
+        Some(i) => format!("{file}:{line}:{}", i + 1),
+        None => format!("{file}:{line}"),
     }
 }
 

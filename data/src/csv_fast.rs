@@ -14,7 +14,7 @@
 //! lines end in lone CRs, whose header row the fast path would not take,
 //! or that are not regular files are read by [`Records`] from the start.
 
-use crate::csv::{Records, Resume, cell};
+use crate::csv::{Records, Resume, cell, header_place};
 use crate::csv_chunk::{Chunk, Selection, field, parse_chunk, plain_line};
 use crate::error::DataError;
 use crate::notes::LoadedFile;
@@ -458,10 +458,7 @@ impl Table for CsvFile {
         &Places::Lines
     }
     fn header_at(&self, column: Option<usize>) -> String {
-        match column {
-            Some(i) => format!("{}:{}:{}", self.file(), self.header_line, i + 1),
-            None => format!("{}:{}", self.file(), self.header_line),
-        }
+        header_place(self.file(), self.header_line, column)
     }
     fn first_position(&self) -> u64 {
         self.header_line + 1

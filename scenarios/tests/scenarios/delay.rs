@@ -4,11 +4,12 @@
 //! without; a scan over `tau_x`'s dead time finds the true one; a streamed
 //! record gives the in-memory estimate bit for bit.
 
+use crate::Streamed;
 use leeway_estimate::{
     DelayRange, EstimateOptions, Method, ScanBy, estimate, scan_delay, with_dead_time,
 };
 use leeway_model::simulate::{Disturbances, simulate_written};
-use leeway_model::{Experiment, Interpreter, Model, Row, Source};
+use leeway_model::{Experiment, Interpreter, Model, Source};
 use leeway_scenarios::synth::Draws;
 use leeway_structure::ir::Ir;
 
@@ -121,24 +122,6 @@ fn declared_dead_times_estimate_consistently_and_missing_ones_do_not() {
     );
     assert_eq!(a.diagnostics.equations, e.len() - 10 - 2);
     assert!(b.diagnostics.dropped_at_start.is_empty());
-}
-
-/// A record that hides that it is in memory, as a file does.
-struct Streamed<'a>(&'a Experiment);
-
-impl Source for Streamed<'_> {
-    fn name(&self) -> &str {
-        &self.0.name
-    }
-    fn len(&self) -> usize {
-        self.0.len()
-    }
-    fn step(&self) -> f64 {
-        self.0.h
-    }
-    fn visit(&self, f: &mut dyn FnMut(&Row)) {
-        self.0.visit(f);
-    }
 }
 
 #[test]

@@ -4,6 +4,7 @@
 //! the local estimate's bits exactly, because the driver combines the
 //! summaries in experiment order whoever computed them.
 
+use crate::Streamed;
 use leeway_estimate::Estimate;
 use leeway_estimate::EstimateError;
 use leeway_estimate::EstimateOptions;
@@ -442,24 +443,6 @@ fn continued_instruments_reach_the_same_fixed_point() {
                 );
             }
         }
-    }
-}
-
-/// A record that hides that it is in memory, as a streamed file does.
-struct Streamed<'a>(&'a Experiment);
-
-impl Source for Streamed<'_> {
-    fn name(&self) -> &str {
-        &self.0.name
-    }
-    fn len(&self) -> usize {
-        self.0.len()
-    }
-    fn step(&self) -> f64 {
-        self.0.h
-    }
-    fn visit(&self, f: &mut dyn FnMut(&leeway_model::Row)) {
-        self.0.visit(f);
     }
 }
 
