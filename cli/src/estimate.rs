@@ -20,8 +20,8 @@ use crate::problem::{Failure, Problem};
 use leeway_estimate::{Bound, DelayRange, estimate, scan_delay};
 use leeway_model::Interpreter;
 use leeway_model::warning::Warning;
-use leeway_report::feedback::{closed_loop, closed_loop_alerts};
-use leeway_report::{heading_alerts, heading_gains, unit_alerts};
+use leeway_report::checks::{data_checks, heading_alerts, unit_alerts_from_peaks};
+use leeway_report::feedback::closed_loop_alerts;
 
 /// Runs `leeway estimate`.
 pub fn run(args: &EstimateArgs) -> Status {
@@ -84,10 +84,12 @@ fn execute(
             .into_iter()
             .map(|w| Warning::plain("model", w)),
     );
-    warnings.extend(unit_alerts(&ir, &sources));
-    let gains = heading_gains(&ir, &sources);
+    // The three checks of the data in one visit of each experiment.
+    let checks = data_checks(&ir, &sources);
+    warnings.extend(unit_alerts_from_peaks(&ir, &checks.input_peaks));
+    let gains = checks.heading_gains;
     warnings.extend(heading_alerts(&ir, &gains));
-    warnings.extend(closed_loop_alerts(&closed_loop(&ir, &sources)));
+    warnings.extend(closed_loop_alerts(&checks.closed_loop));
     let options = args.options(nominal);
     let (result, scan) = match &args.scan_delay {
         None => (

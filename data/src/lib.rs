@@ -58,7 +58,7 @@ pub use options::{
     DEFAULT_TIME_TOLERANCE, LoadOptionError, LoadOptions, STEP_RANGE, TIME_TOLERANCE_HINT,
     sample_time_ok, time_tolerance_ok,
 };
-pub use signals::heading_gain;
+pub use signals::{HeadingGainSums, heading_gain};
 pub use spill::{CsvSource, FileSource, StreamedFile, open_table};
 pub use validate::{
     Block, MAX_RESAMPLE_RATIO, OUTLIER_FACTOR, Places, Table, ZERO_OUTLIER, ZERO_OUTLIER_INPUT,

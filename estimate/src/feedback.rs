@@ -18,7 +18,7 @@ use crate::parallel::{in_order, threads_for};
 use leeway_model::correlation::chi_squared_tail;
 use leeway_model::experiment::{Row, Source};
 use leeway_structure::ir::Ir;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// The window a fit covers, seconds (at least [`MIN_WINDOW`] samples).
 pub const WINDOW_SECONDS: f64 = 30.0;
@@ -63,6 +63,9 @@ struct Sums {
     /// Upper triangle of the states' lags' Gram matrix, row by row
     /// (`width − own` square).
     states: Vec<f64>,
+    /// Per sample the states' lags (columns `OWN..width`), row by row: the
+    /// full fits' residuals are summed from them.
+    lagged: Vec<f64>,
     inputs: Vec<InputSums>,
 }
 
@@ -86,6 +89,7 @@ impl Sums {
         Sums {
             width,
             states: vec![0.0; s * (s + 1) / 2],
+            lagged: Vec::new(),
             inputs: (0..inputs)
                 .map(|_| InputSums {
                     rows: vec![0.0; OWN * width],
@@ -98,6 +102,7 @@ impl Sums {
     }
     fn clear(&mut self) {
         self.states.fill(0.0);
+        self.lagged.clear();
         for i in &mut self.inputs {
             i.rows.fill(0.0);
             i.cross.fill(0.0);
@@ -108,6 +113,7 @@ impl Sums {
     /// Adds a sample: `x` holds the states' lags from column `OWN` on;
     /// its first `OWN` columns are each input's own, written here.
     fn push(&mut self, x: &mut [f64], lags: &[[f64; LAGS]], inputs: &[f64]) {
+        self.lagged.extend_from_slice(&x[OWN..]);
         let mut at = 0;
         for (i, a) in x[OWN..].iter().enumerate() {
             for b in &x[OWN + i..] {
@@ -161,13 +167,36 @@ impl Sums {
         if !(sums.square.is_finite() && g.iter().chain(c.iter()).all(|v| v.is_finite())) {
             return None;
         }
-        // A bounded number of sweeps: a fit that does not converge is no fit.
-        let b = g
-            .try_svd(true, true, f64::EPSILON, 500)?
-            .solve(&c, 1e-12)
-            .ok()?;
-        let rss = (sums.square - b.dot(&c)).max(0.0);
+        let b = solve_normal(g, &c)?;
+        let rss = self.residual_squares(j, &b);
         Some((b, rss))
+    }
+    /// `Σ (u − x·b)²` over the window, from its samples: `u'u − b'c`
+    /// cancels most of its digits when the fit is close (a smoothed input
+    /// its own lags predict to 10⁻⁵ of its square), where the residuals
+    /// themselves lose none, whichever way `b` was solved.
+    fn residual_squares(&self, j: usize, b: &DVector<f64>) -> f64 {
+        let own = &self.inputs[j].own;
+        let s = self.width - OWN;
+        let full = b.len() > OWN;
+        let mut sum = 0.0;
+        for (k, row) in own.iter().enumerate() {
+            let mut fitted = 0.0;
+            for (v, bi) in row[..OWN].iter().zip(b.iter()) {
+                fitted += bi * v;
+            }
+            if full {
+                for (v, bi) in self.lagged[k * s..(k + 1) * s]
+                    .iter()
+                    .zip(&b.as_slice()[OWN..])
+                {
+                    fitted += bi * v;
+                }
+            }
+            let e = row[OWN] - fitted;
+            sum += e * e;
+        }
+        sum
     }
     /// The innovations the restricted fit leaves: the samples whose
     /// residual exceeds 10⁻⁴ of their RMS. Dense noise counts every sample;
@@ -201,6 +230,54 @@ impl Sums {
     }
 }
 
+/// The smallest Cholesky pivot of the equilibrated Gram matrix (unit
+/// diagonal) that the fast solve accepts: below it the columns are nearly
+/// dependent, and the SVD decides what the fit is.
+const PIVOT_FLOOR: f64 = 1e-10;
+
+/// `b` of the normal equations `G b = c`, solved on `G` equilibrated to a
+/// unit diagonal: a state in rad/s beside a force in newtons makes `G`
+/// look singular by its units alone, and equilibrating takes that away
+/// (`b` is scaled back). Most windows' matrices are then well conditioned:
+/// a Cholesky factorisation solves them in a few hundred operations, where
+/// an SVD costs tens of microseconds. A window whose columns are nearly
+/// dependent (a held input, a constant state) goes to the SVD, which drops
+/// what the data cannot tell apart.
+fn solve_normal(g: DMatrix<f64>, c: &DVector<f64>) -> Option<DVector<f64>> {
+    let (g, scale) = equilibrated(&g);
+    let c = c.component_mul(&scale);
+    let y = match well_conditioned(&g) {
+        Some(ch) => ch.solve(&c),
+        // A bounded number of sweeps: a fit that does not converge is no fit.
+        None => g
+            .try_svd(true, true, f64::EPSILON, 500)?
+            .solve(&c, 1e-12)
+            .ok()?,
+    };
+    Some(y.component_mul(&scale))
+}
+
+/// `S G S` with `S` the diagonal that makes its diagonal 1 (1 for a zero
+/// column), and `S`.
+fn equilibrated(g: &DMatrix<f64>) -> (DMatrix<f64>, DVector<f64>) {
+    let scale = g
+        .diagonal()
+        .map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 1.0 });
+    let g = DMatrix::from_fn(g.nrows(), g.ncols(), |i, j| g[(i, j)] * scale[i] * scale[j]);
+    (g, scale)
+}
+
+/// The Cholesky factor of `g` (unit diagonal) when its every pivot is
+/// above [`PIVOT_FLOOR`].
+fn well_conditioned(g: &DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
+    let ch = g.clone().cholesky()?;
+    let l = ch.l_dirty();
+    let smallest = (0..l.nrows())
+        .map(|i| l[(i, i)] * l[(i, i)])
+        .fold(f64::INFINITY, f64::min);
+    (smallest > PIVOT_FLOOR).then_some(ch)
+}
+
 /// The stretches of every experiment where the motion predicts an input,
 /// in experiment order: each experiment checked on its own thread, on the
 /// machine's cores.
@@ -214,50 +291,99 @@ pub fn feedback_each(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Feedback> {
 
 /// The stretches of `source` where the motion predicts an input.
 pub fn feedback(ir: &Ir, source: &dyn Source) -> Vec<Feedback> {
-    let h = source.step();
-    let window = ((WINDOW_SECONDS / h).round() as usize).max(MIN_WINDOW);
-    if ir.inputs.is_empty() || source.len() < MIN_WINDOW {
+    let Some(mut scan) = FeedbackScan::new(ir, source) else {
         return Vec::new();
-    }
-    let n_states = ir.states.len();
-    let width = OWN + (LAGS + 1) * n_states;
-    let mut sums = Sums::new(width, ir.inputs.len());
-    // The states at k, k−1, …, k−LAGS (the regressors from column OWN on),
-    // and each input's lags k−1, …, k−LAGS.
-    let mut x = vec![0.0; width];
-    let mut lags = vec![[0.0; LAGS]; ir.inputs.len()];
-    let mut seen = 0;
-    let mut flagged: Vec<(usize, usize, Vec<usize>, f64)> = Vec::new();
-    let mut k = 0;
-    let mut start = 0;
-    source.visit(&mut |row: &Row| {
-        x.copy_within(OWN..width - n_states, OWN + n_states);
-        x[OWN..OWN + n_states].copy_from_slice(row.states);
-        if seen == LAGS {
-            sums.push(&mut x, &lags, row.inputs);
-        } else {
-            seen += 1;
+    };
+    source.visit(&mut |row: &Row| scan.push(row));
+    scan.finish()
+}
+
+/// The closed-loop check of one experiment as its rows go by, so that it
+/// can share a visit with the other checks of the data: [`FeedbackScan::push`]
+/// every row in order, then [`FeedbackScan::finish`].
+pub struct FeedbackScan<'a> {
+    ir: &'a Ir,
+    source: &'a dyn Source,
+    /// Samples a window holds.
+    window: usize,
+    sums: Sums,
+    /// The states at k, k−1, …, k−LAGS (the regressors from column OWN on).
+    x: Vec<f64>,
+    /// Each input's lags k−1, …, k−LAGS.
+    lags: Vec<[f64; LAGS]>,
+    /// Rows seen before the first whole set of lags (at most `LAGS`).
+    seen: usize,
+    flagged: Vec<(usize, usize, Vec<usize>, f64)>,
+    /// Rows pushed.
+    k: usize,
+    /// The current window's first row.
+    start: usize,
+}
+
+impl<'a> FeedbackScan<'a> {
+    /// The check of `source`, or `None` when there is nothing to check (a
+    /// model without inputs, a record shorter than a window).
+    pub fn new(ir: &'a Ir, source: &'a dyn Source) -> Option<FeedbackScan<'a>> {
+        if ir.inputs.is_empty() || source.len() < MIN_WINDOW {
+            return None;
         }
-        for (l, u) in lags.iter_mut().zip(row.inputs) {
+        let window = ((WINDOW_SECONDS / source.step()).round() as usize).max(MIN_WINDOW);
+        let width = OWN + (LAGS + 1) * ir.states.len();
+        Some(FeedbackScan {
+            ir,
+            source,
+            window,
+            sums: Sums::new(width, ir.inputs.len()),
+            x: vec![0.0; width],
+            lags: vec![[0.0; LAGS]; ir.inputs.len()],
+            seen: 0,
+            flagged: Vec::new(),
+            k: 0,
+            start: 0,
+        })
+    }
+
+    /// The next row of the experiment.
+    pub fn push(&mut self, row: &Row) {
+        let (n_states, width) = (self.ir.states.len(), self.x.len());
+        self.x.copy_within(OWN..width - n_states, OWN + n_states);
+        self.x[OWN..OWN + n_states].copy_from_slice(row.states);
+        if self.seen == LAGS {
+            self.sums.push(&mut self.x, &self.lags, row.inputs);
+        } else {
+            self.seen += 1;
+        }
+        for (l, u) in self.lags.iter_mut().zip(row.inputs) {
             l.copy_within(0..LAGS - 1, 1);
             l[0] = *u;
         }
-        k += 1;
-        let last = k == source.len();
-        if k - start == window || (last && k - start >= MIN_WINDOW) {
-            let shares: Vec<(usize, f64)> = (0..ir.inputs.len())
-                .filter_map(|j| sums.explained(j).map(|e| (j, e)))
-                .filter(|(_, e)| *e >= EXPLAINED)
-                .collect();
-            if !shares.is_empty() {
-                let most = shares.iter().map(|(_, e)| *e).fold(0.0, f64::max);
-                flagged.push((start, k - 1, shares.iter().map(|(j, _)| *j).collect(), most));
-            }
-            sums.clear();
-            start = k;
+        self.k += 1;
+        let (k, start) = (self.k, self.start);
+        let last = k == self.source.len();
+        if k - start == self.window || (last && k - start >= MIN_WINDOW) {
+            self.judge_window();
         }
-    });
-    merge(ir, source, h, flagged)
+    }
+
+    /// Judges the window that ends at the last row pushed, and starts the next.
+    fn judge_window(&mut self) {
+        let shares: Vec<(usize, f64)> = (0..self.ir.inputs.len())
+            .filter_map(|j| self.sums.explained(j).map(|e| (j, e)))
+            .filter(|(_, e)| *e >= EXPLAINED)
+            .collect();
+        if !shares.is_empty() {
+            let most = shares.iter().map(|(_, e)| *e).fold(0.0, f64::max);
+            let inputs = shares.iter().map(|(j, _)| *j).collect();
+            self.flagged.push((self.start, self.k - 1, inputs, most));
+        }
+        self.sums.clear();
+        self.start = self.k;
+    }
+
+    /// The flagged stretches, adjacent windows merged.
+    pub fn finish(self) -> Vec<Feedback> {
+        merge(self.ir, self.source, self.source.step(), self.flagged)
+    }
 }
 
 /// Adjacent flagged windows as one stretch each.
@@ -341,6 +467,99 @@ mod tests {
         assert_eq!(found.len(), 1, "{found:?}");
         assert_eq!((found[0].first, found[0].last), (3000, 4199));
         assert!(found[0].explained > 0.9, "{found:?}");
+    }
+
+    /// The SVD's solution of `G b = c`, as every window was solved before
+    /// the Cholesky path.
+    fn by_svd(g: &DMatrix<f64>, c: &DVector<f64>) -> DVector<f64> {
+        g.clone()
+            .try_svd(true, true, f64::EPSILON, 500)
+            .and_then(|s| s.solve(c, 1e-12).ok())
+            .unwrap_or_else(|| panic!("the SVD converges"))
+    }
+
+    #[test]
+    fn the_fast_solve_agrees_with_the_svd_and_leaves_dependent_columns_to_it() {
+        // 12 columns of a record, well conditioned enough for the Cholesky
+        // path, as most windows are.
+        let e = record(|_| false, 1.0);
+        let x = DMatrix::from_fn(300, 12, |k, j| {
+            (0.37 * (k * (j + 1)) as f64 + j as f64).sin() + 0.1 * e.states[0][k + j]
+        });
+        let g = x.transpose() * &x;
+        let c = x.transpose() * DVector::from_fn(300, |k, _| e.inputs[0][k]);
+        assert!(well_conditioned(&equilibrated(&g).0).is_some());
+        let fast = solve_normal(g.clone(), &c).unwrap_or_else(|| panic!("solved"));
+        let svd = by_svd(&g, &c);
+        let scale = svd.amax();
+        assert!((fast - &svd).amax() <= 1e-8 * scale, "{svd}");
+        // A column repeated: the Gram matrix is singular, the SVD decides.
+        let mut dup = x.clone();
+        dup.set_column(5, &x.column(4).clone_owned());
+        let g = dup.transpose() * &dup;
+        assert!(well_conditioned(&equilibrated(&g).0).is_none());
+        let c = dup.transpose() * DVector::from_fn(300, |k, _| e.inputs[0][k]);
+        let solved = solve_normal(g.clone(), &c).unwrap_or_else(|| panic!("solved"));
+        assert!((&g * &solved - &c).amax() <= 1e-9 * c.amax(), "{solved}");
+        assert!(
+            (solved[4] - solved[5]).abs() <= 1e-9 * solved.amax(),
+            "{solved}"
+        );
+    }
+
+    #[test]
+    fn residual_sums_of_a_close_fit_keep_their_digits() {
+        // A smooth input its own lags predict to about 10⁻⁶ of its square,
+        // and two states that follow it: `u'u − b'c` loses most of the
+        // residual's digits here (it flagged open-loop windows as closed).
+        let (n, n_states) = (300, 2);
+        let width = OWN + (LAGS + 1) * n_states;
+        let u: Vec<f64> = (0..n + LAGS)
+            .map(|k| {
+                let t = k as f64;
+                300.0 * ((0.05 * t).sin() + 0.5 * (0.013 * t).cos() + 1e-4 * (1.7 * t).sin())
+            })
+            .collect();
+        let mut states = vec![[0.0; 2]; n + LAGS];
+        for k in 1..n + LAGS {
+            let [a, b] = states[k - 1];
+            states[k] = [a + 0.2 * (u[k - 1] - a), b + 0.1 * (a - b)];
+        }
+        // Measured with noise: else each state's lags and the input's are
+        // exactly dependent.
+        for (k, s) in states.iter_mut().enumerate() {
+            let t = k as f64;
+            s[0] += 0.3 * (2.3 * t).sin();
+            s[1] = 1e-4 * (s[1] + 0.3 * (3.1 * t + 1.0).cos());
+        }
+        let mut sums = Sums::new(width, 1);
+        let mut rows = Vec::new();
+        for k in LAGS..n + LAGS {
+            let mut x = vec![0.0; width];
+            for lag in 0..=LAGS {
+                x[OWN + lag * n_states..OWN + (lag + 1) * n_states]
+                    .copy_from_slice(&states[k - lag]);
+            }
+            sums.push(&mut x, &[[u[k - 1], u[k - 2]]], &[u[k]]);
+            rows.push(x);
+        }
+        for columns in [OWN, width] {
+            let (_, rss) = sums.fit(0, columns).unwrap_or_else(|| panic!("a fit"));
+            // The reference: least squares on the samples themselves (QR).
+            let a = DMatrix::from_fn(n, columns, |k, c| rows[k][c]);
+            let y = DVector::from_fn(n, |k, _| u[k + LAGS]);
+            let qr = a.clone().qr();
+            let b = qr
+                .r()
+                .solve_upper_triangular(&(qr.q().transpose() * &y))
+                .unwrap_or_else(|| panic!("solved"));
+            let reference = (&y - &a * b).norm_squared();
+            assert!(reference < 1e-5 * y.norm_squared(), "{reference}");
+            assert!(
+                (rss - reference).abs() <= 1e-6 * reference,
+                "{columns} columns: {rss} against {reference}"
+            );
+        }
     }
 
     #[test]

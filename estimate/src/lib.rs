@@ -40,7 +40,7 @@ pub mod moments;
 mod options;
 mod outcome;
 mod own;
-mod parallel;
+pub mod parallel;
 mod plan;
 mod prefix;
 mod protocol;

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// The threads a pass over `n` experiments uses: the machine's cores
 /// (`std::thread::available_parallelism`), at most one per experiment.
-pub(crate) fn threads_for(n: usize) -> usize {
+pub fn threads_for(n: usize) -> usize {
     std::thread::available_parallelism()
         .map_or(1, std::num::NonZeroUsize::get)
         .min(n)
@@ -17,7 +17,7 @@ pub(crate) fn threads_for(n: usize) -> usize {
 /// `f(i)` for every `i` in `0..n`, on `threads` threads taking the next
 /// index as they finish one, returned in index order. A panic in `f` is
 /// resumed here.
-pub(crate) fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
+pub fn in_order<T: Send>(n: usize, threads: usize, f: impl Fn(usize) -> T + Sync) -> Vec<T> {
     if threads <= 1 || n <= 1 {
         return (0..n).map(f).collect();
     }

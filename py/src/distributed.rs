@@ -31,9 +31,7 @@ use leeway_model::Experiment;
 use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_report::feedback::closed_loop_alerts;
-use leeway_report::heading_gains;
 use leeway_report::heading_warnings;
-use leeway_report::input_peaks;
 use leeway_report::unit_warnings_from_peaks;
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -92,15 +90,17 @@ impl Dataset {
 
     fn new(ir: &leeway_structure::ir::Ir, experiments: Experiments, notes: FileNotes) -> Dataset {
         let sources = experiments.sources();
+        // The three checks of the data in one visit of each experiment.
+        let checks = leeway_report::checks::data_checks(ir, &sources);
         let summary = FileSummary {
             experiments: sources
                 .iter()
                 .map(|e| (e.name().to_string(), e.len()))
                 .collect(),
             notes,
-            heading_gains: heading_gains(ir, &sources),
-            input_peaks: input_peaks(ir, &sources),
-            closed_loop: leeway_report::feedback::closed_loop(ir, &sources),
+            heading_gains: checks.heading_gains,
+            input_peaks: checks.input_peaks,
+            closed_loop: checks.closed_loop,
         };
         let summary = encode(&summary);
         drop(sources);

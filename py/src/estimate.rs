@@ -9,9 +9,7 @@ use crate::options::{EstimateOptions, load_options};
 use leeway_data::LoadOptions;
 use leeway_estimate::{DelayRange, ScanBy, estimate, scan_delay};
 use leeway_model::Interpreter;
-use leeway_report::{
-    DelayScanJson, EstimateReport, Estimated, estimate_report, heading_gains, heading_warnings,
-};
+use leeway_report::{DelayScanJson, EstimateReport, Estimated, estimate_report, heading_warnings};
 use pyo3::prelude::*;
 
 /// `leeway estimate --json` of `model` on the frames: each frame is
@@ -61,14 +59,17 @@ fn run_estimate(
         data::load_for_estimate(ir, frames, load_options, options.interrupt.as_ref())?;
     let sources = loaded.sources();
     let mut warnings = model.warnings.clone();
-    warnings.extend(leeway_report::unit_warnings(ir, &sources));
-    let gains = heading_gains(ir, &sources);
+    // The three checks of the data in one visit of each experiment.
+    let checks = leeway_report::checks::data_checks(ir, &sources);
+    warnings.extend(leeway_report::unit_warnings_from_peaks(
+        ir,
+        &checks.input_peaks,
+    ));
+    let gains = checks.heading_gains;
     warnings.extend(heading_warnings(ir, &gains));
     // Worded as the CLI words them: the report finds each one's summary
     // among the estimate's (added below).
-    let alerts = leeway_report::feedback::closed_loop_alerts(
-        &leeway_report::feedback::closed_loop(ir, &sources),
-    );
+    let alerts = leeway_report::feedback::closed_loop_alerts(&checks.closed_loop);
     warnings.extend(alerts.iter().map(|w| w.detail.clone()));
     let (result, scanned) = match scan {
         None => (

@@ -10,12 +10,17 @@ pub mod check;
 
 pub mod feedback;
 
-use leeway_data::{FileNotes, heading_gain};
+pub mod checks;
+
+pub use checks::{
+    heading_alerts, heading_gains, heading_warnings, input_peaks, unit_alerts,
+    unit_alerts_from_peaks, unit_warnings, unit_warnings_from_peaks,
+};
+
+use leeway_data::FileNotes;
 use leeway_estimate::{ColumnEstimate, Diagnostics, Estimate, Method};
-use leeway_model::experiment::Source;
 use leeway_model::signs::ArgSign;
 use leeway_model::warning::Warning;
-use leeway_structure::ir::{Ir, Rotation};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -39,167 +44,6 @@ impl<T: Serialize> Serialize for Ordered<T> {
         }
         map.end()
     }
-}
-
-/// Words in an input's name or column that say it is an angle.
-const ANGLE_WORDS: [&str; 5] = ["delta", "rudder", "angle", "deg", "azimuth"];
-
-/// An input without a declared unit, named like an angle (`delta`,
-/// `rudder_deg`, ...), whose values exceed π in magnitude is probably an
-/// angle logged in degrees: say so, with the declaration that fixes it. Only
-/// the name can tell an angle from a force of the same magnitude, so inputs
-/// named otherwise are left alone rather than warned about on every run.
-pub fn unit_warnings(ir: &Ir, experiments: &[&dyn Source]) -> Vec<String> {
-    details(unit_alerts_from_peaks(ir, &input_peaks(ir, experiments)))
-}
-
-/// [`unit_warnings`] with their summaries and help lines.
-pub fn unit_alerts(ir: &Ir, experiments: &[&dyn Source]) -> Vec<Warning> {
-    unit_alerts_from_peaks(ir, &input_peaks(ir, experiments))
-}
-
-/// Each warning's full text.
-fn details(warnings: Vec<Warning>) -> Vec<String> {
-    warnings.into_iter().map(|w| w.detail).collect()
-}
-
-/// The inputs whose name or column reads like an angle without a declared unit.
-fn angle_like_inputs(ir: &Ir) -> Vec<usize> {
-    ir.inputs
-        .iter()
-        .enumerate()
-        .filter(|(_, name)| {
-            let column = leeway_model::experiment::column_name(ir, name).to_lowercase();
-            let angle_like = ANGLE_WORDS
-                .iter()
-                .any(|w| name.to_lowercase().contains(w) || column.contains(w));
-            !ir.data_units.contains_key(*name) && angle_like
-        })
-        .map(|(i, _)| i)
-        .collect()
-}
-
-/// The largest magnitude of every angle-like input over the experiments (0
-/// for the other inputs): what [`unit_warnings`] judges. Peaks of disjoint
-/// sets of experiments combine by their maximum, exactly.
-pub fn input_peaks(ir: &Ir, experiments: &[&dyn Source]) -> Vec<f64> {
-    let angle_like = angle_like_inputs(ir);
-    let mut peaks = vec![0.0f64; ir.inputs.len()];
-    if angle_like.is_empty() {
-        return peaks;
-    }
-    // One visit of every experiment for all such inputs.
-    for e in experiments {
-        e.visit(&mut |row| {
-            for &i in &angle_like {
-                if let Some(v) = row.inputs.get(i) {
-                    peaks[i] = peaks[i].max(v.abs());
-                }
-            }
-        });
-    }
-    peaks
-}
-
-/// [`unit_warnings`] from the peaks of [`input_peaks`].
-pub fn unit_warnings_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<String> {
-    details(unit_alerts_from_peaks(ir, peaks))
-}
-
-/// [`unit_alerts`] from the peaks of [`input_peaks`].
-pub fn unit_alerts_from_peaks(ir: &Ir, peaks: &[f64]) -> Vec<Warning> {
-    let mut out = Vec::new();
-    for i in angle_like_inputs(ir) {
-        let (name, peak) = (&ir.inputs[i], peaks.get(i).copied().unwrap_or(0.0));
-        if peak > std::f64::consts::PI {
-            out.push(
-                Warning::new(
-                    "angle-unit",
-                    format!("input `{name}` reaches {peak:.1}, more than π: it looks like an angle in degrees"),
-                    format!("if it is, declare `{name} in deg` in data {{ }}"),
-                    format!(
-                        "input `{name}` reaches {peak:.1}: if it is an angle in degrees declare `{name} in deg` in data {{ }}"
-                    ),
-                )
-                .biasing(),
-            );
-        }
-    }
-    out
-}
-
-/// The heading gain of every experiment (`None` without a planar heading or
-/// with too little yaw motion to tell), one visit each.
-pub fn heading_gains(ir: &Ir, experiments: &[&dyn Source]) -> Vec<(String, Option<f64>)> {
-    if heading_name(ir).is_none() {
-        return Vec::new();
-    }
-    experiments
-        .iter()
-        .map(|e| (e.name().to_string(), heading_gain(ir, *e)))
-        .collect()
-}
-
-/// The heading's unit check (SPEC §5): a warning with the measured gain of
-/// `Δψ/h` on the yaw rate when it is off by more than 20 %, from the gains of
-/// [`heading_gains`].
-pub fn heading_warnings(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<String> {
-    details(heading_alerts(ir, gains))
-}
-
-/// [`heading_warnings`] with their summaries and help lines.
-pub fn heading_alerts(ir: &Ir, gains: &[(String, Option<f64>)]) -> Vec<Warning> {
-    let Some(heading) = heading_name(ir) else {
-        return Vec::new();
-    };
-    gains
-        .iter()
-        .filter_map(|(name, gain)| {
-            let gain = (*gain)?;
-            ((gain - 1.0).abs() > 0.2).then(|| heading_warning(ir, name, &heading, gain))
-        })
-        .collect()
-}
-
-fn heading_name(ir: &Ir) -> Option<String> {
-    match &ir.rotation {
-        Rotation::Planar { heading, .. } => {
-            Some(leeway_model::experiment::column_name(ir, heading))
-        }
-        _ => None,
-    }
-}
-
-fn heading_warning(ir: &Ir, experiment: &str, heading: &str, gain: f64) -> Warning {
-    let rate = match &ir.rotation {
-        Rotation::Planar { integrates, .. } => {
-            ir.states.get(*integrates).map_or("r", String::as_str)
-        }
-        _ => "r",
-    };
-    // Far above 1 points at degrees (57.3 = 180/π); the figure itself is
-    // reported as measured, whatever it is.
-    let why = if gain > 20.0 {
-        "a gain near 57.3 (180/π) means the heading is in degrees while the model works in radians"
-    } else {
-        "check the units and frame of both columns"
-    };
-    let help = if gain > 20.0 {
-        format!("if `{heading}` is in degrees, declare `{heading} in deg` in data {{ }}")
-    } else {
-        "check the units and frame of both columns".to_string()
-    };
-    Warning::new(
-        "heading-gain",
-        format!(
-            "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}` (gain {gain:.2}, 1 expected)"
-        ),
-        help,
-        format!(
-            "experiment `{experiment}`: the heading `{heading}` does not integrate `{rate}`: Δ{heading}/h ≈ {gain:.2}·{rate} (gain {gain:.2}, 1 expected); {why}"
-        ),
-    )
-    .biasing()
 }
 
 /// The JSON form of the loading notes (docs/json.md: `data_files`).
