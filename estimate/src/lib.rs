@@ -52,6 +52,7 @@ mod runner;
 mod scan;
 mod solve;
 mod walk;
+mod zeta;
 
 pub use leeway_structure::identify::Centring;
 pub use local::{LocalPasses, PrefixRows};

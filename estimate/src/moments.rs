@@ -856,8 +856,15 @@ impl LongRun {
     }
     /// Adds `ζ_k`.
     pub fn push(&mut self, zeta: &DVector<f64>) {
+        self.push_with(|row| row.copy_from_slice(zeta.as_slice()));
+    }
+    /// Adds the `ζ_k` that `fill` writes into its (zeroed) row.
+    #[inline]
+    pub fn push_with(&mut self, fill: impl FnOnce(&mut [f64])) {
         let start = (self.lags + self.filled) * self.w;
-        self.buf[start..start + self.dim].copy_from_slice(zeta.as_slice());
+        let row = &mut self.buf[start..start + self.dim];
+        row.fill(0.0);
+        fill(row);
         self.filled += 1;
         self.n += 1;
         if self.filled == BLOCK {

@@ -16,7 +16,6 @@ use leeway_model::model::{HeadingRotation, Model, Signals};
 use leeway_model::number::short_number;
 use leeway_model::signs::SignCounter;
 use leeway_structure::ir::{Ir, PredictorKind, Rotation};
-use nalgebra::DVector;
 
 use crate::protocol::{
     BadValue, ExperimentFacts, FactsRequest, LongRunPass, Pass, PassPlan, PassRequest, PassSummary,
@@ -24,6 +23,7 @@ use crate::protocol::{
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
 use crate::walk::{EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper};
+use crate::zeta::ZetaPlan;
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
 struct MomentPass<'a> {
@@ -730,9 +730,8 @@ impl<'a> PassRunner<'a> {
     ) -> Summary {
         // The instruments of the reported iterate (empty θ: the delayed bootstrap).
         let walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
-        let n = plan.n_cols;
+        let zeta = ZetaPlan::new(plan, lr, centres, mean_res);
         let mut sums = LongRun::new(lr.dim, lr.lags);
-        let mut zeta = DVector::zeros(lr.dim);
         let walked = walker.walk(
             e,
             info,
@@ -741,22 +740,7 @@ impl<'a> PassRunner<'a> {
             None,
             &mut Reuse::default(),
             |z: &[f64], phi: &[f64], t: &[f64]| {
-                zeta.fill(0.0);
-                for (o, rows) in lr.rows.iter().enumerate() {
-                    let mut res = t[o];
-                    for (c, v) in &plan.held {
-                        res -= phi[o * n + c] * v;
-                    }
-                    for c in &plan.cols[o] {
-                        res -= phi[o * n + c] * lr.values[*c];
-                    }
-                    res -= mean_res[o];
-                    let source = if lr.own { phi } else { z };
-                    for (r, c, j) in rows {
-                        zeta[*r] += (source[o * n + c] - centres[o][*j]) * res;
-                    }
-                }
-                sums.push(&zeta);
+                sums.push_with(|row| zeta.add(z, phi, t, row));
             },
         );
         let sums = walked.ok().map(|_| {

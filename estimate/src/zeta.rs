@@ -1,0 +1,80 @@
+//! The moment residual `ζ_k` of one sample, as the covariance pass sums it:
+//! per output `o`, the residual `ε = t − Σ φ_c·θ_c − ε̄` and the rows
+//! `(z̃_c − centre)·ε` it adds to `ζ`. The plan is laid out once per
+//! experiment — flat indices into the walk's buffers, values and centres
+//! beside them — so that each sample is a few tight loops; every sum is
+//! made in the order the pass always made it, with the same bits.
+
+use crate::protocol::{LongRunPass, PassPlan};
+
+/// One output's part of `ζ`.
+struct OutputZeta {
+    /// Its target's index.
+    output: usize,
+    /// `(index into φ, value)`: held columns first, then estimated ones.
+    terms: Vec<(usize, f64)>,
+    /// The mean residual `ε̄`.
+    mean: f64,
+    /// `(ζ row, index into the instruments' buffer, centre)`.
+    rows: Vec<(usize, usize, f64)>,
+}
+
+/// How one experiment's samples give `ζ_k`.
+pub(super) struct ZetaPlan {
+    outputs: Vec<OutputZeta>,
+    /// The regressors are their own instruments (least squares).
+    own: bool,
+}
+
+impl ZetaPlan {
+    /// The plan of pass `lr` with `plan`, for an experiment whose
+    /// instruments' centres (per output, by block index) and mean residuals
+    /// are `centres` and `mean_res`.
+    pub(super) fn new(
+        plan: &PassPlan,
+        lr: &LongRunPass,
+        centres: &[Vec<f64>],
+        mean_res: &[f64],
+    ) -> ZetaPlan {
+        let n = plan.n_cols;
+        let outputs = lr
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(o, rows)| {
+                let held = plan.held.iter().map(|&(c, v)| (o * n + c, v));
+                let estimated = plan.cols[o].iter().map(|&c| (o * n + c, lr.values[c]));
+                OutputZeta {
+                    output: o,
+                    terms: held.chain(estimated).collect(),
+                    mean: mean_res[o],
+                    rows: rows
+                        .iter()
+                        .map(|&(r, c, j)| (r, o * n + c, centres[o][j]))
+                        .collect(),
+                }
+            })
+            .collect();
+        ZetaPlan {
+            outputs,
+            own: lr.own,
+        }
+    }
+
+    /// Adds `ζ_k` of the sample with instruments `z`, regressors `phi` and
+    /// targets `t` into `zeta` (zeroed).
+    #[inline]
+    pub(super) fn add(&self, z: &[f64], phi: &[f64], t: &[f64], zeta: &mut [f64]) {
+        let source = if self.own { phi } else { z };
+        for out in &self.outputs {
+            let mut res = t[out.output];
+            for &(i, v) in &out.terms {
+                res -= phi[i] * v;
+            }
+            res -= out.mean;
+            for &(r, i, centre) in &out.rows {
+                zeta[r] += (source[i] - centre) * res;
+            }
+        }
+    }
+}
