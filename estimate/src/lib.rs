@@ -50,6 +50,7 @@ mod report;
 mod run;
 mod runner;
 mod scan;
+mod slots;
 mod solve;
 mod walk;
 mod zeta;

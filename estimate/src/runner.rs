@@ -22,7 +22,8 @@ use crate::protocol::{
     PrefixInstruments, Summary,
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
-use crate::walk::{EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper};
+use crate::slots::{SlotPlans, read_slots};
+use crate::walk::{EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper, WalkSlots};
 use crate::zeta::ZetaPlan;
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
@@ -385,6 +386,9 @@ fn located(e: &dyn Source, sample: usize, what: String) -> BadValue {
 pub struct PassRunner<'a> {
     model: &'a dyn Model,
     terms: Vec<TermPlan>,
+    /// The model's evaluators of some slots, by predictor and slots
+    /// wanted, made once for all the passes of an estimate.
+    slot_plans: SlotPlans,
     /// Asked during the data walks (see [`LocalPasses::interruptible`]).
     pub(crate) interrupt: Option<Interrupt>,
 }
@@ -395,6 +399,7 @@ impl<'a> PassRunner<'a> {
         PassRunner {
             model,
             terms: leeway_model::interp::term_plans(model.ir()),
+            slot_plans: SlotPlans::default(),
             interrupt: None,
         }
     }
@@ -503,6 +508,26 @@ impl<'a> PassRunner<'a> {
             n_cols: plan.n_cols,
             instrument_means: None,
             interrupt: self.interrupt.as_ref(),
+            slots: WalkSlots::default(),
+        }
+    }
+
+    /// The evaluators of only the slots a pass with `plan` reads, where
+    /// the model has them: the instruments' estimated columns, and (unless
+    /// the pass `scan`s every regressor for bad values) the measured
+    /// regressors' estimated and held columns.
+    fn walk_slots(&self, plan: &PassPlan, scan: bool) -> WalkSlots {
+        let n_out = self.model.ir().states.len();
+        WalkSlots {
+            measured: (!scan)
+                .then(|| {
+                    self.slot_plans
+                        .get(self.model, plan.kind, read_slots(plan, n_out, true))
+                })
+                .flatten(),
+            instruments: self
+                .slot_plans
+                .get(self.model, plan.kind, read_slots(plan, n_out, false)),
         }
     }
 
@@ -589,6 +614,7 @@ impl<'a> PassRunner<'a> {
         // An empty θ asks for the delayed bootstrap pass of the refined IV.
         let mut walker = self.pass_walker(plan, pass.theta_sim.is_empty());
         walker.instrument_means = pass.prefix.map(|p| p.means.as_slice());
+        walker.slots = self.walk_slots(plan, pass.scan);
         let simulates = walker.simulates(pass.theta_sim);
         let Begun {
             mut keeping,
@@ -729,7 +755,8 @@ impl<'a> PassRunner<'a> {
         mean_res: &[f64],
     ) -> Summary {
         // The instruments of the reported iterate (empty θ: the delayed bootstrap).
-        let walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
+        let mut walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
+        walker.slots = self.walk_slots(plan, false);
         let zeta = ZetaPlan::new(plan, lr, centres, mean_res);
         let mut sums = LongRun::new(lr.dim, lr.lags);
         let walked = walker.walk(

@@ -15,10 +15,13 @@ use crate::record::{ExperimentInfo, FixedSignColumn};
 use leeway_model::experiment::Source;
 use leeway_model::interp::{ArgPlan, TermPlan};
 use leeway_model::interrupt::Interrupt;
-use leeway_model::model::{HeadingRotation, Model, Signals, planar_rotation, rotated};
+use leeway_model::model::{
+    HeadingRotation, Model, Signals, SlotRegressors, planar_rotation, rotated,
+};
 use leeway_model::signs::set_pointwise_signs;
 use leeway_structure::grammar::EquationKind;
 use leeway_structure::ir::{Ir, PredictorKind, Rotation};
+use std::sync::Arc;
 
 /// Visits every equation of an experiment: `f(z, φ, t)` with dense buffers
 /// (`n_out × n_cols`) of instruments and regressors and the targets.
@@ -40,6 +43,17 @@ pub(super) struct EquationWalker<'a> {
     /// of the walk is skipped (the driver, asking after the pass, then
     /// discards it).
     pub(super) interrupt: Option<&'a Interrupt>,
+    /// Evaluators of only the slots the pass reads, of the measured
+    /// regressors and of the instruments (`None`: every slot).
+    pub(super) slots: WalkSlots,
+}
+
+/// The slots of the regressor buffers a pass reads, where the model can
+/// evaluate just those ([`Model::regressor_slots`]).
+#[derive(Clone, Default)]
+pub(super) struct WalkSlots {
+    pub(super) measured: Option<Arc<dyn SlotRegressors>>,
+    pub(super) instruments: Option<Arc<dyn SlotRegressors>>,
 }
 
 /// Samples between two questions to the interrupt (a few milliseconds).
@@ -398,6 +412,24 @@ impl EquationWalker<'_> {
         }
     }
 
+    /// The measured regressors the pass reads.
+    #[inline(always)]
+    fn eval_measured(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
+        match &self.slots.measured {
+            Some(slots) => slots.update(sig, signs, out),
+            None => self.model.regressors_update(self.kind, sig, signs, out),
+        }
+    }
+
+    /// The instruments' regressors the pass reads.
+    #[inline(always)]
+    fn eval_instruments(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
+        match &self.slots.instruments {
+            Some(slots) => slots.update(sig, signs, out),
+            None => self.model.regressors_update(self.kind, sig, signs, out),
+        }
+    }
+
     /// Evaluates one equation's regressors (unless `skip_measured`) and
     /// instruments into `eq`, at the history `hist` (samples k − 1 and
     /// k − 2) and the instrument simulation `sim`.
@@ -420,8 +452,7 @@ impl EquationWalker<'_> {
                 disturbances: &hist.d1,
             };
             set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y1);
-            self.model
-                .regressors_update(self.kind, &sig, &eq.signs, &mut eq.phi);
+            self.eval_measured(&sig, &eq.signs, &mut eq.phi);
         }
         match self.instruments {
             // Least squares: the regressors are their own instruments.
@@ -435,8 +466,7 @@ impl EquationWalker<'_> {
                     disturbances: means,
                 };
                 set_pointwise_signs(&mut eq.signs, &info.varying, &sim.x);
-                self.model
-                    .regressors_update(self.kind, &sig, &eq.signs, &mut eq.z);
+                self.eval_instruments(&sig, &eq.signs, &mut eq.z);
                 eq.fixed
                     .write(self, &info.fixed_sign_columns, &sig, &mut eq.z);
             }
@@ -453,8 +483,7 @@ impl EquationWalker<'_> {
                     disturbances: dist,
                 };
                 set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y2);
-                self.model
-                    .regressors_update(self.kind, &sig, &eq.signs, &mut eq.z);
+                self.eval_instruments(&sig, &eq.signs, &mut eq.z);
             }
         }
     }

@@ -17,10 +17,10 @@
 
 mod plan;
 
-use crate::model::{Model, Signals};
+use crate::model::{Model, Signals, SlotRegressors};
 use leeway_structure::grammar::EquationKind;
 use leeway_structure::ir::{Arg, Ir, PredictorKind, Signal};
-use plan::Plans;
+use plan::{Plans, RegressorPlan};
 
 pub use leeway_structure::ir::Share;
 
@@ -161,6 +161,15 @@ impl Interpreter {
     }
 }
 
+/// Some slots of a predictor, by the interpreter's plan of only those.
+struct PlannedSlots(RegressorPlan);
+
+impl SlotRegressors for PlannedSlots {
+    fn update(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
+        self.0.eval_nonzero(sig, signs, out);
+    }
+}
+
 impl Model for Interpreter {
     fn ir(&self) -> &Ir {
         &self.ir
@@ -181,12 +190,19 @@ impl Model for Interpreter {
         signs: &[f64],
         out: &mut [f64],
     ) {
-        let plan = match kind {
-            PredictorKind::Basic => &self.plans.basic,
-            PredictorKind::Augmented => &self.plans.augmented,
-            PredictorKind::Measured => &self.plans.measured,
-        };
-        plan.eval_nonzero(sig, signs, out);
+        self.plans.regressors(kind).eval_nonzero(sig, signs, out);
+    }
+    fn regressor_slots(
+        &self,
+        kind: PredictorKind,
+        wanted: &[bool],
+    ) -> Option<Box<dyn SlotRegressors>> {
+        let columns = self.ir.predictors.get(kind);
+        Some(Box::new(PlannedSlots(RegressorPlan::of_slots(
+            &self.ir,
+            columns,
+            Some(wanted),
+        ))))
     }
     fn rhs(&self, theta: &[f64], sig: &Signals, out: &mut [f64]) {
         self.plans.rhs.eval(theta, sig, out);

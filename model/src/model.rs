@@ -19,6 +19,13 @@ pub struct Signals<'a> {
     pub disturbances: &'a [f64],
 }
 
+/// Some slots of a predictor's regressor buffer ([`Model::regressor_slots`]).
+pub trait SlotRegressors: Send + Sync {
+    /// Writes the chosen slots of `out` at the signals `sig` and the sign
+    /// pattern `signs`, as [`Model::regressors_update`] writes them.
+    fn update(&self, sig: &Signals, signs: &[f64], out: &mut [f64]);
+}
+
 /// A compiled second-order modulus model.
 ///
 /// Regressor buffers are dense, row-major by output: the value of column `j`
@@ -72,6 +79,19 @@ pub trait Model: Send + Sync {
         out: &mut [f64],
     ) {
         self.regressors(kind, sig, signs, out);
+    }
+    /// An evaluator of only the `wanted` slots of `kind`'s regressor buffer
+    /// (`n_outputs × n_columns`), for a pass that reads no others: the
+    /// other slots are left as they are. `None` (the default) where the
+    /// model evaluates every slot as cheaply; the interpreter's evaluator
+    /// computes each wanted slot operation for operation as
+    /// [`Model::regressors_update`] does, so its values are the same bits.
+    fn regressor_slots(
+        &self,
+        _kind: PredictorKind,
+        _wanted: &[bool],
+    ) -> Option<Box<dyn SlotRegressors>> {
+        None
     }
     /// The compile-time identifiability report.
     fn report(&self) -> &Report {

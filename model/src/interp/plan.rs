@@ -30,7 +30,9 @@
 mod block;
 
 use crate::model::Signals;
-use leeway_structure::ir::{Arg, Column, Entry, EvalVar, Ir, Pointwise, Share, Signal, Term};
+use leeway_structure::ir::{
+    Arg, Column, Entry, EvalVar, Ir, Pointwise, PredictorKind, Share, Signal, Term,
+};
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 
@@ -544,6 +546,14 @@ pub(super) struct RegressorPlan {
 
 impl RegressorPlan {
     fn new(ir: &Ir, columns: &[Column]) -> RegressorPlan {
+        RegressorPlan::of_slots(ir, columns, None)
+    }
+
+    /// The plan of the slots `wanted` says (every slot: `None`); the others
+    /// are left to the buffer, as structurally zero slots are (so
+    /// [`RegressorPlan::eval_nonzero`] writes only the wanted ones), and
+    /// the table holds only what the wanted slots read.
+    pub(super) fn of_slots(ir: &Ir, columns: &[Column], wanted: Option<&[bool]>) -> RegressorPlan {
         let n = columns.len();
         let n_out = ir.states.len();
         let mut b = TableBuilder::new(ir);
@@ -562,6 +572,9 @@ impl RegressorPlan {
                 let Some(w) = written.get_mut(slot) else {
                     continue;
                 };
+                if wanted.is_some_and(|wanted| !wanted.get(slot).copied().unwrap_or(false)) {
+                    continue;
+                }
                 *w = true;
                 let mut products: Vec<Built> = col
                     .entries
@@ -808,6 +821,15 @@ pub(super) struct Plans {
 }
 
 impl Plans {
+    /// The regressor plan of `kind`.
+    pub(super) fn regressors(&self, kind: PredictorKind) -> &RegressorPlan {
+        match kind {
+            PredictorKind::Basic => &self.basic,
+            PredictorKind::Augmented => &self.augmented,
+            PredictorKind::Measured => &self.measured,
+        }
+    }
+
     pub(super) fn new(ir: &Ir) -> Plans {
         Plans {
             basic: RegressorPlan::new(ir, &ir.predictors.basic),

@@ -529,3 +529,56 @@ fn check_blocks(name: &str, ir: &Ir, seed: u64) {
         }
     }
 }
+
+#[test]
+fn some_slots_are_those_slots_of_the_whole_buffer() {
+    for (seed, (name, ir)) in all_models().iter().enumerate() {
+        check_slots(name, ir, 0x5107 + seed as u64);
+    }
+}
+
+/// Holds `regressor_slots` to `regressors` in the slots wanted, and to
+/// leaving every other slot as it was (past the buffer too), for random
+/// sets of slots.
+fn check_slots(name: &str, ir: &Ir, seed: u64) {
+    let interpreter = Interpreter::new(ir.clone());
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for kind in KINDS {
+        let len = ir.predictors.get(kind).len() * ir.states.len();
+        for round in 0..8 {
+            // Every slot, none, and random halves.
+            let wanted: Vec<bool> = (0..len)
+                .map(|_| match round {
+                    0 => true,
+                    1 => false,
+                    _ => rng.random::<bool>(),
+                })
+                .collect();
+            let slots = interpreter
+                .regressor_slots(kind, &wanted)
+                .unwrap_or_else(|| panic!("the interpreter evaluates some slots"));
+            for k in 0..50 {
+                let s = sample(ir, &mut rng);
+                let sig = s.signals();
+                let mut whole = vec![0.0; len];
+                interpreter.regressors(kind, &sig, &s.signs, &mut whole);
+                let want: Vec<f64> = whole
+                    .iter()
+                    .zip(&wanted)
+                    .map(|(v, w)| if *w { *v } else { GARBAGE })
+                    .collect();
+                // As `regressors_update` is used: the wanted slots zeroed
+                // once (the structurally zero ones are not written again).
+                let mut got: Vec<f64> = wanted
+                    .iter()
+                    .map(|w| if *w { 0.0 } else { GARBAGE })
+                    .chain([GARBAGE; 3])
+                    .collect();
+                slots.update(&sig, &s.signs, &mut got);
+                if let Some(d) = differs(&got, &want) {
+                    panic!("{name}: {kind:?} slots (round {round}), sample {k}: {d}");
+                }
+            }
+        }
+    }
+}
