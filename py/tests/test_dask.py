@@ -91,45 +91,6 @@ def test_the_distributed_estimate_is_the_cli_estimate_bit_for_bit(
     assert est["diagnostics"]["refinements"] == 0  # LS; the IV3 run above refined
 
 
-def _count_openings() -> None:
-    """On a worker: count `mapreduce.open_file` calls by path."""
-    from leeway import mapreduce
-
-    if not hasattr(mapreduce, "_openings"):
-        original = mapreduce.open_file
-        mapreduce._openings = {}  # type: ignore[attr-defined]
-
-        def counted(model, path, options):  # type: ignore[no-untyped-def]
-            mapreduce._openings[path] = mapreduce._openings.get(path, 0) + 1  # type: ignore[attr-defined]
-            return original(model, path, options)
-
-        mapreduce.open_file = counted  # type: ignore[assignment]
-    mapreduce._openings.clear()  # type: ignore[attr-defined]
-
-
-def _openings() -> dict[str, int]:
-    from leeway import mapreduce
-
-    return dict(getattr(mapreduce, "_openings", {}))
-
-
-def test_each_file_is_opened_once_and_the_files_shared_out(
-    ship: leeway.Model, files: list[str], client: Client
-) -> None:
-    # A file's later passes run on the worker that opened (validated and
-    # copied) it, not on whichever is free: each file is opened once in
-    # all, however many passes IV3 makes, and both workers hold files.
-    client.run(_count_openings)
-    distributed_json(ship, files, client, method="iv3")
-    per_worker = client.run(_openings)
-    total: dict[str, int] = {}
-    for counts in per_worker.values():
-        for path, k in counts.items():
-            total[path] = total.get(path, 0) + k
-    assert total == dict.fromkeys(files, 1), per_worker
-    assert all(counts for counts in per_worker.values()), per_worker
-
-
 def test_a_worker_killed_mid_pass_changes_nothing(
     ship: leeway.Model, files: list[str], tmp_path: Path
 ) -> None:

@@ -20,9 +20,8 @@ tasks elsewhere; every task is a pure function of its file and request)::
 
 Workers keep each file they opened (validated once, then streamed from a
 binary copy: memory does not grow with the file) for the passes of one
-estimate — the files shared out among the workers by size, and each
-file's tasks sent to the worker that opened it — and only while the file
-is the one they opened: every task checks the file's identity (size, modification and change times, inode and a hash of its first
+estimate, and only while the file is the one they opened: every task checks
+the file's identity (size, modification and change times, inode and a hash of its first
 and last 64 KiB) against the identity its first opening reported to the
 driver, and a file that changed during the estimate is a located
 ``DataError`` (``data-changed``), never an estimate of old or mixed content.
@@ -214,21 +213,11 @@ def _answer(f: Callable[[], Any]) -> Answer:
 
 
 def _open(model: Model, path: str, options: dict[str, Any], token: str) -> Answer:
-    def opened() -> tuple[bytes, int, Identity, str | None]:
+    def opened() -> tuple[bytes, int, Identity]:
         o = _dataset(model, path, options, token, None)
-        return o.dataset.summary(), len(o.dataset), o.identity, _worker_address()
+        return o.dataset.summary(), len(o.dataset), o.identity
 
     return _answer(opened)
-
-
-def _worker_address() -> str | None:
-    """The address of the worker running this task (``None`` outside one)."""
-    try:
-        from distributed import get_worker
-
-        return str(get_worker().address)
-    except (ImportError, ValueError):
-        return None
 
 
 def _facts(
@@ -276,21 +265,12 @@ def _lost_types() -> tuple[type[BaseException], ...]:
     return (CommClosedError, KilledWorker, TimeoutError, OSError, CancelledError, AsyncCancelled)
 
 
-def _mapped(
-    client: Any,
-    what: str,
-    f: Callable[..., Answer],
-    timeout: float | None,
-    *args: list[Any],
-    where: Sequence[str | None] | None = None,
-) -> list[Any]:
+def _mapped(client: Any, what: str, f: Callable[..., Answer], timeout: float | None, *args: list[Any]) -> list[Any]:
     """``f`` mapped over ``args`` on the cluster (each task retried twice by
     Dask), waited for at most ``timeout`` seconds; a lost worker or
     connection, or a timeout, costs one more attempt of the whole pass and
     then ends in ``EstimateError`` (``worker-lost``), never a hang. A task's
-    ``LeewayError`` is raised as it is. ``where`` names, per task, the
-    worker it should run on (the one holding its file), which another
-    worker may stand in for when that one is gone."""
+    ``LeewayError`` is raised as it is."""
     from distributed import wait
 
     lost = _lost_types()
@@ -298,7 +278,7 @@ def _mapped(
     for _ in range(2):
         futures: list[Any] = []
         try:
-            futures = _submitted(client, f, args, where)
+            futures = client.map(f, *args, pure=False, retries=2)
             start = time.monotonic()
             wait(futures, timeout=timeout)  # type: ignore[no-untyped-call]
             left = None if timeout is None else max(1.0, timeout - (time.monotonic() - start))
@@ -320,49 +300,6 @@ def _mapped(
         hint="check the cluster (client.scheduler_info(), the workers' logs) and run the estimate again; "
         "pass timeout= (seconds a pass may take) if passes are legitimately slow",
     )
-
-
-def _spread(client: Any, paths: Sequence[str]) -> list[str | None] | None:
-    """A worker for each file, the largest files first, each to the worker
-    with the fewest bytes so far (sizes as the driver sees them; a file it
-    cannot see counts one byte): the files, and so the passes, are shared
-    out evenly. ``None`` when the cluster names no workers."""
-    try:
-        workers = sorted(client.scheduler_info()["workers"])
-    except (KeyError, TypeError, AttributeError):
-        return None
-    if not workers:
-        return None
-
-    def size(path: str) -> int:
-        try:
-            return max(1, os.path.getsize(path))
-        except OSError:
-            return 1
-
-    load = dict.fromkeys(workers, 0)
-    where: list[str | None] = [None] * len(paths)
-    for i in sorted(range(len(paths)), key=lambda i: (-size(paths[i]), i)):
-        worker = min(workers, key=lambda w: (load[w], w))
-        where[i] = worker
-        load[worker] += size(paths[i])
-    return where
-
-
-def _submitted(
-    client: Any, f: Callable[..., Answer], args: tuple[list[Any], ...], where: Sequence[str | None] | None
-) -> list[Any]:
-    """The tasks of ``f`` over ``args``, each on its worker of ``where`` if
-    given: a file's passes then run where it was opened, so it is validated
-    and copied once, not once on every worker its tasks land on."""
-    if where is None:
-        return list(client.map(f, *args, pure=False, retries=2))
-    return [
-        client.submit(
-            f, *task, pure=False, retries=2, workers=[w] if w else None, allow_other_workers=True
-        )
-        for task, w in zip(zip(*args), where)
-    ]
 
 
 def _gather(client: Any, futures: list[Any], timeout: float | None) -> list[Answer]:
@@ -461,44 +398,27 @@ def estimate(
     token = uuid.uuid4().hex
     tokens = [token] * n
     try:
-        opened = _mapped(
-            client, "open", _open, timeout, models, paths, settings, tokens, where=_spread(client, paths)
-        )
-        identities = [identity for _, _, identity, _ in opened]
-        # Each file's later tasks go to the worker that opened it.
-        where = [worker for _, _, _, worker in opened]
+        opened = _mapped(client, "open", _open, timeout, models, paths, settings, tokens)
+        identities = [identity for _, _, identity in opened]
         offsets = []
         total = 0
-        for _, count, _, _ in opened:
+        for _, count, _ in opened:
             offsets.append(total)
             total += count
 
         # The request (θ and the plan, a few kB) travels in each task's
         # arguments: no scatter, whose broadcast can wedge on a lost worker.
         def facts(request: bytes) -> list[bytes]:
-            parts = _mapped(
-                client, "facts", _facts, timeout, models, paths, settings, tokens, identities, [request] * n, where=where
-            )
+            parts = _mapped(client, "facts", _facts, timeout, models, paths, settings, tokens, identities, [request] * n)
             return [b for part in parts for b in part]
 
         def run(request: bytes) -> list[bytes]:
             parts = _mapped(
-                client,
-                "moment",
-                _run,
-                timeout,
-                models,
-                paths,
-                settings,
-                tokens,
-                identities,
-                offsets,
-                [request] * n,
-                where=where,
+                client, "moment", _run, timeout, models, paths, settings, tokens, identities, offsets, [request] * n
             )
             return [b for part in parts for b in part]
 
-        result = mapreduce.estimate(model, paths, [s for s, _, _, _ in opened], facts, run, chosen)
+        result = mapreduce.estimate(model, paths, [s for s, _, _ in opened], facts, run, chosen)
         # Every file is still the one the estimate read (a change after its
         # last pass would otherwise go unseen): one light task per file.
         _mapped(client, "final", _verify, timeout, paths, identities)
