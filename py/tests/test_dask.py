@@ -1,12 +1,14 @@
 """leeway.dask on a LocalCluster of two worker processes: the distributed
 estimate is `leeway estimate --json` on the same files, bit for bit; both
-workers take part; a worker killed in the middle of a pass changes nothing;
+workers take part, each file opened by one of them; a worker killed in the middle of a pass changes nothing;
 a worker's data error reaches the caller as the located DataError."""
 
 from __future__ import annotations
 
 import json
 import os
+import shutil
+import time
 import warnings
 from pathlib import Path
 
@@ -15,6 +17,7 @@ import pandas as pd
 import pytest
 
 distributed = pytest.importorskip("distributed")
+import dask  # noqa: E402
 from distributed import Client, LocalCluster  # noqa: E402
 from distributed.diagnostics.plugin import WorkerPlugin  # noqa: E402
 
@@ -89,6 +92,67 @@ def test_the_distributed_estimate_is_the_cli_estimate_bit_for_bit(
     est = json.loads(ours)
     assert est["diagnostics"]["experiments"] == 5
     assert est["diagnostics"]["refinements"] == 0  # LS; the IV3 run above refined
+
+
+def _count_openings() -> None:
+    """On a worker: count `mapreduce.open_file` calls by path."""
+    from leeway import mapreduce
+
+    if not hasattr(mapreduce, "_openings"):
+        original = mapreduce.open_file
+        mapreduce._openings = {}  # type: ignore[attr-defined]
+
+        def counted(model, path, options):  # type: ignore[no-untyped-def]
+            mapreduce._openings[path] = mapreduce._openings.get(path, 0) + 1  # type: ignore[attr-defined]
+            return original(model, path, options)
+
+        mapreduce.open_file = counted  # type: ignore[assignment]
+    mapreduce._openings.clear()  # type: ignore[attr-defined]
+
+
+def _openings() -> dict[str, int]:
+    from leeway import mapreduce
+
+    return dict(getattr(mapreduce, "_openings", {}))
+
+
+class SlowFirstWorker(WorkerPlugin):
+    """Makes the first worker slow at moment passes: a pass then shares
+    its tasks out differently from the opening."""
+
+    def setup(self, worker) -> None:  # type: ignore[no-untyped-def]
+        self.slow = worker.name == 0
+
+    def transition(self, key, start, finish, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        if self.slow and finish == "executing" and str(key).startswith("_run"):
+            time.sleep(0.1)
+
+
+def test_each_file_is_opened_once_by_one_worker(ship: leeway.Model, files: list[str], tmp_path: Path) -> None:
+    # A file's later passes run on the worker that opened (validated and
+    # copied) it, not on whichever is free: IV3's five passes open each of
+    # eight files once in all, though the first worker is slow at moment
+    # passes (a task that went to whichever worker is free would land on
+    # the other), and both workers hold files. Two conditions make it exact:
+    # - Work stealing is off. It may move a pass's last tasks to an idle
+    #   worker, which then opens their files too (the same estimate, some
+    #   work twice); on these millisecond tasks, often.
+    # - Five files at least. Dask places a group of tasks that depends on
+    #   fewer than five others by load alone, as it does tasks without
+    #   dependencies (a "root-ish" group).
+    files = [*files, *(str(shutil.copy(f, tmp_path / f"again{i}.csv")) for i, f in enumerate(files))]
+    with dask.config.set({"distributed.scheduler.work-stealing": False}):
+        with cluster() as c, Client(c) as client:
+            client.register_plugin(SlowFirstWorker())
+            client.run(_count_openings)
+            same_document(distributed_json(ship, files, client, method="iv3"), cli(files))
+            per_worker = client.run(_openings)
+    total: dict[str, int] = {}
+    for counts in per_worker.values():
+        for path, k in counts.items():
+            total[path] = total.get(path, 0) + k
+    assert total == dict.fromkeys(files, 1), per_worker
+    assert all(counts for counts in per_worker.values()), per_worker
 
 
 def test_a_worker_killed_mid_pass_changes_nothing(

@@ -933,3 +933,70 @@ fn validate_calls_a_fit_below_zero_what_it_is() {
         "{v}"
     );
 }
+
+/// Files are opened side by side, one a core: the experiments keep the
+/// order the files were given in, the estimate is the same bytes on every
+/// run, and every failing file is reported in the order given, however the
+/// threads finished.
+#[test]
+fn files_opened_side_by_side_keep_their_order_in_estimates_and_errors() {
+    let dir = Scratch::new("side-by-side");
+    let files: Vec<String> = (0..6u64)
+        .map(|i| {
+            let rows = 300 + 97 * i as usize;
+            dir.write(&format!("run{i}.csv"), &estimation_csv(rows, 1.0, 40 + i))
+        })
+        .collect();
+    let estimate = |given: &[String]| {
+        let mut args = vec!["estimate", SHIP, "--method", "ls", "--json"];
+        args.extend(data_args(given));
+        let o = leeway(&args);
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        stdout(&o)
+    };
+    let order = |text: &str| -> Vec<String> {
+        let v: Value = serde_json::from_str(text).unwrap_or_default();
+        let files = v["data_files"].as_array().cloned().unwrap_or_default();
+        files
+            .iter()
+            .filter_map(|f| f["file"].as_str().map(str::to_string))
+            .collect()
+    };
+    let first = estimate(&files);
+    assert_eq!(order(&first), files, "{first}");
+    assert_eq!(estimate(&files), first);
+    let reversed: Vec<String> = files.iter().rev().cloned().collect();
+    assert_eq!(order(&estimate(&reversed)), reversed);
+
+    // A bad cell near the end of a long file and a missing column in a
+    // short one: both reported, in the order given.
+    let mut lines: Vec<String> = estimation_csv(3000, 1.0, 7)
+        .lines()
+        .map(str::to_string)
+        .collect();
+    let at = lines.len() - 3;
+    let mut cells: Vec<String> = lines[at].split(',').map(str::to_string).collect();
+    cells[1] = "oops".into();
+    lines[at] = cells.join(",");
+    let long_bad = dir.write("long-bad.csv", &(lines.join("\n") + "\n"));
+    let short_bad = dir.write("short-bad.csv", "t,u\n0,1\n");
+    let given = [
+        files[0].clone(),
+        long_bad.clone(),
+        files[1].clone(),
+        short_bad.clone(),
+    ];
+    let mut args = vec!["estimate", SHIP, "--json"];
+    args.extend(data_args(&given));
+    let o = leeway(&args);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stdout(&o));
+    let errors = json(&o)["errors"].as_array().cloned().unwrap_or_default();
+    let located: Vec<String> = errors.iter().map(|e| e["location"].to_string()).collect();
+    assert_eq!(errors.len(), 2, "{located:?}");
+    assert!(
+        located[0].contains(&format!("{long_bad}:{}", at + 1)),
+        "{located:?}"
+    );
+    assert!(located[1].contains(&short_bad), "{located:?}");
+}

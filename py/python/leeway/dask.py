@@ -20,7 +20,10 @@ tasks elsewhere; every task is a pure function of its file and request)::
 
 Workers keep each file they opened (validated once, then streamed from a
 binary copy: memory does not grow with the file) for the passes of one
-estimate, and only while the file is the one they opened: every task checks
+estimate — each pass's task of a file takes the file's opening as an
+argument, so Dask runs it on the worker holding that opening, without
+pinning it there (a lost worker's openings are made again elsewhere) —
+and only while the file is the one they opened: every task checks
 the file's identity (size, modification and change times, inode and a hash of its first
 and last 64 KiB) against the identity its first opening reported to the
 driver, and a file that changed during the estimate is a located
@@ -221,8 +224,16 @@ def _open(model: Model, path: str, options: dict[str, Any], token: str) -> Answe
 
 
 def _facts(
-    model: Model, path: str, options: dict[str, Any], token: str, identity: Identity, request: bytes
+    opening: Answer,
+    model: Model,
+    path: str,
+    options: dict[str, Any],
+    token: str,
+    identity: Identity,
+    request: bytes,
 ) -> Answer:
+    # `opening` (the file's `_open` answer) is not read: it is there so that
+    # Dask runs this task on the worker that holds the file open.
     def answered() -> list[bytes]:
         o = _dataset(model, path, options, token, identity)
         out = _native(o.dataset.facts, request)
@@ -237,6 +248,7 @@ def _verify(path: str, identity: Identity) -> Answer:
 
 
 def _run(
+    opening: Answer,
     model: Model,
     path: str,
     options: dict[str, Any],
@@ -245,6 +257,7 @@ def _run(
     offset: int,
     request: bytes,
 ) -> Answer:
+    # `opening`: as for `_facts`, where the task runs, not what it reads.
     def answered() -> list[bytes]:
         o = _dataset(model, path, options, token, identity)
         out = _native(o.dataset.run, offset, request)
@@ -265,12 +278,21 @@ def _lost_types() -> tuple[type[BaseException], ...]:
     return (CommClosedError, KilledWorker, TimeoutError, OSError, CancelledError, AsyncCancelled)
 
 
-def _mapped(client: Any, what: str, f: Callable[..., Answer], timeout: float | None, *args: list[Any]) -> list[Any]:
+def _mapped(
+    client: Any,
+    what: str,
+    f: Callable[..., Answer],
+    timeout: float | None,
+    *args: list[Any],
+    keep: list[Any] | None = None,
+) -> list[Any]:
     """``f`` mapped over ``args`` on the cluster (each task retried twice by
     Dask), waited for at most ``timeout`` seconds; a lost worker or
     connection, or a timeout, costs one more attempt of the whole pass and
     then ends in ``EstimateError`` (``worker-lost``), never a hang. A task's
-    ``LeewayError`` is raised as it is."""
+    ``LeewayError`` is raised as it is. ``keep`` receives the futures of the
+    attempt that answered: their results stay on the workers that made them
+    while it holds them."""
     from distributed import wait
 
     lost = _lost_types()
@@ -292,6 +314,8 @@ def _mapped(client: Any, what: str, f: Callable[..., Answer], timeout: float | N
         for status, value in answers:
             if status == "error":
                 raise value
+        if keep is not None:
+            keep[:] = futures
         return [value for _, value in answers]
     reason = "timed out" if isinstance(last, TimeoutError) else f"{type(last).__name__}: {last}"
     raise EstimateError(
@@ -397,8 +421,14 @@ def estimate(
     models, settings = [model] * n, [chosen] * n
     token = uuid.uuid4().hex
     tokens = [token] * n
+    # Each file's opening, held while the estimate runs: its later tasks
+    # take it as an argument, and Dask runs a task where its arguments are,
+    # so a file is validated and copied once, by the worker that opened it,
+    # not again by every worker its tasks land on. Nothing is pinned: when
+    # that worker is lost, Dask opens the file again on another.
+    openings: list[Any] = []
     try:
-        opened = _mapped(client, "open", _open, timeout, models, paths, settings, tokens)
+        opened = _mapped(client, "open", _open, timeout, models, paths, settings, tokens, keep=openings)
         identities = [identity for _, _, identity in opened]
         offsets = []
         total = 0
@@ -409,12 +439,25 @@ def estimate(
         # The request (θ and the plan, a few kB) travels in each task's
         # arguments: no scatter, whose broadcast can wedge on a lost worker.
         def facts(request: bytes) -> list[bytes]:
-            parts = _mapped(client, "facts", _facts, timeout, models, paths, settings, tokens, identities, [request] * n)
+            parts = _mapped(
+                client, "facts", _facts, timeout, openings, models, paths, settings, tokens, identities, [request] * n
+            )
             return [b for part in parts for b in part]
 
         def run(request: bytes) -> list[bytes]:
             parts = _mapped(
-                client, "moment", _run, timeout, models, paths, settings, tokens, identities, offsets, [request] * n
+                client,
+                "moment",
+                _run,
+                timeout,
+                openings,
+                models,
+                paths,
+                settings,
+                tokens,
+                identities,
+                offsets,
+                [request] * n,
             )
             return [b for part in parts for b in part]
 
@@ -424,6 +467,7 @@ def estimate(
         _mapped(client, "final", _verify, timeout, paths, identities)
         return result
     finally:
+        openings.clear()
         _clear(client, token)
 
 
