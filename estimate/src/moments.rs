@@ -7,9 +7,11 @@
 //!
 //! Samples are added [`BLOCK`] at a time by a register-tiled kernel that
 //! pulp compiles for each instruction set, running the widest the CPU has
-//! (AVX2 or AVX-512): unfused multiply and add, each sum over the block's
-//! samples in order whatever the tile, so the bits do not depend on the CPU
-//! (a test runs the kernel on every instruction set the CPU has).
+//! (AVX2 or AVX-512): a fused multiply-add per product, each sum over the
+//! block's samples in order whatever the tile, so the bits do not depend on
+//! the CPU (every path fuses the same operations, and a fused multiply-add
+//! rounds once, the same in hardware and in `f64::mul_add`; a test runs the
+//! kernel on every instruction set the CPU has).
 //! [`LongRun`] gives the truncated long-run covariance sums.
 
 use nalgebra::{DMatrix, DVector};
@@ -28,10 +30,9 @@ fn padded(n: usize) -> usize {
 /// `s += aᵀ b` for row-major `a` (`rows × wa`) and `b` (`rows × wb`), `s`
 /// row-major `wa × wb`, widths multiples of [`TILE`], of which only the
 /// first `used` rows of `s` are computed (the others are padding nobody
-/// reads). Each entry sums its rows in order in a register tile and is then
-/// added once: the same operations, in the same order, on every machine (no
-/// fused multiply-add, no CPU-dependent kernel), so results stay
-/// bit-identical everywhere.
+/// reads). Each entry sums its rows in order in a register tile, one fused
+/// multiply-add a row, and is then added once: the same operations, in the
+/// same order, on every machine, so results stay bit-identical everywhere.
 #[inline(always)]
 fn add_outer_products(
     s: &mut [f64],
@@ -111,7 +112,7 @@ fn add_tile<const R: usize, const C: usize>(
         let y = &br[j0..j0 + C];
         for (row, &xi) in acc.iter_mut().zip(x) {
             for (v, &yj) in row.iter_mut().zip(y) {
-                *v += xi * yj;
+                *v = fused(xi, yj, *v);
             }
         }
     }
@@ -123,6 +124,18 @@ fn add_tile<const R: usize, const C: usize>(
     }
 }
 
+/// `x·y + acc` rounded once: the kernels' one multiply-add. Every path pulp
+/// compiles the kernels for fuses it — a vector FMA on AVX2 and AVX-512,
+/// `fma` from the C library on the scalar path — and a fused multiply-add
+/// has one correctly rounded result, so the bits are the same on every CPU
+/// (STYLE.md allows fusion in kernels, not in model evaluation, whose
+/// generated code and interpreter must round alike).
+#[inline(always)]
+#[allow(clippy::disallowed_methods)]
+fn fused(x: f64, y: f64, acc: f64) -> f64 {
+    x.mul_add(y, acc)
+}
+
 /// `s[j] += Σ_rows a[row][j]²` for row-major `a` of width `w` (a multiple
 /// of [`TILE`]), each entry summed over the rows in order.
 #[inline(always)]
@@ -131,7 +144,7 @@ fn add_squares(s: &mut [f64], a: &[f64], rows: usize, w: usize) {
         let mut acc = [0.0f64; TILE];
         for ar in a.chunks_exact(w).take(rows) {
             for (v, &x) in acc.iter_mut().zip(&ar[j0..j0 + TILE]) {
-                *v += x * x;
+                *v = fused(x, x, *v);
             }
         }
         for (o, v) in s[j0..j0 + TILE].iter_mut().zip(acc) {
@@ -657,7 +670,7 @@ impl MomentAccumulator {
         }
         let block = self.base * self.wf..(self.base + rows) * self.wf;
         // Compiled for the widest SIMD this CPU has (pulp dispatches at run
-        // time); every lane does the same unfused multiply and add, so the
+        // time); every lane does the same fused multiply-add, so the
         // bits do not depend on the CPU.
         pulp::Arch::new().dispatch(BlockKernel {
             sums: &mut self.sums,
@@ -964,7 +977,7 @@ mod tests {
 
     /// The block kernel gives the same bits on every instruction set this
     /// CPU has (pulp dispatches to the widest): each entry is summed in
-    /// row order with unfused multiplies and adds, whatever the lanes.
+    /// row order with fused multiply-adds, whatever the lanes.
     #[test]
     fn block_kernel_bits_do_not_depend_on_the_instruction_set() {
         let (m, p) = (13, 12);
@@ -1013,7 +1026,8 @@ mod tests {
     }
 
     /// Whatever the tiles the rows in use are cut into, every entry is its
-    /// rows' products summed in row order from zero, then added once.
+    /// rows' products summed in row order from zero, each product fused
+    /// into the sum (one rounding), then added once.
     #[test]
     fn block_products_are_each_entry_summed_in_row_order() {
         let value = |k: usize| {
@@ -1043,7 +1057,7 @@ mod tests {
                 for j in 0..wb {
                     let mut sum = 0.0;
                     for r in 0..rows {
-                        sum += a[r * wa + i] * b[r * wb + j];
+                        sum = fused(a[r * wa + i], b[r * wb + j], sum);
                     }
                     let want = start[i * wb + j] + sum;
                     assert_eq!(
