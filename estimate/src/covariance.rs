@@ -2,6 +2,7 @@
 
 use crate::accumulate::mismatched;
 use crate::estimator::Estimator;
+use crate::free_run::FreeRunSums;
 use crate::method::Method;
 use crate::moments::CrossMoments;
 use crate::outcome::EstimateError;
@@ -16,14 +17,17 @@ pub(super) type ColumnCovariance = BTreeMap<(usize, usize), f64>;
 impl Estimator<'_> {
     /// The sandwich covariance of the estimated columns: `Σ_i B_i G_i B_iᵀ`,
     /// `G_i` the long-run sum of `ζ_k = Σ_o z̃_o (ε_o − ε̄_o)` truncated at
-    /// `lags`, one pass whose sums are combined in experiment order.
+    /// `lags`, one pass whose sums are combined in experiment order. The
+    /// pass also runs the free run `(θ, means)` of each experiment if asked
+    /// (the estimate's own simulation), whose sums come back in experiment
+    /// order.
     pub(super) fn covariance(
         &self,
         moments: &[Vec<CrossMoments>],
         sol: &[BlockSolution],
-        theta_sim: &[f64],
-        mu: &[f64],
-    ) -> Result<Option<ColumnCovariance>, EstimateError> {
+        (theta_sim, mu): (&[f64], &[f64]),
+        free_run: Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Result<(Option<ColumnCovariance>, Option<Vec<FreeRunSums>>), EstimateError> {
         let n = self.n_cols;
         let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();
         // ζ rows: the instrument rows of every block, concatenated.
@@ -51,6 +55,7 @@ impl Estimator<'_> {
                 rows,
                 centres,
                 mean_res,
+                free_run: free_run.clone(),
             }),
             infos: self.infos.clone(),
         };
@@ -58,19 +63,37 @@ impl Estimator<'_> {
         if summaries.len() != self.facts.len() {
             return Err(mismatched());
         }
+        let mut free_runs = Vec::with_capacity(summaries.len());
+        let mut long_runs = Vec::with_capacity(summaries.len());
+        for s in summaries {
+            let Summary::LongRun {
+                dim,
+                sums,
+                free_run: run,
+            } = s.0
+            else {
+                return Err(mismatched());
+            };
+            if run.is_some() != free_run.is_some() {
+                return Err(mismatched());
+            }
+            free_runs.extend(run);
+            long_runs.push(match sums {
+                Some(sums) if dim == total && sums.len() == total * total => {
+                    Some(DMatrix::from_row_slice(total, total, &sums))
+                }
+                Some(_) => return Err(mismatched()),
+                None => None,
+            });
+        }
+        let free_runs = free_run.is_some().then_some(free_runs);
+        // A diverged instrument simulation anywhere: no covariance.
+        let Some(long_runs) = long_runs.into_iter().collect::<Option<Vec<_>>>() else {
+            return Ok((None, free_runs));
+        };
         let nk: usize = sol.iter().map(|s| s.kept.len()).sum();
         let mut cov = DMatrix::zeros(nk, nk);
-        for (i, s) in summaries.into_iter().enumerate() {
-            let g = match s.0 {
-                Summary::LongRun {
-                    dim,
-                    sums: Some(sums),
-                } if dim == total && sums.len() == total * total => {
-                    DMatrix::from_row_slice(total, total, &sums)
-                }
-                Summary::LongRun { sums: None, .. } => return Ok(None),
-                _ => return Err(mismatched()),
-            };
+        for (i, g) in long_runs.into_iter().enumerate() {
             let b_all = experiment_map(sol, &offsets, (nk, total), i);
             cov += &b_all * g * b_all.transpose();
         }
@@ -81,7 +104,7 @@ impl Estimator<'_> {
                 out.insert((*ca, *cb), cov[(a, b)]);
             }
         }
-        Ok(Some(out))
+        Ok((Some(out), free_runs))
     }
 
     /// Each output's ζ rows: `(row, column, index within its block)`, the

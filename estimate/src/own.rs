@@ -6,13 +6,15 @@
 //! a θ whose own simulation diverges (an unstable model under an autopilot,
 //! paper A1): this pass is what says so.
 //!
-//! It is one `FreeRun` pass. An estimate whose own simulation diverges or
+//! It is one `FreeRun` pass, or part of the covariance pass when the
+//! estimate has one (a streamed record is then read once for both). An estimate whose own simulation diverges or
 //! fits below 0 % is never reported as converged: a warning naming the
 //! likely causes, the error `own-simulation` under `strict`. The Monte Carlo
 //! study, which validates its estimates itself, turns it off.
 
 use crate::accumulate::mismatched;
 use crate::estimator::Estimator;
+use crate::free_run::FreeRunSums;
 use crate::method::Method;
 use crate::outcome::{EstimateError, OwnSimulation, StateFit, err};
 use crate::protocol::{Pass, PassRequest, Summary};
@@ -33,15 +35,28 @@ impl Estimator<'_> {
             infos: self.infos.clone(),
         };
         let summaries = self.pass(&request)?;
-        if summaries.len() != self.facts.len() {
+        let sums = summaries
+            .into_iter()
+            .map(|s| match s.0 {
+                Summary::FreeRun(sums) => Ok(sums),
+                _ => Err(mismatched()),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        self.own_simulation_of(sums)
+    }
+
+    /// The own simulation's fits from every experiment's free-run sums, in
+    /// experiment order.
+    pub(super) fn own_simulation_of(
+        &self,
+        sums: Vec<FreeRunSums>,
+    ) -> Result<OwnSimulation, EstimateError> {
+        if sums.len() != self.facts.len() {
             return Err(mismatched());
         }
         let mut diverged = Vec::new();
         let mut per_state: Vec<Vec<f64>> = vec![Vec::new(); self.ir.states.len()];
-        for (s, f) in summaries.into_iter().zip(&self.facts) {
-            let Summary::FreeRun(sums) = s.0 else {
-                return Err(mismatched());
-            };
+        for (sums, f) in sums.into_iter().zip(&self.facts) {
             if sums.diverged {
                 diverged.push(f.name.clone());
             }

@@ -128,6 +128,10 @@ pub(super) struct LongRunPass {
     /// and the mean residual.
     pub(super) centres: Vec<Vec<Vec<f64>>>,
     pub(super) mean_res: Vec<Vec<f64>>,
+    /// The estimate's own simulation, run in the same pass (a streamed
+    /// record is then read once for both): `(θ, means)` as
+    /// [`Pass::FreeRun`] takes them.
+    pub(super) free_run: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The instruments a warm start settled on over the first `samples`
@@ -153,8 +157,13 @@ pub(super) enum Summary {
     },
     /// The instrument simulation left the states' bounds.
     Diverged { bad: Option<BadValue> },
-    /// `ζ`'s long-run sum, row-major `dim × dim`; `None` if the simulation diverged.
-    LongRun { dim: usize, sums: Option<Vec<f64>> },
+    /// `ζ`'s long-run sum, row-major `dim × dim`; `None` if the simulation
+    /// diverged. With the free run's sums when the pass asked for them.
+    LongRun {
+        dim: usize,
+        sums: Option<Vec<f64>>,
+        free_run: Option<crate::free_run::FreeRunSums>,
+    },
     /// A free run's fit sums.
     FreeRun(crate::free_run::FreeRunSums),
 }

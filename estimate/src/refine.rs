@@ -375,13 +375,21 @@ impl Estimator<'_> {
         }
         let values: BTreeMap<usize, f64> = self.all_values(&sol).into_iter().collect();
         // The reported θ simulated on its own data: an estimate that does
-        // not reproduce its data is never called converged (before the
-        // covariance pass, which `strict` then spares).
-        let own = if self.options.own_simulation {
-            let means = self.mean_vector(&values, &theta);
-            Some(self.own_simulation(&theta, &means)?)
+        // not reproduce its data is never called converged. With a
+        // covariance it runs in the covariance pass (one read of the data
+        // for both), which `strict` then discards with the estimate.
+        let free_run = self
+            .options
+            .own_simulation
+            .then(|| (theta.clone(), self.mean_vector(&values, &theta)));
+        let (cov, own) = if self.options.covariance {
+            let (cov, runs) = self.covariance(&moments, &sol, (&theta_sim, &mu), free_run)?;
+            (cov, runs.map(|r| self.own_simulation_of(r)).transpose()?)
         } else {
-            None
+            let own = free_run
+                .map(|(theta, means)| self.own_simulation(&theta, &means))
+                .transpose()?;
+            (None, own)
         };
         if let Some(problem) = own
             .as_ref()
@@ -401,11 +409,6 @@ impl Estimator<'_> {
             );
             converged = false;
         }
-        let cov = if self.options.covariance {
-            self.covariance(&moments, &sol, &theta_sim, &mu)?
-        } else {
-            None
-        };
         let mut estimate = self.finish(
             sign_patterns,
             &sol,

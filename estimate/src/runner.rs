@@ -17,6 +17,7 @@ use leeway_model::number::short_number;
 use leeway_model::signs::SignCounter;
 use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 
+use crate::free_run::{AlongsideFreeRun, FreeRunSums};
 use crate::protocol::{
     BadValue, ExperimentFacts, FactsRequest, LongRunPass, Pass, PassPlan, PassRequest, PassSummary,
     PrefixInstruments, Summary,
@@ -592,9 +593,9 @@ impl<'a> PassRunner<'a> {
             Pass::LongRun(lr) => {
                 self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
             }
-            Pass::FreeRun { theta, means } => Summary::FreeRun(crate::free_run::FreeRunSums::of(
-                self.model, theta, means, e,
-            )),
+            Pass::FreeRun { theta, means } => {
+                Summary::FreeRun(FreeRunSums::of(self.model, theta, means, e))
+            }
         })
     }
 
@@ -754,6 +755,39 @@ impl<'a> PassRunner<'a> {
         centres: &[Vec<f64>],
         mean_res: &[f64],
     ) -> Summary {
+        let sums_over =
+            |e: &dyn Source| self.long_run_sums(e, (info, plan, lr), (centres, mean_res));
+        let Some((theta, means)) = &lr.free_run else {
+            return Summary::LongRun {
+                dim: lr.dim,
+                sums: sums_over(e),
+                free_run: None,
+            };
+        };
+        // A streamed record is read once for both; an in-memory one's
+        // columns are walked directly, and the free run visits them after.
+        let (sums, free_run) = if e.in_memory().is_some() {
+            let sums = sums_over(e);
+            (sums, FreeRunSums::of(self.model, theta, means, e))
+        } else {
+            let alongside = AlongsideFreeRun::new(self.model, theta, means, e);
+            (sums_over(&alongside), alongside.finish())
+        };
+        Summary::LongRun {
+            dim: lr.dim,
+            sums,
+            free_run: Some(free_run),
+        }
+    }
+
+    /// `ζ`'s long-run sum over `e`, row-major (`None`: the instrument
+    /// simulation diverged), its centres and mean residuals given.
+    fn long_run_sums(
+        &self,
+        e: &dyn Source,
+        (info, plan, lr): (&ExperimentInfo, &PassPlan, &LongRunPass),
+        (centres, mean_res): (&[Vec<f64>], &[f64]),
+    ) -> Option<Vec<f64>> {
         // The instruments of the reported iterate (empty θ: the delayed bootstrap).
         let mut walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
         walker.slots = self.walk_slots(plan, false);
@@ -770,12 +804,11 @@ impl<'a> PassRunner<'a> {
                 sums.push_with(|row| zeta.add(z, phi, t, row));
             },
         );
-        let sums = walked.ok().map(|_| {
+        walked.ok().map(|_| {
             let g = sums.sum_psd();
             // Row-major, as documented (g is symmetric).
             g.transpose().as_slice().to_vec()
-        });
-        Summary::LongRun { dim: lr.dim, sums }
+        })
     }
 }
 

@@ -98,56 +98,105 @@ pub fn simulate_each(
     disturbances: Disturbances,
     each: &mut dyn FnMut(&Row, &[f64], f64),
 ) -> bool {
-    let ir = model.ir();
-    let Ok(view) = delayed(ir, data) else {
+    let Ok(view) = delayed(model.ir(), data) else {
         return true;
     };
     let data: &dyn Source = &view;
-    let n_out = ir.states.len();
-    let n_comp = ir.components.len();
-    let h = data.step();
-    let planar = matches!(ir.rotation, Rotation::Planar { .. });
-    let mut x = vec![0.0; n_out];
-    let mut next = vec![0.0; n_out];
-    let mut f = vec![0.0; n_out];
-    let mut psi = 0.0;
-    // The integrated heading's rotation, by small steps (re-anchored).
-    let mut headings = HeadingRotation::default();
-    let mut dist = vec![0.0; n_comp];
-    let mut k = 0usize;
-    let mut diverged = false;
-    data.visit(&mut |row| {
-        if k == 0 {
-            x.copy_from_slice(row.states);
-            psi = row.heading;
+    let mut run = Stepper::new(model, theta, disturbances, data.step());
+    data.visit(&mut |row| run.push(row, &mut *each));
+    run.diverged()
+}
+
+/// The simulation of [`simulate_each`] fed one row at a time, for a caller
+/// that visits the rows itself (a pass that walks them for something else
+/// too). The rows must be the samples the equations see (a [`delayed`]
+/// view); fed the same rows, it gives what [`simulate_each`] gives, bit for
+/// bit.
+pub struct Stepper<'a> {
+    model: &'a dyn Model,
+    theta: &'a [f64],
+    disturbances: Disturbances<'a>,
+    h: f64,
+    planar: bool,
+    x: Vec<f64>,
+    next: Vec<f64>,
+    f: Vec<f64>,
+    psi: f64,
+    /// The integrated heading's rotation, by small steps (re-anchored).
+    headings: HeadingRotation,
+    dist: Vec<f64>,
+    started: bool,
+    diverged: bool,
+}
+
+impl<'a> Stepper<'a> {
+    /// A simulation of `theta` with step `h`, begun at the first row fed.
+    pub fn new(
+        model: &'a dyn Model,
+        theta: &'a [f64],
+        disturbances: Disturbances<'a>,
+        h: f64,
+    ) -> Stepper<'a> {
+        let ir = model.ir();
+        let n_out = ir.states.len();
+        Stepper {
+            model,
+            theta,
+            disturbances,
+            h,
+            planar: matches!(ir.rotation, Rotation::Planar { .. }),
+            x: vec![0.0; n_out],
+            next: vec![0.0; n_out],
+            f: vec![0.0; n_out],
+            psi: 0.0,
+            headings: HeadingRotation::default(),
+            dist: vec![0.0; ir.components.len()],
+            started: false,
+            diverged: false,
         }
-        each(row, &x, psi);
-        disturbances.fill(ir, row.disturbances, &mut dist);
+    }
+
+    /// Hands `each` the row with the simulated states and heading at it
+    /// (NaN once diverged), then steps to the next sample.
+    #[inline]
+    pub fn push(&mut self, row: &Row, each: impl FnOnce(&Row, &[f64], f64)) {
+        let ir = self.model.ir();
+        if !self.started {
+            self.x.copy_from_slice(row.states);
+            self.psi = row.heading;
+            self.started = true;
+        }
+        each(row, &self.x, self.psi);
+        self.disturbances.fill(ir, row.disturbances, &mut self.dist);
         let rot_buf;
-        let rotation: &[f64] = if planar {
-            rot_buf = headings.next(psi);
+        let rotation: &[f64] = if self.planar {
+            rot_buf = self.headings.next(self.psi);
             &rot_buf
         } else {
             row.rotation
         };
-        if !diverged {
+        if !self.diverged {
             let sig = Signals {
-                states: &x,
+                states: &self.x,
                 inputs: row.inputs,
                 rotation,
-                disturbances: &dist,
+                disturbances: &self.dist,
             };
-            model.step(theta, h, &sig, &mut f, &mut next);
-            psi = next_heading(ir, psi, h, &x);
-            if next.iter().any(|v| !v.is_finite() || v.abs() > 1e12) {
-                diverged = true;
-                next.fill(f64::NAN);
+            self.model
+                .step(self.theta, self.h, &sig, &mut self.f, &mut self.next);
+            self.psi = next_heading(ir, self.psi, self.h, &self.x);
+            if self.next.iter().any(|v| !v.is_finite() || v.abs() > 1e12) {
+                self.diverged = true;
+                self.next.fill(f64::NAN);
             }
-            x.copy_from_slice(&next);
+            self.x.copy_from_slice(&self.next);
         }
-        k += 1;
-    });
-    diverged
+    }
+
+    /// The simulation left the finite numbers.
+    pub fn diverged(&self) -> bool {
+        self.diverged
+    }
 }
 
 /// A simulation as `leeway simulate` writes it: the input experiment with

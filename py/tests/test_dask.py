@@ -130,7 +130,7 @@ class SlowFirstWorker(WorkerPlugin):
 
 def test_each_file_is_opened_once_by_one_worker(ship: leeway.Model, files: list[str], tmp_path: Path) -> None:
     # A file's later passes run on the worker that opened (validated and
-    # copied) it, not on whichever is free: IV3's five passes open each of
+    # copied) it, not on whichever is free: IV3's passes open each of
     # eight files once in all, though the first worker is slow at moment
     # passes (a task that went to whichever worker is free would land on
     # the other), and both workers hold files. Two conditions make it exact:

@@ -446,6 +446,71 @@ fn continued_instruments_reach_the_same_fixed_point() {
     }
 }
 
+/// A streamed record that counts its visits.
+struct Counted<'a>(Streamed<'a>, std::sync::atomic::AtomicUsize);
+
+impl Source for Counted<'_> {
+    fn name(&self) -> &str {
+        self.0.name()
+    }
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn step(&self) -> f64 {
+        self.0.step()
+    }
+    fn visit(&self, f: &mut dyn FnMut(&leeway_model::Row)) {
+        self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.0.visit(f);
+    }
+}
+
+#[test]
+fn the_own_simulation_reads_a_streamed_record_in_the_covariance_pass() {
+    let model = ship();
+    let data = experiments(&model);
+    let run = |options: &EstimateOptions| {
+        let counted: Vec<Counted> = data
+            .iter()
+            .map(|e| Counted(Streamed(e), Default::default()))
+            .collect();
+        let sources: Vec<&dyn Source> = counted.iter().map(|e| e as &dyn Source).collect();
+        let estimate = estimate(&model, &sources, options).expect("an estimate");
+        let visits: Vec<usize> = counted
+            .iter()
+            .map(|c| c.1.load(std::sync::atomic::Ordering::Relaxed))
+            .collect();
+        (estimate, visits)
+    };
+    for method in [Method::Iv3, Method::Ls] {
+        let options = aggregated(method);
+        let (with, visits) = run(&options);
+        let (without, visits_without) = run(&EstimateOptions {
+            own_simulation: false,
+            ..options.clone()
+        });
+        // No visit of its own: it steps along the covariance pass's walk.
+        assert_eq!(visits, visits_without, "{method:?}");
+        assert!(without.diagnostics.own_simulation.is_none());
+        let own = with.diagnostics.own_simulation.clone();
+        assert!(
+            own.as_ref().is_some_and(|o| o.mean_fit.is_some()),
+            "{own:?}"
+        );
+        // In-memory records' free runs visit them after the covariance
+        // walk: the same fits, bit for bit.
+        let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+        let separate = estimate(&model, &held, &options).expect("in memory");
+        assert_eq!(
+            format!("{own:?}"),
+            format!("{:?}", separate.diagnostics.own_simulation),
+            "{method:?}"
+        );
+        let estimated = |e: &Estimate| bits(e).split(" Diagnostics").next().map(str::to_string);
+        assert_eq!(estimated(&with), estimated(&without), "{method:?}");
+    }
+}
+
 #[test]
 fn streamed_experiments_on_several_threads_give_the_estimate_of_one() {
     let model = ship();
