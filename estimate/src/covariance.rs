@@ -43,6 +43,7 @@ impl Estimator<'_> {
             .collect();
         let rows = self.zeta_rows(sol, &offsets);
         let (centres, mean_res) = self.centres_and_mean_residuals(moments, &values);
+        let runs_free = free_run.is_some();
         let request = PassRequest {
             plan: self.pass_plan(),
             pass: Pass::LongRun(LongRunPass {
@@ -55,7 +56,7 @@ impl Estimator<'_> {
                 rows,
                 centres,
                 mean_res,
-                free_run: free_run.clone(),
+                free_run,
             }),
             infos: self.infos.clone(),
         };
@@ -74,7 +75,7 @@ impl Estimator<'_> {
             else {
                 return Err(mismatched());
             };
-            if run.is_some() != free_run.is_some() {
+            if run.is_some() != runs_free {
                 return Err(mismatched());
             }
             free_runs.extend(run);
@@ -86,7 +87,7 @@ impl Estimator<'_> {
                 None => None,
             });
         }
-        let free_runs = free_run.is_some().then_some(free_runs);
+        let free_runs = runs_free.then_some(free_runs);
         // A diverged instrument simulation anywhere: no covariance.
         let Some(long_runs) = long_runs.into_iter().collect::<Option<Vec<_>>>() else {
             return Ok((None, free_runs));
