@@ -94,6 +94,14 @@ pub fn refinements(s: &str) -> Result<usize, String> {
     }
 }
 
+/// A fraction in (0, 1] (`--refine-subsample`).
+pub fn fraction(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 1.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a fraction in (0, 1], such as 0.1")),
+    }
+}
+
 /// A sample time in seconds within [`STEP_RANGE`] (`--step`, `--resample`).
 pub fn positive(s: &str) -> Result<f64, String> {
     let (lo, hi) = STEP_RANGE;

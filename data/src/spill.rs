@@ -180,6 +180,17 @@ impl Source for FileSource {
             true
         });
     }
+    fn visit_head(&self, n: usize, f: &mut dyn FnMut(&Row)) {
+        // Read no further than the head: a subsample costs its own share.
+        let mut left = n;
+        if left > 0 {
+            self.read(0, &mut |_, _, row| {
+                f(row);
+                left -= 1;
+                left > 0
+            });
+        }
+    }
     fn locate(&self, k: usize) -> String {
         let mut at = None;
         if k < self.block.rows {

@@ -317,6 +317,19 @@ fn streaming_visits_give_the_values_of_loading_bit_for_bit() {
             s.visit(&mut |r| b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits())));
             assert_eq!(a, b);
         }
+        // A head (the refinement on a subsample): its first rows only,
+        // streamed or held.
+        let width = a.len() / h.len();
+        for n in [0, 1, 7, h.len(), h.len() + 3] {
+            let first = &a[..width * n.min(h.len())];
+            for source in [h as &dyn Source, s as &dyn Source] {
+                b.clear();
+                source.visit_head(n, &mut |r| {
+                    b.extend(r.states.iter().chain(r.inputs).map(|v| v.to_bits()));
+                });
+                assert_eq!(first, &b[..], "head of {n}");
+            }
+        }
         assert!(s.failure().is_none());
     }
     // Sample 3 of `b` (row k = 28) sits on line 36: 2 before the header,

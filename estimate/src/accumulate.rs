@@ -41,6 +41,7 @@ impl Estimator<'_> {
                 prefix,
             },
             infos: self.infos.clone(),
+            head: None,
         };
         let summaries = self.pass(&request)?;
         // The first bad value in experiment order is a data error, whatever diverged.

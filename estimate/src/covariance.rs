@@ -59,6 +59,7 @@ impl Estimator<'_> {
                 free_run,
             }),
             infos: self.infos.clone(),
+            head: None,
         };
         let summaries = self.pass(&request)?;
         if summaries.len() != self.facts.len() {

@@ -29,6 +29,7 @@
 
 mod accumulate;
 mod cache;
+mod checked_facts;
 mod covariance;
 mod disturbances;
 mod estimator;
@@ -52,6 +53,7 @@ mod runner;
 mod scan;
 mod slots;
 mod solve;
+mod subsample;
 mod walk;
 mod zeta;
 
@@ -61,11 +63,11 @@ pub use method::{Choice, Combine, Initial, Instruments, Method, Named, UnknownNa
 pub use options::{EstimateOptions, Interrupt, MAX_LAGS, MAX_REFINEMENTS, OutOfRange, Start};
 pub use outcome::{
     ColumnEstimate, Diagnostics, DisturbanceMoment, DroppedAtStart, Estimate, EstimateError,
-    InstrumentSimulation, OwnSimulation, StateFit,
+    InstrumentSimulation, OwnSimulation, StateFit, SubsampleRefinement,
 };
 pub use plan::{PlanKey, StructuralPlan};
 pub use protocol::{
-    ExperimentFacts, FactsRequest, PassRequest, PassSummary, Passes, decode, encode,
+    ExperimentFacts, FactsRequest, PassRequest, PassSummary, Passes, decode, encode, head_samples,
 };
 pub use run::{NOMINAL_LIMIT, estimate, estimate_with};
 pub use runner::PassRunner;

@@ -198,6 +198,12 @@ impl<'a> LocalPasses<'a> {
 
 impl Passes for LocalPasses<'_> {
     fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        if request.head.is_some() {
+            // A subsample's facts: of the heads, so nothing kept serves them.
+            return Ok(in_order(self.experiments.len(), self.pass_threads(), |i| {
+                self.runner.facts(self.experiments[i], request)
+            }));
+        }
         // Facts depend on the request only through the predictor kind and the spread.
         let key = (request.method.predictor(), request.heading_spread.to_bits());
         if let Some((_, f)) = self.kept().facts.iter().find(|(k, _)| *k == key) {
@@ -233,7 +239,9 @@ impl Passes for LocalPasses<'_> {
     fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
         let stop_early = matches!(request.pass, Pass::Moments { scan: false, .. });
         let threads = self.pass_threads();
-        if threads > 1 {
+        // A subsample's pass reads the heads: nothing kept of the whole
+        // records serves it, and it keeps nothing.
+        if threads > 1 || request.head.is_some() {
             // Streamed experiments keep nothing: each walked on its own.
             let mut out = in_order(self.experiments.len(), threads, |i| {
                 self.runner

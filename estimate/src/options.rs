@@ -62,6 +62,17 @@ pub struct EstimateOptions {
     /// (Ctrl-C in Python, whose handler runs only when asked while native
     /// code runs).
     pub interrupt: Option<Interrupt>,
+    /// Refine on a subsample first (`Some(fraction)`, in (0, 1]): the
+    /// bootstrap and the refinement run on the first `⌈fraction·n⌉` samples
+    /// of every experiment, and once they settle, the refinement over all
+    /// samples goes on from their estimate. Its first pass over all samples
+    /// compares the subsample's last two instrument simulations there, and
+    /// stops when they moved less than `tolerance` — the test every
+    /// refinement settles by. At scale that saves the bootstrap pass and a
+    /// refinement pass over all samples; the estimate is the same fixed
+    /// point within the tolerance, not the same bits (docs/estimation.md).
+    /// Only for a refined IV from the delayed bootstrap (no `start`).
+    pub refine_subsample: Option<f64>,
 }
 
 pub use leeway_model::interrupt::Interrupt;
@@ -174,6 +185,7 @@ impl Default for EstimateOptions {
             start: None,
             own_simulation: true,
             interrupt: None,
+            refine_subsample: None,
         }
     }
 }

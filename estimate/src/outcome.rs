@@ -75,6 +75,32 @@ pub struct Diagnostics {
     /// declares dead times (empty, and left out of the JSON, otherwise).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub dropped_at_start: Vec<DroppedAtStart>,
+    /// The refinement on a subsample that began this one, when asked for
+    /// ([`EstimateOptions::refine_subsample`](crate::EstimateOptions::refine_subsample));
+    /// left out of the JSON otherwise. `refinements` and `converged` above
+    /// are those over all samples.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub subsample: Option<SubsampleRefinement>,
+}
+
+/// A refinement on a subsample: the bootstrap and the refinement ran on the
+/// first samples of every experiment, and once they settled, the refinement
+/// over all samples went on from their estimate.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SubsampleRefinement {
+    /// The fraction of every experiment's samples refined on.
+    pub fraction: f64,
+    /// The samples the subsample has (over all experiments).
+    pub samples: usize,
+    /// Refinements on the subsample.
+    pub refinements: usize,
+    /// Its estimate began the refinement over all samples. When `false`,
+    /// the refinement over all samples began from the bootstrap, as without
+    /// a subsample, and `why_not` says why.
+    pub used: bool,
+    /// Why the subsample's estimate was not used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why_not: Option<String>,
 }
 
 /// The equations one experiment loses at its start: the method's, then the

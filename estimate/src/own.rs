@@ -33,6 +33,7 @@ impl Estimator<'_> {
                 means: means.to_vec(),
             },
             infos: self.infos.clone(),
+            head: None,
         };
         let summaries = self.pass(&request)?;
         let sums = summaries

@@ -29,6 +29,11 @@ use crate::record::ExperimentInfo;
 pub struct FactsRequest {
     pub(crate) method: Method,
     pub(crate) heading_spread: f64,
+    /// Read only each experiment's head ([`head_samples`] of this fraction):
+    /// the passes of a refinement on a subsample. Left out when `None`, so
+    /// the passes of every other estimate exchange the same bytes as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) head: Option<f64>,
 }
 
 impl FactsRequest {
@@ -37,8 +42,27 @@ impl FactsRequest {
         FactsRequest {
             method: options.method,
             heading_spread: options.heading_spread,
+            head: None,
         }
     }
+}
+
+/// The samples of a record of `len` samples that a subsample of `fraction`
+/// reads: its first `⌈fraction·len⌉`, at least [`MIN_SAMPLES`] (all of
+/// them when it has fewer). Every runner computes it from the record it
+/// holds, so the driver need not know the records' lengths to ask for it.
+///
+/// [`MIN_SAMPLES`]: leeway_model::experiment::MIN_SAMPLES
+pub fn head_samples(len: usize, fraction: f64) -> usize {
+    let wanted = (fraction * len as f64).ceil();
+    // A fraction in (0, 1] keeps `wanted` within 0..=len; the clamp makes
+    // any other value harmless.
+    let wanted = if wanted.is_finite() && wanted > 0.0 {
+        (wanted as usize).min(len)
+    } else {
+        len
+    };
+    wanted.max(leeway_model::experiment::MIN_SAMPLES.min(len))
 }
 
 /// One experiment as read once before estimating: its name and length and,
@@ -74,6 +98,9 @@ pub struct PassRequest {
     pub(super) plan: PassPlan,
     pub(super) pass: Pass,
     pub(super) infos: Vec<ExperimentInfo>,
+    /// Each experiment's head only, as [`FactsRequest::head`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) head: Option<f64>,
 }
 
 /// What a data pass needs of the estimator's plan.

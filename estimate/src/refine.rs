@@ -50,6 +50,13 @@ impl Estimator<'_> {
         &mut self,
         sign_patterns: Vec<ExperimentSigns>,
     ) -> Result<Estimate, EstimateError> {
+        let (cur, settled) = self.refine()?;
+        self.report_iterate(cur, settled, sign_patterns)
+    }
+
+    /// The refined IV's iterations: the iterate to report, and how the
+    /// refinement ended.
+    pub(super) fn refine(&mut self) -> Result<(Iterate, Settled), EstimateError> {
         let refine =
             self.options.method != Method::Ls && self.options.instruments == Instruments::Simulated;
         let (mut theta_sim, mut mu, prefix) = self.starting_instruments(refine);
@@ -146,7 +153,7 @@ impl Estimator<'_> {
             stopped,
             refinements,
         };
-        self.report_iterate(cur, settled, sign_patterns)
+        Ok((cur, settled))
     }
 
     /// The instruments a refinement begins with: the nominal model's, or a
@@ -240,8 +247,7 @@ impl Estimator<'_> {
         mu: &[f64],
         tries: usize,
     ) -> Result<Option<Resimulated>, EstimateError> {
-        let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
-        let new_mu = self.mean_vector(&values, &cur.theta);
+        let new_mu = self.implied_means(cur);
         let mut step = 1.0;
         for _ in 0..tries {
             let trial: Vec<f64> = theta_sim
@@ -269,6 +275,13 @@ impl Estimator<'_> {
             step *= 0.5;
         }
         Ok(None)
+    }
+
+    /// The disturbance means the iterate `cur` implies (§6): those its
+    /// re-simulation takes.
+    pub(super) fn implied_means(&self, cur: &Iterate) -> Vec<f64> {
+        let values: BTreeMap<usize, f64> = self.all_values(&cur.sol).into_iter().collect();
+        self.mean_vector(&values, &cur.theta)
     }
 
     /// Whether a refinement whose simulation moved by `change` (a damped
@@ -450,13 +463,13 @@ struct Resimulated {
 }
 
 /// How the refinement ended.
-struct Settled {
+pub(super) struct Settled {
     /// The estimate refines at all (a refined IV).
-    refine: bool,
-    converged: bool,
+    pub(super) refine: bool,
+    pub(super) converged: bool,
     /// Stopped early (divergence, runaway).
-    stopped: bool,
-    refinements: usize,
+    pub(super) stopped: bool,
+    pub(super) refinements: usize,
 }
 
 /// The first clause of the own-simulation problem: what the simulation did.

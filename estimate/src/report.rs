@@ -74,6 +74,7 @@ impl Estimator<'_> {
                 aggregates: self.aggregates.clone(),
                 own_simulation: None,
                 dropped_at_start: self.dropped_at_start(),
+                subsample: None,
             },
             warnings: self.warnings.iter().map(|w| w.detail.clone()).collect(),
             warning_summaries: self.warnings.clone(),

@@ -1,16 +1,15 @@
 //! The entry points: [`estimate`] on data at hand, [`estimate_with`] on passes run anywhere.
 
+use crate::checked_facts::{ReadFacts, read_facts};
 use crate::estimator::Estimator;
 use crate::estimator::stop_if_interrupted;
 use crate::local::LocalPasses;
-use crate::method::Method;
+use crate::method::{Initial, Instruments, Method};
 use crate::options::EstimateOptions;
 use crate::outcome::{Estimate, EstimateError, err};
-use crate::protocol::{FactsRequest, Passes};
+use crate::protocol::Passes;
 use leeway_model::experiment::Source;
 use leeway_model::model::Model;
-use leeway_model::signs::ExperimentSigns;
-use leeway_model::warning::Warning;
 use leeway_structure::ir::Ir;
 
 /// The largest nominal value accepted: with a regressor within
@@ -69,75 +68,92 @@ pub fn estimate_with(
     let ir = model.ir();
     let nominal = nominal_values(ir, options)?;
     check_start(ir, options)?;
+    check_subsample(options)?;
     stop_if_interrupted(options)?;
-    let facts = passes.facts(&FactsRequest::new(options))?;
-    stop_if_interrupted(options)?;
-    if facts.is_empty() {
-        return Err(err(
-            "no-data",
-            "no experiment given",
-            "pass at least one --data file",
-        ));
-    }
-    let kind = options.method.predictor();
-    let mut warnings = Vec::new();
-    let mut notes = Vec::new();
-    // Sign patterns, measured means, bounds and heading spread, in one visit each.
-    let mut sign_patterns = Vec::new();
-    let mut infos = Vec::new();
-    for f in &facts {
-        if let Some(why) = &f.delay_error {
-            return Err(err(
-                "invalid-delay",
-                why.clone(),
-                "give the dead time in steps, or in seconds that are a whole number of this record's sample times",
-            ));
+    let read = read_facts(ir, passes, options)?;
+    // A refinement on a subsample, when asked for, begins this one.
+    let Some(fraction) = options
+        .refine_subsample
+        .filter(|_| refines_from_bootstrap(options))
+    else {
+        return estimate_from(model, passes, options, nominal, read);
+    };
+    let head = crate::subsample::refine_on_head(model, passes, options, &nominal, fraction)?;
+    let mut report = head.report;
+    let mut estimate = match head.start {
+        Some(start) => {
+            let warm = EstimateOptions {
+                start: Some(start),
+                ..options.clone()
+            };
+            match estimate_from(model, passes, &warm, nominal.clone(), read.clone()) {
+                // Its estimate's simulation diverges on the whole records:
+                // begin from the bootstrap, as without a subsample.
+                Err(e) if e.code == "nominal-diverges" => {
+                    report.used = false;
+                    report.why_not = Some(
+                        "the simulation of its estimate diverges on the whole records".to_string(),
+                    );
+                    estimate_from(model, passes, options, nominal, read)?
+                }
+                other => other?,
+            }
         }
-        let Some((s, info)) = f.read.clone() else {
-            return Err(err(
-                "too-few-samples",
-                format!(
-                    "experiment `{}` has {} samples; at least {} are needed",
-                    f.name,
-                    f.len,
-                    leeway_model::experiment::MIN_SAMPLES
-                ),
-                "record a longer experiment",
-            ));
-        };
-        warnings.extend(sign_violations(&s, options.strict)?);
-        notes.extend(crossing_note(ir, &s));
-        infos.push(info);
-        sign_patterns.push(s);
-    }
-    for (f, info) in facts.iter().zip(&infos) {
-        if info.frozen.is_some() {
-            warnings.push(Warning::plain(
-                "constant-heading",
-                format!(
-                    "experiment `{}`: the heading barely varied (circular std {:.3} rad): R is treated as constant there (paper Remark 2)",
-                    f.name,
-                    info.spread.max(0.0)
-                ),
-            ));
-        }
-    }
+        None => estimate_from(model, passes, options, nominal, read)?,
+    };
+    estimate.diagnostics.subsample = Some(report);
+    Ok(estimate)
+}
+
+/// The estimate from the facts `read`: the structural analysis, the
+/// refinement and the report.
+fn estimate_from(
+    model: &dyn Model,
+    passes: &dyn Passes,
+    options: &EstimateOptions,
+    nominal: Vec<f64>,
+    read: ReadFacts,
+) -> Result<Estimate, EstimateError> {
     let mut est = Estimator::new(
         model,
         options,
-        kind,
+        options.method.predictor(),
         nominal,
-        infos,
-        &sign_patterns,
-        warnings,
+        read.infos,
+        &read.sign_patterns,
+        read.warnings,
         passes,
-        facts,
+        read.facts,
     )?;
     est.check_length()?;
-    let mut estimate = est.run(sign_patterns)?;
-    notes.extend(same_estimate_note(ir, options.method));
+    let mut estimate = est.run(read.sign_patterns)?;
+    let mut notes = read.notes;
+    notes.extend(same_estimate_note(model.ir(), options.method));
     estimate.notes = notes;
     Ok(estimate)
+}
+
+/// The estimate is a refined IV from the delayed bootstrap, the only one a
+/// refinement on a subsample can begin (a warm start already begins
+/// elsewhere; least squares and delayed instruments do not refine).
+fn refines_from_bootstrap(options: &EstimateOptions) -> bool {
+    options.method != Method::Ls
+        && options.instruments == Instruments::Simulated
+        && options.initial == Initial::Delayed
+        && options.start.is_none()
+        && options.max_refinements > 0
+}
+
+/// A subsample's fraction, if any, is in (0, 1].
+fn check_subsample(options: &EstimateOptions) -> Result<(), EstimateError> {
+    match options.refine_subsample {
+        Some(f) if !(f > 0.0 && f <= 1.0) => Err(err(
+            "invalid-option",
+            format!("the subsample to refine on is {f} of the samples: it must be in (0, 1]"),
+            "give a fraction such as 0.1 (the first tenth of every experiment)",
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Said once when other methods must give this very estimate: on a model
@@ -190,82 +206,4 @@ fn check_start(ir: &Ir, options: &EstimateOptions) -> Result<(), EstimateError> 
         ));
     }
     Ok(())
-}
-
-/// Minority fraction from which a sign violation can bias the estimate badly
-/// (its summary says so).
-const LARGE_VIOLATION: f64 = 0.01;
-
-/// The warnings of an experiment whose sign arguments do not keep one sign
-/// (paper A7), or (`strict`) the error of the first.
-fn sign_violations(s: &ExperimentSigns, strict: bool) -> Result<Vec<Warning>, EstimateError> {
-    let mut warnings = Vec::new();
-    for a in &s.arguments {
-        if a.minority_fraction > 0.0 {
-            let how = if a.minority_fraction >= LARGE_VIOLATION {
-                "can be badly biased"
-            } else {
-                "may be slightly biased"
-            };
-            let summary = format!(
-                "experiment `{}`: {} changes sign ({:.1} % of samples, paper A7): terms in |{}| {how}",
-                s.experiment,
-                a.argument,
-                100.0 * a.minority_fraction,
-                a.argument
-            );
-            let help = format!(
-                "split the run where {} changes sign, or keep its sign with a steady offset; --strict makes this an error",
-                a.argument
-            );
-            let msg = format!(
-                "experiment `{}`: {} has sign {} in {:.1}% of the samples and the other sign in {:.2}% (paper A7 requires one sign per experiment)",
-                s.experiment,
-                a.argument,
-                if a.sign > 0 { "+" } else { "-" },
-                100.0 * (1.0 - a.minority_fraction),
-                100.0 * a.minority_fraction
-            );
-            if strict {
-                return Err(err(
-                    "sign-violation",
-                    msg,
-                    "split the experiment where the argument changes sign, or run experiments with a static offset large enough that it keeps its sign, or drop --strict to estimate anyway",
-                ));
-            }
-            warnings.push(Warning::new("sign-violation", summary, help, msg).biasing());
-        }
-    }
-    Ok(warnings)
-}
-
-/// The note on an experiment's pointwise sign arguments that cross zero, if any.
-fn crossing_note(ir: &Ir, s: &ExperimentSigns) -> Option<String> {
-    let crossing: Vec<String> = s
-        .pointwise
-        .iter()
-        .zip(&s.crossings)
-        .filter(|(a, _)| {
-            a.minority_fraction > 0.0
-                && ir
-                    .sign_args
-                    .iter()
-                    .any(|x| x.pointwise && x.name == a.argument)
-        })
-        .map(|(a, n)| {
-            format!(
-                "{} ({n} sign change{}, {:.1}% of the samples of the minority sign)",
-                a.argument,
-                if *n == 1 { "" } else { "s" },
-                100.0 * a.minority_fraction
-            )
-        })
-        .collect();
-    (!crossing.is_empty()).then(|| {
-        format!(
-            "experiment `{}`: {} cross zero; their moduli are evaluated pointwise, as the simulation does (within the noise of zero, measurement noise biases |x| slightly upwards)",
-            s.experiment,
-            crossing.join(", ")
-        )
-    })
 }

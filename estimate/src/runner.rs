@@ -9,7 +9,7 @@ use crate::moments::{
 };
 use crate::prefix::{Checkpoint, Wanted};
 use leeway_model::delay::delayed;
-use leeway_model::experiment::Source;
+use leeway_model::experiment::{Head, Source};
 use leeway_model::interp::TermPlan;
 use leeway_model::interrupt::Interrupt;
 use leeway_model::model::{HeadingRotation, Model, Signals};
@@ -20,7 +20,7 @@ use leeway_structure::ir::{Ir, PredictorKind, Rotation};
 use crate::free_run::{AlongsideFreeRun, FreeRunSums};
 use crate::protocol::{
     BadValue, ExperimentFacts, FactsRequest, LongRunPass, Pass, PassPlan, PassRequest, PassSummary,
-    PrefixInstruments, Summary,
+    PrefixInstruments, Summary, head_samples,
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
 use crate::slots::{SlotPlans, read_slots};
@@ -420,6 +420,8 @@ impl<'a> PassRunner<'a> {
         from: Option<FactsState>,
     ) -> (ExperimentFacts, Option<FactsState>) {
         let ir = self.model.ir();
+        let head = request.head.map(|f| Head::new(e, head_samples(e.len(), f)));
+        let e: &dyn Source = head.as_ref().map_or(e, |h| h);
         let view = match delayed(ir, e) {
             Ok(view) => view,
             Err(error) => {
@@ -557,6 +559,8 @@ impl<'a> PassRunner<'a> {
         request: &PassRequest,
         cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> PassSummary {
+        let head = request.head.map(|f| Head::new(e, head_samples(e.len(), f)));
+        let e: &dyn Source = head.as_ref().map_or(e, |h| h);
         // The facts pass reported a dead time that is no whole number of
         // samples, and the driver stopped: no pass gets here with one.
         let Ok(view) = delayed(self.model.ir(), e) else {

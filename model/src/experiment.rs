@@ -47,6 +47,18 @@ pub trait Source: Sync {
     fn step(&self) -> f64;
     /// Calls `f` on every sample in order.
     fn visit(&self, f: &mut dyn FnMut(&Row));
+    /// Calls `f` on the first `n` samples in order (every sample, if fewer):
+    /// what a [`Head`] of the record visits. A streamed source stops reading
+    /// after them; this default visits every sample and passes on the first `n`.
+    fn visit_head(&self, n: usize, f: &mut dyn FnMut(&Row)) {
+        let mut k = 0usize;
+        self.visit(&mut |row| {
+            if k < n {
+                f(row);
+            }
+            k += 1;
+        });
+    }
     /// Where sample `k` (from 0) comes from, for messages: `file:line` for a
     /// file, the experiment and sample otherwise.
     fn locate(&self, k: usize) -> String {
@@ -202,6 +214,59 @@ impl Source for Experiment {
     fn visit(&self, f: &mut dyn FnMut(&Row)) {
         self.rows(f);
     }
+    fn visit_head(&self, n: usize, f: &mut dyn FnMut(&Row)) {
+        self.head_rows(n, f);
+    }
+}
+
+/// The first samples of a record, as a record of its own: what a
+/// refinement on a subsample reads (`EstimateOptions::refine_subsample`).
+/// A streamed record is read only as far as its head; one held in memory
+/// is copied that far, so that passes walk its columns as they walk the
+/// whole record's.
+pub struct Head<'a> {
+    source: &'a dyn Source,
+    n: usize,
+    memory: Option<Experiment>,
+}
+
+impl<'a> Head<'a> {
+    /// The first `n` samples of `source` (all of them, if it has fewer).
+    pub fn new(source: &'a dyn Source, n: usize) -> Head<'a> {
+        let n = n.min(source.len());
+        Head {
+            source,
+            n,
+            memory: source.in_memory().map(|x| x.truncated(n)),
+        }
+    }
+}
+
+impl Source for Head<'_> {
+    fn name(&self) -> &str {
+        self.source.name()
+    }
+    fn len(&self) -> usize {
+        self.n
+    }
+    fn step(&self) -> f64 {
+        self.source.step()
+    }
+    fn visit(&self, f: &mut dyn FnMut(&Row)) {
+        self.source.visit_head(self.n, f);
+    }
+    fn visit_head(&self, n: usize, f: &mut dyn FnMut(&Row)) {
+        self.source.visit_head(n.min(self.n), f);
+    }
+    fn locate(&self, k: usize) -> String {
+        self.source.locate(k)
+    }
+    fn in_memory(&self) -> Option<&Experiment> {
+        self.memory.as_ref()
+    }
+    fn dead_time_applied(&self) -> bool {
+        self.source.dead_time_applied()
+    }
 }
 
 impl Experiment {
@@ -212,12 +277,22 @@ impl Experiment {
     }
 
     /// Calls `f` on every sample from sample `start` on, in order.
-    pub fn rows_from<F: FnMut(&Row)>(&self, start: usize, mut f: F) {
+    pub fn rows_from<F: FnMut(&Row)>(&self, start: usize, f: F) {
+        self.rows_between(start, self.len(), f);
+    }
+
+    /// Calls `f` on the first `n` samples, in order.
+    fn head_rows<F: FnMut(&Row)>(&self, n: usize, f: F) {
+        self.rows_between(0, n.min(self.len()), f);
+    }
+
+    /// Calls `f` on the samples `start..end`, in order.
+    fn rows_between<F: FnMut(&Row)>(&self, start: usize, end: usize, mut f: F) {
         let mut states = vec![0.0; self.states.len()];
         let mut inputs = vec![0.0; self.inputs.len()];
         let mut rotation = vec![0.0; self.rotation.len()];
         let mut dist = vec![0.0; self.disturbances.len()];
-        for k in start..self.len() {
+        for k in start..end {
             for (d, c) in states.iter_mut().zip(&self.states) {
                 *d = c[k];
             }

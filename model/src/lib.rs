@@ -27,7 +27,7 @@ pub mod validation;
 pub mod warning;
 
 #[doc(inline)]
-pub use experiment::{Experiment, MIN_SAMPLES, Row, Source, column_name};
+pub use experiment::{Experiment, Head, MIN_SAMPLES, Row, Source, column_name};
 #[doc(inline)]
 pub use interp::Interpreter;
 #[doc(inline)]

@@ -31,6 +31,9 @@ pub(crate) struct EstimateOptions {
     /// `scan_by="fit"` or `"residual"` (`--scan-by`).
     #[pyo3(default)]
     pub(crate) scan_by: Option<String>,
+    /// `refine_subsample=0.1` (`--refine-subsample`).
+    #[pyo3(default)]
+    pub(crate) refine_subsample: Option<f64>,
 }
 
 /// The value named `given` of a named option, or an `OptionError` listing
@@ -93,6 +96,7 @@ impl EstimateOptions {
             strict: self.strict,
             lags: self.lags,
             runaway_guard: self.runaway_guard,
+            refine_subsample: self.refine_subsample,
             interrupt: Some(python_interrupt()),
             ..leeway_estimate::EstimateOptions::default()
         };

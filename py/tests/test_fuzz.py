@@ -40,7 +40,7 @@ WEIRD = [
 ]
 
 OPTIONS = ["method", "instruments", "initial", "centring", "combine", "nominal", "aggregate", "strict", "lags",
-           "max_refinements", "runaway_guard", "step", "time_tolerance", "resample"]
+           "max_refinements", "runaway_guard", "refine_subsample", "step", "time_tolerance", "resample"]
 
 
 def base_frame(rng: random.Random, n: int) -> pd.DataFrame:

@@ -28,7 +28,8 @@ BAD_OPTIONS = [
     ("step", 1j), ("resample", False), ("resample", "1"), ("time_tolerance", None), ("time_tolerance", "0.05"),
     ("time_tolerance", np.bool_(True)), ("method", 3), ("method", None), ("centring", 1), ("combine", b"summed"),
     ("aggregate", 1), ("aggregate", "yes"), ("strict", None), ("runaway_guard", 0), ("instruments", ["simulated"]),
-    ("initial", None),
+    ("initial", None), ("refine_subsample", 0), ("refine_subsample", 1.5), ("refine_subsample", "0.1"),
+    ("refine_subsample", True), ("refine_subsample", float("nan")),
 ]
 
 
@@ -120,3 +121,21 @@ def test_options_edited_on_their_way_are_checked_again(ship, ship_frame) -> None
     with pytest.raises(leeway.OptionError, match="not a path"):
         mr.open_file(ship, 3, options)  # type: ignore[arg-type]
     assert pd.DataFrame is not None
+
+
+def test_refining_on_a_subsample_is_reported_and_lands_near_the_plain_estimate(ship, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from conftest import ship_data
+
+    frame = ship_data(tmp_path, 12000, 10.0, 11)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", leeway.LeewayWarning)
+        plain = leeway.estimate(ship, frame, aggregate=True)
+        first = leeway.estimate(ship, frame, aggregate=True, refine_subsample=np.float64(0.25))
+    sub = first.diagnostics["subsample"]
+    assert sub == {"fraction": 0.25, "samples": 3000, "refinements": sub["refinements"], "used": True}
+    assert "subsample" not in plain.diagnostics
+    assert first.diagnostics["converged"]
+    for name, se in plain.document["std_errors"].items():
+        if se is not None:
+            assert abs(first.document["estimates"][name] - plain.document["estimates"][name]) <= 0.01 * se, name
+    assert any("refined first on 0.25 of every experiment" in line for line in first.summary().diagnostics)

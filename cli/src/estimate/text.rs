@@ -268,19 +268,22 @@ fn diagnostics(s: &mut String, o: &Outcome) {
             ),
         ]);
     }
+    rows.extend([vec![
+        "refinements".to_string(),
+        format!(
+            "{} ({})",
+            d.refinements,
+            if d.converged {
+                "converged"
+            } else {
+                "not converged"
+            }
+        ),
+    ]]);
+    if let Some(s) = &d.subsample {
+        rows.push(vec!["subsample".to_string(), subsample(s)]);
+    }
     rows.extend([
-        vec![
-            "refinements".to_string(),
-            format!(
-                "{} ({})",
-                d.refinements,
-                if d.converged {
-                    "converged"
-                } else {
-                    "not converged"
-                }
-            ),
-        ],
         vec!["own simulation".to_string(), own_simulation(d)],
         vec!["instruments".to_string(), d.instruments.clone()],
         vec!["centring".to_string(), d.centring.clone()],
@@ -343,4 +346,21 @@ fn own_simulation(d: &leeway_estimate::Diagnostics) -> String {
         fit(own.mean_fit),
         leeway_structure::grammar::join_capped(states, ", ")
     )
+}
+
+/// The refinement on a subsample that began this one: where, how long, and
+/// whether its estimate was used.
+fn subsample(s: &leeway_estimate::SubsampleRefinement) -> String {
+    let head = format!(
+        "the first {} of every experiment ({} samples): {} refinement{}",
+        leeway_model::number::short_number(s.fraction),
+        s.samples,
+        s.refinements,
+        if s.refinements == 1 { "" } else { "s" }
+    );
+    match (&s.why_not, s.used) {
+        (_, true) => format!("{head}, settled; the refinement over all samples went on from it"),
+        (Some(why), false) => format!("{head}; not used ({why}): refined from the bootstrap"),
+        (None, false) => format!("{head}; not used: refined from the bootstrap"),
+    }
 }

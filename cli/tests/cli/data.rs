@@ -738,6 +738,32 @@ fn every_numeric_option_is_bounded_with_an_error_naming_it() {
             "--lags",
         ),
         (
+            vec!["estimate", SHIP, "--data", &data, "--refine-subsample", "0"],
+            "--refine-subsample",
+        ),
+        (
+            vec![
+                "estimate",
+                SHIP,
+                "--data",
+                &data,
+                "--refine-subsample",
+                "1.5",
+            ],
+            "--refine-subsample",
+        ),
+        (
+            vec![
+                "estimate",
+                SHIP,
+                "--data",
+                &data,
+                "--refine-subsample",
+                "nan",
+            ],
+            "--refine-subsample",
+        ),
+        (
             vec!["estimate", SHIP, "--data", &data, "--lags", "0"],
             "--lags",
         ),

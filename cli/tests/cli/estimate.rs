@@ -153,6 +153,52 @@ fn estimate_prints_tables_and_warnings_for_people() {
     assert!(!out.contains('\u{1b}') && !err.contains('\u{1b}'));
 }
 
+/// `--refine-subsample`: the refinement on the first fifth of a long run
+/// settles there and the refinement over all samples goes on from it, in
+/// the JSON and in the text.
+#[test]
+fn estimate_refines_on_a_subsample_when_asked() {
+    let dir = Scratch::new("subsample");
+    let data = dir.write("long.csv", &estimation_csv(20000, 10.0, 201));
+    let o = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &data,
+        "--refine-subsample",
+        "0.2",
+        "--json",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let d = &v["diagnostics"];
+    assert_eq!(
+        d["subsample"],
+        serde_json::json!({"fraction": 0.2, "samples": 4000, "refinements": d["subsample"]["refinements"], "used": true}),
+        "{d}"
+    );
+    assert_eq!(d["converged"].as_bool(), Some(true), "{d}");
+    let o = leeway(&[
+        "estimate",
+        SHIP,
+        "--data",
+        &data,
+        "--refine-subsample",
+        "0.2",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(
+        out.contains("subsample         the first 0.2 of every experiment (4000 samples)")
+            && out.contains("settled; the refinement over all samples went on from it"),
+        "{out}"
+    );
+    // Without the flag, the JSON has no `subsample`.
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    assert!(json(&o)["diagnostics"].get("subsample").is_none());
+}
+
 /// A small valid file: 30 samples with a time column, then mutated per class.
 fn small_csv() -> Vec<Vec<String>> {
     estimation_csv(30, 1.0, 3)

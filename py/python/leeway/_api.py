@@ -385,6 +385,17 @@ def _seconds(what: str, v: Any, optional: bool = True) -> float | None:
     return _number(what, v, hint=f"give {what} as a finite number" + (" (or None)" if optional else ""))
 
 
+def _fraction(what: str, v: Any) -> float | None:
+    """A fraction in (0, 1], or None."""
+    if v is None:
+        return None
+    hint = f"give {what} as a fraction in (0, 1], e.g. {what}=0.1 (or None)"
+    value = _number(what, v, hint=hint)
+    if not 0.0 < value <= 1.0:
+        raise OptionError(f"{what}={value} is not a fraction in (0, 1]", code="invalid-option", hint=hint)
+    return value
+
+
 _EXAMPLES = {"scan_delay": "tau_x=0..2s", "scan_by": "fit", "method": "iv3", "instruments": "simulated", "initial": "delayed", "centring": "experiment", "combine": "summed"}
 
 # The CLI's bounds (cli/src/estimate.rs, py/src/lib.rs), checked here too so
@@ -408,6 +419,8 @@ def _checked_options(options: dict[str, Any]) -> dict[str, Any]:
     out["step"] = _seconds("step", options["step"])
     out["resample"] = _seconds("resample", options["resample"])
     out["time_tolerance"] = _seconds("time_tolerance", options["time_tolerance"], optional=False)
+    if "refine_subsample" in options:
+        out["refine_subsample"] = _fraction("refine_subsample", options["refine_subsample"])
     for key in ("scan_delay", "scan_by"):
         if key in options:
             out[key] = _text(key, options[key], optional=True)
@@ -466,6 +479,7 @@ def estimate(
     lags: int = 1,
     max_refinements: int = 8,
     runaway_guard: bool = True,
+    refine_subsample: float | None = None,
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
@@ -478,7 +492,10 @@ def estimate(
     column if it has one), a list or dict of DataFrames (a dict names the
     experiments), or Arrow/polars tables. ``scan_delay="tau_x=0..2s"``
     (``--scan-delay``) finds an input's dead time: the estimate is at the
-    best one, and ``Estimate.delay_scan`` holds the curve. Warnings are
+    best one, and ``Estimate.delay_scan`` holds the curve.
+    ``refine_subsample=0.1`` (``--refine-subsample``) refines on the first
+    tenth of every experiment before the whole records (for long records;
+    the same fixed point within the tolerance, not the same bits). Warnings are
     issued as ``LeewayWarning``; errors raise the classes of
     ``leeway.errors``."""
     options = _estimate_options(
@@ -494,6 +511,7 @@ def estimate(
         lags=lags,
         max_refinements=max_refinements,
         runaway_guard=runaway_guard,
+        refine_subsample=refine_subsample,
         step=step,
         time_tolerance=time_tolerance,
         resample=resample,

@@ -29,6 +29,7 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--time-tolerance": ("time_tolerance", "number"),
     "--lags": ("lags", "number"),
     "--max-refinements": ("max_refinements", "number"),
+    "--refine-subsample": ("refine_subsample", "number"),
     "--nominal": ("nominal", "mapping"),
     "--disturbance": ("disturbances", "mapping"),
     "--x0": ("x0", "mapping"),

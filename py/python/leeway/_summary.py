@@ -186,6 +186,13 @@ def summary(
         f"condition number {g.get('condition_number', math.nan):.3g}",
         f"refinements {g.get('refinements')} ({'converged' if g.get('converged') else 'not converged'})",
     ]
+    sub = g.get("subsample")
+    if sub is not None:
+        how = "settled, then refined over all samples from it" if sub["used"] else f"not used ({sub.get('why_not')})"
+        diagnostics.append(
+            f"refined first on {sub['fraction']:g} of every experiment ({sub['samples']} samples, "
+            f"{sub['refinements']} refinements): {how}"
+        )
     if own.get("mean_fit") is not None:
         fits = ", ".join(f"{f['state']} {f['fit']:.1f} %" for f in own.get("fits", []) if f["fit"] is not None)
         diagnostics.append(f"own simulation fit: {fits} (mean {own['mean_fit']:.1f} %)")

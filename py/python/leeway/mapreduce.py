@@ -41,6 +41,7 @@ _DEFAULTS: dict[str, Any] = {
     "lags": 1,
     "max_refinements": 8,
     "runaway_guard": True,
+    "refine_subsample": None,
     "step": None,
     "time_tolerance": 0.05,
     "resample": None,

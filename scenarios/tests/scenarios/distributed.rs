@@ -89,10 +89,14 @@ fn bits(e: &Estimate) -> String {
 }
 
 fn experiments(model: &Interpreter) -> Vec<Experiment> {
-    let design = InputDesign::default();
     // Runs of different lengths and winds, as a campaign has.
-    [(10.0, 700, 11), (6.0, 1300, 12), (14.0, 450, 13)]
-        .iter()
+    runs(model, &[(10.0, 700, 11), (6.0, 1300, 12), (14.0, 450, 13)])
+}
+
+/// The study's estimation runs of these `(wind, samples, seed)`.
+fn runs(model: &Interpreter, runs: &[(f64, usize, u64)]) -> Vec<Experiment> {
+    let design = InputDesign::default();
+    runs.iter()
         .map(|&(wind, n, seed)| study::estimation_experiment(model, &design, wind, n, seed).0)
         .collect()
 }
@@ -446,8 +450,13 @@ fn continued_instruments_reach_the_same_fixed_point() {
     }
 }
 
-/// A streamed record that counts its visits.
-struct Counted<'a>(Streamed<'a>, std::sync::atomic::AtomicUsize);
+/// A streamed record that counts its visits of the whole record and of its
+/// head apart.
+struct Counted<'a>(
+    Streamed<'a>,
+    std::sync::atomic::AtomicUsize,
+    std::sync::atomic::AtomicUsize,
+);
 
 impl Source for Counted<'_> {
     fn name(&self) -> &str {
@@ -463,6 +472,29 @@ impl Source for Counted<'_> {
         self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.0.visit(f);
     }
+    fn visit_head(&self, n: usize, f: &mut dyn FnMut(&leeway_model::Row)) {
+        self.2.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        // The record's own head: read no further than `n`.
+        self.0.0.visit_head(n, f);
+    }
+}
+
+/// The estimate from `data` streamed, and how often it visited each record
+/// whole and its head.
+fn counted(
+    model: &Interpreter,
+    data: &[Experiment],
+    options: &EstimateOptions,
+) -> (Estimate, Vec<usize>, Vec<usize>) {
+    let counted: Vec<Counted> = data
+        .iter()
+        .map(|e| Counted(Streamed(e), Default::default(), Default::default()))
+        .collect();
+    let sources: Vec<&dyn Source> = counted.iter().map(|e| e as &dyn Source).collect();
+    let estimate = estimate(model, &sources, options).expect("an estimate");
+    let load = |a: &std::sync::atomic::AtomicUsize| a.load(std::sync::atomic::Ordering::Relaxed);
+    let (whole, heads) = counted.iter().map(|c| (load(&c.1), load(&c.2))).unzip();
+    (estimate, whole, heads)
 }
 
 #[test]
@@ -470,16 +502,7 @@ fn the_own_simulation_reads_a_streamed_record_in_the_covariance_pass() {
     let model = ship();
     let data = experiments(&model);
     let run = |options: &EstimateOptions| {
-        let counted: Vec<Counted> = data
-            .iter()
-            .map(|e| Counted(Streamed(e), Default::default()))
-            .collect();
-        let sources: Vec<&dyn Source> = counted.iter().map(|e| e as &dyn Source).collect();
-        let estimate = estimate(&model, &sources, options).expect("an estimate");
-        let visits: Vec<usize> = counted
-            .iter()
-            .map(|c| c.1.load(std::sync::atomic::Ordering::Relaxed))
-            .collect();
+        let (estimate, visits, _) = counted(&model, &data, options);
         (estimate, visits)
     };
     for method in [Method::Iv3, Method::Ls] {
@@ -535,4 +558,131 @@ fn streamed_experiments_on_several_threads_give_the_estimate_of_one() {
         let local = estimate(&model, &held, &options).expect("in memory");
         assert_eq!(bits(&one), bits(&local), "{method:?}");
     }
+}
+
+/// Long runs of different lengths and winds, for the refinement on a subsample.
+fn long_experiments(model: &Interpreter) -> Vec<Experiment> {
+    runs(
+        model,
+        &[(10.0, 4000, 21), (6.0, 6000, 22), (14.0, 3000, 23)],
+    )
+}
+
+/// Refining on a fifth of every record first reaches the fixed point of the
+/// refinement over all samples — that of a refinement run to a far tighter
+/// tolerance, within a hundredth of a standard error — and passes over all
+/// samples only for the refinement from the subsample's estimate, never
+/// for a bootstrap; in memory or streamed, and mapped over workers, the
+/// same bits.
+#[test]
+fn refining_on_a_subsample_first_reaches_the_fixed_point_over_all_samples() {
+    let model = ship();
+    let data = long_experiments(&model);
+    // IV1 and IV2 run away on these windy records from their bootstrap on.
+    let method = Method::Iv3;
+    let plain = aggregated(method);
+    let sub = EstimateOptions {
+        refine_subsample: Some(0.2),
+        ..plain.clone()
+    };
+    let (full, whole_full, heads_full) = counted(&model, &data, &plain);
+    let (first, whole_sub, heads_sub) = counted(&model, &data, &sub);
+    let s = first.diagnostics.subsample.clone().expect("reported");
+    assert!(s.used && s.why_not.is_none(), "{s:?}");
+    assert_eq!(s.samples, (4000 + 6000 + 3000) / 5, "{s:?}");
+    assert!(first.diagnostics.converged && full.diagnostics.converged);
+    assert!(full.diagnostics.subsample.is_none());
+    assert_eq!(heads_full, vec![0, 0, 0]);
+    // The subsample's facts, bootstrap and refinements read the heads only.
+    assert_eq!(heads_sub, vec![2 + s.refinements; 3]);
+    // Over all samples: the facts, the bootstrap (or the first pass from
+    // the subsample's estimate), each refinement and the covariance.
+    assert_eq!(whole_full, vec![3 + full.diagnostics.refinements; 3]);
+    assert_eq!(whole_sub, vec![3 + first.diagnostics.refinements; 3]);
+    let tight = estimate(
+        &model,
+        &data.iter().map(|e| e as &dyn Source).collect::<Vec<_>>(),
+        &EstimateOptions {
+            tolerance: 1e-9,
+            max_refinements: 30,
+            ..plain.clone()
+        },
+    )
+    .expect("a tight estimate");
+    assert!(tight.diagnostics.converged);
+    for (((a, b), se), name) in first
+        .theta
+        .iter()
+        .zip(&tight.theta)
+        .zip(&tight.std_errors)
+        .zip(&tight.parameters)
+    {
+        if let Some(se) = se {
+            assert!(
+                (a - b).abs() <= 0.01 * se,
+                "{name}: {a} vs {b}, standard error {se}"
+            );
+        }
+    }
+    // In memory (heads copied) and mapped over workers (the head in the
+    // request): the streamed estimate's bits.
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let local = estimate(&model, &held, &sub).expect("in memory");
+    assert_eq!(bits(&first), bits(&local), "in memory");
+    let workers = Workers {
+        model: &model,
+        experiments: &data,
+    };
+    let mapped = estimate_with(&model, &workers, &sub).expect("mapped");
+    assert_eq!(bits(&first), bits(&mapped), "mapped");
+}
+
+/// A subsample too short to estimate from changes nothing: the refinement
+/// over all samples begins from the bootstrap, bit for bit as without one,
+/// and the report says why the subsample was not used.
+#[test]
+fn a_subsample_that_cannot_settle_leaves_the_estimate_as_without_one() {
+    let model = ship();
+    let data = experiments(&model);
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let plain = aggregated(Method::Iv3);
+    let without = estimate(&model, &held, &plain).expect("an estimate");
+    let mut with = estimate(
+        &model,
+        &held,
+        &EstimateOptions {
+            refine_subsample: Some(0.001),
+            ..plain
+        },
+    )
+    .expect("an estimate");
+    let s = with.diagnostics.subsample.take().expect("reported");
+    assert!(!s.used, "{s:?}");
+    let why = s.why_not.unwrap_or_default();
+    assert!(why.contains("on the subsample: 24 equations"), "{why}");
+    assert_eq!(bits(&with), bits(&without));
+}
+
+/// A bad value after the subsample is found by the first pass over all
+/// samples, as the bootstrap finds it without a subsample: the same error.
+#[test]
+fn a_bad_value_past_the_subsample_is_the_error_it_is_without_one() {
+    let model = ship();
+    let mut data = long_experiments(&model);
+    let last = data[1].len() - 5;
+    data[1].states[0][last] = f64::NAN;
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let plain = aggregated(Method::Iv3);
+    let without = estimate(&model, &held, &plain).expect_err("a bad value");
+    let with = estimate(
+        &model,
+        &held,
+        &EstimateOptions {
+            refine_subsample: Some(0.2),
+            ..plain
+        },
+    )
+    .expect_err("a bad value");
+    assert_eq!(with.code, "non-finite-data", "{with:?}");
+    assert_eq!(format!("{with:?}"), format!("{without:?}"));
 }
