@@ -138,6 +138,19 @@ fn a_streamed_record_gives_the_in_memory_estimate_bit_for_bit() {
     let bits = |t: &[f64]| t.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
     assert_eq!(bits(&memory.theta), bits(&streamed.theta));
     assert_eq!(memory.diagnostics, streamed.diagnostics);
+    // A subsample is the head of the record, less its dead time after (10
+    // samples), in memory or streamed.
+    let sub = EstimateOptions {
+        refine_subsample: Some(0.3),
+        ..opts
+    };
+    let memory = estimate(&model, &[&e as &dyn Source], &sub).expect("in memory");
+    let streamed = estimate(&model, &[&Streamed(&e) as &dyn Source], &sub).expect("streamed");
+    assert_eq!(bits(&memory.theta), bits(&streamed.theta));
+    assert_eq!(memory.diagnostics, streamed.diagnostics);
+    let s = memory.diagnostics.subsample.expect("reported");
+    let head = leeway_estimate::head_samples(e.len(), 0.3);
+    assert_eq!((s.samples, s.used), (head - 10, true), "{s:?}");
 }
 
 #[test]
