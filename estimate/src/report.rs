@@ -252,14 +252,17 @@ impl Estimator<'_> {
         match (self.options.method, self.options.instruments) {
             (Method::Ls, _) => "none (least squares: the regressors themselves)".to_string(),
             (_, Instruments::Simulated) => {
-                let mut text = format!(
-                    "simulated model ({}), refined with the estimate",
-                    match self.options.initial {
+                let first = match (&self.options.start, self.options.refine_subsample) {
+                    (Some(_), Some(_)) => "first simulation: the estimate refined on the subsample",
+                    (Some(_), None) => "first simulation: the warm start's estimate",
+                    (None, _) => match self.options.initial {
                         Initial::Nominal => "first simulation: the nominal model",
-                        Initial::Delayed =>
-                            "first simulation: an estimate with delayed-measurement instruments",
-                    }
-                );
+                        Initial::Delayed => {
+                            "first simulation: an estimate with delayed-measurement instruments"
+                        }
+                    },
+                };
+                let mut text = format!("simulated model ({first}), refined with the estimate");
                 // Only what this model has: a heading, measured media.
                 if matches!(self.ir.rotation, Rotation::Planar { .. }) {
                     text.push_str(

@@ -191,7 +191,8 @@ fn estimate_refines_on_a_subsample_when_asked() {
     let out = stdout(&o);
     assert!(
         out.contains("subsample         the first 0.2 of every experiment (4000 samples)")
-            && out.contains("settled; the refinement over all samples went on from it"),
+            && out.contains("settled; the refinement over all samples went on from it")
+            && out.contains("first simulation: the estimate refined on the subsample"),
         "{out}"
     );
     // Without the flag, the JSON has no `subsample`.
