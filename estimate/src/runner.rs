@@ -383,6 +383,11 @@ fn located(e: &dyn Source, sample: usize, what: String) -> BadValue {
     }
 }
 
+/// The head of `e` a request asks for (its fraction), if any.
+fn head_of(e: &dyn Source, fraction: Option<f64>) -> Option<Head<'_>> {
+    fraction.map(|f| Head::new(e, head_samples(e.len(), f)))
+}
+
 /// A model ready to run passes over experiments (its term plans built once).
 pub struct PassRunner<'a> {
     model: &'a dyn Model,
@@ -420,7 +425,7 @@ impl<'a> PassRunner<'a> {
         from: Option<FactsState>,
     ) -> (ExperimentFacts, Option<FactsState>) {
         let ir = self.model.ir();
-        let head = request.head.map(|f| Head::new(e, head_samples(e.len(), f)));
+        let head = head_of(e, request.head);
         let e: &dyn Source = head.as_ref().map_or(e, |h| h);
         let view = match delayed(ir, e) {
             Ok(view) => view,
@@ -559,7 +564,7 @@ impl<'a> PassRunner<'a> {
         request: &PassRequest,
         cache: Option<(&mut RecordCache, &mut usize, bool)>,
     ) -> PassSummary {
-        let head = request.head.map(|f| Head::new(e, head_samples(e.len(), f)));
+        let head = head_of(e, request.head);
         let e: &dyn Source = head.as_ref().map_or(e, |h| h);
         // The facts pass reported a dead time that is no whole number of
         // samples, and the driver stopped: no pass gets here with one.
