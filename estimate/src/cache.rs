@@ -20,6 +20,13 @@ use leeway_structure::ir::PredictorKind;
 /// for a streamed record.
 pub(super) const KEEP_BUDGET: usize = 512 << 20;
 
+/// The most one [`LocalPasses`] keeps of its streamed records' instrument
+/// simulations (bytes): two trajectories a record (the kept one, and the
+/// one a pass writes while it reads the other), reserved in record order —
+/// 48 MB for a record of 10⁶ samples of three states, so a single such
+/// file, or five, keep theirs; the records beyond it simulate again.
+pub(super) const TRAJECTORY_BUDGET: usize = 256 << 20;
+
 /// What earlier passes over one record kept (see [`walk::Reuse`]).
 #[derive(Debug, Default)]
 pub(super) struct RecordCache {
@@ -51,6 +58,9 @@ pub(super) struct RecordCache {
     /// Where the facts visit of each predictor kind stood after this
     /// record's samples (or a prefix's), to go on from.
     facts: Vec<(PredictorKind, FactsState)>,
+    /// A streamed record's cache: it keeps its last instrument simulations
+    /// only (see [`RecordCache::trajectories_only`]).
+    only_trajectories: bool,
 }
 
 /// The states after each step of one plan's last simulation, with the
@@ -158,6 +168,23 @@ pub(super) struct Kept<'a> {
 }
 
 impl RecordCache {
+    /// The cache of a streamed record: only the states of its last
+    /// instrument simulation are kept — a refinement's next pass reads them
+    /// as its reference, the covariance pass as its instruments, instead of
+    /// simulating them again. Its rows, headings and facts are read again
+    /// from the file on every pass, as before.
+    pub(super) fn trajectories_only() -> RecordCache {
+        RecordCache {
+            only_trajectories: true,
+            ..RecordCache::default()
+        }
+    }
+
+    /// Whether this cache keeps instrument simulations only (a streamed record's).
+    pub(super) fn keeps_trajectories_only(&self) -> bool {
+        self.only_trajectories
+    }
+
     /// The regressor rows of each output kept for `plan` and `info`'s signs.
     pub(super) fn regressors(
         &self,
@@ -323,6 +350,11 @@ impl RecordCache {
             }
             ok
         };
+        if self.only_trajectories {
+            // Nothing else is offered by a pass over a streamed record.
+            debug_assert!(kept.regressors.is_none() && kept.headings.is_none());
+            debug_assert!(kept.simulation.is_none());
+        }
         if let Some(r) = kept.regressors {
             let bytes = r.iter().map(RegressorRows::bytes).sum();
             if fits(bytes) {

@@ -1,7 +1,7 @@
 //! Passes on this machine: every experiment in order, with what earlier
 //! passes over an in-memory record keep for later ones.
 
-use crate::cache::{Continued, KEEP_BUDGET, RecordCache};
+use crate::cache::{Continued, KEEP_BUDGET, RecordCache, TRAJECTORY_BUDGET};
 use crate::outcome::EstimateError;
 use crate::parallel::{in_order, threads_for};
 use crate::plan::{PlanKey, StructuralPlan};
@@ -26,9 +26,48 @@ pub struct LocalPasses<'a> {
     runner: PassRunner<'a>,
     experiments: &'a [&'a dyn Source],
     kept: std::sync::Mutex<KeptPasses>,
+    /// What each streamed experiment keeps: its last instrument simulation,
+    /// where [`TRAJECTORY_BUDGET`] leaves room for it (`None`: nothing).
+    streamed: Vec<std::sync::Mutex<Option<StreamedKeep>>>,
     /// Threads a pass over streamed experiments uses (in-memory ones are
     /// passed over in order, on one, for what they keep).
     threads: usize,
+}
+
+/// A streamed record's cache (instrument simulations only) and the bytes
+/// reserved for it.
+struct StreamedKeep {
+    cache: RecordCache,
+    budget: usize,
+}
+
+/// The caches of streamed `experiments` of a model with `n_out` states:
+/// in experiment order, each whose two trajectories (the one kept and the
+/// one a pass writes beside it) fit in what is left of `total` bytes gets
+/// them reserved; the others keep nothing.
+fn streamed_caches(
+    experiments: &[&dyn Source],
+    n_out: usize,
+    total: usize,
+) -> Vec<std::sync::Mutex<Option<StreamedKeep>>> {
+    let mut left = total;
+    experiments
+        .iter()
+        .map(|e| {
+            let bytes = e
+                .len()
+                .saturating_mul(n_out)
+                .saturating_mul(2 * std::mem::size_of::<f64>());
+            let fits = e.in_memory().is_none() && bytes <= left;
+            if fits {
+                left -= bytes;
+            }
+            std::sync::Mutex::new(fits.then(|| StreamedKeep {
+                cache: RecordCache::trajectories_only(),
+                budget: bytes,
+            }))
+        })
+        .collect()
 }
 
 /// What [`LocalPasses`] kept of each in-memory record — its regressor rows
@@ -77,6 +116,7 @@ impl<'a> LocalPasses<'a> {
                 budget: KEEP_BUDGET,
                 for_others: false,
             }),
+            streamed: streamed_caches(experiments, model.ir().states.len(), TRAJECTORY_BUDGET),
             threads: threads_for(experiments.len()),
         }
     }
@@ -102,8 +142,12 @@ impl<'a> LocalPasses<'a> {
     }
 
     /// Keeps at most `bytes` for later passes (0: nothing; every pass then
-    /// computes everything, as for streamed records). The default is 512 MiB.
-    pub fn with_budget(self, bytes: usize) -> LocalPasses<'a> {
+    /// computes everything). The default is 512 MiB for in-memory records
+    /// and [`TRAJECTORY_BUDGET`] for streamed ones, whose instrument
+    /// simulations get at most `bytes` too.
+    pub fn with_budget(mut self, bytes: usize) -> LocalPasses<'a> {
+        let n_out = self.runner.n_out();
+        self.streamed = streamed_caches(self.experiments, n_out, bytes.min(TRAJECTORY_BUDGET));
         self.adjusted(|k| k.budget = bytes)
     }
 
@@ -121,6 +165,7 @@ impl<'a> LocalPasses<'a> {
             runner: self.runner,
             experiments: self.experiments,
             kept: std::sync::Mutex::new(kept),
+            streamed: self.streamed,
             threads: self.threads,
         }
     }
@@ -177,6 +222,16 @@ impl<'a> LocalPasses<'a> {
             for c in k.records.iter_mut().flatten() {
                 c.reserve = samples;
             }
+        })
+    }
+
+    /// Streamed experiment `i`'s cache. A poisoned lock (a pass over it
+    /// panicked) leaves it keeping nothing.
+    fn streamed_slot(&self, i: usize) -> std::sync::MutexGuard<'_, Option<StreamedKeep>> {
+        self.streamed[i].lock().unwrap_or_else(|poisoned| {
+            let mut slot = poisoned.into_inner();
+            *slot = None;
+            slot
         })
     }
 
@@ -242,10 +297,16 @@ impl Passes for LocalPasses<'_> {
         // A subsample's pass reads the heads: nothing kept of the whole
         // records serves it, and it keeps nothing.
         if threads > 1 || request.head.is_some() {
-            // Streamed experiments keep nothing: each walked on its own.
+            // Streamed experiments, each walked on its own, keep their
+            // instrument simulations only (not a subsample's).
             let mut out = in_order(self.experiments.len(), threads, |i| {
+                let mut slot = self.streamed_slot(i);
+                let cache = slot
+                    .as_mut()
+                    .filter(|_| request.head.is_none())
+                    .map(|s| (&mut s.cache, &mut s.budget, false));
                 self.runner
-                    .pass_keeping(self.experiments[i], i, request, None)
+                    .pass_keeping(self.experiments[i], i, request, cache)
             });
             if stop_early
                 && let Some(k) = out
@@ -265,12 +326,12 @@ impl Passes for LocalPasses<'_> {
         } = &mut *kept;
         let mut out = Vec::with_capacity(self.experiments.len());
         for (i, (e, cache)) in self.experiments.iter().zip(records.iter_mut()).enumerate() {
-            let s = self.runner.pass_keeping(
-                *e,
-                i,
-                request,
-                cache.as_mut().map(|c| (c, &mut *budget, *for_others)),
-            );
+            let mut slot = self.streamed_slot(i);
+            let cache = match cache {
+                Some(c) => Some((c, &mut *budget, *for_others)),
+                None => slot.as_mut().map(|s| (&mut s.cache, &mut s.budget, false)),
+            };
+            let s = self.runner.pass_keeping(*e, i, request, cache);
             let diverged = matches!(s.0, Summary::Diverged { .. });
             out.push(s);
             if diverged && stop_early {

@@ -154,15 +154,26 @@ struct Completed<'a> {
 }
 
 impl Keeping {
-    /// What a pass that `simulates` over a record of `samples` samples
-    /// keeps, with `cache` (nothing without one).
-    fn new(cache: Option<&mut RecordCache>, simulates: bool, samples: usize) -> Keeping {
+    /// What a pass that `simulates` `n_out` states over a record of
+    /// `samples` samples keeps, with `cache` (nothing without one).
+    fn new(
+        cache: Option<&mut RecordCache>,
+        simulates: bool,
+        (samples, n_out): (usize, usize),
+    ) -> Keeping {
         let Some(c) = cache else {
             return Keeping::default();
         };
+        let keeps_headings = c.headings().is_none() && !c.keeps_trajectories_only();
         Keeping {
-            headings: c.headings().is_none().then(|| Vec::with_capacity(samples)),
-            trajectory: simulates.then(|| c.take_spare()),
+            headings: keeps_headings.then(|| Vec::with_capacity(samples)),
+            // Room for the whole trajectory at once: grown by doubling, it
+            // would be copied and its pages cleared several times over.
+            trajectory: simulates.then(|| {
+                let mut v = c.take_spare();
+                v.reserve_exact(samples.saturating_sub(1).saturating_mul(n_out));
+                v
+            }),
             ..Keeping::default()
         }
     }
@@ -283,7 +294,11 @@ impl<'a> MomentPass<'a> {
         // Rows the cache could not take are not kept at all: a record whose
         // rows exceed what is left of the budget would otherwise allocate and
         // zero them on every pass, only to drop them.
-        let fits = cache.as_ref().is_some_and(|(_, left)| {
+        // A streamed record's cache keeps no rows.
+        let fits = cache.as_ref().is_some_and(|(c, left)| {
+            if c.keeps_trajectories_only() {
+                return false;
+            }
             let bytes = plan
                 .cols
                 .iter()
@@ -310,7 +325,7 @@ impl<'a> MomentPass<'a> {
             simulation: self.continued_simulation(simulates, reads_means),
         };
         let mut cache = cache;
-        let mut keeping = Keeping::new(cache.as_deref_mut(), simulates, e.len());
+        let mut keeping = Keeping::new(cache.as_deref_mut(), simulates, (e.len(), ir.states.len()));
         let checkpoint = keeping.take_checkpoint(cache, budget, &wanted);
         Begun {
             keeping,
@@ -408,6 +423,11 @@ impl<'a> PassRunner<'a> {
             slot_plans: SlotPlans::default(),
             interrupt: None,
         }
+    }
+
+    /// The states of its model (each simulation step's width).
+    pub(super) fn n_out(&self) -> usize {
+        self.model.ir().states.len()
     }
 
     /// The facts of one experiment, in one visit.
@@ -600,7 +620,11 @@ impl<'a> PassRunner<'a> {
                 )
             }
             Pass::LongRun(lr) => {
-                self.long_run(e, info, plan, lr, &lr.centres[index], &lr.mean_res[index])
+                // The instruments' simulation, if the refinement that
+                // simulated them kept it.
+                let states = cache.and_then(|(c, ..)| c.trajectory_of(&lr.theta_sim, &lr.mu));
+                let row = (&lr.centres[index][..], &lr.mean_res[index][..]);
+                self.long_run(e, info, plan, lr, row, states)
             }
             Pass::FreeRun { theta, means } => {
                 Summary::FreeRun(FreeRunSums::of(self.model, theta, means, e))
@@ -761,11 +785,11 @@ impl<'a> PassRunner<'a> {
         info: &ExperimentInfo,
         plan: &PassPlan,
         lr: &LongRunPass,
-        centres: &[Vec<f64>],
-        mean_res: &[f64],
+        (centres, mean_res): (&[Vec<f64>], &[f64]),
+        states: Option<&[f64]>,
     ) -> Summary {
         let sums_over =
-            |e: &dyn Source| self.long_run_sums(e, (info, plan, lr), (centres, mean_res));
+            |e: &dyn Source| self.long_run_sums(e, (info, plan, lr), (centres, mean_res), states);
         let Some((theta, means)) = &lr.free_run else {
             return Summary::LongRun {
                 dim: lr.dim,
@@ -790,12 +814,14 @@ impl<'a> PassRunner<'a> {
     }
 
     /// `ζ`'s long-run sum over `e`, row-major (`None`: the instrument
-    /// simulation diverged), its centres and mean residuals given.
+    /// simulation diverged), its centres and mean residuals given, and the
+    /// instrument simulation's `states` if kept.
     fn long_run_sums(
         &self,
         e: &dyn Source,
         (info, plan, lr): (&ExperimentInfo, &PassPlan, &LongRunPass),
         (centres, mean_res): (&[Vec<f64>], &[f64]),
+        states: Option<&[f64]>,
     ) -> Option<Vec<f64>> {
         // The instruments of the reported iterate (empty θ: the delayed bootstrap).
         let mut walker = self.pass_walker(plan, lr.theta_sim.is_empty() && !lr.own);
@@ -808,7 +834,10 @@ impl<'a> PassRunner<'a> {
             &lr.theta_sim,
             &lr.mu,
             None,
-            &mut Reuse::default(),
+            &mut Reuse {
+                instruments: states,
+                ..Reuse::default()
+            },
             |z: &[f64], phi: &[f64], t: &[f64]| {
                 sums.push_with(|row| zeta.add(z, phi, t, row));
             },

@@ -83,6 +83,11 @@ pub(super) struct Reuse<'a> {
     pub(super) reference: Option<&'a [f64]>,
     /// Keep the instrument simulation's states after each step here.
     pub(super) keep_trajectory: Option<&'a mut Vec<f64>>,
+    /// The instrument simulation's states after each step (`n_out` each),
+    /// from a walk that simulated the same `(θ, μ)`: read instead of
+    /// stepping it again (the covariance pass, after the refinement that
+    /// simulated its instruments).
+    pub(super) instruments: Option<&'a [f64]>,
     /// The sink knows the regressors and targets of this many first
     /// equations (kept over a shorter prefix of the record): skip them there.
     pub(super) measured_known: usize,
@@ -242,6 +247,10 @@ impl EquationWalker<'_> {
             .reference
             .filter(|r| r.len() == e.len().saturating_sub(1) * n_out);
         let known_headings = reuse.headings.filter(|r| r.len() == e.len());
+        // Kept instrument states likewise, and only for a walk from the start.
+        let known_states = reuse
+            .instruments
+            .filter(|r| r.len() == e.len().saturating_sub(1) * n_out);
         let h = e.step();
         let mut eq = EquationBuffers::new(self, info);
         let (resume, resume_sim) = self.resumed(e, theta_sim, reference, reuse, known_headings);
@@ -252,8 +261,10 @@ impl EquationWalker<'_> {
         let mut hist = resume.unwrap_or_else(|| History::start(&shape));
         // Rotations read from a kept copy leave the running rotation behind.
         hist.headings = hist.headings.take().filter(|_| known_headings.is_none());
+        let known_states = known_states.filter(|_| resume_sim.is_none());
         let simulated = (theta_sim, mu, reference, known_reference);
         let mut sims = Simulations::new(self, info, simulated, h, resume_sim, &mut hist.equations);
+        sims.known_states = known_states;
         let mut k = start;
         let mut diverged = false;
         let simulates = self.simulates(theta_sim);
@@ -638,6 +649,9 @@ struct Simulations<'a> {
     reference: Option<(&'a [f64], &'a [f64])>,
     /// The reference's states after each step, kept by an earlier walk.
     known_reference: Option<&'a [f64]>,
+    /// The instrument simulation's own states after each step, kept by an
+    /// earlier walk of the same `(θ, μ)`: the same bits it would step to.
+    known_states: Option<&'a [f64]>,
     /// Beyond these magnitudes a simulation has diverged.
     bound: &'a [f64],
     /// The step.
@@ -680,6 +694,7 @@ impl<'a> Simulations<'a> {
             mu,
             reference,
             known_reference,
+            known_states: None,
             bound: &info.bound,
             h,
             planar: shape.planar,
@@ -733,8 +748,17 @@ impl<'a> Simulations<'a> {
         keep: Option<&mut Vec<f64>>,
     ) -> Result<(), Diverged> {
         let (h, planar) = (self.h, self.planar);
-        self.sim
-            .step(self.model, self.theta, h, hist, planar, &mut self.fbuf);
+        match self.known_states {
+            Some(known) => {
+                // States after step `y_n` (steps taken so far), read.
+                let n_out = self.sim.x.len();
+                let at = self.change.y_n * n_out;
+                self.sim.next.copy_from_slice(&known[at..at + n_out]);
+            }
+            None => self
+                .sim
+                .step(self.model, self.theta, h, hist, planar, &mut self.fbuf),
+        }
         if self.sim.beyond(self.bound) {
             return Err(Diverged);
         }

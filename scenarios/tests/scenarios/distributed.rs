@@ -686,3 +686,110 @@ fn a_bad_value_past_the_subsample_is_the_error_it_is_without_one() {
     assert_eq!(with.code, "non-finite-data", "{with:?}");
     assert_eq!(format!("{with:?}"), format!("{without:?}"));
 }
+
+/// The ship, counting its simulation steps.
+struct Stepping<'a>(&'a Interpreter, std::sync::atomic::AtomicUsize);
+
+impl Model for Stepping<'_> {
+    fn ir(&self) -> &leeway_structure::ir::Ir {
+        self.0.ir()
+    }
+    fn basic(&self, sig: &leeway_model::Signals, out: &mut [f64]) {
+        self.0.basic(sig, out);
+    }
+    fn augmented(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
+        self.0.augmented(sig, signs, out);
+    }
+    fn measured(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
+        self.0.measured(sig, signs, out);
+    }
+    fn rhs(&self, theta: &[f64], sig: &leeway_model::Signals, out: &mut [f64]) {
+        self.0.rhs(theta, sig, out);
+    }
+    fn regressors_update(
+        &self,
+        kind: leeway_structure::ir::PredictorKind,
+        sig: &leeway_model::Signals,
+        signs: &[f64],
+        out: &mut [f64],
+    ) {
+        self.0.regressors_update(kind, sig, signs, out);
+    }
+    fn regressor_slots(
+        &self,
+        kind: leeway_structure::ir::PredictorKind,
+        wanted: &[bool],
+    ) -> Option<Box<dyn leeway_model::model::SlotRegressors>> {
+        self.0.regressor_slots(kind, wanted)
+    }
+    fn step(
+        &self,
+        theta: &[f64],
+        h: f64,
+        sig: &leeway_model::Signals,
+        f: &mut [f64],
+        next: &mut [f64],
+    ) {
+        self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.0.step(theta, h, sig, f, next);
+    }
+}
+
+/// A refinement's next pass reads its reference simulation — the previous
+/// pass's instruments — from what that pass kept, and the covariance pass
+/// its instruments, instead of stepping them again: for streamed records
+/// (which keep their instrument simulations only) and in-memory ones, on
+/// one thread or several. The same bits as passes that keep nothing, with
+/// one simulation over every record saved per refinement — and where a
+/// refinement diverges (IV1 here, whose best iterate is then an earlier
+/// one), the same bits still.
+#[test]
+fn kept_instrument_simulations_are_read_not_stepped_again() {
+    let ship = ship();
+    let data = experiments(&ship);
+    let streamed: Vec<Streamed> = data.iter().map(Streamed).collect();
+    let streamed: Vec<&dyn Source> = streamed.iter().map(|e| e as &dyn Source).collect();
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    // Steps of one simulation over every record (from its first sample).
+    let one_simulation: usize = data.iter().map(|e| e.len() - 1).sum();
+    for method in [Method::Iv3, Method::Iv1] {
+        let options = aggregated(method);
+        let run = |sources: &[&dyn Source], threads: usize, budget: Option<usize>| {
+            let model = Stepping(&ship, Default::default());
+            let passes = LocalPasses::new(&model, sources).with_threads(threads);
+            let passes = match budget {
+                Some(bytes) => passes.with_budget(bytes),
+                None => passes,
+            };
+            let estimate = estimate_with(&model, &passes, &options).expect("an estimate");
+            (estimate, model.1.load(std::sync::atomic::Ordering::Relaxed))
+        };
+        let (nothing_kept, _) = run(&streamed, 1, Some(0));
+        let refinements = nothing_kept.diagnostics.refinements;
+        let diverged = nothing_kept.warnings.iter().any(|w| w.contains("diverges"));
+        assert_eq!(
+            diverged,
+            method == Method::Iv1,
+            "{:?}",
+            nothing_kept.warnings
+        );
+        assert!(refinements >= 2 || diverged, "{method:?}: {refinements}");
+        for (sources, threads) in [(&streamed, 1), (&streamed, 3), (&held, 1)] {
+            // Records walked side by side do not stop at another's divergence.
+            let (_, all_steps) = run(sources, threads, Some(0));
+            let (kept, steps) = run(sources, threads, None);
+            assert_eq!(bits(&kept), bits(&nothing_kept), "{method:?} on {threads}");
+            // Refinements after the first read their reference; the
+            // covariance pass reads its instruments.
+            if diverged {
+                assert!(steps < all_steps, "{method:?} on {threads}");
+            } else {
+                assert_eq!(
+                    all_steps - steps,
+                    refinements * one_simulation,
+                    "{method:?} on {threads}"
+                );
+            }
+        }
+    }
+}
