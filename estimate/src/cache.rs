@@ -25,7 +25,7 @@ pub(super) const KEEP_BUDGET: usize = 512 << 20;
 /// one a pass writes while it reads the other), reserved in record order —
 /// 48 MB for a record of 10⁶ samples of three states, so a single such
 /// file, or five, keep theirs; the records beyond it simulate again.
-pub(super) const TRAJECTORY_BUDGET: usize = 256 << 20;
+pub const TRAJECTORY_BUDGET: usize = 256 << 20;
 
 /// What earlier passes over one record kept (see [`walk::Reuse`]).
 #[derive(Debug, Default)]
@@ -66,6 +66,39 @@ pub(super) struct RecordCache {
 /// The states after each step of one plan's last simulation, with the
 /// bits of the `(θ, μ)` simulated.
 type KeptTrajectory = (RowsKey, Vec<u64>, Vec<u64>, Vec<f64>);
+
+/// What one record keeps between the passes of an estimate whose passes
+/// are run elsewhere than [`LocalPasses`] (a worker's, holding the record
+/// across passes): the states of its last instrument simulations, in the
+/// bytes reserved for them ([`KeptSimulations::bytes`], against
+/// [`TRAJECTORY_BUDGET`] over all the records of a process). Read by a
+/// refinement's next pass as its reference and by the covariance pass as
+/// its instruments, they are the very states stepping would give.
+///
+/// [`LocalPasses`]: crate::LocalPasses
+pub struct KeptSimulations {
+    pub(super) cache: RecordCache,
+    pub(super) budget: usize,
+}
+
+impl KeptSimulations {
+    /// Bytes a record of `samples` samples of a model with `n_out` states
+    /// reserves: two trajectories (the one kept and the one a pass writes
+    /// while it reads the other).
+    pub fn bytes(samples: usize, n_out: usize) -> usize {
+        samples
+            .saturating_mul(n_out)
+            .saturating_mul(2 * std::mem::size_of::<f64>())
+    }
+
+    /// Room for a record's simulations of at most `bytes`.
+    pub fn new(bytes: usize) -> KeptSimulations {
+        KeptSimulations {
+            cache: RecordCache::trajectories_only(),
+            budget: bytes,
+        }
+    }
+}
 
 /// What a record's cache hands to the passes over a longer record that
 /// begins with it: its regressor rows and where its facts visits stood.
@@ -350,11 +383,16 @@ impl RecordCache {
             }
             ok
         };
-        if self.only_trajectories {
-            // Nothing else is offered by a pass over a streamed record.
-            debug_assert!(kept.regressors.is_none() && kept.headings.is_none());
-            debug_assert!(kept.simulation.is_none());
-        }
+        let kept = if self.only_trajectories {
+            Kept {
+                regressors: None,
+                headings: None,
+                simulation: None,
+                ..kept
+            }
+        } else {
+            kept
+        };
         if let Some(r) = kept.regressors {
             let bytes = r.iter().map(RegressorRows::bytes).sum();
             if fits(bytes) {

@@ -57,6 +57,7 @@ mod subsample;
 mod walk;
 mod zeta;
 
+pub use cache::{KeptSimulations, TRAJECTORY_BUDGET};
 pub use leeway_structure::identify::Centring;
 pub use local::{LocalPasses, PrefixRows};
 pub use method::{Choice, Combine, Initial, Instruments, Method, Named, UnknownName};

@@ -1,7 +1,7 @@
 //! Passes on this machine: every experiment in order, with what earlier
 //! passes over an in-memory record keep for later ones.
 
-use crate::cache::{Continued, KEEP_BUDGET, RecordCache, TRAJECTORY_BUDGET};
+use crate::cache::{Continued, KEEP_BUDGET, KeptSimulations, RecordCache, TRAJECTORY_BUDGET};
 use crate::outcome::EstimateError;
 use crate::parallel::{in_order, threads_for};
 use crate::plan::{PlanKey, StructuralPlan};
@@ -28,17 +28,10 @@ pub struct LocalPasses<'a> {
     kept: std::sync::Mutex<KeptPasses>,
     /// What each streamed experiment keeps: its last instrument simulation,
     /// where [`TRAJECTORY_BUDGET`] leaves room for it (`None`: nothing).
-    streamed: Vec<std::sync::Mutex<Option<StreamedKeep>>>,
+    streamed: Vec<std::sync::Mutex<Option<KeptSimulations>>>,
     /// Threads a pass over streamed experiments uses (in-memory ones are
     /// passed over in order, on one, for what they keep).
     threads: usize,
-}
-
-/// A streamed record's cache (instrument simulations only) and the bytes
-/// reserved for it.
-struct StreamedKeep {
-    cache: RecordCache,
-    budget: usize,
 }
 
 /// The caches of streamed `experiments` of a model with `n_out` states:
@@ -49,23 +42,17 @@ fn streamed_caches(
     experiments: &[&dyn Source],
     n_out: usize,
     total: usize,
-) -> Vec<std::sync::Mutex<Option<StreamedKeep>>> {
+) -> Vec<std::sync::Mutex<Option<KeptSimulations>>> {
     let mut left = total;
     experiments
         .iter()
         .map(|e| {
-            let bytes = e
-                .len()
-                .saturating_mul(n_out)
-                .saturating_mul(2 * std::mem::size_of::<f64>());
+            let bytes = KeptSimulations::bytes(e.len(), n_out);
             let fits = e.in_memory().is_none() && bytes <= left;
             if fits {
                 left -= bytes;
             }
-            std::sync::Mutex::new(fits.then(|| StreamedKeep {
-                cache: RecordCache::trajectories_only(),
-                budget: bytes,
-            }))
+            std::sync::Mutex::new(fits.then(|| KeptSimulations::new(bytes)))
         })
         .collect()
 }
@@ -227,7 +214,7 @@ impl<'a> LocalPasses<'a> {
 
     /// Streamed experiment `i`'s cache. A poisoned lock (a pass over it
     /// panicked) leaves it keeping nothing.
-    fn streamed_slot(&self, i: usize) -> std::sync::MutexGuard<'_, Option<StreamedKeep>> {
+    fn streamed_slot(&self, i: usize) -> std::sync::MutexGuard<'_, Option<KeptSimulations>> {
         self.streamed[i].lock().unwrap_or_else(|poisoned| {
             let mut slot = poisoned.into_inner();
             *slot = None;
@@ -301,12 +288,8 @@ impl Passes for LocalPasses<'_> {
             // instrument simulations only (not a subsample's).
             let mut out = in_order(self.experiments.len(), threads, |i| {
                 let mut slot = self.streamed_slot(i);
-                let cache = slot
-                    .as_mut()
-                    .filter(|_| request.head.is_none())
-                    .map(|s| (&mut s.cache, &mut s.budget, false));
                 self.runner
-                    .pass_keeping(self.experiments[i], i, request, cache)
+                    .pass_with_kept(self.experiments[i], i, request, slot.as_mut())
             });
             if stop_early
                 && let Some(k) = out

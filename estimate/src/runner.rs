@@ -2,7 +2,9 @@
 //! facts, and walks it for a pass's moment sums, long-run sums or free-run
 //! fit, keeping what later passes over an in-memory record can reuse.
 
-use crate::cache::{InstrumentsKey, Kept, RecordCache, Resume, SimulationKey, bits};
+use crate::cache::{
+    InstrumentsKey, Kept, KeptSimulations, RecordCache, Resume, SimulationKey, bits,
+};
 use crate::method::Instruments;
 use crate::moments::{
     CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows, kept_rows_bytes,
@@ -575,8 +577,25 @@ impl<'a> PassRunner<'a> {
         self.pass_keeping(e, index, request, None)
     }
 
+    /// [`PassRunner::pass`], reading and filling the instrument simulations
+    /// `kept` of this record by its earlier passes (a worker's, which holds
+    /// the record across passes): the same summary, sooner. A subsample's
+    /// pass neither reads nor keeps them.
+    pub fn pass_with_kept(
+        &self,
+        e: &dyn Source,
+        index: usize,
+        request: &PassRequest,
+        kept: Option<&mut KeptSimulations>,
+    ) -> PassSummary {
+        let kept = kept
+            .filter(|_| request.head.is_none())
+            .map(|k| (&mut k.cache, &mut k.budget, false));
+        self.pass_keeping(e, index, request, kept)
+    }
+
     /// [`PassRunner::pass`], reading and filling what earlier passes over
-    /// this in-memory record kept: the same summary, sooner.
+    /// this record kept: the same summary, sooner.
     pub(super) fn pass_keeping(
         &self,
         e: &dyn Source,
@@ -670,7 +689,9 @@ impl<'a> PassRunner<'a> {
         keeping.rows = keeps && kept.is_some() && kept_rows.is_none();
         // Where this pass stands at the end, for a pass over a longer record.
         keeping.wants_history = keeping.rows && instruments_key.is_some();
-        keeping.wants_simulation = simulates && kept.is_some() && e.in_memory().is_some();
+        keeping.wants_simulation = simulates
+            && kept.is_some_and(|c| !c.keeps_trajectories_only())
+            && e.in_memory().is_some();
         let (measured_known, resumed) =
             (checkpoint.measured_known(), checkpoint.resumed_equations());
         let from = checkpoint.into_resumption();

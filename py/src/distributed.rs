@@ -19,10 +19,12 @@ use leeway_data::LoadOptions;
 use leeway_estimate::EstimateError;
 use leeway_estimate::ExperimentFacts;
 use leeway_estimate::FactsRequest;
+use leeway_estimate::KeptSimulations;
 use leeway_estimate::PassRequest;
 use leeway_estimate::PassRunner;
 use leeway_estimate::PassSummary;
 use leeway_estimate::Passes;
+use leeway_estimate::TRAJECTORY_BUDGET;
 use leeway_estimate::decode;
 use leeway_estimate::encode;
 use leeway_estimate::estimate_with;
@@ -38,6 +40,21 @@ use pyo3::types::PyBytes;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Bytes the datasets open in this process (a worker) have reserved for
+/// their experiments' instrument simulations, at most [`TRAJECTORY_BUDGET`]:
+/// a worker holding many files keeps no more than one process of the CLI.
+static RESERVED: AtomicUsize = AtomicUsize::new(0);
+
+/// Reserves `bytes` of [`TRAJECTORY_BUDGET`], if they are left.
+fn reserve(bytes: usize) -> bool {
+    RESERVED
+        .fetch_update(Ordering::AcqRel, Ordering::Acquire, |r| {
+            r.checked_add(bytes).filter(|&t| t <= TRAJECTORY_BUDGET)
+        })
+        .is_ok()
+}
 
 /// A file's experiments: streamed from a validated copy, or held in memory
 /// when resampled (resampling interpolates over a whole experiment), as the
@@ -73,6 +90,17 @@ pub struct Dataset {
     model: Interpreter,
     experiments: Experiments,
     summary: Vec<u8>,
+    /// Each experiment's last instrument simulations, kept between passes
+    /// where the process's budget had room (`None`: simulated again).
+    kept: Vec<Mutex<Option<KeptSimulations>>>,
+    /// What `kept` reserved of the budget, given back when dropped.
+    reserved: usize,
+}
+
+impl Drop for Dataset {
+    fn drop(&mut self) {
+        RESERVED.fetch_sub(self.reserved, Ordering::AcqRel);
+    }
 }
 
 impl Dataset {
@@ -103,11 +131,25 @@ impl Dataset {
             closed_loop: checks.closed_loop,
         };
         let summary = encode(&summary);
+        let mut reserved = 0;
+        let kept = sources
+            .iter()
+            .map(|e| {
+                let bytes = KeptSimulations::bytes(e.len(), ir.states.len());
+                let fits = reserve(bytes);
+                if fits {
+                    reserved += bytes;
+                }
+                Mutex::new(fits.then(|| KeptSimulations::new(bytes)))
+            })
+            .collect();
         drop(sources);
         Dataset {
             model: Interpreter::new(ir.clone()),
             experiments,
             summary,
+            kept,
+            reserved,
         }
     }
 
@@ -204,7 +246,13 @@ impl Dataset {
     ) -> PyResult<Vec<Bound<'py, PyBytes>>> {
         let request: PassRequest = decode(request).map_err(failed)?;
         self.answer(py, |runner, i, e| {
-            encode(&runner.pass(e, offset + i, &request))
+            // A pass that panicked left its experiment's simulations unsure: none kept.
+            let mut kept = self.kept[i].lock().unwrap_or_else(|poisoned| {
+                let mut slot = poisoned.into_inner();
+                *slot = None;
+                slot
+            });
+            encode(&runner.pass_with_kept(e, offset + i, &request, kept.as_mut()))
         })
     }
 }

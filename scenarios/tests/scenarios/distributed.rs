@@ -735,6 +735,39 @@ impl Model for Stepping<'_> {
     }
 }
 
+/// Workers that hold their experiments across passes and keep each one's
+/// instrument simulations between them, as `leeway.dask`'s do.
+struct KeepingWorkers<'a> {
+    model: &'a dyn Model,
+    experiments: &'a [Experiment],
+    kept: Vec<std::sync::Mutex<Option<leeway_estimate::KeptSimulations>>>,
+}
+
+impl Passes for KeepingWorkers<'_> {
+    fn facts(&self, request: &FactsRequest) -> Result<Vec<ExperimentFacts>, EstimateError> {
+        let runner = PassRunner::new(self.model);
+        Ok(self
+            .experiments
+            .iter()
+            .map(|e| runner.facts(e, request))
+            .collect())
+    }
+
+    fn pass(&self, request: &PassRequest) -> Result<Vec<PassSummary>, EstimateError> {
+        let request: PassRequest = decode(&encode(request)).expect("request");
+        let answers: Vec<Vec<u8>> = (0..self.experiments.len())
+            .into_par_iter()
+            .map(|i| {
+                let runner = PassRunner::new(self.model);
+                let mut kept = self.kept[i].lock().expect("no pass panicked");
+                let e = Streamed(&self.experiments[i]);
+                encode(&runner.pass_with_kept(&e, i, &request, kept.as_mut()))
+            })
+            .collect();
+        answers.iter().map(|b| decode(b)).collect()
+    }
+}
+
 /// A refinement's next pass reads its reference simulation — the previous
 /// pass's instruments — from what that pass kept, and the covariance pass
 /// its instruments, instead of stepping them again: for streamed records
@@ -774,6 +807,34 @@ fn kept_instrument_simulations_are_read_not_stepped_again() {
             nothing_kept.warnings
         );
         assert!(refinements >= 2 || diverged, "{method:?}: {refinements}");
+        // Workers that keep them, beside them.
+        let mapped = |keeps: bool| {
+            let model = Stepping(&ship, Default::default());
+            let n_out = ship.ir().states.len();
+            let kept = data
+                .iter()
+                .map(|e| {
+                    let bytes = leeway_estimate::KeptSimulations::bytes(e.len(), n_out);
+                    std::sync::Mutex::new(
+                        keeps.then(|| leeway_estimate::KeptSimulations::new(bytes)),
+                    )
+                })
+                .collect();
+            let workers = KeepingWorkers {
+                model: &model,
+                experiments: &data,
+                kept,
+            };
+            let estimate = estimate_with(&model, &workers, &options).expect("mapped");
+            (estimate, model.1.load(std::sync::atomic::Ordering::Relaxed))
+        };
+        let ((plain, all_mapped), (kept_mapped, mapped_steps)) = (mapped(false), mapped(true));
+        assert_eq!(bits(&plain), bits(&nothing_kept), "{method:?} mapped");
+        assert_eq!(bits(&kept_mapped), bits(&nothing_kept), "{method:?} mapped");
+        assert!(mapped_steps < all_mapped, "{method:?} mapped");
+        if !diverged {
+            assert_eq!(all_mapped - mapped_steps, refinements * one_simulation);
+        }
         for (sources, threads) in [(&streamed, 1), (&streamed, 3), (&held, 1)] {
             // Records walked side by side do not stop at another's divergence.
             let (_, all_steps) = run(sources, threads, Some(0));
