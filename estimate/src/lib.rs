@@ -25,7 +25,8 @@
 //! order, samples in order), so results are bit-identical across runs,
 //! CPUs and whoever runs the passes. An estimate on a streamed source keeps
 //! `O(n_ϑ²)` memory whatever N — samples are visited, never collected — and
-//! on in-memory records at most the keeping budget of [`LocalPasses`] more.
+//! at most [`TRAJECTORY_BUDGET`] of kept instrument simulations more; on
+//! in-memory records at most the keeping budget of [`LocalPasses`] more.
 
 mod accumulate;
 mod cache;
