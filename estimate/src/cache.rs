@@ -23,7 +23,7 @@ use leeway_structure::ir::PredictorKind;
 /// for a streamed record.
 pub(super) const KEEP_BUDGET: usize = 512 << 20;
 
-/// The most one [`LocalPasses`] (or one worker's datasets) keeps of its
+/// The most one [`LocalPasses`](crate::LocalPasses) (or one worker's datasets) keeps of its
 /// streamed records' instrument simulations (bytes): two trajectories a
 /// record (the kept one, and the one a pass writes while it reads the
 /// other), reserved in record order — 48 MB for a record of 10⁶ samples of
