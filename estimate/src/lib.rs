@@ -32,6 +32,7 @@ mod accumulate;
 mod cache;
 mod checked_facts;
 mod covariance;
+pub mod dense;
 mod disturbances;
 mod estimator;
 pub mod feedback;

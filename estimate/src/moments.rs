@@ -14,6 +14,7 @@
 //! kernel on every instruction set the CPU has).
 //! [`LongRun`] gives the truncated long-run covariance sums.
 
+use crate::dense::Dense;
 use nalgebra::{DMatrix, DVector};
 
 /// Samples buffered before they are added to the sums, so that the sums are
@@ -466,7 +467,7 @@ impl MomentAccumulator {
     /// kept regressors themselves. The same bits as
     /// [`MomentAccumulator::push_columns`] of the same sample.
     #[inline]
-    pub fn push_over_kept_row(&mut self, z: &[f64], cols: &[usize]) {
+    pub fn push_over_kept_row<D: Dense>(&mut self, z: D, cols: &[usize]) {
         let (m, r) = (self.m, self.filled);
         let at = (self.base + r) * self.wf;
         if z.is_empty() {
@@ -480,12 +481,12 @@ impl MomentAccumulator {
         } else {
             if self.n == 0 {
                 for (a, &c) in self.z0.iter_mut().zip(cols) {
-                    *a = z[c];
+                    *a = z.at(c);
                 }
             }
             let zr = &mut self.zb[r * self.wz..r * self.wz + m];
             for ((a, &c), z0) in zr.iter_mut().zip(cols).zip(&self.z0) {
-                *a = z[c] - z0;
+                *a = z.at(c) - z0;
             }
         }
         self.n += 1;
@@ -521,12 +522,12 @@ impl MomentAccumulator {
     /// `cols` of the dense rows `z` and `phi` (as many instruments as
     /// regressors), gathered and shifted in one sweep.
     #[inline]
-    pub fn push_columns(&mut self, z: &[f64], phi: &[f64], cols: &[usize], t: f64) {
+    pub fn push_columns<D: Dense>(&mut self, z: D, phi: D, cols: &[usize], t: f64) {
         debug_assert!(self.m == cols.len() && self.p == cols.len());
         if self.n == 0 {
             for ((a, b), &c) in self.z0.iter_mut().zip(self.phi0.iter_mut()).zip(cols) {
-                *a = z[c];
-                *b = phi[c];
+                *a = z.at(c);
+                *b = phi.at(c);
             }
             self.t0 = t;
         }
@@ -540,8 +541,8 @@ impl MomentAccumulator {
             .zip(cols)
             .zip(self.z0.iter().zip(&self.phi0))
         {
-            *a = z[c] - z0;
-            *b = phi[c] - p0;
+            *a = z.at(c) - z0;
+            *b = phi.at(c) - p0;
         }
         self.fb[at + p] = t - self.t0;
         self.fb[at + p + 1] = 1.0;
@@ -584,17 +585,17 @@ impl MomentAccumulator {
     /// row `z` and whose regressors and target are `kept`'s next row (the
     /// same sample of the same record).
     #[inline]
-    pub fn push_instruments(&mut self, z: &[f64], cols: &[usize], kept: &RegressorRows) {
+    pub fn push_instruments<D: Dense>(&mut self, z: D, cols: &[usize], kept: &RegressorRows) {
         debug_assert!(self.m == cols.len() && self.p == kept.p && self.wf == kept.wf);
         if self.n == 0 {
             for (a, &c) in self.z0.iter_mut().zip(cols) {
-                *a = z[c];
+                *a = z.at(c);
             }
         }
         let (m, r) = (self.m, self.filled);
         let zr = &mut self.zb[r * self.wz..r * self.wz + m];
         for ((a, &c), z0) in zr.iter_mut().zip(cols).zip(&self.z0) {
-            *a = z[c] - z0;
+            *a = z.at(c) - z0;
         }
         self.n += 1;
         self.filled += 1;
@@ -1127,7 +1128,7 @@ mod tests {
         let mut first = MomentAccumulator::new(4, 4);
         first.keep_rows(101, 0);
         for k in 0..101 {
-            first.push_columns(&dense(k, 0.5), &dense(k, 0.0), &cols, target(k));
+            first.push_columns(&dense(k, 0.5)[..], &dense(k, 0.0)[..], &cols, target(k));
         }
         let (sums_first, rows) = first.finish_keeping();
         let rows = rows.expect("rows kept");
@@ -1136,8 +1137,8 @@ mod tests {
         let mut full = MomentAccumulator::new(4, 4);
         let mut kept = MomentAccumulator::new(4, 4);
         for k in 0..101 {
-            full.push_columns(&dense(k, 1.5), &dense(k, 0.0), &cols, target(k));
-            kept.push_instruments(&dense(k, 1.5), &cols, &rows);
+            full.push_columns(&dense(k, 1.5)[..], &dense(k, 0.0)[..], &cols, target(k));
+            kept.push_instruments(&dense(k, 1.5)[..], &cols, &rows);
         }
         let (full, kept) = (full.finish(), kept.finish_with(&rows));
         let bits = |m: &CrossMoments| format!("{:?}", serde_json::to_string(m).ok());
@@ -1145,13 +1146,13 @@ mod tests {
         // Without keeping, the first accumulation's sums are unchanged too.
         let mut plain = MomentAccumulator::new(4, 4);
         for k in 0..101 {
-            plain.push_columns(&dense(k, 0.5), &dense(k, 0.0), &cols, target(k));
+            plain.push_columns(&dense(k, 0.5)[..], &dense(k, 0.0)[..], &cols, target(k));
         }
         assert_eq!(bits(&plain.finish()), bits(&sums_first));
         // More instruments than kept rows: unusable sums, not wrong ones.
         let mut over = MomentAccumulator::new(4, 4);
         for k in 0..102 {
-            over.push_instruments(&dense(k, 1.5), &cols, &rows);
+            over.push_instruments(&dense(k, 1.5)[..], &cols, &rows);
         }
         assert!(
             over.finish_with(&rows)
@@ -1177,13 +1178,13 @@ mod tests {
             let mut whole = MomentAccumulator::new(5, 5);
             whole.keep_rows(200, 0);
             for k in 0..200 {
-                whole.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+                whole.push_columns(&dense(k)[..], &dense(k + 1)[..], &cols, target(k));
             }
             let (whole, whole_rows) = whole.finish_keeping();
             let mut first = MomentAccumulator::new(5, 5);
             first.keep_rows(prefix, 200);
             for k in 0..prefix {
-                first.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+                first.push_columns(&dense(k)[..], &dense(k + 1)[..], &cols, target(k));
             }
             let partial = first.partial().expect("keeps its rows");
             let (_, rows) = first.finish_keeping();
@@ -1192,7 +1193,7 @@ mod tests {
             let mut resumed = MomentAccumulator::new(5, 5);
             resumed.keep_rows_resuming(rows, partial, 200);
             for k in prefix..200 {
-                resumed.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+                resumed.push_columns(&dense(k)[..], &dense(k + 1)[..], &cols, target(k));
             }
             let (resumed, resumed_rows) = resumed.finish_keeping();
             assert_eq!(bits(&whole), bits(&resumed), "prefix {prefix}");
@@ -1204,13 +1205,13 @@ mod tests {
         let mut other = MomentAccumulator::new(5, 5);
         other.keep_rows(10, 0);
         for k in 0..10 {
-            other.push_columns(&dense(k), &dense(k), &cols, target(k));
+            other.push_columns(&dense(k)[..], &dense(k)[..], &cols, target(k));
         }
         let partial = other.partial().expect("keeps its rows");
         let mut longer = MomentAccumulator::new(5, 5);
         longer.keep_rows(11, 0);
         for k in 0..11 {
-            longer.push_columns(&dense(k), &dense(k), &cols, target(k));
+            longer.push_columns(&dense(k)[..], &dense(k)[..], &cols, target(k));
         }
         let (_, longer) = longer.finish_keeping();
         assert!(!partial.continues(&longer.expect("kept")));
@@ -1233,34 +1234,34 @@ mod tests {
         let mut rows_all = MomentAccumulator::new(5, 5);
         rows_all.keep_rows(200, 0);
         for k in 0..200 {
-            rows_all.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+            rows_all.push_columns(&dense(k)[..], &dense(k + 1)[..], &cols, target(k));
         }
         let (_, rows_all) = rows_all.finish_keeping();
         let rows_all = rows_all.expect("rows kept");
         let z = |k: usize| dense(k + 7);
         let mut whole = MomentAccumulator::new(5, 5);
         for k in 0..200 {
-            whole.push_instruments(&z(k), &cols, &rows_all);
+            whole.push_instruments(&z(k)[..], &cols, &rows_all);
         }
         let whole = whole.finish_with(&rows_all);
         for prefix in [5, 32, 77] {
             let mut first = MomentAccumulator::new(5, 5);
             first.keep_rows(prefix, 0);
             for k in 0..prefix {
-                first.push_columns(&dense(k), &dense(k + 1), &cols, target(k));
+                first.push_columns(&dense(k)[..], &dense(k + 1)[..], &cols, target(k));
             }
             let (_, prefix_rows) = first.finish_keeping();
             let prefix_rows = prefix_rows.expect("rows kept");
             let mut over_kept = MomentAccumulator::new(5, 5);
             for k in 0..prefix {
-                over_kept.push_instruments(&z(k), &cols, &prefix_rows);
+                over_kept.push_instruments(&z(k)[..], &cols, &prefix_rows);
             }
             let from = over_kept.partial_instruments();
             assert!(from.continues_over(&rows_all) && from.continues(&prefix_rows));
             let mut resumed = MomentAccumulator::new(5, 5);
             resumed.resume_instruments(from.clone(), &rows_all);
             for k in prefix..200 {
-                resumed.push_instruments(&z(k), &cols, &rows_all);
+                resumed.push_instruments(&z(k)[..], &cols, &rows_all);
             }
             assert_eq!(
                 bits(&whole),
@@ -1270,7 +1271,7 @@ mod tests {
             let mut scanning = MomentAccumulator::new(5, 5);
             scanning.keep_rows_resuming(prefix_rows, from, 200);
             for k in prefix..200 {
-                scanning.push_columns(&z(k), &dense(k + 1), &cols, target(k));
+                scanning.push_columns(&z(k)[..], &dense(k + 1)[..], &cols, target(k));
             }
             let (scanned, _) = scanning.finish_keeping();
             assert_eq!(bits(&whole), bits(&scanned), "prefix {prefix}, scanning");

@@ -285,7 +285,7 @@ mod tests {
         let mut a = MomentAccumulator::new(2, 2);
         a.keep_rows(equations, 0);
         for k in 0..equations {
-            a.push_columns(&row(k), &row(k), &[0, 1], k as f64);
+            a.push_columns(&row(k)[..], &row(k)[..], &[0, 1], k as f64);
         }
         let partial = a.partial().expect("keeps its rows");
         let (_, rows) = a.finish_keeping();
@@ -499,7 +499,7 @@ mod tests {
         let (whole, _) = rows(28);
         let mut over = MomentAccumulator::new(2, 2);
         for k in 0..10 {
-            over.push_instruments(&row(k), &[0, 1], &whole);
+            over.push_instruments(&row(k)[..], &[0, 1], &whole);
         }
         let over = [over.partial_instruments()];
         let whole = std::slice::from_ref(&whole);

@@ -5,6 +5,7 @@
 use crate::cache::{
     InstrumentsKey, Kept, KeptSimulations, RecordCache, Resume, SimulationKey, bits,
 };
+use crate::dense::Dense;
 use crate::method::Instruments;
 use crate::moments::{
     CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows, kept_rows_bytes,
@@ -26,7 +27,9 @@ use crate::protocol::{
 };
 use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
 use crate::slots::{SlotPlans, read_slots};
-use crate::walk::{EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper, WalkSlots};
+use crate::walk::{
+    EquationSink, EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper, WalkSlots,
+};
 use crate::zeta::ZetaPlan;
 
 /// The θ of one moment pass (see [`Pass::Moments`]).
@@ -87,21 +90,20 @@ impl<'a> MomentSink<'a> {
     /// Adds equation `k + 1`: instruments `z`, regressors `phi`
     /// (`n_out × n_cols` each) and targets `t`.
     #[inline(always)]
-    fn push(&mut self, z: &[f64], phi: &[f64], t: &[f64]) {
+    fn push<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
         let plan = self.plan;
         let n = plan.n_cols;
         self.k += 1;
         let k = self.k;
         if let Some(rows) = self.rows {
             for ((o, a), r) in self.acc.iter_mut().enumerate().zip(rows) {
-                a.push_instruments(&z[o * n..(o + 1) * n], &plan.cols[o], r);
+                a.push_instruments(z.part(o * n, n), &plan.cols[o], r);
             }
             return;
         }
         if k - 2 < self.measured_known {
             for (o, a) in self.acc.iter_mut().enumerate() {
-                let z = z.get(o * n..(o + 1) * n).unwrap_or(&[]);
-                a.push_over_kept_row(z, &plan.cols[o]);
+                a.push_over_kept_row(z.part(o * n, n), &plan.cols[o]);
             }
             return;
         }
@@ -111,14 +113,9 @@ impl<'a> MomentSink<'a> {
         for (o, a) in self.acc.iter_mut().enumerate() {
             let mut target = t[o];
             for (c, v) in &plan.held {
-                target -= phi[o * n + c] * v;
+                target -= phi.at(o * n + c) * v;
             }
-            a.push_columns(
-                &z[o * n..(o + 1) * n],
-                &phi[o * n..(o + 1) * n],
-                &plan.cols[o],
-                target,
-            );
+            a.push_columns(z.part(o * n, n), phi.part(o * n, n), &plan.cols[o], target);
         }
     }
 }
@@ -724,7 +721,7 @@ impl<'a> PassRunner<'a> {
             mu,
             pass.reference,
             &mut reuse,
-            |z, phi, t| sink.push(z, phi, t),
+            &mut sink,
         );
         drop(reuse);
         let MomentSink { acc, bad, .. } = sink;
@@ -779,10 +776,13 @@ impl<'a> PassRunner<'a> {
         info: &ExperimentInfo,
         plan: &PassPlan,
     ) -> Option<(usize, String)> {
-        let ir = self.model.ir();
-        let n = plan.n_cols;
-        let mut bad = None;
-        let mut k = 1usize;
+        let mut first = FirstBad {
+            ir: self.model.ir(),
+            kind: plan.kind,
+            n: plan.n_cols,
+            k: 1,
+            bad: None,
+        };
         let _ = self.walker(plan, None).walk(
             e,
             info,
@@ -790,14 +790,9 @@ impl<'a> PassRunner<'a> {
             &[],
             None,
             &mut Reuse::default(),
-            |_: &[f64], phi: &[f64], t: &[f64]| {
-                k += 1;
-                if bad.is_none() {
-                    bad = non_finite(ir, plan.kind, n, k, phi, t);
-                }
-            },
+            &mut first,
         );
-        bad
+        first.bad
     }
 
     fn long_run(
@@ -859,8 +854,9 @@ impl<'a> PassRunner<'a> {
                 instruments: states,
                 ..Reuse::default()
             },
-            |z: &[f64], phi: &[f64], t: &[f64]| {
-                sums.push_with(|row| zeta.add(z, phi, t, row));
+            &mut ZetaSums {
+                zeta: &zeta,
+                sums: &mut sums,
             },
         );
         walked.ok().map(|_| {
@@ -868,6 +864,45 @@ impl<'a> PassRunner<'a> {
             // Row-major, as documented (g is symmetric).
             g.transpose().as_slice().to_vec()
         })
+    }
+}
+
+impl EquationSink for MomentSink<'_> {
+    #[inline(always)]
+    fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
+        self.push(z, phi, t);
+    }
+}
+
+/// The first bad measured value of a walk ([`non_finite`]), equation `k`
+/// being the last one seen.
+struct FirstBad<'a> {
+    ir: &'a Ir,
+    kind: PredictorKind,
+    n: usize,
+    k: usize,
+    bad: Option<(usize, String)>,
+}
+
+impl EquationSink for FirstBad<'_> {
+    fn equation<D: Dense>(&mut self, _z: D, phi: D, t: &[f64]) {
+        self.k += 1;
+        if self.bad.is_none() {
+            self.bad = non_finite(self.ir, self.kind, self.n, self.k, phi, t);
+        }
+    }
+}
+
+/// `ζ_k` of each equation into the long-run sums.
+struct ZetaSums<'a> {
+    zeta: &'a ZetaPlan,
+    sums: &'a mut LongRun,
+}
+
+impl EquationSink for ZetaSums<'_> {
+    #[inline(always)]
+    fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
+        self.sums.push_with(|row| self.zeta.add(z, phi, t, row));
     }
 }
 
@@ -990,12 +1025,12 @@ fn finish(
 /// A measured regressor or target that is not finite, or so large that
 /// its square or a sum of squares leaves f64's range ([`REGRESSOR_LIMIT`]),
 /// in equation `k` (regressors at `k − 1`): `(sample, what)`.
-pub(super) fn non_finite(
+pub(super) fn non_finite<D: Dense>(
     ir: &Ir,
     kind: PredictorKind,
     n: usize,
     k: usize,
-    phi: &[f64],
+    phi: D,
     t: &[f64],
 ) -> Option<(usize, String)> {
     // The common case in one branch-free sweep (NaN fails `<=` too): a
@@ -1003,19 +1038,18 @@ pub(super) fn non_finite(
     // the rare bad value is then looked for entry by entry.
     // `!(|x| <= limit)` and not `|x| > limit`: NaN must count.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    let out_of_range = |v: &[f64]| -> u64 {
-        v.iter()
-            .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))
-            .sum()
-    };
-    if out_of_range(phi) + out_of_range(t) == 0 {
+    fn out_of_range(v: impl Iterator<Item = f64>) -> u64 {
+        v.map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT))).sum()
+    }
+    let bad_regressors = out_of_range((0..phi.len()).map(|i| phi.at(i)));
+    if bad_regressors + out_of_range(t.iter().copied()) == 0 {
         return None;
     }
     let predictors = ir.predictors.get(kind);
     let wrong = |v: f64| !v.is_finite() || v.abs() > REGRESSOR_LIMIT;
     for (o, target) in t.iter().enumerate() {
         for (c, col) in predictors.iter().enumerate().take(n) {
-            let v = phi[o * n + c];
+            let v = phi.at(o * n + c);
             if wrong(v) && v != 0.0 {
                 return Some((
                     k - 1,

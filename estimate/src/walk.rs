@@ -7,8 +7,10 @@
 //! error `non-finite-data`, located in its source and found by the first
 //! (scanning) pass, never a rank verdict.
 
+use crate::dense::{BlockColumn, Dense};
 use crate::estimator::Estimator;
 use crate::method::{Instruments, Method};
+use crate::moments::BLOCK;
 use crate::outcome::{EstimateError, err};
 use crate::protocol::{BadValue, PassPlan, SimChange};
 use crate::record::{ExperimentInfo, FixedSignColumn};
@@ -54,6 +56,13 @@ pub(super) struct EquationWalker<'a> {
 pub(super) struct WalkSlots {
     pub(super) measured: Option<Arc<dyn SlotRegressors>>,
     pub(super) instruments: Option<Arc<dyn SlotRegressors>>,
+}
+
+/// What a walk gives each equation to: its instruments `z` and regressors
+/// `phi` (dense, `n_out × n_cols`; empty where the walk skips them) and its
+/// targets `t`, in the order of the record.
+pub(super) trait EquationSink {
+    fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]);
 }
 
 /// Samples between two questions to the interrupt (a few milliseconds).
@@ -218,11 +227,14 @@ impl EquationWalker<'_> {
         self.instruments == Some(Instruments::Simulated) && !theta_sim.is_empty()
     }
 
-    /// Calls `f(z, φ, t)` on each equation: instruments, regressors
+    /// Gives each equation to `sink`: instruments, regressors
     /// (`n_out × n_cols`) and targets (both empty when the walk skips the
-    /// measured side). Generic in `f`, so the sink is inlined into the walk.
+    /// measured side). Generic in the sink, so it is inlined into the walk.
+    /// Where the model evaluates blocks and the walk evaluates every
+    /// equation, equations are evaluated [`BLOCK`] at a time
+    /// ([`PendingBlock`]), each with the bits it would have alone.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn walk<F: FnMut(&[f64], &[f64], &[f64])>(
+    pub(super) fn walk<S: EquationSink>(
         &self,
         e: &dyn Source,
         info: &ExperimentInfo,
@@ -230,7 +242,7 @@ impl EquationWalker<'_> {
         mu: &[f64],
         reference: Option<(&[f64], &[f64])>,
         reuse: &mut Reuse,
-        mut f: F,
+        sink: &mut S,
     ) -> Result<SimChange, Diverged> {
         let ir = self.ir;
         let shape = Shape::of(ir);
@@ -253,6 +265,9 @@ impl EquationWalker<'_> {
             .filter(|r| r.len() == e.len().saturating_sub(1) * n_out);
         let h = e.step();
         let mut eq = EquationBuffers::new(self, info);
+        if self.evaluates_blocks() && !skip_measured && measured_known == 0 {
+            eq.block = Some(PendingBlock::new(n_out * self.n_cols, n_out));
+        }
         let (resume, resume_sim) = self.resumed(e, theta_sim, reference, reuse, known_headings);
         let replay_until = resume_sim.as_ref().map_or(0, |s| s.samples);
         let start = resume
@@ -291,7 +306,7 @@ impl EquationWalker<'_> {
                         (&shape, h),
                         &mut eq,
                         skip_measured,
-                        &mut f,
+                        sink,
                     );
                     hist.equations += 1;
                 }
@@ -315,6 +330,9 @@ impl EquationWalker<'_> {
             Some(x) => x.rows_from(start, &mut sample),
             None => e.visit(&mut sample),
         }
+        // The equations of the last block (or of the block the simulation
+        // diverged in, as far as it went).
+        self.flush(info, &mut eq, sink);
         if diverged {
             return Err(Diverged);
         }
@@ -383,13 +401,24 @@ impl EquationWalker<'_> {
         (resume, resume_sim)
     }
 
-    /// Gives equation k (sample `row`) to the sink `f`: its regressors
-    /// (unless `skip_measured`) and instruments evaluated into `eq` at the
-    /// history `hist` (samples k − 1 and k − 2) and the instrument
-    /// simulation `sim`, and its targets (step `h`).
+    /// Whether this walk's evaluators take blocks of samples: the
+    /// measured regressors' and (if any) the instruments'.
+    fn evaluates_blocks(&self) -> bool {
+        let blocks =
+            |s: &Option<Arc<dyn SlotRegressors>>| s.as_ref().is_some_and(|s| s.evaluates_blocks());
+        blocks(&self.slots.measured)
+            && (self.instruments.is_none() || blocks(&self.slots.instruments))
+    }
+
+    /// Gives equation k (sample `row`) to the sink: its regressors (unless
+    /// `skip_measured`) and instruments evaluated into `eq` at the history
+    /// `hist` (samples k − 1 and k − 2) and the instrument simulation
+    /// `sim`, and its targets (step `h`). With a pending block, the
+    /// equation joins it, and the block is evaluated and given to the sink
+    /// once full.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn equation<F: FnMut(&[f64], &[f64], &[f64])>(
+    fn equation<S: EquationSink>(
         &self,
         info: &ExperimentInfo,
         row: &leeway_model::experiment::Row,
@@ -398,29 +427,105 @@ impl EquationWalker<'_> {
         (shape, h): (&Shape, f64),
         eq: &mut EquationBuffers,
         skip_measured: bool,
-        f: &mut F,
+        sink: &mut S,
     ) {
-        self.regressors_and_instruments(info, hist, sim, shape, eq, skip_measured);
+        let planar = shape.planar.is_some();
+        if let Some(block) = eq.block.as_mut() {
+            set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y1);
+            block
+                .measured
+                .push(block.len, &measured_signals(hist, planar), &eq.signs);
+            if let Some((sig, states)) = self.instrument_signals(info, hist, sim, planar) {
+                set_pointwise_signs(&mut eq.signs, &info.varying, states);
+                block.instruments.push(block.len, &sig, &eq.signs);
+            }
+            let n_out = block.n_out;
+            let t = &mut block.t[block.len * n_out..(block.len + 1) * n_out];
+            targets(self.ir, row.states, &hist.y1, h, t);
+            block.len += 1;
+            if block.len == BLOCK {
+                self.flush(info, eq, sink);
+            }
+            return;
+        }
+        self.regressors_and_instruments(info, hist, sim, planar, eq, skip_measured);
+        let empty: &[f64] = &[];
         if skip_measured {
             // Least squares has no instruments of its own.
-            f(
-                if self.instruments.is_some() {
-                    &eq.z
-                } else {
-                    &[]
-                },
-                &[],
-                &[],
-            );
+            let z: &[f64] = if self.instruments.is_some() {
+                &eq.z
+            } else {
+                empty
+            };
+            sink.equation(z, empty, empty);
         } else {
             targets(self.ir, row.states, &hist.y1, h, &mut eq.t);
-            let instruments = if self.instruments.is_some() {
+            let instruments: &[f64] = if self.instruments.is_some() {
                 &eq.z
             } else {
                 &eq.phi
             };
-            f(instruments, &eq.phi, &eq.t);
+            sink.equation(instruments, &eq.phi[..], &eq.t[..]);
         }
+    }
+
+    /// Evaluates the pending block's equations, slot-major, and gives them
+    /// to the sink in order (nothing without a block or equations).
+    fn flush<S: EquationSink>(
+        &self,
+        info: &ExperimentInfo,
+        eq: &mut EquationBuffers,
+        sink: &mut S,
+    ) {
+        let Some(block) = eq.block.as_mut() else {
+            return;
+        };
+        let n = block.len;
+        if n == 0 {
+            return;
+        }
+        let slots = block.phi.len() / BLOCK;
+        if n < BLOCK {
+            // A shorter block lays its slots out anew: the slots no
+            // evaluator writes must read zero, as in a buffer of one equation.
+            block.phi.fill(0.0);
+            block.z.fill(0.0);
+        }
+        let (phi, z) = (&mut block.phi[..slots * n], &mut block.z[..slots * n]);
+        let measured: [Signals; BLOCK] = std::array::from_fn(|s| block.measured.signals(s));
+        if let Some(plan) = &self.slots.measured {
+            plan.update_block(
+                &measured[..n],
+                block.measured.signs(n),
+                block.measured.n_signs(),
+                phi,
+            );
+        }
+        if self.instruments.is_some() {
+            let instruments: [Signals; BLOCK] =
+                std::array::from_fn(|s| block.instruments.signals(s));
+            if let Some(plan) = &self.slots.instruments {
+                let signs = block.instruments.signs(n);
+                plan.update_block(&instruments[..n], signs, block.instruments.n_signs(), z);
+            }
+            if self.instruments == Some(Instruments::Simulated) {
+                for (s, sig) in instruments[..n].iter().enumerate() {
+                    eq.fixed
+                        .write(self, &info.fixed_sign_columns, sig, z, (n, s));
+                }
+            }
+        }
+        let n_out = block.n_out;
+        for s in 0..n {
+            let phi = BlockColumn::new(phi, n, s, slots);
+            let z = if self.instruments.is_some() {
+                BlockColumn::new(z, n, s, slots)
+            } else {
+                phi
+            };
+            sink.equation(z, phi, &block.t[s * n_out..(s + 1) * n_out]);
+        }
+        block.len = 0;
     }
 
     /// The measured regressors the pass reads.
@@ -441,34 +546,18 @@ impl EquationWalker<'_> {
         }
     }
 
-    /// Evaluates one equation's regressors (unless `skip_measured`) and
-    /// instruments into `eq`, at the history `hist` (samples k − 1 and
-    /// k − 2) and the instrument simulation `sim`.
+    /// The signals the instruments are evaluated at, and the states their
+    /// pointwise moduli take their signs from (`None`: least squares).
     #[inline(always)]
-    fn regressors_and_instruments(
-        &self,
-        info: &ExperimentInfo,
-        hist: &History,
-        sim: &Simulation,
-        shape: &Shape,
-        eq: &mut EquationBuffers,
-        skip_measured: bool,
-    ) {
-        let planar = shape.planar.is_some();
-        if !skip_measured {
-            let sig = Signals {
-                states: &hist.y1,
-                inputs: &hist.u1,
-                rotation: if planar { &hist.rh1 } else { &hist.rot1 },
-                disturbances: &hist.d1,
-            };
-            set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y1);
-            self.eval_measured(&sig, &eq.signs, &mut eq.phi);
-        }
-        match self.instruments {
-            // Least squares: the regressors are their own instruments.
-            None => {}
-            Some(Instruments::Simulated) => {
+    fn instrument_signals<'s>(
+        &'s self,
+        info: &'s ExperimentInfo,
+        hist: &'s History,
+        sim: &'s Simulation,
+        planar: bool,
+    ) -> Option<(Signals<'s>, &'s [f64])> {
+        match self.instruments? {
+            Instruments::Simulated => {
                 let means = self.instrument_means.unwrap_or(&info.measured_mean);
                 let sig = Signals {
                     states: &sim.x,
@@ -476,12 +565,9 @@ impl EquationWalker<'_> {
                     rotation: if planar { &sim.rz } else { &hist.rot2 },
                     disturbances: means,
                 };
-                set_pointwise_signs(&mut eq.signs, &info.varying, &sim.x);
-                self.eval_instruments(&sig, &eq.signs, &mut eq.z);
-                eq.fixed
-                    .write(self, &info.fixed_sign_columns, &sig, &mut eq.z);
+                Some((sig, &sim.x))
             }
-            Some(Instruments::Delayed) => {
+            Instruments::Delayed => {
                 let dist: &[f64] = if self.delayed_mean {
                     &info.measured_mean
                 } else {
@@ -493,10 +579,130 @@ impl EquationWalker<'_> {
                     rotation: if planar { &hist.rh2 } else { &hist.rot2 },
                     disturbances: dist,
                 };
-                set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y2);
-                self.eval_instruments(&sig, &eq.signs, &mut eq.z);
+                Some((sig, &hist.y2))
             }
         }
+    }
+
+    /// Evaluates one equation's regressors (unless `skip_measured`) and
+    /// instruments into `eq`, at the history `hist` (samples k − 1 and
+    /// k − 2) and the instrument simulation `sim`.
+    #[inline(always)]
+    fn regressors_and_instruments(
+        &self,
+        info: &ExperimentInfo,
+        hist: &History,
+        sim: &Simulation,
+        planar: bool,
+        eq: &mut EquationBuffers,
+        skip_measured: bool,
+    ) {
+        if !skip_measured {
+            set_pointwise_signs(&mut eq.signs, &info.varying, &hist.y1);
+            self.eval_measured(&measured_signals(hist, planar), &eq.signs, &mut eq.phi);
+        }
+        if let Some((sig, states)) = self.instrument_signals(info, hist, sim, planar) {
+            set_pointwise_signs(&mut eq.signs, &info.varying, states);
+            self.eval_instruments(&sig, &eq.signs, &mut eq.z);
+            if self.instruments == Some(Instruments::Simulated) {
+                eq.fixed
+                    .write(self, &info.fixed_sign_columns, &sig, &mut eq.z, (1, 0));
+            }
+        }
+    }
+}
+
+/// The signals the measured regressors are evaluated at: samples k − 1.
+#[inline(always)]
+fn measured_signals(hist: &History, planar: bool) -> Signals<'_> {
+    Signals {
+        states: &hist.y1,
+        inputs: &hist.u1,
+        rotation: if planar { &hist.rh1 } else { &hist.rot1 },
+        disturbances: &hist.d1,
+    }
+}
+
+/// Equations evaluated a block at a time: each one's signals, sign
+/// patterns and targets are copied as the walk passes it, then the model's
+/// block evaluators take them all at once (slot-major, docs/performance.md)
+/// and the sink each in turn. Every value is the bits the equation would
+/// have alone; the sink reads them through [`BlockColumn`]s, without a copy
+/// into buffers of their own.
+struct PendingBlock {
+    len: usize,
+    measured: SignalRows,
+    instruments: SignalRows,
+    n_out: usize,
+    /// Targets, `n_out` per equation.
+    t: Vec<f64>,
+    /// Regressors and instruments, slot-major (`slots × len`), zeroed once:
+    /// the evaluators write only the slots the pass reads.
+    phi: Vec<f64>,
+    z: Vec<f64>,
+}
+
+impl PendingBlock {
+    fn new(slots: usize, n_out: usize) -> PendingBlock {
+        PendingBlock {
+            len: 0,
+            measured: SignalRows::default(),
+            instruments: SignalRows::default(),
+            n_out,
+            t: vec![0.0; BLOCK * n_out],
+            phi: vec![0.0; BLOCK * slots],
+            z: vec![0.0; BLOCK * slots],
+        }
+    }
+}
+
+/// The signals and sign patterns of a block's equations, row after row:
+/// states, inputs, rotation, disturbances and signs, each as wide as the
+/// walk's (the same for every equation of a walk).
+#[derive(Default)]
+struct SignalRows {
+    widths: [usize; 5],
+    values: [Vec<f64>; 5],
+}
+
+impl SignalRows {
+    /// Equation `s`'s signals and signs.
+    #[inline(always)]
+    fn push(&mut self, s: usize, sig: &Signals, signs: &[f64]) {
+        let parts = [
+            sig.states,
+            sig.inputs,
+            sig.rotation,
+            sig.disturbances,
+            signs,
+        ];
+        for ((w, v), part) in self.widths.iter_mut().zip(&mut self.values).zip(parts) {
+            if s == 0 && v.len() < BLOCK * part.len() {
+                v.resize(BLOCK * part.len(), 0.0);
+            }
+            *w = part.len();
+            copy_few(&mut v[s * *w..(s + 1) * *w], part);
+        }
+    }
+
+    /// Equation `s`'s signals (stale ones beyond the equations pushed).
+    fn signals(&self, s: usize) -> Signals<'_> {
+        let part = |i: usize| &self.values[i][s * self.widths[i]..(s + 1) * self.widths[i]];
+        Signals {
+            states: part(0),
+            inputs: part(1),
+            rotation: part(2),
+            disturbances: part(3),
+        }
+    }
+
+    /// The sign patterns of the first `n` equations.
+    fn signs(&self, n: usize) -> &[f64] {
+        &self.values[4][..n * self.widths[4]]
+    }
+
+    fn n_signs(&self) -> usize {
+        self.widths[4]
     }
 }
 
@@ -540,6 +746,8 @@ struct EquationBuffers<'a> {
     /// Signs of the pointwise moduli, sample by sample where they change.
     signs: Vec<f64>,
     fixed: FixedSigns<'a>,
+    /// Equations waiting to be evaluated as a block, where the walk does.
+    block: Option<PendingBlock>,
 }
 
 impl<'a> EquationBuffers<'a> {
@@ -554,6 +762,7 @@ impl<'a> EquationBuffers<'a> {
             t: vec![0.0; n_out],
             signs: info.signs.clone(),
             fixed: FixedSigns::new(walker.terms, &info.fixed_sign_columns, n_out),
+            block: None,
         }
     }
 }
@@ -605,7 +814,8 @@ impl<'a> FixedSigns<'a> {
     }
 
     /// Writes the instruments of the fixed-sign `columns` at the signals
-    /// `sig` into `z` (`n_out × n_cols`).
+    /// `sig` into `z` (`n_out × n_cols`), or into sample `s` of a block of
+    /// `n` laid out slot-major (`(n, s)`; `(1, 0)`: one equation's buffer).
     #[inline(always)]
     fn write(
         &mut self,
@@ -613,6 +823,7 @@ impl<'a> FixedSigns<'a> {
         columns: &[FixedSignColumn],
         sig: &Signals,
         z: &mut [f64],
+        (n, s): (usize, usize),
     ) {
         for (v, arg) in self.values.iter_mut().zip(&self.args) {
             *v = arg.eval(sig, true);
@@ -631,7 +842,7 @@ impl<'a> FixedSigns<'a> {
             }
             for o in 0..self.acc.len() {
                 if self.set[o] {
-                    z[o * walker.n_cols + fixed.column] = self.acc[o];
+                    z[(o * walker.n_cols + fixed.column) * n + s] = self.acc[o];
                 }
             }
         }

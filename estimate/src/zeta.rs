@@ -5,6 +5,7 @@
 //! beside them — so that each sample is a few tight loops; every sum is
 //! made in the order the pass always made it, with the same bits.
 
+use crate::dense::Dense;
 use crate::protocol::{LongRunPass, PassPlan};
 
 /// One output's part of `ζ`.
@@ -64,16 +65,16 @@ impl ZetaPlan {
     /// Adds `ζ_k` of the sample with instruments `z`, regressors `phi` and
     /// targets `t` into `zeta` (zeroed).
     #[inline]
-    pub(super) fn add(&self, z: &[f64], phi: &[f64], t: &[f64], zeta: &mut [f64]) {
+    pub(super) fn add<D: Dense>(&self, z: D, phi: D, t: &[f64], zeta: &mut [f64]) {
         let source = if self.own { phi } else { z };
         for out in &self.outputs {
             let mut res = t[out.output];
             for &(i, v) in &out.terms {
-                res -= phi[i] * v;
+                res -= phi.at(i) * v;
             }
             res -= out.mean;
             for &(r, i, centre) in &out.rows {
-                zeta[r] += (source[i] - centre) * res;
+                zeta[r] += (source.at(i) - centre) * res;
             }
         }
     }

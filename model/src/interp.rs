@@ -168,6 +168,12 @@ impl SlotRegressors for PlannedSlots {
     fn update(&self, sig: &Signals, signs: &[f64], out: &mut [f64]) {
         self.0.eval_nonzero(sig, signs, out);
     }
+    fn evaluates_blocks(&self) -> bool {
+        true
+    }
+    fn update_block(&self, samples: &[Signals], signs: &[f64], n_signs: usize, out: &mut [f64]) {
+        self.0.eval_block_nonzero(samples, signs, n_signs, out);
+    }
 }
 
 impl Model for Interpreter {

@@ -24,6 +24,31 @@ pub trait SlotRegressors: Send + Sync {
     /// Writes the chosen slots of `out` at the signals `sig` and the sign
     /// pattern `signs`, as [`Model::regressors_update`] writes them.
     fn update(&self, sig: &Signals, signs: &[f64], out: &mut [f64]);
+    /// Whether [`SlotRegressors::update_block`] evaluates a block at once
+    /// (the interpreter's plans); else it is [`SlotRegressors::update`]
+    /// sample by sample, and a walk is better off calling that.
+    fn evaluates_blocks(&self) -> bool {
+        false
+    }
+    /// The chosen slots of a block of `n = samples.len()` samples,
+    /// slot-major: slot `k` of sample `s` at `out[k · n + s]`, bit for bit
+    /// what [`SlotRegressors::update`] writes sample by sample; the other
+    /// slots of `out` are left as they are. `signs` holds `n_signs` values
+    /// per sample. By default sample by sample, through a buffer.
+    fn update_block(&self, samples: &[Signals], signs: &[f64], n_signs: usize, out: &mut [f64]) {
+        let n = samples.len();
+        let slots = out.len() / n.max(1);
+        let mut one = vec![0.0; slots];
+        for (s, sig) in samples.iter().enumerate() {
+            for (k, v) in one.iter_mut().enumerate() {
+                *v = out[k * n + s];
+            }
+            self.update(sig, &signs[s * n_signs..(s + 1) * n_signs], &mut one);
+            for (k, v) in one.iter().enumerate() {
+                out[k * n + s] = *v;
+            }
+        }
+    }
 }
 
 /// A compiled second-order modulus model.

@@ -854,3 +854,138 @@ fn kept_instrument_simulations_are_read_not_stepped_again() {
         }
     }
 }
+
+/// The interpreter's evaluators of some slots, taking blocks of samples
+/// (as the interpreter does) or not, counting the blocks they evaluate.
+struct SlotsByBlock {
+    inner: Box<dyn leeway_model::model::SlotRegressors>,
+    blocks: bool,
+    evaluated: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+}
+
+impl leeway_model::model::SlotRegressors for SlotsByBlock {
+    fn update(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
+        self.inner.update(sig, signs, out);
+    }
+    fn evaluates_blocks(&self) -> bool {
+        self.blocks
+    }
+    fn update_block(
+        &self,
+        samples: &[leeway_model::Signals],
+        signs: &[f64],
+        n_signs: usize,
+        out: &mut [f64],
+    ) {
+        self.evaluated
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.inner.update_block(samples, signs, n_signs, out);
+    }
+}
+
+/// The ship, whose walks evaluate their equations a block at a time or one
+/// by one.
+struct ByBlock<'a> {
+    model: &'a Interpreter,
+    blocks: bool,
+    evaluated: std::sync::Arc<std::sync::atomic::AtomicUsize>,
+}
+
+impl Model for ByBlock<'_> {
+    fn ir(&self) -> &leeway_structure::ir::Ir {
+        self.model.ir()
+    }
+    fn basic(&self, sig: &leeway_model::Signals, out: &mut [f64]) {
+        self.model.basic(sig, out);
+    }
+    fn augmented(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
+        self.model.augmented(sig, signs, out);
+    }
+    fn measured(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
+        self.model.measured(sig, signs, out);
+    }
+    fn rhs(&self, theta: &[f64], sig: &leeway_model::Signals, out: &mut [f64]) {
+        self.model.rhs(theta, sig, out);
+    }
+    fn regressors_update(
+        &self,
+        kind: leeway_structure::ir::PredictorKind,
+        sig: &leeway_model::Signals,
+        signs: &[f64],
+        out: &mut [f64],
+    ) {
+        self.model.regressors_update(kind, sig, signs, out);
+    }
+    fn regressor_slots(
+        &self,
+        kind: leeway_structure::ir::PredictorKind,
+        wanted: &[bool],
+    ) -> Option<Box<dyn leeway_model::model::SlotRegressors>> {
+        let inner = self.model.regressor_slots(kind, wanted)?;
+        Some(Box::new(SlotsByBlock {
+            inner,
+            blocks: self.blocks,
+            evaluated: std::sync::Arc::clone(&self.evaluated),
+        }))
+    }
+    fn step(
+        &self,
+        theta: &[f64],
+        h: f64,
+        sig: &leeway_model::Signals,
+        f: &mut [f64],
+        next: &mut [f64],
+    ) {
+        self.model.step(theta, h, sig, f, next);
+    }
+}
+
+/// The ship holding its heading in a strong wind: the relative wind keeps
+/// its sign, so IV3's measured-medium columns take fixed-sign instruments.
+fn holding_course(model: &Interpreter, n: usize, seed: u64) -> Experiment {
+    let inputs: Vec<Vec<f64>> = study::estimation_input(&InputDesign::default(), n, seed)
+        .into_iter()
+        .map(|u| vec![u[0], u[1], 0.0])
+        .collect();
+    let system = study::true_system(20.0);
+    let x0 = [0.5, 0.0, 0.0];
+    leeway_scenarios::synth::experiment(model, &system, "course", &x0, 0.3, &inputs, seed).0
+}
+
+/// Equations evaluated a block at a time (the interpreter's evaluators,
+/// read by the sinks slot-major) give every method the bits of equations
+/// evaluated one by one: streamed records of lengths that leave a shorter
+/// last block, in memory keeping nothing, on one thread or several.
+#[test]
+fn equations_evaluated_by_blocks_give_the_bits_of_one_by_one() {
+    let ship = ship();
+    // Lengths that are no multiple of the block: a shorter block ends each.
+    let mut data = runs(&ship, &[(10.0, 701, 31), (6.0, 1290, 32), (14.0, 37, 33)]);
+    data.push(holding_course(&ship, 900, 34));
+    let streamed: Vec<Streamed> = data.iter().map(Streamed).collect();
+    let streamed: Vec<&dyn Source> = streamed.iter().map(|e| e as &dyn Source).collect();
+    let held: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    for method in [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3] {
+        let options = aggregated(method);
+        let run = |blocks: bool, sources: &[&dyn Source], threads: usize| {
+            let model = ByBlock {
+                model: &ship,
+                blocks,
+                evaluated: Default::default(),
+            };
+            let passes = LocalPasses::new(&model, sources)
+                .with_threads(threads)
+                .with_budget(0);
+            let estimate = estimate_with(&model, &passes, &options).expect("an estimate");
+            let blocks = model.evaluated.load(std::sync::atomic::Ordering::Relaxed);
+            (bits(&estimate), blocks)
+        };
+        let (one_by_one, none) = run(false, &streamed, 1);
+        assert_eq!(none, 0, "{method:?}");
+        for (sources, threads) in [(&streamed, 1), (&streamed, 3), (&held, 2)] {
+            let (by_blocks, evaluated) = run(true, sources, threads);
+            assert!(evaluated > 0, "{method:?}: no block evaluated");
+            assert_eq!(by_blocks, one_by_one, "{method:?} on {threads} threads");
+        }
+    }
+}

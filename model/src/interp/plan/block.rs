@@ -163,6 +163,30 @@ impl RegressorPlan {
         n_signs: usize,
         out: &mut [f64],
     ) {
+        self.eval_block_in(samples, signs, n_signs, out, true);
+    }
+
+    /// [`RegressorPlan::eval_block`] without writing the slots the plan
+    /// leaves zero (structurally, or not wanted): they keep what `out` holds.
+    pub(in crate::interp) fn eval_block_nonzero(
+        &self,
+        samples: &[Signals],
+        signs: &[f64],
+        n_signs: usize,
+        out: &mut [f64],
+    ) {
+        self.eval_block_in(samples, signs, n_signs, out, false);
+    }
+
+    #[inline(always)]
+    fn eval_block_in(
+        &self,
+        samples: &[Signals],
+        signs: &[f64],
+        n_signs: usize,
+        out: &mut [f64],
+        zeros: bool,
+    ) {
         let n = samples.len();
         let out = &mut out[..self.len * n];
         BLOCK_TABLE.with(|cell| {
@@ -178,8 +202,10 @@ impl RegressorPlan {
             let t: &[f64] = t;
             self.entries.write_block(t, n, e);
             let e: &[f64] = e;
-            for &(start, end) in &self.zeros {
-                out[start as usize * n..end as usize * n].fill(0.0);
+            if zeros {
+                for &(start, end) in &self.zeros {
+                    out[start as usize * n..end as usize * n].fill(0.0);
+                }
             }
             self.slots.write_block(t, n, out);
             for &(slot, a, b) in &self.pairs {

@@ -1,0 +1,79 @@
+//! One equation's dense buffer (`n_out × n_cols` slots of regressors or
+//! instruments) as the walk hands it to a sink: a slice of its own, or one
+//! sample's column of a block the model evaluated slot-major
+//! ([`BlockColumn`]). Sinks read either through [`Dense`], so the walk can
+//! evaluate a block of equations at once and hand them over without
+//! copying each back into a buffer of its own.
+
+/// A dense equation buffer, read slot by slot.
+pub trait Dense: Copy {
+    /// Its number of slots.
+    fn len(self) -> usize;
+    /// Whether it has none.
+    fn is_empty(self) -> bool {
+        self.len() == 0
+    }
+    /// Slot `i`.
+    fn at(self, i: usize) -> f64;
+    /// Slots `from..from + len`, or none where the buffer is shorter.
+    fn part(self, from: usize, len: usize) -> Self;
+}
+
+impl Dense for &[f64] {
+    #[inline(always)]
+    fn len(self) -> usize {
+        <[f64]>::len(self)
+    }
+    #[inline(always)]
+    fn at(self, i: usize) -> f64 {
+        self[i]
+    }
+    #[inline(always)]
+    fn part(self, from: usize, len: usize) -> Self {
+        self.get(from..from + len).unwrap_or(&[])
+    }
+}
+
+/// Sample `s` of a block of `n` samples evaluated slot-major (slot `k` of
+/// sample `s` at `values[k · n + s]`): its slots `from..from + len`.
+#[derive(Clone, Copy, Debug)]
+pub struct BlockColumn<'a> {
+    values: &'a [f64],
+    n: usize,
+    s: usize,
+    from: usize,
+    len: usize,
+}
+
+impl<'a> BlockColumn<'a> {
+    /// Sample `s` of the block `values` of `n` samples of `slots` slots each.
+    pub fn new(values: &'a [f64], n: usize, s: usize, slots: usize) -> BlockColumn<'a> {
+        BlockColumn {
+            values,
+            n,
+            s,
+            from: 0,
+            len: slots,
+        }
+    }
+}
+
+impl Dense for BlockColumn<'_> {
+    #[inline(always)]
+    fn len(self) -> usize {
+        self.len
+    }
+    #[inline(always)]
+    fn at(self, i: usize) -> f64 {
+        self.values[(self.from + i) * self.n + self.s]
+    }
+    #[inline(always)]
+    fn part(self, from: usize, len: usize) -> Self {
+        let fits = from + len <= self.len;
+        BlockColumn {
+            from: self.from + from,
+            len: if fits { len } else { 0 },
+            ..self
+        }
+    }
+}
