@@ -59,6 +59,9 @@ struct MomentSink<'a> {
     acc: Vec<MomentAccumulator>,
     /// The first bad measured value (scanning passes).
     bad: Option<(usize, String)>,
+    /// Every regressor and target of the current block is in range: its
+    /// equations need no check of their own.
+    block_in_range: bool,
 }
 
 impl<'a> MomentSink<'a> {
@@ -84,6 +87,7 @@ impl<'a> MomentSink<'a> {
             k: 1 + resumed,
             acc,
             bad: None,
+            block_in_range: false,
         }
     }
 
@@ -107,7 +111,7 @@ impl<'a> MomentSink<'a> {
             }
             return;
         }
-        if self.scan && self.bad.is_none() {
+        if self.scan && self.bad.is_none() && !self.block_in_range {
             self.bad = non_finite(self.ir, plan.kind, n, k, phi, t);
         }
         for (o, a) in self.acc.iter_mut().enumerate() {
@@ -540,18 +544,19 @@ impl<'a> PassRunner<'a> {
     }
 
     /// The evaluators of only the slots a pass with `plan` reads, where
-    /// the model has them: the instruments' estimated columns, and (unless
-    /// the pass `scan`s every regressor for bad values) the measured
-    /// regressors' estimated and held columns.
+    /// the model has them: the instruments' estimated columns, and the
+    /// measured regressors' estimated and held columns — or every slot,
+    /// where the pass `scan`s every regressor for bad values (an evaluator
+    /// still, so that the walk can evaluate blocks).
     fn walk_slots(&self, plan: &PassPlan, scan: bool) -> WalkSlots {
         let n_out = self.model.ir().states.len();
+        let measured = if scan {
+            vec![true; n_out * plan.n_cols]
+        } else {
+            read_slots(plan, n_out, true)
+        };
         WalkSlots {
-            measured: (!scan)
-                .then(|| {
-                    self.slot_plans
-                        .get(self.model, plan.kind, read_slots(plan, n_out, true))
-                })
-                .flatten(),
+            measured: self.slot_plans.get(self.model, plan.kind, measured),
             instruments: self
                 .slot_plans
                 .get(self.model, plan.kind, read_slots(plan, n_out, false)),
@@ -871,6 +876,9 @@ impl EquationSink for MomentSink<'_> {
     #[inline(always)]
     fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
         self.push(z, phi, t);
+    }
+    fn block(&mut self, in_range: impl FnOnce() -> bool) {
+        self.block_in_range = self.scan && self.bad.is_none() && in_range();
     }
 }
 

@@ -63,6 +63,24 @@ pub(super) struct WalkSlots {
 /// targets `t`, in the order of the record.
 pub(super) trait EquationSink {
     fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]);
+    /// Before a block's equations: `in_range()` says whether every
+    /// regressor and target of the block is finite and within
+    /// [`REGRESSOR_LIMIT`] (one sweep over the block, for a sink that
+    /// would otherwise check each equation).
+    fn block(&mut self, in_range: impl FnOnce() -> bool) {
+        let _ = in_range;
+    }
+}
+
+/// Whether every value is finite and within [`REGRESSOR_LIMIT`]: one
+/// branch-free sweep (NaN fails `<=` too), which vectorises.
+pub(super) fn in_range(values: &[f64]) -> bool {
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    let out: u64 = values
+        .iter()
+        .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))
+        .sum();
+    out == 0
 }
 
 /// Samples between two questions to the interrupt (a few milliseconds).
@@ -516,6 +534,8 @@ impl EquationWalker<'_> {
             }
         }
         let n_out = block.n_out;
+        let t = &block.t[..n * n_out];
+        sink.block(|| in_range(phi) && in_range(t));
         for s in 0..n {
             let phi = BlockColumn::new(phi, n, s, slots);
             let z = if self.instruments.is_some() {
@@ -523,7 +543,7 @@ impl EquationWalker<'_> {
             } else {
                 phi
             };
-            sink.equation(z, phi, &block.t[s * n_out..(s + 1) * n_out]);
+            sink.equation(z, phi, &t[s * n_out..(s + 1) * n_out]);
         }
         block.len = 0;
     }

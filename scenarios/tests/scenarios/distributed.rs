@@ -988,4 +988,27 @@ fn equations_evaluated_by_blocks_give_the_bits_of_one_by_one() {
             assert_eq!(by_blocks, one_by_one, "{method:?} on {threads} threads");
         }
     }
+    // A bad value inside a block (and one in the block after) is the
+    // error it is one by one: the same sample, the same regressor.
+    let mut bad = data;
+    bad[1].states[2][300] = f64::NAN;
+    bad[1].states[0][333] = 1e300;
+    let streamed: Vec<Streamed> = bad.iter().map(Streamed).collect();
+    let streamed: Vec<&dyn Source> = streamed.iter().map(|e| e as &dyn Source).collect();
+    let error = |blocks: bool| {
+        let model = ByBlock {
+            model: &ship,
+            blocks,
+            evaluated: Default::default(),
+        };
+        let e = estimate(&model, &streamed, &aggregated(Method::Iv3)).expect_err("a bad value");
+        (
+            format!("{e:?}"),
+            model.evaluated.load(std::sync::atomic::Ordering::Relaxed),
+        )
+    };
+    let ((one_by_one, _), (by_blocks, evaluated)) = (error(false), error(true));
+    assert!(one_by_one.contains("non-finite-data"), "{one_by_one}");
+    assert!(evaluated > 0);
+    assert_eq!(by_blocks, one_by_one);
 }
