@@ -687,54 +687,6 @@ fn a_bad_value_past_the_subsample_is_the_error_it_is_without_one() {
     assert_eq!(format!("{with:?}"), format!("{without:?}"));
 }
 
-/// The ship, counting its simulation steps.
-struct Stepping<'a>(&'a Interpreter, std::sync::atomic::AtomicUsize);
-
-impl Model for Stepping<'_> {
-    fn ir(&self) -> &leeway_structure::ir::Ir {
-        self.0.ir()
-    }
-    fn basic(&self, sig: &leeway_model::Signals, out: &mut [f64]) {
-        self.0.basic(sig, out);
-    }
-    fn augmented(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
-        self.0.augmented(sig, signs, out);
-    }
-    fn measured(&self, sig: &leeway_model::Signals, signs: &[f64], out: &mut [f64]) {
-        self.0.measured(sig, signs, out);
-    }
-    fn rhs(&self, theta: &[f64], sig: &leeway_model::Signals, out: &mut [f64]) {
-        self.0.rhs(theta, sig, out);
-    }
-    fn regressors_update(
-        &self,
-        kind: leeway_structure::ir::PredictorKind,
-        sig: &leeway_model::Signals,
-        signs: &[f64],
-        out: &mut [f64],
-    ) {
-        self.0.regressors_update(kind, sig, signs, out);
-    }
-    fn regressor_slots(
-        &self,
-        kind: leeway_structure::ir::PredictorKind,
-        wanted: &[bool],
-    ) -> Option<Box<dyn leeway_model::model::SlotRegressors>> {
-        self.0.regressor_slots(kind, wanted)
-    }
-    fn step(
-        &self,
-        theta: &[f64],
-        h: f64,
-        sig: &leeway_model::Signals,
-        f: &mut [f64],
-        next: &mut [f64],
-    ) {
-        self.1.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        self.0.step(theta, h, sig, f, next);
-    }
-}
-
 /// Workers that hold their experiments across passes and keep each one's
 /// instrument simulations between them, as `leeway.dask`'s do.
 struct KeepingWorkers<'a> {
@@ -788,14 +740,14 @@ fn kept_instrument_simulations_are_read_not_stepped_again() {
     for method in [Method::Iv3, Method::Iv1] {
         let options = aggregated(method);
         let run = |sources: &[&dyn Source], threads: usize, budget: Option<usize>| {
-            let model = Stepping(&ship, Default::default());
+            let model = Counting::new(&ship, true);
             let passes = LocalPasses::new(&model, sources).with_threads(threads);
             let passes = match budget {
                 Some(bytes) => passes.with_budget(bytes),
                 None => passes,
             };
             let estimate = estimate_with(&model, &passes, &options).expect("an estimate");
-            (estimate, model.1.load(std::sync::atomic::Ordering::Relaxed))
+            (estimate, model.steps())
         };
         let (nothing_kept, _) = run(&streamed, 1, Some(0));
         let refinements = nothing_kept.diagnostics.refinements;
@@ -809,7 +761,7 @@ fn kept_instrument_simulations_are_read_not_stepped_again() {
         assert!(refinements >= 2 || diverged, "{method:?}: {refinements}");
         // Workers that keep them, beside them.
         let mapped = |keeps: bool| {
-            let model = Stepping(&ship, Default::default());
+            let model = Counting::new(&ship, true);
             let n_out = ship.ir().states.len();
             let kept = data
                 .iter()
@@ -826,7 +778,7 @@ fn kept_instrument_simulations_are_read_not_stepped_again() {
                 kept,
             };
             let estimate = estimate_with(&model, &workers, &options).expect("mapped");
-            (estimate, model.1.load(std::sync::atomic::Ordering::Relaxed))
+            (estimate, model.steps())
         };
         let ((plain, all_mapped), (kept_mapped, mapped_steps)) = (mapped(false), mapped(true));
         assert_eq!(bits(&plain), bits(&nothing_kept), "{method:?} mapped");
@@ -883,15 +835,34 @@ impl leeway_model::model::SlotRegressors for SlotsByBlock {
     }
 }
 
-/// The ship, whose walks evaluate their equations a block at a time or one
-/// by one.
-struct ByBlock<'a> {
+/// The ship, counting its simulation steps and the blocks of equations its
+/// walks evaluate — a block at a time (as the interpreter does) or, where
+/// its slot evaluators say they take no blocks, one by one.
+struct Counting<'a> {
     model: &'a Interpreter,
     blocks: bool,
+    steps: std::sync::atomic::AtomicUsize,
     evaluated: std::sync::Arc<std::sync::atomic::AtomicUsize>,
 }
 
-impl Model for ByBlock<'_> {
+impl<'a> Counting<'a> {
+    fn new(model: &'a Interpreter, blocks: bool) -> Counting<'a> {
+        Counting {
+            model,
+            blocks,
+            steps: Default::default(),
+            evaluated: Default::default(),
+        }
+    }
+    fn steps(&self) -> usize {
+        self.steps.load(std::sync::atomic::Ordering::Relaxed)
+    }
+    fn blocks_evaluated(&self) -> usize {
+        self.evaluated.load(std::sync::atomic::Ordering::Relaxed)
+    }
+}
+
+impl Model for Counting<'_> {
     fn ir(&self) -> &leeway_structure::ir::Ir {
         self.model.ir()
     }
@@ -936,6 +907,8 @@ impl Model for ByBlock<'_> {
         f: &mut [f64],
         next: &mut [f64],
     ) {
+        self.steps
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         self.model.step(theta, h, sig, f, next);
     }
 }
@@ -968,17 +941,12 @@ fn equations_evaluated_by_blocks_give_the_bits_of_one_by_one() {
     for method in [Method::Ls, Method::Iv1, Method::Iv2, Method::Iv3] {
         let options = aggregated(method);
         let run = |blocks: bool, sources: &[&dyn Source], threads: usize| {
-            let model = ByBlock {
-                model: &ship,
-                blocks,
-                evaluated: Default::default(),
-            };
+            let model = Counting::new(&ship, blocks);
             let passes = LocalPasses::new(&model, sources)
                 .with_threads(threads)
                 .with_budget(0);
             let estimate = estimate_with(&model, &passes, &options).expect("an estimate");
-            let blocks = model.evaluated.load(std::sync::atomic::Ordering::Relaxed);
-            (bits(&estimate), blocks)
+            (bits(&estimate), model.blocks_evaluated())
         };
         let (one_by_one, none) = run(false, &streamed, 1);
         assert_eq!(none, 0, "{method:?}");
@@ -996,16 +964,9 @@ fn equations_evaluated_by_blocks_give_the_bits_of_one_by_one() {
     let streamed: Vec<Streamed> = bad.iter().map(Streamed).collect();
     let streamed: Vec<&dyn Source> = streamed.iter().map(|e| e as &dyn Source).collect();
     let error = |blocks: bool| {
-        let model = ByBlock {
-            model: &ship,
-            blocks,
-            evaluated: Default::default(),
-        };
+        let model = Counting::new(&ship, blocks);
         let e = estimate(&model, &streamed, &aggregated(Method::Iv3)).expect_err("a bad value");
-        (
-            format!("{e:?}"),
-            model.evaluated.load(std::sync::atomic::Ordering::Relaxed),
-        )
+        (format!("{e:?}"), model.blocks_evaluated())
     };
     let ((one_by_one, _), (by_blocks, evaluated)) = (error(false), error(true));
     assert!(one_by_one.contains("non-finite-data"), "{one_by_one}");
