@@ -29,6 +29,7 @@ use crate::record::{ExperimentInfo, FactsState, RecordSums, record_info};
 use crate::slots::{SlotPlans, read_slots};
 use crate::walk::{
     EquationSink, EquationWalker, History, REGRESSOR_LIMIT, Reuse, SimWalk, Stopper, WalkSlots,
+    in_range,
 };
 use crate::zeta::ZetaPlan;
 
@@ -1041,16 +1042,9 @@ pub(super) fn non_finite<D: Dense>(
     phi: D,
     t: &[f64],
 ) -> Option<(usize, String)> {
-    // The common case in one branch-free sweep (NaN fails `<=` too): a
-    // count of the entries out of range vectorises (compare, mask, add);
-    // the rare bad value is then looked for entry by entry.
-    // `!(|x| <= limit)` and not `|x| > limit`: NaN must count.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    fn out_of_range(v: impl Iterator<Item = f64>) -> u64 {
-        v.map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT))).sum()
-    }
-    let bad_regressors = out_of_range((0..phi.len()).map(|i| phi.at(i)));
-    if bad_regressors + out_of_range(t.iter().copied()) == 0 {
+    // The common case in one branch-free sweep; the rare bad value is
+    // then looked for entry by entry.
+    if in_range((0..phi.len()).map(|i| phi.at(i))) && in_range(t.iter().copied()) {
         return None;
     }
     let predictors = ir.predictors.get(kind);

@@ -73,11 +73,11 @@ pub(super) trait EquationSink {
 }
 
 /// Whether every value is finite and within [`REGRESSOR_LIMIT`]: one
-/// branch-free sweep (NaN fails `<=` too), which vectorises.
-pub(super) fn in_range(values: &[f64]) -> bool {
+/// branch-free sweep (a count of the values out of range, which
+/// vectorises; NaN fails `<=` too).
+pub(super) fn in_range(values: impl Iterator<Item = f64>) -> bool {
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     let out: u64 = values
-        .iter()
         .map(|x| u64::from(!(x.abs() <= REGRESSOR_LIMIT)))
         .sum();
     out == 0
@@ -535,7 +535,7 @@ impl EquationWalker<'_> {
         }
         let n_out = block.n_out;
         let t = &block.t[..n * n_out];
-        sink.block(|| in_range(phi) && in_range(t));
+        sink.block(|| in_range(phi.iter().copied()) && in_range(t.iter().copied()));
         for s in 0..n {
             let phi = BlockColumn::new(phi, n, s, slots);
             let z = if self.instruments.is_some() {
