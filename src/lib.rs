@@ -327,10 +327,11 @@
 //! asserting what the section claims. No two public types in these docs
 //! share a name: the compiler's options are [`CompileOptions`], the
 //! estimator's [`EstimateOptions`]; the syntax tree is
-//! `structure::grammar::ModelSyntax`, the trait [`Model`]. The facade's
-//! dev-dependencies stay small, since trybuild compiles them all for the ui
-//! tests: benchmarks live in the unpublished `leeway-bench` (`bench/`; how to
-//! run, compare and profile them: `docs/performance.md`).
+//! `structure::grammar::ModelSyntax`, the trait [`Model`]. The macros' ui
+//! tests live with `leeway-macros`, whose dev-dependencies are this crate
+//! and trybuild alone, since trybuild compiles them all; benchmarks live in
+//! the unpublished `leeway-bench` (`bench/`; how to run, compare and profile
+//! them: `docs/performance.md`).
 //!
 //! Past one machine, the estimator's passes over the data are its map half:
 //! [`estimate::PassRunner`] computes what one experiment

@@ -1,6 +1,6 @@
 //! Models the macros compile, and that run, with warnings denied: the
 //! structure compiler's notes and warnings never fail a build. (The ui
-//! tests, `tests/ui.rs`, hold the failing cases; these were its passing
+//! tests, `macros/tests/ui.rs`, hold the failing cases; these were its passing
 //! ones, moved here so that trybuild only type-checks, and these compile
 //! with the other tests.)
 #![deny(warnings)]
