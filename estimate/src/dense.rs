@@ -77,3 +77,36 @@ impl Dense for BlockColumn<'_> {
         }
     }
 }
+
+/// The equations of a block as the walk evaluated them: regressors `phi`
+/// and instruments `z` slot-major (`slots × n`; `z` is `phi` where the
+/// regressors are their own instruments) and targets `t`, `n_out` per
+/// equation. A sink reads each equation's column ([`EquationBlock::equation`])
+/// or a slot across the block, contiguous, to vectorise over samples.
+#[derive(Clone, Copy, Debug)]
+pub struct EquationBlock<'a> {
+    /// The regressors, slot-major.
+    pub phi: &'a [f64],
+    /// The instruments, slot-major.
+    pub z: &'a [f64],
+    /// The targets, equation after equation.
+    pub t: &'a [f64],
+    /// Equations in the block.
+    pub n: usize,
+    /// Slots of an equation (`n_out × n_cols`).
+    pub slots: usize,
+    /// Targets of an equation.
+    pub n_out: usize,
+}
+
+impl<'a> EquationBlock<'a> {
+    /// Equation `s`: its instruments, regressors and targets.
+    #[inline(always)]
+    pub fn equation(&self, s: usize) -> (BlockColumn<'a>, BlockColumn<'a>, &'a [f64]) {
+        (
+            BlockColumn::new(self.z, self.n, s, self.slots),
+            BlockColumn::new(self.phi, self.n, s, self.slots),
+            &self.t[s * self.n_out..(s + 1) * self.n_out],
+        )
+    }
+}

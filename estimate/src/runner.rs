@@ -5,7 +5,7 @@
 use crate::cache::{
     InstrumentsKey, Kept, KeptSimulations, RecordCache, Resume, SimulationKey, bits,
 };
-use crate::dense::Dense;
+use crate::dense::{Dense, EquationBlock};
 use crate::method::Instruments;
 use crate::moments::{
     CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows, kept_rows_bytes,
@@ -863,6 +863,7 @@ impl<'a> PassRunner<'a> {
             &mut ZetaSums {
                 zeta: &zeta,
                 sums: &mut sums,
+                res: Vec::new(),
             },
         );
         walked.ok().map(|_| {
@@ -906,12 +907,17 @@ impl EquationSink for FirstBad<'_> {
 struct ZetaSums<'a> {
     zeta: &'a ZetaPlan,
     sums: &'a mut LongRun,
+    /// Each output's residuals over a block.
+    res: Vec<f64>,
 }
 
 impl EquationSink for ZetaSums<'_> {
     #[inline(always)]
     fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
         self.sums.push_with(|row| self.zeta.add(z, phi, t, row));
+    }
+    fn equations(&mut self, block: EquationBlock) {
+        self.zeta.add_block(block, &mut self.res, self.sums);
     }
 }
 

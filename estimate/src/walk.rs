@@ -7,7 +7,7 @@
 //! error `non-finite-data`, located in its source and found by the first
 //! (scanning) pass, never a rank verdict.
 
-use crate::dense::{BlockColumn, Dense};
+use crate::dense::{Dense, EquationBlock};
 use crate::estimator::Estimator;
 use crate::method::{Instruments, Method};
 use crate::moments::BLOCK;
@@ -69,6 +69,16 @@ pub(super) trait EquationSink {
     /// would otherwise check each equation).
     fn block(&mut self, in_range: impl FnOnce() -> bool) {
         let _ = in_range;
+    }
+    /// A block's equations, in order: by default each in turn
+    /// ([`EquationSink::equation`]). A sink that vectorises across the
+    /// block's samples must give each equation the bits it would alone.
+    #[inline(always)]
+    fn equations(&mut self, block: EquationBlock) {
+        for s in 0..block.n {
+            let (z, phi, t) = block.equation(s);
+            self.equation(z, phi, t);
+        }
     }
 }
 
@@ -536,15 +546,14 @@ impl EquationWalker<'_> {
         let n_out = block.n_out;
         let t = &block.t[..n * n_out];
         sink.block(|| in_range(phi.iter().copied()) && in_range(t.iter().copied()));
-        for s in 0..n {
-            let phi = BlockColumn::new(phi, n, s, slots);
-            let z = if self.instruments.is_some() {
-                BlockColumn::new(z, n, s, slots)
-            } else {
-                phi
-            };
-            sink.equation(z, phi, &t[s * n_out..(s + 1) * n_out]);
-        }
+        sink.equations(EquationBlock {
+            z: if self.instruments.is_some() { z } else { phi },
+            phi,
+            t,
+            n,
+            slots,
+            n_out,
+        });
         block.len = 0;
     }
 
@@ -647,7 +656,7 @@ fn measured_signals(hist: &History, planar: bool) -> Signals<'_> {
 /// patterns and targets are copied as the walk passes it, then the model's
 /// block evaluators take them all at once (slot-major, docs/performance.md)
 /// and the sink each in turn. Every value is the bits the equation would
-/// have alone; the sink reads them through [`BlockColumn`]s, without a copy
+/// have alone; the sink reads them through [`BlockColumn`](crate::dense::BlockColumn)s, without a copy
 /// into buffers of their own.
 struct PendingBlock {
     len: usize,

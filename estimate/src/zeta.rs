@@ -5,7 +5,8 @@
 //! beside them — so that each sample is a few tight loops; every sum is
 //! made in the order the pass always made it, with the same bits.
 
-use crate::dense::Dense;
+use crate::dense::{Dense, EquationBlock};
+use crate::moments::{BLOCK, LongRun};
 use crate::protocol::{LongRunPass, PassPlan};
 
 /// One output's part of `ζ`.
@@ -73,9 +74,51 @@ impl ZetaPlan {
                 res -= phi.at(i) * v;
             }
             res -= out.mean;
-            for &(r, i, centre) in &out.rows {
-                zeta[r] += (source.at(i) - centre) * res;
+            out.add_rows(source, res, zeta);
+        }
+    }
+
+    /// Adds `ζ_k` of each sample of `block` to `sums`, as [`ZetaPlan::add`]
+    /// would one by one: the residuals of every sample first, each term
+    /// across the block's samples (contiguous, so it vectorises), with each
+    /// sample's operations in the same order — the same bits. `res` is
+    /// scratch.
+    pub(super) fn add_block(&self, block: EquationBlock, res: &mut Vec<f64>, sums: &mut LongRun) {
+        let n = block.n;
+        res.resize(self.outputs.len() * BLOCK, 0.0);
+        for (out, res) in self.outputs.iter().zip(res.chunks_exact_mut(BLOCK)) {
+            let res = &mut res[..n];
+            for (s, r) in res.iter_mut().enumerate() {
+                *r = block.t[s * block.n_out + out.output];
             }
+            for &(i, v) in &out.terms {
+                let phi = &block.phi[i * n..(i + 1) * n];
+                for (r, &p) in res.iter_mut().zip(phi) {
+                    *r -= p * v;
+                }
+            }
+            for r in res.iter_mut() {
+                *r -= out.mean;
+            }
+        }
+        for s in 0..n {
+            let (z, phi, _) = block.equation(s);
+            let source = if self.own { phi } else { z };
+            sums.push_with(|zeta| {
+                for (out, res) in self.outputs.iter().zip(res.chunks_exact(BLOCK)) {
+                    out.add_rows(source, res[s], zeta);
+                }
+            });
+        }
+    }
+}
+
+impl OutputZeta {
+    /// `ζ`'s rows of this output: `(z̃_c − centre)·ε` added to each.
+    #[inline(always)]
+    fn add_rows<D: Dense>(&self, source: D, res: f64, zeta: &mut [f64]) {
+        for &(r, i, centre) in &self.rows {
+            zeta[r] += (source.at(i) - centre) * res;
         }
     }
 }
