@@ -110,3 +110,37 @@ impl<'a> EquationBlock<'a> {
         )
     }
 }
+
+/// Slots `from..from + len` of a block of `n` samples evaluated
+/// slot-major (`values`, `slots × n`), each a row of the block's samples.
+#[derive(Clone, Copy, Debug)]
+pub struct SlotRows<'a> {
+    values: &'a [f64],
+    n: usize,
+    from: usize,
+    len: usize,
+}
+
+impl<'a> SlotRows<'a> {
+    /// Slots `from..from + len` of the block `values` of `n` samples.
+    pub fn new(values: &'a [f64], n: usize, (from, len): (usize, usize)) -> SlotRows<'a> {
+        SlotRows {
+            values,
+            n,
+            from,
+            len,
+        }
+    }
+    /// Slot `i` (from `from`) of every sample.
+    #[inline(always)]
+    pub fn row(&self, i: usize) -> &'a [f64] {
+        &self.values[(self.from + i) * self.n..][..self.n]
+    }
+    /// Sample `s`'s slots, as [`EquationBlock::equation`] gives them, then
+    /// [`Dense::part`].
+    #[inline(always)]
+    pub fn column(&self, s: usize) -> BlockColumn<'a> {
+        let slots = self.values.len() / self.n.max(1);
+        BlockColumn::new(self.values, self.n, s, slots).part(self.from, self.len)
+    }
+}

@@ -14,7 +14,7 @@
 //! kernel on every instruction set the CPU has).
 //! [`LongRun`] gives the truncated long-run covariance sums.
 
-use crate::dense::Dense;
+use crate::dense::{Dense, SlotRows};
 use nalgebra::{DMatrix, DVector};
 
 /// Samples buffered before they are added to the sums, so that the sums are
@@ -548,6 +548,53 @@ impl MomentAccumulator {
         self.fb[at + p + 1] = 1.0;
         self.n += 1;
         self.filled += 1;
+        if self.filled == BLOCK {
+            self.flush();
+        }
+    }
+
+    /// Adds a block's samples, as [`MomentAccumulator::push_columns`] one
+    /// by one: instruments and regressors the slots `cols` of `z` and
+    /// `phi` (evaluated slot-major), targets `t`, one a sample. Written a
+    /// slot at a time across the samples when they fill the buffer from
+    /// its start: the same values in the same rows, so the same bits.
+    pub fn push_block(&mut self, z: SlotRows, phi: SlotRows, cols: &[usize], t: &[f64]) {
+        let nb = t.len();
+        if self.filled != 0 || nb == 0 || nb > BLOCK {
+            for (s, &t) in t.iter().enumerate() {
+                self.push_columns(z.column(s), phi.column(s), cols, t);
+            }
+            return;
+        }
+        debug_assert!(self.m == cols.len() && self.p == cols.len());
+        if self.n == 0 {
+            for ((a, b), &c) in self.z0.iter_mut().zip(self.phi0.iter_mut()).zip(cols) {
+                *a = z.row(c)[0];
+                *b = phi.row(c)[0];
+            }
+            self.t0 = t[0];
+        }
+        let (p, wz, wf) = (self.p, self.wz, self.wf);
+        let at = self.base * wf;
+        if at + nb * wf > self.fb.len() {
+            self.fb.resize(at + BLOCK * wf, 0.0);
+        }
+        let fb = &mut self.fb[at..at + nb * wf];
+        for (i, &c) in cols.iter().enumerate() {
+            let (z0, p0) = (self.z0[i], self.phi0[i]);
+            for (row, &v) in self.zb.chunks_exact_mut(wz).zip(z.row(c)) {
+                row[i] = v - z0;
+            }
+            for (row, &v) in fb.chunks_exact_mut(wf).zip(phi.row(c)) {
+                row[i] = v - p0;
+            }
+        }
+        for (row, &t) in fb.chunks_exact_mut(wf).zip(t) {
+            row[p] = t - self.t0;
+            row[p + 1] = 1.0;
+        }
+        self.n += nb;
+        self.filled = nb;
         if self.filled == BLOCK {
             self.flush();
         }
@@ -1116,6 +1163,66 @@ mod tests {
     /// The regressor rows kept by one accumulation give a second one with
     /// other instruments exactly the sums it would compute itself, over a
     /// partial last block too (101 samples: three blocks and five rows).
+    /// Samples pushed a block at a time, slot-major, give the bits of the
+    /// same samples pushed one by one: whole blocks, a shorter last one,
+    /// blocks that begin mid-buffer (pushed one by one), keeping the rows
+    /// or not.
+    #[test]
+    fn samples_pushed_by_blocks_give_the_bits_of_one_by_one() {
+        let value = |k: usize, slot: usize, shift: f64| {
+            1e3 * slot as f64 + ((k * 5 + slot) as f64 * 0.41 + shift).sin()
+        };
+        let cols = [0, 2, 3, 5];
+        let (slots, samples) = (6, 203);
+        let target = |k: usize| (k as f64 * 0.13).cos() * 7.0 + 2.0;
+        let bits = |m: &CrossMoments| format!("{:?}", serde_json::to_string(m).ok());
+        for keeping in [false, true] {
+            for blocks in [vec![32; 6], vec![5, 27, 32, 32, 7, 25, 32, 32]] {
+                let mut one = MomentAccumulator::new(4, 4);
+                let mut by_blocks = MomentAccumulator::new(4, 4);
+                if keeping {
+                    one.keep_rows(samples, 0);
+                    by_blocks.keep_rows(samples, 0);
+                }
+                let mut k0 = 0;
+                for nb in blocks
+                    .iter()
+                    .copied()
+                    .chain([samples - blocks.iter().sum::<usize>()])
+                {
+                    let block = |shift: f64| -> Vec<f64> {
+                        (0..slots)
+                            .flat_map(|c| (k0..k0 + nb).map(move |k| value(k, c, shift)))
+                            .collect()
+                    };
+                    let (z, phi) = (block(0.5), block(0.0));
+                    let t: Vec<f64> = (k0..k0 + nb).map(target).collect();
+                    by_blocks.push_block(
+                        SlotRows::new(&z, nb, (0, slots)),
+                        SlotRows::new(&phi, nb, (0, slots)),
+                        &cols,
+                        &t,
+                    );
+                    for k in k0..k0 + nb {
+                        let zk: Vec<f64> = (0..slots).map(|c| value(k, c, 0.5)).collect();
+                        let pk: Vec<f64> = (0..slots).map(|c| value(k, c, 0.0)).collect();
+                        one.push_columns(&zk[..], &pk[..], &cols, target(k));
+                    }
+                    k0 += nb;
+                }
+                let (one, one_rows) = one.finish_keeping();
+                let (by_blocks, block_rows) = by_blocks.finish_keeping();
+                assert_eq!(
+                    bits(&one),
+                    bits(&by_blocks),
+                    "keeping {keeping}, {blocks:?}"
+                );
+                let rows = |r: Option<RegressorRows>| r.map(|r| format!("{:?}", r.rows));
+                assert_eq!(rows(one_rows), rows(block_rows));
+            }
+        }
+    }
+
     #[test]
     fn kept_regressor_rows_give_the_same_bits() {
         let dense = |k: usize, shift: f64| -> Vec<f64> {

@@ -5,7 +5,7 @@
 use crate::cache::{
     InstrumentsKey, Kept, KeptSimulations, RecordCache, Resume, SimulationKey, bits,
 };
-use crate::dense::{Dense, EquationBlock};
+use crate::dense::{Dense, EquationBlock, SlotRows};
 use crate::method::Instruments;
 use crate::moments::{
     CrossMoments, LongRun, MomentAccumulator, PartialSums, RegressorRows, kept_rows_bytes,
@@ -63,6 +63,8 @@ struct MomentSink<'a> {
     /// Every regressor and target of the current block is in range: its
     /// equations need no check of their own.
     block_in_range: bool,
+    /// An output's targets over a block.
+    targets: Vec<f64>,
 }
 
 impl<'a> MomentSink<'a> {
@@ -89,6 +91,7 @@ impl<'a> MomentSink<'a> {
             acc,
             bad: None,
             block_in_range: false,
+            targets: Vec::new(),
         }
     }
 
@@ -878,6 +881,44 @@ impl EquationSink for MomentSink<'_> {
     #[inline(always)]
     fn equation<D: Dense>(&mut self, z: D, phi: D, t: &[f64]) {
         self.push(z, phi, t);
+    }
+    fn equations(&mut self, block: EquationBlock) {
+        // Across the block when every equation would take the plain path
+        // of `push`: no kept rows, none of its regressors known, nothing to
+        // look for.
+        let plain = self.rows.is_none()
+            && self.k > self.measured_known
+            && !(self.scan && self.bad.is_none() && !self.block_in_range);
+        if !plain {
+            for s in 0..block.n {
+                let (z, phi, t) = block.equation(s);
+                self.push(z, phi, t);
+            }
+            return;
+        }
+        let (plan, n, nb) = (self.plan, self.plan.n_cols, block.n);
+        self.k += nb;
+        self.targets.resize(nb.max(self.targets.len()), 0.0);
+        for (o, a) in self.acc.iter_mut().enumerate() {
+            // Each equation's target less its held columns, in `push`'s
+            // order, across the block.
+            let target = &mut self.targets[..nb];
+            for (s, v) in target.iter_mut().enumerate() {
+                *v = block.t[s * block.n_out + o];
+            }
+            for (c, v) in &plan.held {
+                let phi = &block.phi[(o * n + c) * nb..][..nb];
+                for (x, p) in target.iter_mut().zip(phi) {
+                    *x -= p * v;
+                }
+            }
+            a.push_block(
+                SlotRows::new(block.z, nb, (o * n, n)),
+                SlotRows::new(block.phi, nb, (o * n, n)),
+                &plan.cols[o],
+                target,
+            );
+        }
     }
     fn block(&mut self, in_range: impl FnOnce() -> bool) {
         self.block_in_range = self.scan && self.bad.is_none() && in_range();
