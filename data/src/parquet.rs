@@ -116,6 +116,9 @@ enum Cell {
 struct Batch {
     cells: Vec<Cell>,
     text: Vec<u8>,
+    /// A DOUBLE column's batch without nulls, as stored (then `cells` is
+    /// empty): most columns, read without a cell each.
+    doubles: Vec<f64>,
 }
 
 /// A Parquet file read as a [`Table`].
@@ -334,11 +337,11 @@ impl ParquetFile {
 
     /// The current cell of column `i`.
     fn cell(&self, i: usize) -> Cell {
-        self.batches[i]
-            .cells
-            .get(self.index)
-            .copied()
-            .unwrap_or(Cell::Null)
+        let batch = &self.batches[i];
+        if let Some(&v) = batch.doubles.get(self.index) {
+            return Cell::Num(v);
+        }
+        batch.cells.get(self.index).copied().unwrap_or(Cell::Null)
     }
 
     /// A value beyond ±2⁵³ as written: a decimal's unscaled integer with
@@ -525,10 +528,20 @@ fn fill(
 ) -> parquet::errors::Result<usize> {
     out.cells.clear();
     out.text.clear();
+    out.doubles.clear();
     // An UINT's value is its stored bits read unsigned: the casts below.
     #[allow(clippy::cast_sign_loss)]
     match reader {
-        ColumnReader::DoubleColumnReader(r) => typed(r, max_def, n, out, |v, _| Cell::Num(*v)),
+        ColumnReader::DoubleColumnReader(r) => {
+            let (values, defs, rows) = records(r, max_def, n)?;
+            if defs.iter().all(|d| *d == max_def) {
+                out.doubles = values;
+                return Ok(rows.min(out.doubles.len()));
+            }
+            Ok(cells(values, &defs, max_def, rows, out, |v, _| {
+                Cell::Num(*v)
+            }))
+        }
         ColumnReader::FloatColumnReader(r) => {
             typed(r, max_def, n, out, |v, _| Cell::Num(f64::from(*v)))
         }
@@ -572,8 +585,19 @@ fn typed<T: DataType>(
     max_def: i16,
     n: usize,
     out: &mut Batch,
-    mut convert: impl FnMut(&T::T, &mut Vec<u8>) -> Cell,
+    convert: impl FnMut(&T::T, &mut Vec<u8>) -> Cell,
 ) -> parquet::errors::Result<usize> {
+    let (values, defs, rows) = records(reader, max_def, n)?;
+    Ok(cells(values, &defs, max_def, rows, out, convert))
+}
+
+/// The next `n` rows of a typed column: its values, their definition
+/// levels (none for a required column) and how many rows were read.
+fn records<T: DataType>(
+    reader: &mut ColumnReaderImpl<T>,
+    max_def: i16,
+    n: usize,
+) -> parquet::errors::Result<(Vec<T::T>, Vec<i16>, usize)> {
     let mut values: Vec<T::T> = Vec::with_capacity(n);
     let mut defs: Vec<i16> = Vec::with_capacity(n);
     let mut rows = 0;
@@ -589,9 +613,22 @@ fn typed<T: DataType>(
         }
         rows += records;
     }
+    Ok((values, defs, rows))
+}
+
+/// The cells of `rows` read rows: nulls where the definition level is
+/// below the maximum, the values through `convert`.
+fn cells<T>(
+    values: Vec<T>,
+    defs: &[i16],
+    max_def: i16,
+    rows: usize,
+    out: &mut Batch,
+    mut convert: impl FnMut(&T, &mut Vec<u8>) -> Cell,
+) -> usize {
     if max_def > 0 {
         let mut next = values.iter();
-        for d in &defs {
+        for d in defs {
             let cell = match (*d == max_def).then(|| next.next()).flatten() {
                 Some(v) => convert(v, &mut out.text),
                 None => Cell::Null,
@@ -604,7 +641,7 @@ fn typed<T: DataType>(
             out.cells.push(cell);
         }
     }
-    Ok(rows.min(out.cells.len()))
+    rows.min(out.cells.len())
 }
 
 impl Table for ParquetFile {
@@ -659,6 +696,12 @@ impl Table for ParquetFile {
                 ),
                 "write the column as DOUBLE (pandas: df[c].astype(\"float64\")); leeway does not convert other types",
             ));
+        }
+        // Most columns: a DOUBLE without nulls, its value finite.
+        if let Some(&v) = self.batches[i].doubles.get(self.index)
+            && v.is_finite()
+        {
+            return Ok(v);
         }
         match self.cell(i) {
             Cell::Num(v) => finite(v, at),

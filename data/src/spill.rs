@@ -13,7 +13,7 @@ use crate::error::DataError;
 use crate::notes::FileNotes;
 use crate::options::LoadOptions;
 use crate::signals::{Role, required_signals};
-use crate::validate::{Block, Places, RowBuf, Table, measured_rotation, scan, value};
+use crate::validate::{Block, Places, RowBuf, Table, measured_rotation, scan};
 use leeway_model::experiment::{Row, Source};
 use leeway_structure::ir::Ir;
 
@@ -42,19 +42,45 @@ impl Spill {
 struct SpillWriter {
     out: std::io::BufWriter<std::fs::File>,
     bytes: Vec<u8>,
+    /// Each spilled value's part of a row (states, inputs, rotation,
+    /// disturbances, heading) and index there, found once from its role.
+    places: Vec<(usize, usize)>,
 }
 
 impl SpillWriter {
-    fn push(&mut self, line: u64, roles: &[Role], row: &Row) -> std::io::Result<()> {
+    fn push(&mut self, line: u64, row: &Row) -> std::io::Result<()> {
         use std::io::Write;
+        let heading = [row.heading];
+        let parts = [
+            row.states,
+            row.inputs,
+            row.rotation,
+            row.disturbances,
+            &heading,
+        ];
         self.bytes.clear();
         self.bytes.extend_from_slice(&line.to_le_bytes());
-        for role in roles {
-            self.bytes
-                .extend_from_slice(&value(row, role).to_le_bytes());
+        for &(part, i) in &self.places {
+            let v = parts[part][i];
+            self.bytes.extend_from_slice(&v.to_le_bytes());
         }
         self.out.write_all(&self.bytes)
     }
+}
+
+/// Where each role's value is in a row: its part (states, inputs,
+/// rotation, disturbances, heading) and index there.
+fn row_places(roles: &[Role]) -> Vec<(usize, usize)> {
+    roles
+        .iter()
+        .map(|role| match *role {
+            Role::State(i) => (0, i),
+            Role::Input(i) => (1, i),
+            Role::Rotation(i) => (2, i),
+            Role::Disturbance(i) => (3, i),
+            Role::Heading => (4, 0),
+        })
+        .collect()
 }
 
 /// An experiment of a file visited in passes: the validating pass wrote
@@ -135,11 +161,7 @@ impl FileSource {
         let rows = self.block.rows;
         let mut chunk = vec![0u8; width * READ_ROWS.min(rows.saturating_sub(from).max(1))];
         let mut buf = RowBuf::sized(self.n_states, self.n_inputs, self.n_rotation, self.n_comp);
-        let word = |b: &[u8], i: usize| -> [u8; 8] {
-            let mut w = [0u8; 8];
-            w.copy_from_slice(&b[8 * i..8 * i + 8]);
-            w
-        };
+        let places: Vec<usize> = self.roles.iter().map(|r| buf.place(r)).collect();
         let mut k = from;
         while k < rows {
             let n = READ_ROWS.min(rows - k);
@@ -148,9 +170,10 @@ impl FileSource {
                 return self.fail(lost(format!("rows {} to {} of {rows}: {e}", k + 1, k + n)));
             }
             for row in bytes.chunks_exact(width) {
-                let line = u64::from_le_bytes(word(row, 0));
-                for (j, role) in self.roles.iter().enumerate() {
-                    buf.set(role, f64::from_le_bytes(word(row, j + 1)));
+                let (line, values) = row.split_at(8);
+                let line = u64::from_le_bytes(word(line));
+                for (&place, v) in places.iter().zip(values.chunks_exact(8)) {
+                    buf.set(place, f64::from_le_bytes(word(v)));
                 }
                 if !f(k, line, &buf.row()) {
                     return;
@@ -159,6 +182,14 @@ impl FileSource {
             }
         }
     }
+}
+
+/// The first eight bytes of `b`.
+#[inline(always)]
+fn word(b: &[u8]) -> [u8; 8] {
+    let mut w = [0u8; 8];
+    w.copy_from_slice(&b[..8]);
+    w
 }
 
 /// Rows of the spill read at a time.
@@ -252,11 +283,13 @@ pub fn open_table(
     let mut writer = SpillWriter {
         out: std::io::BufWriter::with_capacity(1 << 16, spill_file.reopen().map_err(spill_error)?),
         bytes: Vec::new(),
+        places: Vec::new(),
     };
     // Every signal the model reads from data, in a fixed order.
     let roles: Vec<Role> = required_signals(ir).into_iter().map(|(_, r)| r).collect();
+    writer.places = row_places(&roles);
     let scanned = scan(table, ir, options, &mut |_, position, row, _| {
-        writer.push(position, &roles, row).map_err(spill_error)
+        writer.push(position, row).map_err(spill_error)
     })?;
     std::io::Write::flush(&mut writer.out).map_err(spill_error)?;
     drop(writer);

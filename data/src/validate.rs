@@ -255,9 +255,14 @@ impl Layout {
 
     /// Reads the current row's signals into `buf` (declared units converted
     /// to the model's base units, once, here) and returns its time stamp.
-    fn read(&self, table: &dyn Table, buf: &mut RowBuf) -> Result<Option<f64>, DataError> {
-        for (role, i, name, factor) in &self.cols {
-            buf.set(role, table.number(*i, name)? * factor);
+    fn read(
+        &self,
+        table: &dyn Table,
+        places: &[usize],
+        buf: &mut RowBuf,
+    ) -> Result<Option<f64>, DataError> {
+        for ((_, i, name, factor), &place) in self.cols.iter().zip(places) {
+            buf.set(place, table.number(*i, name)? * factor);
         }
         match self.time_col {
             Some(i) => Ok(Some(table.number(i, "time")? * self.time_factor)),
@@ -275,13 +280,14 @@ pub(super) fn measured_rotation(ir: &Ir) -> usize {
     }
 }
 
-/// One sample's values, reused from row to row.
+/// A row's values in one buffer: states, inputs, rotation variables,
+/// disturbance components and heading side by side. Each column's place in
+/// it is found once ([`RowBuf::place`]): a match on the role of every value
+/// of every row cost more than the rest of reading it.
 pub(super) struct RowBuf {
-    states: Vec<f64>,
-    inputs: Vec<f64>,
-    rotation: Vec<f64>,
-    dist: Vec<f64>,
-    heading: f64,
+    values: Vec<f64>,
+    /// Where the inputs, rotation, disturbances and heading begin.
+    at: [usize; 4],
 }
 
 impl RowBuf {
@@ -294,42 +300,49 @@ impl RowBuf {
         )
     }
     pub(super) fn sized(states: usize, inputs: usize, rotation: usize, comp: usize) -> RowBuf {
+        let at = [
+            states,
+            states + inputs,
+            states + inputs + rotation,
+            states + inputs + rotation + comp,
+        ];
         RowBuf {
-            states: vec![0.0; states],
-            inputs: vec![0.0; inputs],
-            rotation: vec![0.0; rotation],
-            dist: vec![0.0; comp],
-            heading: 0.0,
+            values: vec![0.0; at[3] + 1],
+            at,
         }
     }
-    pub(super) fn set(&mut self, role: &Role, v: f64) {
-        match role {
-            Role::State(s) => self.states[*s] = v,
-            Role::Input(s) => self.inputs[*s] = v,
-            Role::Heading => self.heading = v,
-            Role::Rotation(s) => self.rotation[*s] = v,
-            Role::Disturbance(s) => self.dist[*s] = v,
+    /// Where `role`'s value is kept.
+    pub(super) fn place(&self, role: &Role) -> usize {
+        match *role {
+            Role::State(i) => i,
+            Role::Input(i) => self.at[0] + i,
+            Role::Rotation(i) => self.at[1] + i,
+            Role::Disturbance(i) => self.at[2] + i,
+            Role::Heading => self.at[3],
         }
     }
+    /// Sets the value at `place` (one [`RowBuf::place`] gave).
+    #[inline(always)]
+    pub(super) fn set(&mut self, place: usize, v: f64) {
+        if let Some(slot) = self.values.get_mut(place) {
+            *slot = v;
+        }
+    }
+    /// The value at `place`.
+    #[inline(always)]
+    pub(super) fn get(&self, place: usize) -> f64 {
+        self.values.get(place).copied().unwrap_or(0.0)
+    }
+    #[inline(always)]
     pub(super) fn row(&self) -> Row<'_> {
+        let [i, r, d, h] = self.at;
         Row {
-            states: &self.states,
-            inputs: &self.inputs,
-            heading: self.heading,
-            rotation: &self.rotation,
-            disturbances: &self.dist,
+            states: &self.values[..i],
+            inputs: &self.values[i..r],
+            rotation: &self.values[r..d],
+            disturbances: &self.values[d..h],
+            heading: self.values[h],
         }
-    }
-}
-
-/// The value of `role` in a row.
-pub(super) fn value(row: &Row, role: &Role) -> f64 {
-    match role {
-        Role::State(s) => row.states[*s],
-        Role::Input(s) => row.inputs[*s],
-        Role::Heading => row.heading,
-        Role::Rotation(s) => row.rotation[*s],
-        Role::Disturbance(s) => row.disturbances[*s],
     }
 }
 
@@ -447,10 +460,11 @@ fn read_blocks(
     let mut finished: std::collections::HashSet<Vec<u8>> = std::collections::HashSet::new();
     let mut current: Option<Vec<u8>> = None;
     let mut buf = RowBuf::new(ir);
+    let places: Vec<usize> = layout.cols.iter().map(|c| buf.place(&c.0)).collect();
     let n_cols = layout.cols.len();
     while table.next_row()? {
         let line = table.position();
-        let t = layout.read(table, &mut buf)?;
+        let t = layout.read(table, &places, &mut buf)?;
         let label = match layout.exp_col {
             Some(i) => table.label(i)?,
             None => std::borrow::Cow::Borrowed(base_name.as_bytes()),
@@ -485,11 +499,10 @@ fn read_blocks(
         if let Some(t) = t {
             block.times.push(t, line);
         }
-        let row = buf.row();
-        for (j, (role, ..)) in layout.cols.iter().enumerate() {
-            block.extremes[j].push(value(&row, role), line);
+        for (extremes, &place) in block.extremes.iter_mut().zip(&places) {
+            extremes.push(buf.get(place), line);
         }
-        sink(b, line, &row, t)?;
+        sink(b, line, &buf.row(), t)?;
     }
     Ok(blocks)
 }

@@ -51,33 +51,36 @@ pub struct Feedback {
 }
 
 /// The sums of one window. The full fit of input `j` has the columns `1`,
-/// `u_j`'s lags (its own block, `own` wide), then the states' lags (shared
+/// `u_j`'s lags (its own block, `OWN` wide), then the states' lags (shared
 /// by every input's fit): the Gram matrix of the states' lags is summed
 /// once for all inputs, each input's rows of its own columns against every
 /// column apart. Each entry is the sum of the same products in the same
-/// order as a full rank-1 update would make it, so the fits' bits are those
-/// of one Gram matrix per input.
+/// order as a full rank-1 update per sample would make it, so the fits'
+/// bits are those of one Gram matrix per input.
+///
+/// The window's samples are kept, and the sums made from them once the
+/// window is whole ([`Sums::settle`]): each entry's products are then
+/// added sample after sample in a register, several entries side by side,
+/// rather than loaded and stored again at every sample.
 struct Sums {
     /// Columns of the full fit.
     width: usize,
+    /// The window's samples, a row each: the states' lags (`width − OWN`),
+    /// then per input its own columns and itself, `1, u(k−1), …, u(k)`.
+    window: Vec<f64>,
     /// Upper triangle of the states' lags' Gram matrix, row by row
-    /// (`width − own` square).
+    /// (`width − OWN` square).
     states: Vec<f64>,
-    /// Per sample the states' lags (columns `OWN..width`), row by row: the
-    /// full fits' residuals are summed from them.
-    lagged: Vec<f64>,
     inputs: Vec<InputSums>,
 }
 
-/// One input's sums over a window: its own columns' rows of `X'X`, `X'u`,
-/// `u'u`; and per sample the input with its own lags (the restricted fit's
-/// rows), whose residuals say how many innovations the window holds.
+/// One input's sums over a window: its own columns' rows of `X'X` (the
+/// upper triangle's part), `X'u`, `u'u`.
 struct InputSums {
-    /// `own × width`, row by row.
+    /// `OWN × width`, row by row.
     rows: Vec<f64>,
     cross: Vec<f64>,
     square: f64,
-    own: Vec<[f64; OWN + 1]>,
 }
 
 /// The restricted fit's columns: `1` and the input's lags.
@@ -88,58 +91,92 @@ impl Sums {
         let s = width - OWN;
         Sums {
             width,
+            window: Vec::new(),
             states: vec![0.0; s * (s + 1) / 2],
-            lagged: Vec::new(),
             inputs: (0..inputs)
                 .map(|_| InputSums {
                     rows: vec![0.0; OWN * width],
                     cross: vec![0.0; width],
                     square: 0.0,
-                    own: Vec::new(),
                 })
                 .collect(),
         }
     }
     fn clear(&mut self) {
-        self.states.fill(0.0);
-        self.lagged.clear();
-        for i in &mut self.inputs {
-            i.rows.fill(0.0);
-            i.cross.fill(0.0);
-            i.square = 0.0;
-            i.own.clear();
-        }
+        self.window.clear();
     }
-    /// Adds a sample: `x` holds the states' lags from column `OWN` on;
-    /// its first `OWN` columns are each input's own, written here.
-    fn push(&mut self, x: &mut [f64], lags: &[[f64; LAGS]], inputs: &[f64]) {
-        self.lagged.extend_from_slice(&x[OWN..]);
-        let mut at = 0;
-        for (i, a) in x[OWN..].iter().enumerate() {
-            for b in &x[OWN + i..] {
-                self.states[at] += a * b;
-                at += 1;
-            }
+    /// A window row's length: the values, then [`PAD`] zeros that let
+    /// every tile of [`Sums::settle`] be whole.
+    fn stride(&self) -> usize {
+        self.width - OWN + (OWN + 1) * self.inputs.len() + PAD
+    }
+    /// Where input `j`'s own columns begin in a window row.
+    fn own_at(&self, j: usize) -> usize {
+        self.width - OWN + (OWN + 1) * j
+    }
+    /// Adds a sample: the states' lags `lagged` (`width − OWN`), each
+    /// input's lags and the inputs.
+    fn push(&mut self, lagged: &[f64], lags: &[[f64; LAGS]], inputs: &[f64]) {
+        self.window.extend_from_slice(lagged);
+        for (l, u) in lags.iter().zip(inputs) {
+            let mut own = [*u; OWN + 1];
+            own[0] = 1.0;
+            own[1..OWN].copy_from_slice(l);
+            self.window.extend_from_slice(&own);
         }
-        for (j, sums) in self.inputs.iter_mut().enumerate() {
-            x[0] = 1.0;
-            x[1..OWN].copy_from_slice(&lags[j]);
-            let u = inputs[j];
-            for (r, a) in x[..OWN].iter().enumerate() {
-                for (g, b) in sums.rows[r * x.len()..(r + 1) * x.len()]
-                    .iter_mut()
-                    .zip(&*x)
-                {
-                    *g += b * a;
+        self.window.extend_from_slice(&[0.0; PAD]);
+    }
+    /// The window's samples, a row each.
+    fn samples(&self) -> std::slice::ChunksExact<'_, f64> {
+        self.window.chunks_exact(self.stride())
+    }
+    /// Makes the sums of the window's samples, a tile of entries at a time
+    /// (those of a tile beyond the wanted ones are dropped).
+    fn settle(&mut self) {
+        let (s, stride) = (self.width - OWN, self.stride());
+        let window = &self.window;
+        // The states' triangle, two rows at a time: row i's entries from
+        // column i on, row i + 1's from i + 1 on.
+        let mut row_at = 0;
+        for i in (0..s).step_by(2) {
+            let next_at = row_at + (s - i);
+            for b0 in (i..s).step_by(LANES) {
+                let tile = tile::<2, LANES>(window, stride, i, b0);
+                for (r, sums) in tile.iter().enumerate() {
+                    let (a, at) = (i + r, if r == 0 { row_at } else { next_at });
+                    for b in b0.max(a)..(b0 + LANES).min(s) {
+                        self.states[at + b - a] = sums[b - b0];
+                    }
                 }
             }
-            for (c, a) in sums.cross.iter_mut().zip(&*x) {
-                *c += u * a;
+            row_at = next_at + (s - i).saturating_sub(1);
+        }
+        for j in 0..self.inputs.len() {
+            let own = self.own_at(j);
+            let sums = &mut self.inputs[j];
+            // The own columns and the input (`1, u(k−1), u(k−2), u(k)`)
+            // against the states' lags: rows of the Gram matrix, then `X'u`.
+            for a0 in (own..own + OWN + 1).step_by(2) {
+                for b0 in (0..s).step_by(LANES) {
+                    let tile = tile::<2, LANES>(window, stride, a0, b0);
+                    for (r, part) in tile.iter().enumerate() {
+                        let (a, n) = (a0 + r - own, (s - b0).min(LANES));
+                        let dest = match a.checked_sub(OWN) {
+                            None => &mut sums.rows[a * self.width + OWN + b0..][..n],
+                            Some(_) => &mut sums.cross[OWN + b0..][..n],
+                        };
+                        dest.copy_from_slice(&part[..n]);
+                    }
+                }
             }
-            sums.square += u * u;
-            let mut row = [u; OWN + 1];
-            row[..OWN].copy_from_slice(&x[..OWN]);
-            sums.own.push(row);
+            // The own columns and the input against themselves.
+            let tile = tile::<{ OWN + 1 }, { OWN + 1 }>(window, stride, own, own);
+            for (r, part) in tile[..OWN].iter().enumerate() {
+                sums.rows[r * self.width + r..(r + 1) * self.width][..OWN - r]
+                    .copy_from_slice(&part[r..OWN]);
+            }
+            sums.cross[..OWN].copy_from_slice(&tile[OWN][..OWN]);
+            sums.square = tile[OWN][OWN];
         }
     }
     /// Input `j`'s Gram matrix of the first `columns` columns.
@@ -176,24 +213,20 @@ impl Sums {
     /// its own lags predict to 10⁻⁵ of its square), where the residuals
     /// themselves lose none, whichever way `b` was solved.
     fn residual_squares(&self, j: usize, b: &DVector<f64>) -> f64 {
-        let own = &self.inputs[j].own;
-        let s = self.width - OWN;
+        let (s, own) = (self.width - OWN, self.own_at(j));
         let full = b.len() > OWN;
         let mut sum = 0.0;
-        for (k, row) in own.iter().enumerate() {
+        for row in self.samples() {
             let mut fitted = 0.0;
-            for (v, bi) in row[..OWN].iter().zip(b.iter()) {
+            for (v, bi) in row[own..own + OWN].iter().zip(b.iter()) {
                 fitted += bi * v;
             }
             if full {
-                for (v, bi) in self.lagged[k * s..(k + 1) * s]
-                    .iter()
-                    .zip(&b.as_slice()[OWN..])
-                {
+                for (v, bi) in row[..s].iter().zip(&b.as_slice()[OWN..]) {
                     fitted += bi * v;
                 }
             }
-            let e = row[OWN] - fitted;
+            let e = row[own + OWN] - fitted;
             sum += e * e;
         }
         sum
@@ -202,11 +235,13 @@ impl Sums {
     /// residual exceeds 10⁻⁴ of their RMS. Dense noise counts every sample;
     /// an input held (or smoothed) between steps counts only its steps.
     fn innovations(&self, j: usize, b: &DVector<f64>, rss: f64) -> f64 {
-        let own = &self.inputs[j].own;
-        let floor = 1e-4 * (rss / own.len().max(1) as f64).sqrt();
-        let count = own
-            .iter()
+        let own = self.own_at(j);
+        let n = self.window.len() / self.stride();
+        let floor = 1e-4 * (rss / n.max(1) as f64).sqrt();
+        let count = self
+            .samples()
             .filter(|row| {
+                let row = &row[own..own + OWN + 1];
                 let e = row[OWN] - (0..OWN).map(|i| b[i] * row[i]).sum::<f64>();
                 e.abs() > floor
             })
@@ -228,6 +263,40 @@ impl Sums {
         let stat = (n - self.width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
         (chi_squared_tail(stat, q) < 1e-6).then_some((r - f) / r)
     }
+}
+
+/// Entries a tile of [`Sums::settle`] sums side by side per row.
+const LANES: usize = 8;
+/// Zeros after each window row, so that a tile reaching past the last
+/// value reads zeros (its entries there are dropped).
+const PAD: usize = LANES;
+
+/// `Σ_k m[k][a + r] · m[k][b + c]` for `r < A`, `c < L`, over the rows
+/// `m[k]` (`stride` wide): each entry summed from `0.0` in row order, one
+/// multiply and one add a product, so the bits of adding them one sample
+/// at a time. The tile's sums stay in registers through the rows, and its
+/// `A × L` independent additions keep the adder busy (an entry alone
+/// would wait on its last addition at every row).
+#[inline(always)]
+fn tile<const A: usize, const L: usize>(
+    m: &[f64],
+    stride: usize,
+    a: usize,
+    b: usize,
+) -> [[f64; L]; A] {
+    let mut acc = [[0.0; L]; A];
+    if a + A > stride || b + L > stride {
+        return acc; // no such columns (never, by the callers)
+    }
+    for row in m.chunks_exact(stride) {
+        let y = &row[b..b + L];
+        for (acc, x) in acc.iter_mut().zip(&row[a..a + A]) {
+            for (acc, y) in acc.iter_mut().zip(y) {
+                *acc += x * y;
+            }
+        }
+    }
+    acc
 }
 
 /// The smallest Cholesky pivot of the equilibrated Gram matrix (unit
@@ -349,7 +418,7 @@ impl<'a> FeedbackScan<'a> {
         self.x.copy_within(OWN..width - n_states, OWN + n_states);
         self.x[OWN..OWN + n_states].copy_from_slice(row.states);
         if self.seen == LAGS {
-            self.sums.push(&mut self.x, &self.lags, row.inputs);
+            self.sums.push(&self.x[OWN..], &self.lags, row.inputs);
         } else {
             self.seen += 1;
         }
@@ -367,6 +436,7 @@ impl<'a> FeedbackScan<'a> {
 
     /// Judges the window that ends at the last row pushed, and starts the next.
     fn judge_window(&mut self) {
+        self.sums.settle();
         let shares: Vec<(usize, f64)> = (0..self.ir.inputs.len())
             .filter_map(|j| self.sums.explained(j).map(|e| (j, e)))
             .filter(|(_, e)| *e >= EXPLAINED)
@@ -540,9 +610,11 @@ mod tests {
                 x[OWN + lag * n_states..OWN + (lag + 1) * n_states]
                     .copy_from_slice(&states[k - lag]);
             }
-            sums.push(&mut x, &[[u[k - 1], u[k - 2]]], &[u[k]]);
+            x[..OWN].copy_from_slice(&[1.0, u[k - 1], u[k - 2]]);
+            sums.push(&x[OWN..], &[[u[k - 1], u[k - 2]]], &[u[k]]);
             rows.push(x);
         }
+        sums.settle();
         for columns in [OWN, width] {
             let (_, rss) = sums.fit(0, columns).unwrap_or_else(|| panic!("a fit"));
             // The reference: least squares on the samples themselves (QR).
@@ -559,6 +631,115 @@ mod tests {
                 (rss - reference).abs() <= 1e-6 * reference,
                 "{columns} columns: {rss} against {reference}"
             );
+        }
+    }
+
+    /// A sample of a window: the states' lags, each input's lags, the inputs.
+    type Sample = (Vec<f64>, Vec<[f64; LAGS]>, Vec<f64>);
+    /// An input's sums: rows, cross products, square.
+    type InputReference = (Vec<f64>, Vec<f64>, f64);
+
+    /// The sums as a rank-1 update per sample made them (before the window
+    /// was kept and summed whole): the states' triangle, then each input's
+    /// rows, cross products and square.
+    fn summed_sample_by_sample(
+        width: usize,
+        samples: &[Sample],
+    ) -> (Vec<f64>, Vec<InputReference>) {
+        let s = width - OWN;
+        let m = samples.first().map_or(0, |x| x.2.len());
+        let mut states = vec![0.0; s * (s + 1) / 2];
+        let mut inputs = vec![(vec![0.0; OWN * width], vec![0.0; width], 0.0); m];
+        for (lagged, lags, us) in samples {
+            let mut x = vec![0.0; width];
+            x[OWN..].copy_from_slice(lagged);
+            let mut at = 0;
+            for (i, a) in x[OWN..].iter().enumerate() {
+                for b in &x[OWN + i..] {
+                    states[at] += a * b;
+                    at += 1;
+                }
+            }
+            for (j, (rows, cross, square)) in inputs.iter_mut().enumerate() {
+                x[0] = 1.0;
+                x[1..OWN].copy_from_slice(&lags[j]);
+                let u = us[j];
+                for r in 0..OWN {
+                    for c in r..width {
+                        rows[r * width + c] += x[c] * x[r];
+                    }
+                }
+                for (c, a) in cross.iter_mut().zip(&x) {
+                    *c += u * a;
+                }
+                *square += u * u;
+            }
+        }
+        (states, inputs)
+    }
+
+    #[test]
+    fn window_sums_have_the_bits_of_sums_made_sample_by_sample() {
+        let mut seed = 11u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for (n_states, n_inputs, n) in
+            [(1, 1, 1), (3, 3, 100), (2, 1, 37), (4, 2, 129), (6, 3, 300)]
+        {
+            let width = OWN + (LAGS + 1) * n_states;
+            let samples: Vec<Sample> = (0..n)
+                .map(|k| {
+                    // Magnitudes far apart, and a negative zero now and then.
+                    let lagged = (0..width - OWN)
+                        .map(|c| {
+                            if (k + c) % 17 == 0 {
+                                -0.0
+                            } else {
+                                next() * [1e-3, 1e-2, 0.1, 1.0, 10.0, 100.0, 1e3][c % 7]
+                            }
+                        })
+                        .collect();
+                    let lags = (0..n_inputs)
+                        .map(|_| [next() * 1e3, next() * 1e3])
+                        .collect();
+                    let us = (0..n_inputs).map(|_| next() * 1e3).collect();
+                    (lagged, lags, us)
+                })
+                .collect();
+            let mut sums = Sums::new(width, n_inputs);
+            // A window before, to show the sums start afresh.
+            sums.push(
+                &vec![1e9; width - OWN],
+                &vec![[1e9; LAGS]; n_inputs],
+                &vec![1e9; n_inputs],
+            );
+            sums.settle();
+            sums.clear();
+            for (lagged, lags, us) in &samples {
+                sums.push(lagged, lags, us);
+            }
+            sums.settle();
+            let (states, inputs) = summed_sample_by_sample(width, &samples);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&sums.states), bits(&states), "{n_states} states");
+            for (j, (rows, cross, square)) in inputs.iter().enumerate() {
+                let got = &sums.inputs[j];
+                for r in 0..OWN {
+                    // The upper triangle's part, which the fits read.
+                    let part = r * width + r..(r + 1) * width;
+                    assert_eq!(
+                        bits(&got.rows[part.clone()]),
+                        bits(&rows[part]),
+                        "input {j} row {r}"
+                    );
+                }
+                assert_eq!(bits(&got.cross), bits(cross), "input {j}");
+                assert_eq!(got.square.to_bits(), square.to_bits(), "input {j}");
+            }
         }
     }
 

@@ -538,8 +538,7 @@ impl EquationWalker<'_> {
             }
             if self.instruments == Some(Instruments::Simulated) {
                 for (s, sig) in instruments[..n].iter().enumerate() {
-                    eq.fixed
-                        .write(self, &info.fixed_sign_columns, sig, z, (n, s));
+                    eq.fixed.write(&info.fixed_sign_columns, sig, z, (n, s));
                 }
             }
         }
@@ -635,7 +634,7 @@ impl EquationWalker<'_> {
             self.eval_instruments(&sig, &eq.signs, &mut eq.z);
             if self.instruments == Some(Instruments::Simulated) {
                 eq.fixed
-                    .write(self, &info.fixed_sign_columns, &sig, &mut eq.z, (1, 0));
+                    .write(&info.fixed_sign_columns, &sig, &mut eq.z, (1, 0));
             }
         }
     }
@@ -790,7 +789,7 @@ impl<'a> EquationBuffers<'a> {
             z: vec![0.0; len],
             t: vec![0.0; n_out],
             signs: info.signs.clone(),
-            fixed: FixedSigns::new(walker.terms, &info.fixed_sign_columns, n_out),
+            fixed: FixedSigns::new(walker.terms, &info.fixed_sign_columns, n_out, walker.n_cols),
             block: None,
         }
     }
@@ -800,6 +799,9 @@ impl<'a> EquationBuffers<'a> {
 /// columns), each evaluated once a sample, and their buffers: nothing
 /// allocated per sample.
 struct FixedSigns<'a> {
+    terms: &'a [TermPlan],
+    /// Columns of a row of the instruments' buffer.
+    n_cols: usize,
     args: Vec<&'a ArgPlan>,
     /// The argument of each factor: `slots[column][term][factor]`.
     slots: Vec<Vec<Vec<usize>>>,
@@ -809,7 +811,12 @@ struct FixedSigns<'a> {
 }
 
 impl<'a> FixedSigns<'a> {
-    fn new(terms: &'a [TermPlan], columns: &[FixedSignColumn], n_out: usize) -> FixedSigns<'a> {
+    fn new(
+        terms: &'a [TermPlan],
+        columns: &[FixedSignColumn],
+        n_out: usize,
+        n_cols: usize,
+    ) -> FixedSigns<'a> {
         let mut args: Vec<&ArgPlan> = Vec::new();
         let slots: Vec<Vec<Vec<usize>>> = columns
             .iter()
@@ -834,6 +841,8 @@ impl<'a> FixedSigns<'a> {
             })
             .collect();
         FixedSigns {
+            terms,
+            n_cols,
             values: vec![0.0; args.len()],
             args,
             slots,
@@ -848,7 +857,6 @@ impl<'a> FixedSigns<'a> {
     #[inline(always)]
     fn write(
         &mut self,
-        walker: &EquationWalker,
         columns: &[FixedSignColumn],
         sig: &Signals,
         z: &mut [f64],
@@ -860,7 +868,7 @@ impl<'a> FixedSigns<'a> {
         for (fixed, slots) in columns.iter().zip(&self.slots) {
             self.set.fill(false);
             for ((term, o, signs), slots) in fixed.terms.iter().zip(slots) {
-                let plan = &walker.terms[*term];
+                let plan = &self.terms[*term];
                 let mut t = plan.coefficient;
                 for (((_, modulus), s), slot) in plan.factors.iter().zip(signs).zip(slots) {
                     let v = self.values[*slot];
@@ -871,7 +879,7 @@ impl<'a> FixedSigns<'a> {
             }
             for o in 0..self.acc.len() {
                 if self.set[o] {
-                    z[(o * walker.n_cols + fixed.column) * n + s] = self.acc[o];
+                    z[(o * self.n_cols + fixed.column) * n + s] = self.acc[o];
                 }
             }
         }
@@ -1384,5 +1392,92 @@ impl<'a> Stopper<'a> {
         }
         self.seen += 1;
         self.stopped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use leeway_model::interp::Share;
+    use leeway_structure::ir::Signal;
+
+    /// `u − d`: a state less a measured medium's component.
+    fn relative(state: usize) -> ArgPlan {
+        ArgPlan {
+            signal: Signal::State(state),
+            shares: vec![(Share::One, 0)],
+        }
+    }
+
+    /// The instrument of a `Φ2` modulus whose argument keeps its sign in
+    /// the data is the noise-free `s·a_sim`, not `|a_sim|`: where the
+    /// simulated argument crosses zero against the data's sign, the two
+    /// differ in sign, and only `s·a_sim` is the smooth analogue of the
+    /// regressor (docs/estimation.md, "Sign of Φ2 instruments").
+    #[test]
+    fn a_fixed_sign_instrument_is_the_sign_times_the_simulated_argument() {
+        // Term 0: 2·|u − d|·(u − d) on output 0; term 1: 3·|v − d| on
+        // output 0; term 2: 5·|v − d| on output 1. Column 1 holds terms 0
+        // and 1 (summed in order), column 0 term 2.
+        let terms = vec![
+            TermPlan {
+                coefficient: 2.0,
+                factors: vec![(relative(0), true), (relative(0), false)],
+                parameter: 0,
+                output: 0,
+            },
+            TermPlan {
+                coefficient: 3.0,
+                factors: vec![(relative(1), true)],
+                parameter: 1,
+                output: 0,
+            },
+            TermPlan {
+                coefficient: 5.0,
+                factors: vec![(relative(1), true)],
+                parameter: 2,
+                output: 1,
+            },
+        ];
+        let columns = vec![
+            FixedSignColumn {
+                column: 1,
+                terms: vec![(0, 0, vec![1.0, 1.0]), (1, 0, vec![-1.0])],
+            },
+            FixedSignColumn {
+                column: 0,
+                terms: vec![(2, 1, vec![-1.0])],
+            },
+        ];
+        let (n_out, n_cols) = (2, 2);
+        let mut fixed = FixedSigns::new(&terms, &columns, n_out, n_cols);
+        // The simulated u − d = 0.5 − 2 = −1.5 against the data's sign +1;
+        // v − d = 1 − 2 = −1 with the data's sign −1.
+        let sig = Signals {
+            states: &[0.5, 1.0],
+            inputs: &[],
+            rotation: &[],
+            disturbances: &[2.0],
+        };
+        // One equation's buffer: `n_out × n_cols`, row by row.
+        let mut z = vec![f64::NAN; n_out * n_cols];
+        fixed.write(&columns, &sig, &mut z, (1, 0));
+        let column_1: f64 = 2.0 * (1.0 * -1.5) * -1.5 + 3.0 * (-1.0 * -1.0);
+        assert_eq!(z[1].to_bits(), column_1.to_bits(), "{z:?}");
+        assert_eq!(
+            z[n_cols].to_bits(),
+            (5.0f64 * (-1.0 * -1.0)).to_bits(),
+            "{z:?}"
+        );
+        // Pointwise `|a_sim|` would give −4.5 + 3 in column 1.
+        assert_ne!(z[1], 2.0 * 1.5 * -1.5 + 3.0 * 1.0);
+        // Slots no fixed-sign column owns are left as they were.
+        assert!(z[0].is_nan() && z[n_cols + 1].is_nan(), "{z:?}");
+        // Sample 2 of a block of 3, laid out slot-major.
+        let mut block = vec![f64::NAN; n_out * n_cols * 3];
+        fixed.write(&columns, &sig, &mut block, (3, 2));
+        assert_eq!(block[3 + 2].to_bits(), column_1.to_bits(), "{block:?}");
+        assert_eq!(block[(n_cols) * 3 + 2], 5.0, "{block:?}");
+        assert_eq!(block.iter().filter(|v| !v.is_nan()).count(), 2, "{block:?}");
     }
 }
