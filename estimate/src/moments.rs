@@ -933,6 +933,29 @@ impl LongRun {
         }
     }
 
+    /// Adds the `ζ` of `n` samples that `fill` writes into their zeroed
+    /// rows (`fill(rows, w)`: sample `s`'s row at `rows[s·w..]`), as `n`
+    /// calls of [`LongRun::push_with`] would — when they begin a block
+    /// (`false`, and nothing added, otherwise).
+    #[inline]
+    pub fn push_rows_with(&mut self, n: usize, fill: impl FnOnce(&mut [f64], usize)) -> bool {
+        if self.filled != 0 || n == 0 || n > BLOCK {
+            return false;
+        }
+        let (w, dim) = (self.w, self.dim);
+        let rows = &mut self.buf[self.lags * w..(self.lags + n) * w];
+        for row in rows.chunks_exact_mut(w) {
+            row[..dim].fill(0.0);
+        }
+        fill(rows, w);
+        self.filled = n;
+        self.n += n;
+        if self.filled == BLOCK {
+            self.flush();
+        }
+        true
+    }
+
     fn flush(&mut self) {
         let (rows, w, lags) = (self.filled, self.w, self.lags);
         if rows == 0 {
@@ -1158,6 +1181,47 @@ mod tests {
         let got = lr.sum_psd();
         // The definition need not be PSD; these data keep it so.
         assert!((got - &exact).abs().max() < 1e-9 * exact.abs().max());
+    }
+
+    /// Rows of `ζ` added a block at a time give the bits of the same rows
+    /// pushed one by one: whole blocks, a shorter last one, and blocks that
+    /// begin mid-buffer, which are refused (and then pushed one by one).
+    #[test]
+    fn long_run_rows_added_by_blocks_give_the_bits_of_one_by_one() {
+        let (m, lags) = (5, 2);
+        let z = |k: usize, i: usize| 1e2 * i as f64 + ((k * 7 + i * 3) as f64 * 0.37).sin();
+        let mut one = LongRun::new(m, lags);
+        for k in 0..150 {
+            one.push_with(|row| row.iter_mut().enumerate().for_each(|(i, v)| *v = z(k, i)));
+        }
+        let mut blocks = LongRun::new(m, lags);
+        // 3 alone, then blocks of 29 (refused mid-buffer, so one by one) up
+        // to the buffer's end, then whole blocks and a last one of 22.
+        let mut k = 0;
+        for len in [3, 29, BLOCK, BLOCK, BLOCK, 22] {
+            let added = blocks.push_rows_with(len, |rows, w| {
+                for (s, row) in rows.chunks_exact_mut(w).enumerate() {
+                    for (i, v) in row[..m].iter_mut().enumerate() {
+                        *v += z(k + s, i);
+                    }
+                }
+            });
+            assert_eq!(added, len != 29, "a block of {len} from sample {k}");
+            if !added {
+                for s in k..k + len {
+                    blocks.push_with(|row| {
+                        row.iter_mut().enumerate().for_each(|(i, v)| *v = z(s, i))
+                    });
+                }
+            }
+            k += len;
+        }
+        assert_eq!(k, 150);
+        assert_eq!(blocks.n, one.n);
+        blocks.flush();
+        one.flush();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&blocks.sums), bits(&one.sums));
     }
 
     /// The regressor rows kept by one accumulation give a second one with

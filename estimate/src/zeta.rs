@@ -101,6 +101,23 @@ impl ZetaPlan {
                 *r -= out.mean;
             }
         }
+        // A block that begins the long-run sums' block: each row of `ζ`
+        // across the samples (a slot's values contiguous), outputs and rows
+        // in the order below, so each entry gets the same additions.
+        let source = if self.own { block.phi } else { block.z };
+        let whole = sums.push_rows_with(n, |rows, w| {
+            for (out, res) in self.outputs.iter().zip(res.chunks_exact(BLOCK)) {
+                for &(r, i, centre) in &out.rows {
+                    let values = &source[i * n..][..n];
+                    for ((row, &v), &res) in rows.chunks_exact_mut(w).zip(values).zip(res) {
+                        row[r] += (v - centre) * res;
+                    }
+                }
+            }
+        });
+        if whole {
+            return;
+        }
         for s in 0..n {
             let (z, phi, _) = block.equation(s);
             let source = if self.own { phi } else { z };
