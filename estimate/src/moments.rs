@@ -939,7 +939,8 @@ impl LongRun {
     /// (`false`, and nothing added, otherwise).
     #[inline]
     pub fn push_rows_with(&mut self, n: usize, fill: impl FnOnce(&mut [f64], usize)) -> bool {
-        if self.filled != 0 || n == 0 || n > BLOCK {
+        // No rows to lay out without a dimension (`w` is then 0).
+        if self.filled != 0 || n == 0 || n > BLOCK || self.w == 0 {
             return false;
         }
         let (w, dim) = (self.w, self.dim);
@@ -1222,6 +1223,10 @@ mod tests {
         one.flush();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&blocks.sums), bits(&one.sums));
+        // Without a dimension there are no rows to lay out: refused.
+        let mut empty = LongRun::new(0, lags);
+        assert!(!empty.push_rows_with(4, |_, _| {}));
+        assert_eq!(empty.n, 0);
     }
 
     /// The regressor rows kept by one accumulation give a second one with
