@@ -1229,9 +1229,6 @@ mod tests {
         assert_eq!(empty.n, 0);
     }
 
-    /// The regressor rows kept by one accumulation give a second one with
-    /// other instruments exactly the sums it would compute itself, over a
-    /// partial last block too (101 samples: three blocks and five rows).
     /// Samples pushed a block at a time, slot-major, give the bits of the
     /// same samples pushed one by one: whole blocks, a shorter last one,
     /// blocks that begin mid-buffer (pushed one by one), keeping the rows
@@ -1292,6 +1289,9 @@ mod tests {
         }
     }
 
+    /// The regressor rows kept by one accumulation give a second one with
+    /// other instruments exactly the sums it would compute itself, over a
+    /// partial last block too (101 samples: three blocks and five rows).
     #[test]
     fn kept_regressor_rows_give_the_same_bits() {
         let dense = |k: usize, shift: f64| -> Vec<f64> {
