@@ -12,8 +12,10 @@ whole process (both cores count); RSS is the peak.
 
 ``--campaign FILES`` adds a campaign of that many 10⁶-sample Parquet files
 estimated with IV3 in one process (``leeway estimate --data`` every file)
-and on a Dask LocalCluster of two one-thread workers (``leeway.dask``,
-when the ``leeway`` package is importable), compared bit for bit.
+and on Dask LocalClusters (``leeway.dask``, when the ``leeway`` package is
+importable) of both layouts docs/distributed.md compares — one worker of a
+thread a core in this process, and one-thread worker processes, a core
+each — compared bit for bit.
 
     cargo build --release -p leeway-cli -p leeway-bench
     python bench/scale.py /tmp/scale --rows 1000000 10000000 --runs 3
@@ -155,13 +157,19 @@ def campaign(args, bench: Path, files: int) -> None:
         print("(no leeway or dask package here: the LocalCluster run is skipped)")
         return
     model = leeway.Model.load(str(MODEL))
-    with LocalCluster(n_workers=2, threads_per_worker=1, dashboard_address=":0") as cluster, Client(cluster) as client:
-        start = time.perf_counter()
-        spread = leeway.dask.estimate(model, [str(p) for p in paths], client, method="iv3", aggregate=True)
-        wall = time.perf_counter() - start
     local = json.loads(out.read_text())
-    same = json.loads(spread.to_json())["parameters"] == local["parameters"]
-    print(f"the same on a LocalCluster of 2 workers: {wall:.1f} s wall; parameters bit-identical to the CLI's: {same}")
+    cores = os.cpu_count() or 1
+    layouts = {
+        f"one worker of {cores} threads": {"n_workers": 1, "threads_per_worker": cores, "processes": False},
+        f"{cores} one-thread worker processes": {"n_workers": cores, "threads_per_worker": 1},
+    }
+    for name, layout in layouts.items():
+        with LocalCluster(dashboard_address=":0", **layout) as cluster, Client(cluster) as client:
+            start = time.perf_counter()
+            spread = leeway.dask.estimate(model, [str(p) for p in paths], client, method="iv3", aggregate=True)
+            wall = time.perf_counter() - start
+        same = json.loads(spread.to_json())["parameters"] == local["parameters"]
+        print(f"the same on a LocalCluster of {name}: {wall:.1f} s wall; parameters bit-identical to the CLI's: {same}")
 
 
 def main() -> None:

@@ -105,6 +105,40 @@ def test_the_distributed_estimate_is_the_cli_estimate_bit_for_bit(
     assert est["diagnostics"]["refinements"] == 0  # LS; the IV3 run above refined
 
 
+def test_one_worker_of_two_threads_gives_the_same_bits(
+    ship: leeway.Model, files: list[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The layout docs/distributed.md recommends on one machine: one worker
+    # in the driver's process, a thread a core. Its two threads run a
+    # pass's tasks side by side over the files it opened, sharing one cache
+    # of openings and one trajectory budget: the same estimate, bit for
+    # bit, and each file opened once.
+    from leeway import mapreduce
+
+    openings: dict[str, int] = {}
+    original = mapreduce.open_file
+
+    def counted(model, path, options):  # type: ignore[no-untyped-def]
+        openings[path] = openings.get(path, 0) + 1
+        return original(model, path, options)
+
+    monkeypatch.setattr(mapreduce, "open_file", counted)
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0") as c:
+        with Client(c) as client, distributed.get_task_stream(client) as stream:
+            ours = distributed_json(ship, files, client, method="iv3")
+    same_document(ours, cli(files))
+    assert openings == dict.fromkeys(files, 1), openings
+    # Two tasks of one pass ran at the same time.
+    runs = sorted(
+        (s["start"], s["stop"])
+        for t in stream.data
+        if str(t["key"]).startswith("_run")
+        for s in t["startstops"]
+        if s["action"] == "compute"
+    )
+    assert any(b[0] < a[1] for a, b in zip(runs, runs[1:])), runs
+
+
 def _count_openings() -> None:
     """On a worker: count `mapreduce.open_file` calls by path."""
     from leeway import mapreduce

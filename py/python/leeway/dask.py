@@ -14,7 +14,9 @@ tasks elsewhere; every task is a pure function of its file and request)::
     from dask.distributed import Client, LocalCluster
     import leeway, leeway.dask
 
-    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    # One worker a machine, a thread a core: the tasks run in Rust without
+    # the GIL (docs/distributed.md).
+    client = Client(LocalCluster(n_workers=1, threads_per_worker=2, processes=False))
     model = leeway.Model.load("ship.som")
     est = leeway.dask.estimate(model, ["run1.csv", "run2.csv"], client, method="iv3")
 
