@@ -8,8 +8,8 @@
 //! simply: `"run 1"`) split at commas and trimmed as the csv crate's
 //! `Trim::All` does. It stops at the first line
 //! it does not take, for the exact reader to go on from there. A cell is
-//! parsed here only when it is made of `[0-9+-.eE]` and the fast parser
-//! reads all of it to a finite number, which `str::parse::<f64>` (both
+//! parsed here only when the fast parser reads all of it to a finite
+//! number, which `str::parse::<f64>` (both
 //! correctly rounded) reads to the same bits; any other cell is left for
 //! [`cell`](crate::csv::cell) to read (or refuse) from the line's text.
 
@@ -137,26 +137,34 @@ pub(crate) fn parse_chunk(text: &[u8], selection: &Selection, chunk: &mut Chunk)
 
 /// Where the line holding `from` ends (its LF, or the text's end).
 fn line_end(text: &[u8], from: usize) -> usize {
-    text[from..]
-        .iter()
-        .position(|b| *b == b'\n')
-        .map_or(text.len(), |k| from + k)
+    memchr::memchr(b'\n', &text[from..]).map_or(text.len(), |k| from + k)
 }
 
 /// Appends the selected values of the row whose line starts at `pos` and
-/// returns the line's end, in one pass over its bytes; `None` (nothing
-/// appended) for a line with a quote other than a simply quoted cell's (see
-/// [`cell_text`]) or a cell count other than the header's.
+/// returns the line's end; `None` (nothing appended) for a line with a
+/// quote other than a simply quoted cell's (see [`cell_text`]) or a cell
+/// count other than the header's. The line's end, its quotes and its
+/// commas are found by `memchr`'s vectorised searches.
 fn take_row(
     values: &mut Vec<f64>,
     text: &[u8],
     pos: usize,
     selection: &Selection,
 ) -> Option<usize> {
+    let end = line_end(text, pos);
+    let line = &text[pos..end];
+    let taken = if memchr::memchr(b'"', line).is_some() {
+        take_quoted(values, line, selection)
+    } else {
+        take_plain(values, line, selection)
+    };
+    taken.then_some(end)
+}
+
+/// [`take_row`] for a line without quotes.
+fn take_plain(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
     let base = values.len();
     values.resize(base + selection.width, f64::NAN);
-    let (mut cells, mut from, mut quoted) = (0, pos, false);
-    let mut end = pos;
     let mut cell = |cells: usize, piece: &[u8]| {
         if let Some(Some(slot)) = selection.slots.get(cells)
             && let Some(v) = plain_number(piece.trim_ascii())
@@ -164,32 +172,18 @@ fn take_row(
             values[base + slot] = v;
         }
     };
-    loop {
-        match text.get(end) {
-            None | Some(b'\n') => break,
-            Some(b',') => {
-                cell(cells, &text[from..end]);
-                cells += 1;
-                from = end + 1;
-            }
-            Some(b'"') => quoted = true,
-            Some(_) => {}
-        }
-        end += 1;
+    let (mut cells, mut from) = (0, 0);
+    for comma in memchr::memchr_iter(b',', line) {
+        cell(cells, &line[from..comma]);
+        cells += 1;
+        from = comma + 1;
     }
-    cell(cells, &text[from..end]);
-    cells += 1;
-    let taken = if quoted {
+    cell(cells, &line[from..]);
+    if cells + 1 != selection.cells {
         values.truncate(base);
-        take_quoted(values, &text[pos..end], selection)
-    } else {
-        cells == selection.cells
-    };
-    if !taken {
-        values.truncate(base);
-        return None;
+        return false;
     }
-    Some(end)
+    true
 }
 
 /// [`take_row`] for a line holding quotes.
@@ -199,6 +193,7 @@ fn take_quoted(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> boo
     let mut cells = 0;
     for piece in line.split(|b| *b == b',') {
         let Some(text) = cell_text(piece) else {
+            values.truncate(base);
             return false;
         };
         if let Some(Some(slot)) = selection.slots.get(cells)
@@ -208,7 +203,11 @@ fn take_quoted(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> boo
         }
         cells += 1;
     }
-    cells == selection.cells
+    if cells != selection.cells {
+        values.truncate(base);
+        return false;
+    }
+    true
 }
 
 /// Whether every cell of a line is plain or simply quoted (see
@@ -249,16 +248,13 @@ fn cell_text(piece: &[u8]) -> Option<&[u8]> {
 }
 
 /// A cell the fast parser reads to the bits `str::parse::<f64>` gives: a
-/// plain decimal read whole to a finite value. `None` leaves the cell to
-/// the exact reading.
+/// decimal read whole to a finite value. `None` leaves the cell to the
+/// exact reading. The fast parser reads whole only an optional sign, digits
+/// with at most one point, and an exponent, or else `inf`, `infinity` and
+/// `nan` (not finite): the cells `str::parse` reads, correctly rounded by
+/// both (`csv_fast::tests::plain_numbers_are_parsed_to_the_bits_of_str_parse`
+/// tries random texts over digits, signs, points, exponents and letters).
 pub(crate) fn plain_number(cell: &[u8]) -> Option<f64> {
-    let plain = !cell.is_empty()
-        && cell
-            .iter()
-            .all(|b| matches!(b, b'0'..=b'9' | b'+' | b'-' | b'.' | b'e' | b'E'));
-    if !plain {
-        return None;
-    }
     match fast_float2::parse::<f64, _>(cell) {
         Ok(v) if v.is_finite() => Some(v),
         _ => None,
