@@ -21,7 +21,7 @@ use crate::notes::LoadedFile;
 use crate::open::open_path;
 use crate::options::LoadOptions;
 use crate::spill::{StreamedFile, open_table};
-use crate::validate::{Places, Table, load_table};
+use crate::validate::{ParsedRow, Places, Table, load_table};
 use leeway_model::experiment::Experiment;
 use leeway_structure::ir::Ir;
 use std::borrow::Cow;
@@ -499,6 +499,17 @@ impl Table for CsvFile {
             }
             Reading::Exact(r) => r.number(i, name),
         }
+    }
+    fn parsed_row(&self) -> Option<ParsedRow<'_>> {
+        let Reading::Fast(f) = &self.read else {
+            return None;
+        };
+        let (_, chunk, row) = f.current()?;
+        let width = f.selection.width;
+        Some(ParsedRow {
+            values: chunk.values.get(row * width..(row + 1) * width)?,
+            slots: &f.selection.slots,
+        })
     }
     fn label(&self, i: usize) -> Result<Cow<'_, [u8]>, DataError> {
         match &self.read {

@@ -61,8 +61,8 @@ pub use options::{
 pub use signals::{HeadingGainSums, heading_gain};
 pub use spill::{CsvSource, FileSource, StreamedFile, open_table};
 pub use validate::{
-    Block, MAX_RESAMPLE_RATIO, OUTLIER_FACTOR, Places, Table, ZERO_OUTLIER, ZERO_OUTLIER_INPUT,
-    load_table,
+    Block, MAX_RESAMPLE_RATIO, OUTLIER_FACTOR, ParsedRow, Places, Table, ZERO_OUTLIER,
+    ZERO_OUTLIER_INPUT, load_table,
 };
 pub use write::write_csv;
 

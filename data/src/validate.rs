@@ -95,6 +95,12 @@ pub trait Table {
     /// Cell `i` of the current row as a finite number (`name`: the column's
     /// name in messages).
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError>;
+    /// The current row's cells that are already parsed (the CSV fast
+    /// path's chunk), so that reading them needs no call of
+    /// [`Table::number`] each; `None` where the table keeps none.
+    fn parsed_row(&self) -> Option<ParsedRow<'_>> {
+        None
+    }
     /// Cell `i` of the current row as a label (an experiment's name).
     fn label(&self, i: usize) -> Result<std::borrow::Cow<'_, [u8]>, DataError>;
     /// The type of column `i` when it holds dates or times (read as
@@ -117,6 +123,40 @@ pub trait Table {
     /// Where the row at `position` is, naming a column when given.
     fn at(&self, position: u64, column: Option<(usize, &str)>) -> String {
         self.places().at(self.file(), position, column)
+    }
+}
+
+/// A row's cells parsed ahead ([`Table::parsed_row`]): `values[slots[i]]`
+/// is column `i`'s value, NaN where the cell was left to
+/// [`Table::number`] (a parsed value is finite).
+#[derive(Clone, Copy, Debug)]
+pub struct ParsedRow<'a> {
+    pub(crate) values: &'a [f64],
+    pub(crate) slots: &'a [Option<usize>],
+}
+
+impl ParsedRow<'_> {
+    /// Column `i`'s value where it was parsed: what [`Table::number`] gives.
+    #[inline(always)]
+    pub(crate) fn get(&self, i: usize) -> Option<f64> {
+        let slot = (*self.slots.get(i)?)?;
+        let v = *self.values.get(slot)?;
+        (!v.is_nan()).then_some(v)
+    }
+}
+
+/// Cell `i` of the current row as a finite number: from the row parsed
+/// ahead where it holds it, else through [`Table::number`].
+#[inline(always)]
+fn number_of(
+    table: &dyn Table,
+    parsed: Option<ParsedRow>,
+    i: usize,
+    name: &str,
+) -> Result<f64, DataError> {
+    match parsed.and_then(|p| p.get(i)) {
+        Some(v) => Ok(v),
+        None => table.number(i, name),
     }
 }
 
@@ -261,11 +301,14 @@ impl Layout {
         places: &[usize],
         buf: &mut RowBuf,
     ) -> Result<Option<f64>, DataError> {
+        let parsed = table.parsed_row();
         for ((_, i, name, factor), &place) in self.cols.iter().zip(places) {
-            buf.set(place, table.number(*i, name)? * factor);
+            buf.set(place, number_of(table, parsed, *i, name)? * factor);
         }
         match self.time_col {
-            Some(i) => Ok(Some(table.number(i, "time")? * self.time_factor)),
+            Some(i) => Ok(Some(
+                number_of(table, parsed, i, "time")? * self.time_factor,
+            )),
             None => Ok(None),
         }
     }

@@ -44,9 +44,18 @@ fn transcript(table: &mut dyn Table, columns: &[usize], label: Option<usize>) ->
             table.dropped()
         );
         for &i in columns {
+            // A cell parsed ahead is what `number` gives, bit for bit.
+            let ahead = table.parsed_row().and_then(|p| p.get(i));
             match table.number(i, &format!("c{i}")) {
-                Ok(v) => row.push_str(&format!(" {:x}", v.to_bits())),
+                Ok(v) => {
+                    assert!(
+                        ahead.is_none_or(|a| a.to_bits() == v.to_bits()),
+                        "{row} {i}"
+                    );
+                    row.push_str(&format!(" {:x}", v.to_bits()));
+                }
                 Err(e) => {
+                    assert!(ahead.is_none(), "{row} {i}: parsed ahead, yet {e:?}");
                     out.push(format!("{row} cell error {e:?}"));
                     return out;
                 }
@@ -491,4 +500,34 @@ fn the_loaded_file_does_not_depend_on_batches_or_threads() {
             want.as_ref().map(|l| l.notes.clone()).map_err(Clone::clone)
         );
     }
+}
+
+#[test]
+fn the_fast_path_hands_its_parsed_cells_over_and_leaves_the_others() {
+    let f = file_of(b"a,b,c\n1.5,x,-2e3\n\"4\",5,inf\n");
+    let mut r = CsvFile::open_with(
+        f.path(),
+        "--data",
+        Batching {
+            chunk: 1000,
+            threads: 1,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"));
+    // Columns chosen out of order, one twice: each keeps its own slot.
+    r.select(&[2, 0, 2]);
+    let mut rows = Vec::new();
+    while r.next_row().unwrap_or_else(|e| panic!("{e:?}")) {
+        let p = r
+            .parsed_row()
+            .unwrap_or_else(|| panic!("the fast path parsed the row"));
+        rows.push([p.get(0), p.get(1), p.get(2)]);
+    }
+    assert!(r.is_fast());
+    // `x` and `5` are not read (column 1 is not chosen), a simply quoted
+    // `"4"` is, and `inf` is left to `number` (not finite: its error).
+    assert_eq!(
+        rows,
+        [[Some(1.5), None, Some(-2e3)], [Some(4.0), None, None]],
+    );
 }
