@@ -837,6 +837,55 @@ mod tests {
     }
 
     #[test]
+    fn streamed_samples_are_located_at_their_rows_of_the_file() {
+        // The spill of a Parquet file stores no positions: each sample's
+        // is told from its index, counted from its experiment's first row.
+        use leeway_model::experiment::Source;
+        let (_path_dir, path) = scratch("streamed.parquet");
+        let n = 20i64;
+        let per_run = |v: i64| Values::I64((0..2 * n).map(|_| v).collect());
+        let runs = (0..2 * n)
+            .map(|k| if k < n { b"a".to_vec() } else { b"b".to_vec() })
+            .collect();
+        write(
+            &path,
+            &[
+                (
+                    "required int64 time;",
+                    Values::I64((0..2 * n).map(|k| k % n).collect()),
+                ),
+                ("required int64 u;", per_run(1)),
+                ("required int64 r;", per_run(2)),
+                ("required int64 delta;", per_run(35)),
+                ("required binary experiment (UTF8);", Values::Bytes(runs)),
+            ],
+        );
+        let src = "model M { state u, r input delta der u = X*u + T*delta der r = N*r step 1.0 }";
+        let ir = leeway_structure::compile(src, &leeway_structure::CompileOptions::default())
+            .ir
+            .unwrap_or_else(|| panic!("the test model compiles"));
+        let streamed = crate::file::open_file(&path, &ir, &crate::options::LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let file = path.display();
+        let [a, b] = &streamed.sources[..] else {
+            panic!("two experiments")
+        };
+        assert_eq!(a.locate(0), format!("{file}: row 0 (row group 0, row 0)"));
+        assert_eq!(
+            a.locate(19),
+            format!("{file}: row 19 (row group 0, row 19)")
+        );
+        assert_eq!(b.locate(3), format!("{file}: row 23 (row group 0, row 23)"));
+        let mut rows = 0;
+        b.visit(&mut |row| {
+            assert_eq!((row.states, row.inputs), (&[1.0, 2.0][..], &[35.0][..]));
+            rows += 1;
+        });
+        assert_eq!(rows, 20);
+        assert!(b.failure().is_none());
+    }
+
+    #[test]
     fn unsigned_integers_are_read_unsigned() {
         let (_path_dir, path) = scratch("unsigned.parquet");
         // 3000000037 stored in an INT32's bits; 2⁵³ and 2⁶⁴−40 in an INT64's.

@@ -2,8 +2,9 @@
 //! values to a binary spill file, and each pass over an experiment
 //! ([`FileSource`]) reads them back from there, whatever the format read.
 //!
-//! Each row is its position and its values in base units, little-endian, in
-//! a temporary file removed when the sources are dropped. A visit reads its
+//! Each row is its values in base units, little-endian, after its position
+//! where that cannot be told from the row's index (a CSV file's line), in a
+//! temporary file removed when the sources are dropped. A visit reads its
 //! block back a chunk of 8192 rows at a time (one read each), so the
 //! values are the validated ones bit for bit, no pass parses text again, a
 //! file rewritten after validation changes nothing, and memory does not grow
@@ -18,8 +19,10 @@ use leeway_model::experiment::{Row, Source};
 use leeway_structure::ir::Ir;
 
 /// The validated samples of a file, as the validating pass parsed them:
-/// per row its position (`u64`: the physical line of a CSV file, the row
-/// otherwise) and the layout's values (`f64`, base
+/// per row its position where it cannot be told from the row's index
+/// (`u64`: the physical line of a CSV file, which comment and blank lines
+/// move; the rows of a Parquet file or a frame are positions `first`,
+/// `first + 1`, … and are not stored) and the layout's values (`f64`, base
 /// units), little-endian, in a temporary file removed when the last
 /// [`FileSource`] of the file is dropped. Later passes read these bytes
 /// instead of parsing the text again: the values are the validated ones, bit
@@ -29,18 +32,38 @@ struct Spill {
     file: tempfile::NamedTempFile,
     /// Values per row (the layout's columns).
     width: usize,
+    /// Where the rows' positions are: stored in each row, or the first
+    /// row's, the others following it one by one.
+    positions: Positions,
+}
+
+/// How a spill's rows know their positions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Positions {
+    /// Each row begins with its position (CSV: lines that comment and blank
+    /// lines move).
+    InRows,
+    /// Row `r` of the spill is at position `first + r` (Parquet files and
+    /// frames: every row a sample).
+    Consecutive { first: u64 },
 }
 
 impl Spill {
-    /// Bytes per row: the line and the values.
+    /// Bytes per row: the position where it is stored, and the values.
     fn record(&self) -> u64 {
-        8 * (1 + self.width as u64)
+        let position = u64::from(self.positions == Positions::InRows);
+        8 * (position + self.width as u64)
     }
 }
 
 /// Writes validated rows to a [`Spill`].
 struct SpillWriter {
     out: std::io::BufWriter<std::fs::File>,
+    /// Where positions go; a consecutive file's first position is taken
+    /// from its first row.
+    positions: Positions,
+    /// Rows written.
+    rows: u64,
     bytes: Vec<u8>,
     /// Each spilled value's part of a row (states, inputs, rotation,
     /// disturbances, heading) and index there, found once from its role.
@@ -59,7 +82,23 @@ impl SpillWriter {
             &heading,
         ];
         self.bytes.clear();
-        self.bytes.extend_from_slice(&line.to_le_bytes());
+        match self.positions {
+            Positions::InRows => self.bytes.extend_from_slice(&line.to_le_bytes()),
+            Positions::Consecutive { .. } if self.rows == 0 => {
+                self.positions = Positions::Consecutive { first: line };
+            }
+            // Positions not stored are told by the row's index: a table
+            // whose rows skip one would have its samples misplaced.
+            Positions::Consecutive { first } if first + self.rows != line => {
+                return Err(std::io::Error::other(format!(
+                    "row {} is at position {line}, not {}",
+                    self.rows + 1,
+                    first + self.rows
+                )));
+            }
+            Positions::Consecutive { .. } => {}
+        }
+        self.rows += 1;
         for &(part, i) in &self.places {
             let v = parts[part][i];
             self.bytes.extend_from_slice(&v.to_le_bytes());
@@ -170,8 +209,13 @@ impl FileSource {
                 return self.fail(lost(format!("rows {} to {} of {rows}: {e}", k + 1, k + n)));
             }
             for row in bytes.chunks_exact(width) {
-                let (line, values) = row.split_at(8);
-                let line = u64::from_le_bytes(word(line));
+                let (line, values) = match self.spill.positions {
+                    Positions::InRows => {
+                        let (line, values) = row.split_at(8);
+                        (u64::from_le_bytes(word(line)), values)
+                    }
+                    Positions::Consecutive { first } => (first + self.first_record + k as u64, row),
+                };
                 for (&place, v) in places.iter().zip(values.chunks_exact(8)) {
                     buf.set(place, f64::from_le_bytes(word(v)));
                 }
@@ -280,8 +324,14 @@ pub fn open_table(
         .prefix("leeway-spill-")
         .tempfile()
         .map_err(spill_error)?;
+    let positions = match table.places() {
+        Places::Lines => Positions::InRows,
+        Places::Rows | Places::Groups(_) => Positions::Consecutive { first: 0 },
+    };
     let mut writer = SpillWriter {
         out: std::io::BufWriter::with_capacity(1 << 16, spill_file.reopen().map_err(spill_error)?),
+        positions,
+        rows: 0,
         bytes: Vec::new(),
         places: Vec::new(),
     };
@@ -292,10 +342,12 @@ pub fn open_table(
         writer.push(position, row).map_err(spill_error)
     })?;
     std::io::Write::flush(&mut writer.out).map_err(spill_error)?;
+    let positions = writer.positions;
     drop(writer);
     let spill = std::sync::Arc::new(Spill {
         file: spill_file,
         width: roles.len(),
+        positions,
     });
     let places = table.places().clone();
     let mut first_record = 0u64;
