@@ -486,13 +486,8 @@ impl Table for CsvFile {
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
         match &self.read {
             Reading::Fast(f) => {
-                if let (Some((_, chunk, row)), Some(Some(slot))) =
-                    (f.current(), f.selection.slots.get(i))
-                {
-                    let v = chunk.values[row * f.selection.width + slot];
-                    if !v.is_nan() {
-                        return Ok(v);
-                    }
+                if let Some(v) = self.parsed_row().and_then(|p| p.get(i)) {
+                    return Ok(v);
                 }
                 let line = f.line(self.header_line);
                 cell(&f.file, line, field(f.line_text(), i), i, name)
