@@ -17,9 +17,20 @@ importable) of both layouts docs/distributed.md compares — one worker of a
 thread a core in this process, and one-thread worker processes, a core
 each — compared bit for bit.
 
+``--instructions`` counts instead of timing: each method and format run
+once under valgrind's callgrind (the ``profiling`` build, which has the
+symbols), and the instructions a sample of each phase of the estimate
+printed; each profile stays in DIR for ``callgrind_annotate``. The same
+command gives the same count to about a part in a million, so two builds
+compare where a host's drift hides a few per cent of time (compare them
+with the same DIR: the count moves by about 0.1 % with the length of the
+paths). It is about 150× slower than a plain run: use 10⁵ rows.
+
     cargo build --release -p leeway-cli -p leeway-bench
     python bench/scale.py /tmp/scale --rows 1000000 10000000 --runs 3
     python bench/scale.py /tmp/scale --rows 1000000 --campaign 10
+    cargo build --profile profiling -p leeway-cli
+    python bench/scale.py /tmp/scale --rows 100000 --instructions
 
 Prints Markdown tables (docs/performance.md quotes them with the load).
 """
@@ -29,6 +40,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -131,6 +144,101 @@ def estimate_row(args, bench: Path, data: Path, method: str, rows: int, read_cpu
     )
 
 
+# The phases of an estimate, by the function whose inclusive count is
+# theirs (every thread counted together; a closure or function that
+# inlining removes counts as absent).
+PHASES = {
+    "data checks": ["leeway_report::checks::data_checks::{{closure}}"],
+    "facts": ["leeway_estimate::runner::PassRunner::facts_from"],
+    "moment passes": ["leeway_estimate::runner::PassRunner::moments"],
+    "covariance + own simulation": ["leeway_estimate::runner::PassRunner::long_run::{{closure}}"],
+    # Across every pass:
+    "regressors (interpreted)": ["<leeway_model::interp::PlannedSlots as leeway_model::model::SlotRegressors>::update_block"],
+    "simulation steps (interpreted)": ["leeway_model::interp::plan::RhsPlan::eval"],
+    "kernels": ["leeway_estimate::moments::MomentAccumulator::flush", "leeway_estimate::moments::LongRun::flush"],
+}
+SCAN = "leeway_data::validate::scan"
+PARSE = "leeway_data::csv_chunk::parse_chunk"
+# `count (pct)  file:function [object]`; the function may hold spaces and colons.
+ANNOTATED = re.compile(r"^\s*([\d,]+) \([^)]*\)\s+([<*>]\s+)?[^:\s]*:(.*?)(?: \(\d[\d,]*x\))?(?: \[[^\]]*\])?\s*$")
+
+
+def annotated(text: str) -> list[tuple[str, str, int]]:
+    """`(mark, function, count)` of every line of callgrind_annotate's output."""
+    lines = []
+    for line in text.splitlines():
+        m = ANNOTATED.match(line)
+        if m:
+            lines.append(((m.group(2) or "").strip(), m.group(3).strip(), int(m.group(1).replace(",", ""))))
+    return lines
+
+
+def callgrind(args, data: Path, method: str) -> tuple[dict[str, int], int]:
+    """Instructions of each phase of one estimate under callgrind, and its passes."""
+    stem = Path(args.dir) / f"callgrind-{data.stem}-{data.suffix[1:]}-{method}"
+    out, json_out = stem.with_suffix(".out"), stem.with_suffix(".json")
+    cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", args.profiling,
+           "estimate", str(MODEL), "--data", str(data), "--method", method, "--aggregate", "--json"]
+    with open(json_out, "wb") as sink:
+        done = subprocess.run(cmd, stdout=sink, stderr=subprocess.DEVNULL)
+    if done.returncode not in (0, 1):
+        raise SystemExit(f"failed ({done.returncode}): {' '.join(cmd)}")
+    report = json.loads(json_out.read_text())
+    passes = (report["diagnostics"].get("refinements") or 0) + 1
+
+    def annotate(*options: str) -> str:
+        return subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=yes", *options, str(out)],
+                              capture_output=True, text=True, check=True).stdout
+
+    text = annotate()
+    total = re.search(r"^\s*([\d,]+) \(100\.0%\)\s+PROGRAM TOTALS", text, re.M)
+    counts = {"total": int(total.group(1).replace(",", "")) if total else 0}
+    # A function is listed once per source file its inlined code came from;
+    # its own line holds the whole inclusive count, the largest.
+    inclusive: dict[str, int] = {}
+    for _, function, count in annotated(text):
+        inclusive[function] = max(inclusive.get(function, 0), count)
+    for phase, functions in PHASES.items():
+        counts[phase] = sum(inclusive.get(f, 0) for f in functions)
+    # Reading: the validating pass, and the CSV chunks parsed on the other
+    # threads (those it parsed itself are in its count already).
+    parsed_by_scan = 0
+    block: list[tuple[str, str, int]] = []
+    for mark, function, count in annotated(annotate("--tree=caller")) + [("*", "", 0)]:
+        if mark == "*":
+            if function == PARSE:
+                # Listed once per source file of its inlined code: the
+                # callers of the whole function are under one of them.
+                by_scan = sum(c for m, f, c in block if m == "<" and f.endswith("::next_row"))
+                parsed_by_scan = max(parsed_by_scan, by_scan)
+            block = []
+        else:
+            block.append((mark, function, count))
+    counts["reading"] = inclusive.get(SCAN, 0) + inclusive.get(PARSE, 0) - parsed_by_scan
+    return counts, passes
+
+
+def instructions(args, bench: Path) -> None:
+    """Instructions a sample of each phase, per format and method."""
+    if not shutil.which("valgrind") or not shutil.which("callgrind_annotate"):
+        raise SystemExit("--instructions runs valgrind's callgrind: install valgrind (Debian: apt install valgrind)")
+    if not Path(args.profiling).exists():
+        raise SystemExit(f"no {args.profiling}: build it with `cargo build --profile profiling -p leeway-cli`")
+    phases = ["reading", *PHASES]
+    print("\ninstructions a sample (callgrind); the phases after the covariance pass are parts of the passes")
+    print(f"\n| format | rows | method | total | {' | '.join(phases)} | passes | moment-sum FLOP a sample |")
+    print("|---|---|---|---|" + "---|" * len(phases) + "---|---|")
+    for rows in args.rows:
+        for data in write_data(bench, Path(args.dir), rows):
+            for method in args.methods:
+                counts, passes = callgrind(args, data, method)
+                per_sample, _ = flops(bench, data, method)
+                share = lambda k: f"{counts[k] / rows:,.0f} ({100 * counts[k] / counts['total']:.1f} %)"
+                print(f"| {data.suffix[1:]} | {rows:,} | {method} | {counts['total'] / rows:,.0f} | "
+                      + " | ".join(share(k) for k in phases)
+                      + f" | {passes} | {passes} × {per_sample} |", flush=True)
+
+
 def campaign(args, bench: Path, files: int) -> None:
     directory = Path(args.dir) / "campaign"
     directory.mkdir(parents=True, exist_ok=True)
@@ -180,10 +288,15 @@ def main() -> None:
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--leeway", default=str(ROOT / "target" / "release" / "leeway"))
     parser.add_argument("--campaign", type=int, default=0, metavar="FILES")
+    parser.add_argument("--instructions", action="store_true", help="count instructions (callgrind) instead of timing")
+    parser.add_argument("--profiling", default=str(ROOT / "target" / "profiling" / "leeway"))
     args = parser.parse_args()
     # The bench binaries (`stream-memory`, `flops`) of this checkout's release build.
     bench = ROOT / "target" / "release"
     Path(args.dir).mkdir(parents=True, exist_ok=True)
+    if args.instructions:
+        instructions(args, bench)
+        return
     bw = bandwidth()
     print(f"machine: {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}, memory bandwidth {bw / 1e9:.1f} GB/s (copy)")
     print("\n| format | rows | method | wall s | CPU s | peak MiB | pandas read CPU s | CPU / pandas | read floor s | passes × FLOP/sample | FLOP floor s |")
