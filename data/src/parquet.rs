@@ -31,7 +31,7 @@
 
 use crate::error::DataError;
 use crate::open::open_path;
-use crate::validate::{Places, Table, finite, missing, not_a_number};
+use crate::validate::{ParsedRow, Places, Table, finite, missing, not_a_number};
 use parquet::column::reader::{ColumnReader, ColumnReaderImpl};
 use parquet::data_type::DataType;
 use parquet::file::reader::{FileReader, SerializedFileReader};
@@ -147,6 +147,14 @@ pub struct ParquetFile {
     /// The position of the batch's first row.
     batch_start: u64,
     started: bool,
+    /// The batch's plain columns (DOUBLE without nulls, read as stored)
+    /// row by row, `plain_width` values a row, NaN where a value is not
+    /// finite (`number` refuses it with its place); each column's place in
+    /// a row. What [`Table::parsed_row`] hands the validating pass, so that
+    /// it reads a row without a call of [`Table::number`] a value.
+    plain: Vec<f64>,
+    plain_width: usize,
+    plain_slots: Vec<Option<usize>>,
 }
 
 impl std::fmt::Debug for ParquetFile {
@@ -222,6 +230,9 @@ impl ParquetFile {
             index: 0,
             batch_start: 0,
             started: false,
+            plain: Vec::new(),
+            plain_width: 0,
+            plain_slots: vec![None; schema.num_columns()],
             reader,
         };
         crate::validate::unique_headers(&table.headers, |i| table.header_at(Some(i)))?;
@@ -308,7 +319,39 @@ impl ParquetFile {
         }
         self.remaining -= want as u64;
         self.rows = want;
+        self.gather_plain();
         Ok(true)
+    }
+
+    /// Lays the batch's plain columns into `plain`, row by row: those
+    /// whose values [`Table::number`] takes as stored (a refused column's
+    /// values are never handed over).
+    fn gather_plain(&mut self) {
+        let rows = self.rows;
+        let mut width = 0;
+        for (i, slot) in self.plain_slots.iter_mut().enumerate() {
+            let read = self.readers.get(i).is_some_and(Option::is_some);
+            let refused = matches!(self.readings[i], Reading::Refused(_));
+            let plain = read && !refused && self.batches[i].doubles.len() >= rows;
+            *slot = plain.then(|| {
+                width += 1;
+                width - 1
+            });
+        }
+        self.plain_width = width;
+        self.plain.clear();
+        self.plain.resize(rows * width, f64::NAN);
+        for (batch, slot) in self.batches.iter().zip(&self.plain_slots) {
+            let Some(slot) = *slot else { continue };
+            for (row, &v) in self.plain[slot..]
+                .iter_mut()
+                .step_by(width)
+                .zip(&batch.doubles[..rows])
+            {
+                // Left to `number`, which refuses it with its place.
+                *row = if v.is_finite() { v } else { f64::NAN };
+            }
+        }
     }
 
     /// A decoding failure at `position` (in column `column`).
@@ -679,6 +722,13 @@ impl Table for ParquetFile {
     fn position(&self) -> u64 {
         self.batch_start + self.index as u64
     }
+    fn parsed_row(&self) -> Option<ParsedRow<'_>> {
+        let w = self.plain_width;
+        Some(ParsedRow {
+            values: self.plain.get(self.index * w..(self.index + 1) * w)?,
+            slots: &self.plain_slots,
+        })
+    }
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError> {
         let at = || self.at(self.position(), Some((i, name)));
         let text_hint = || {
@@ -698,9 +748,7 @@ impl Table for ParquetFile {
             ));
         }
         // Most columns: a DOUBLE without nulls, its value finite.
-        if let Some(&v) = self.batches[i].doubles.get(self.index)
-            && v.is_finite()
-        {
+        if let Some(v) = self.parsed_row().and_then(|p| p.get(i)) {
             return Ok(v);
         }
         match self.cell(i) {
@@ -773,6 +821,8 @@ mod tests {
         I64(Vec<i64>),
         Fixed(Vec<Vec<u8>>),
         Bytes(Vec<Vec<u8>>),
+        /// An optional DOUBLE column (`None`: a null).
+        F64(Vec<Option<f64>>),
     }
 
     fn write(path: &Path, columns: &[(&str, Values)]) {
@@ -807,6 +857,15 @@ mod tests {
                     col.typed::<parquet::data_type::ByteArrayType>()
                         .write_batch(&v, None, None)
                 }
+                Values::F64(v) => {
+                    let present: Vec<f64> = v.iter().flatten().copied().collect();
+                    let defs: Vec<i16> = v.iter().map(|x| i16::from(x.is_some())).collect();
+                    col.typed::<parquet::data_type::DoubleType>().write_batch(
+                        &present,
+                        Some(&defs),
+                        None,
+                    )
+                }
             };
             written.unwrap_or_else(|e| panic!("{e}"));
             col.close().unwrap_or_else(|e| panic!("{e}"));
@@ -821,9 +880,77 @@ mod tests {
         let name = t.headers()[i].clone();
         let mut out = Vec::new();
         while t.next_row()? {
-            out.push(t.number(i, &name)?);
+            let v = number_as_handed_over(&t, i, &name)?;
+            out.push(v);
         }
         Ok(out)
+    }
+
+    /// Cell `i` of the current row through [`Table::number`], after
+    /// checking that the value [`Table::parsed_row`] hands over (if any)
+    /// is its bits, and that a cell `number` refuses is never handed over.
+    fn number_as_handed_over(t: &ParquetFile, i: usize, name: &str) -> Result<f64, DataError> {
+        let ahead = t.parsed_row().and_then(|p| p.get(i));
+        let v = t.number(i, name);
+        match &v {
+            Ok(v) => assert!(
+                ahead.is_none_or(|a| a.to_bits() == v.to_bits()),
+                "row {}: handed over {ahead:?}, read {v}",
+                t.position()
+            ),
+            Err(e) => assert!(
+                ahead.is_none(),
+                "row {}: handed over {ahead:?}, yet {e}",
+                t.position()
+            ),
+        }
+        v
+    }
+
+    #[test]
+    fn plain_doubles_are_handed_over_as_number_reads_them() {
+        // Three batches and a bit; an infinity and a NaN (refused by
+        // `number` with their place) and a null (its batch read cell by
+        // cell) in some of them.
+        let n = 3 * BATCH + 5;
+        let a: Vec<Option<f64>> = (0..n)
+            .map(|k| {
+                Some(match k {
+                    17 => f64::INFINITY,
+                    5000 => f64::NAN,
+                    _ => k as f64 * 0.1 - 3.0,
+                })
+            })
+            .collect();
+        let b: Vec<Option<f64>> = (0..n)
+            .map(|k| (k != 2 * BATCH + 1).then_some(-(k as f64)))
+            .collect();
+        let c: Vec<Option<f64>> = (0..n).map(|k| Some(k as f64 / 7.0)).collect();
+        let (_dir, path) = scratch("plain.parquet");
+        write(
+            &path,
+            &[
+                ("optional double a;", Values::F64(a.clone())),
+                ("optional double b;", Values::F64(b.clone())),
+                ("optional double c;", Values::F64(c.clone())),
+            ],
+        );
+        let mut t = ParquetFile::open(&path).unwrap_or_else(|e| panic!("{e}"));
+        let (mut handed, mut refused) = ([0usize; 3], [0usize; 3]);
+        while t.next_row().unwrap_or_else(|e| panic!("{e}")) {
+            let k = usize::try_from(t.position()).unwrap_or(usize::MAX);
+            for (i, column) in [&a, &b, &c].iter().enumerate() {
+                handed[i] += usize::from(t.parsed_row().and_then(|p| p.get(i)).is_some());
+                match number_as_handed_over(&t, i, "x") {
+                    Ok(v) => assert_eq!(Some(v.to_bits()), column[k].map(f64::to_bits)),
+                    Err(_) => refused[i] += 1,
+                }
+            }
+        }
+        // `a`: all but its infinity and NaN; `b`: all but the batch with
+        // its null (read cell by cell, its null refused); `c`: every value.
+        assert_eq!(refused, [2, 1, 0]);
+        assert_eq!(handed, [n - 2, n - BATCH, n]);
     }
 
     /// A file path in a fresh directory, removed with the returned guard.

@@ -96,8 +96,9 @@ pub trait Table {
     /// name in messages).
     fn number(&self, i: usize, name: &str) -> Result<f64, DataError>;
     /// The current row's cells that are already parsed (the CSV fast
-    /// path's chunk), so that reading them needs no call of
-    /// [`Table::number`] each; `None` where the table keeps none.
+    /// path's chunk, a Parquet batch's plain columns), so that reading them
+    /// needs no call of [`Table::number`] each; `None` where the table
+    /// keeps none.
     fn parsed_row(&self) -> Option<ParsedRow<'_>> {
         None
     }
