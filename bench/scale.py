@@ -192,7 +192,9 @@ def callgrind(args, data: Path, method: str) -> tuple[dict[str, int], int]:
 
     text = annotate()
     total = re.search(r"^\s*([\d,]+) \(100\.0%\)\s+PROGRAM TOTALS", text, re.M)
-    counts = {"total": int(total.group(1).replace(",", "")) if total else 0}
+    if not total:
+        raise SystemExit(f"callgrind_annotate printed no total for {out}")
+    counts = {"total": int(total.group(1).replace(",", ""))}
     # A function is listed once per source file its inlined code came from;
     # its own line holds the whole inclusive count, the largest.
     inclusive: dict[str, int] = {}
@@ -233,9 +235,9 @@ def instructions(args, bench: Path) -> None:
             for method in args.methods:
                 counts, passes = callgrind(args, data, method)
                 per_sample, _ = flops(bench, data, method)
-                share = lambda k: f"{counts[k] / rows:,.0f} ({100 * counts[k] / counts['total']:.1f} %)"
+                shares = (f"{counts[k] / rows:,.0f} ({100 * counts[k] / counts['total']:.1f} %)" for k in phases)
                 print(f"| {data.suffix[1:]} | {rows:,} | {method} | {counts['total'] / rows:,.0f} | "
-                      + " | ".join(share(k) for k in phases)
+                      + " | ".join(shares)
                       + f" | {passes} | {passes} × {per_sample} |", flush=True)
 
 
