@@ -12,20 +12,9 @@
 use leeway::Source;
 use leeway::data::{LoadOptions, Records, load_file_noted, load_table, open_file, open_table};
 use leeway::ir::Ir;
+use leeway_bench::cpu_seconds;
 use std::path::Path;
 use std::time::Instant;
-
-/// This process's CPU time (user + system, all threads) in seconds, where
-/// `/proc/self/stat` reports it (Linux; its clock ticks are 1/100 s).
-fn cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the command name (in parentheses, which may hold spaces).
-    let rest = &stat[stat.rfind(')')? + 2..];
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    // utime and stime: fields 14 and 15 of the line, 12 and 13 after the name.
-    let ticks: u64 = fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?;
-    Some(ticks as f64 / 100.0)
-}
 
 /// One way of reading the file: the rows read, or why not.
 type Reading<'a> = Box<dyn FnMut() -> Result<usize, String> + 'a>;
