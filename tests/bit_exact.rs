@@ -2,7 +2,8 @@
 //! same IR agree bit for bit (`f64::to_bits`) on every regressor of every
 //! predictor, on `rhs` and on `step`, over thousands of random samples
 //! (states, inputs, heading or rotation entries, disturbances, θ) and random
-//! sign patterns, for every example model and the fixtures in `tests/models/`.
+//! sign patterns, for every example model and the fixtures in `tests/models/`;
+//! and so does a whole estimate streamed from a file, by every method.
 //!
 //! To add a model: `include_model!` it in `models` below and list it in
 //! `cases()`. `every_example_model_is_covered` fails until every
@@ -427,4 +428,59 @@ fn generated_code_simulates_with_the_dead_times_bit_for_bit() {
         "{} ≠ {expected}",
         g.states[0][1]
     );
+}
+
+/// A streamed estimate is the same, bit for bit, with the model compiled in
+/// as interpreted (docs/rust.md says so): the estimator's walk evaluates
+/// the interpreter's regressors a block of samples at a time and hands the
+/// sinks whole blocks, and generated code's sample by sample, so the two
+/// take different paths through every pass and must make each sum in the
+/// same order. Two experiments of different lengths from one CSV file, the
+/// ship in 10 m/s of wind, every method with standard errors.
+#[test]
+fn a_streamed_estimate_is_the_same_compiled_in_or_interpreted() {
+    use leeway::data::{LoadOptions, open_file};
+    use leeway::{EstimateOptions, Method, Source, estimate};
+    use leeway_scenarios::study::estimation_experiment;
+    let ship = models::ship::Ship;
+    let interpreter = Interpreter::new(ship.ir().clone());
+    let design = Default::default();
+    let (a, _) = estimation_experiment(&ship, &design, 10.0, 1500, 1);
+    let (b, _) = estimation_experiment(&ship, &design, 10.0, 900, 2);
+    let path = std::env::temp_dir().join(format!("leeway-bit-exact-{}.csv", std::process::id()));
+    let written = std::fs::File::create(&path)
+        .and_then(|mut f| leeway::write_csv(ship.ir(), &[&a, &b], 0.0, &mut f));
+    let opened = written.map(|()| open_file(&path, ship.ir(), &LoadOptions::default()));
+    let estimates = opened.map(|file| {
+        let file = file.unwrap_or_else(|e| panic!("the file opens: {e}"));
+        let sources: Vec<&dyn Source> = file.sources.iter().map(|s| s as &dyn Source).collect();
+        assert_eq!(sources.len(), 2);
+        Method::ALL.map(|method| {
+            let options = EstimateOptions {
+                method,
+                aggregate: true,
+                ..EstimateOptions::default()
+            };
+            let models: [&dyn Model; 2] = [&ship, &interpreter];
+            models.map(|m| estimate(m, &sources, &options))
+        })
+    });
+    std::fs::remove_file(&path).ok();
+    let estimates = estimates.unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    for (method, [compiled, interpreted]) in Method::ALL.iter().zip(estimates) {
+        let compiled = compiled.unwrap_or_else(|e| panic!("{}: {e}", method.name()));
+        assert!(
+            compiled.std_errors.iter().any(Option::is_some),
+            "{}: standard errors, so that the covariance pass ran",
+            method.name()
+        );
+        // Debug prints each f64 in the shortest form that reads back to
+        // its bits: equal text, equal bits.
+        assert_eq!(
+            format!("{compiled:?}"),
+            format!("{:?}", interpreted.unwrap_or_else(|e| panic!("{e}"))),
+            "{}",
+            method.name()
+        );
+    }
 }
