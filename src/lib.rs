@@ -183,7 +183,8 @@
 //! mapped in its `data { }` block), with an optional `time` column and an
 //! `experiment` column that splits one file into several; every problem is
 //! a [`DataError`] located at `file:row:column`. [`data::open_csv`]
-//! streams a file too large to hold, and `leeway_scenarios::synth` simulates a
+//! streams a file too large to hold ([`data::open_file`] a CSV or, with
+//! this crate's `parquet` feature, a Parquet file), and `leeway_scenarios::synth` simulates a
 //! seeded "true system" to make test data, as here — the paper's ship under
 //! a 0.2 m/s current (unmeasured) and a 10 m/s wind (measured):
 //!

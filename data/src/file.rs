@@ -31,7 +31,7 @@ pub fn with_table<T>(
         return Err(DataError::new(
             path.display().to_string(),
             "this leeway was built without Parquet support",
-            "build it with the cargo feature `parquet` (leeway-cli has it by default), or convert the file to CSV",
+            "build it with the cargo feature `parquet` (of `leeway` or `leeway-data`; leeway-cli has it by default), or convert the file to CSV",
         ));
     }
     f(&mut CsvFile::open(path, what)?)
