@@ -214,6 +214,41 @@ pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
             }
             lines.extend(split_notes(&f.file, e));
         }
+        lines.extend(grid_notes(f));
+    }
+    lines
+}
+
+/// A joined log's signals read by their mean over the step, and its
+/// stalls: what the grid did that picking one sample would not say.
+fn grid_notes(f: &FileNotes) -> Vec<String> {
+    use leeway_model::number::short_number as num;
+    let mut lines: Vec<String> = f
+        .signals
+        .iter()
+        .filter(|s| s.on_grid.starts_with("mean") || s.on_grid.starts_with("centred"))
+        .map(|s| format!("{}: {}: {}", f.file, s.signal, s.on_grid))
+        .collect();
+    for e in &f.experiments {
+        for g in e.stalls.iter().take(MAX_SPLIT_LINES) {
+            lines.push(format!(
+                "{}: {} stalled from t = {} to {} s ({} s, beyond {} s but within the gap limit): {} across",
+                f.file,
+                g.signal.as_deref().unwrap_or("a signal"),
+                num(g.from),
+                num(g.to),
+                num(g.to - g.from),
+                num(g.limit),
+                "held or interpolated"
+            ));
+        }
+        if e.stalls.len() > MAX_SPLIT_LINES {
+            lines.push(format!(
+                "{}: … and {} more stalls (--json lists them all)",
+                f.file,
+                e.stalls.len() - MAX_SPLIT_LINES
+            ));
+        }
     }
     lines
 }

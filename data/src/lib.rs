@@ -42,6 +42,7 @@ mod open;
 pub mod options;
 #[cfg(feature = "parquet")]
 pub mod parquet;
+pub mod rates;
 pub mod resample;
 pub mod signals;
 mod spill;

@@ -42,6 +42,10 @@ pub struct SignalNote {
     pub repeated_stamps: usize,
     /// `hold` or `linear` (`angle` for a heading) between samples.
     pub between: String,
+    /// What the grid read of it (docs/logs.md, "On the grid"): at the grid
+    /// time, or its mean over the step and of how many samples.
+    #[serde(default)]
+    pub on_grid: String,
 }
 
 /// How one experiment's time stamps were read.
@@ -63,6 +67,11 @@ pub struct TimeNotes {
     /// The pieces a split left, kept or dropped (empty when not split).
     #[serde(default)]
     pub pieces: Vec<PieceNote>,
+    /// Stalls of a joined log's signals: holes within the gap limit but
+    /// longer than the signal's stall threshold (`limit`), held or
+    /// interpolated across.
+    #[serde(default)]
+    pub stalls: Vec<GapNote>,
 }
 
 /// A stretch without samples that split an experiment: times in seconds,

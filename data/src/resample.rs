@@ -6,7 +6,6 @@
 
 use leeway_model::experiment::Experiment;
 use leeway_structure::ir::{Ir, Rotation};
-use std::f64::consts::PI;
 
 /// The grid `t0 + k·h` for every `k` with `t0 + k·h ≤ t_last` (up to rounding).
 fn grid(times: &[f64], h: f64) -> Vec<f64> {
@@ -55,8 +54,7 @@ fn linear(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
 /// The angle difference `b − a` brought into `[−π, π)`: the short arc a
 /// heading turns between two samples (also the join of a robot log's).
 pub fn short_arc(a: f64, b: f64) -> f64 {
-    let d = b - a;
-    d - 2.0 * PI * ((d + PI) / (2.0 * PI)).floor()
+    crate::rates::short_arc(a, b)
 }
 
 fn angular(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
@@ -110,6 +108,7 @@ mod tests {
     use crate::csv::parse_csv_noted;
     use crate::options::LoadOptions;
     use leeway_model::experiment::Source;
+    use std::f64::consts::PI;
 
     fn ship() -> Ir {
         let src = "model M { state u, v, r input d heading psi integrates r

@@ -3,27 +3,18 @@
 //! first sample or after its last — and a stretch of any signal without
 //! samples longer than its gap limit ends the experiment there: the pieces
 //! between holes become experiments of their own when long enough (the
-//! model's minimum), and every hole and piece is noted. Between samples a
-//! measurement is interpolated linearly (a heading along the short arc), a
-//! command held (zero-order hold). Grid times are whole nanoseconds from
-//! the piece's start, so a grid time that falls on a stamp reads that
-//! sample exactly.
+//! model's minimum), and every hole and piece is noted. Each signal is read
+//! on the grid by its rule ([`leeway_data::rates`]): a slow source at the
+//! grid time (a measurement interpolated, a heading along the short arc, a
+//! command held), a fast one by its mean over the step. Grid times are
+//! whole nanoseconds from the piece's start, so a grid time that falls on a
+//! stamp reads that sample exactly. Kept windows, when given, bound the
+//! pieces: nothing outside them reaches the grid.
 
 use crate::stamps::Nanos;
 use leeway_data::notes::{GapNote, PieceNote};
-use leeway_data::resample::short_arc;
+pub use leeway_data::rates::{Between, Reduce, Rule};
 use leeway_model::experiment::MIN_SAMPLES;
-
-/// How a signal is read between its samples.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Between {
-    /// The last sample until the next.
-    Hold,
-    /// Straight lines.
-    Linear,
-    /// An angle in radians along the short arc.
-    Angle,
-}
 
 /// One signal's samples: strictly increasing stamps.
 #[derive(Clone, Copy, Debug)]
@@ -34,10 +25,13 @@ pub struct Track<'a> {
     pub stamps: &'a [Nanos],
     /// Its values.
     pub values: &'a [f64],
-    /// How it is read between samples.
-    pub between: Between,
+    /// How it is read on the grid.
+    pub rule: Rule,
     /// Its gap limit, in nanoseconds.
     pub limit: f64,
+    /// A hole longer than this (nanoseconds) but within the limit is a
+    /// stall: held or interpolated across, and noted.
+    pub stall: f64,
 }
 
 /// A stretch of the grid where every signal has samples.
@@ -60,8 +54,13 @@ pub struct Joined {
     pub pieces: Vec<Piece>,
     /// Every hole inside the span where all tracks have samples.
     pub gaps: Vec<GapNote>,
-    /// Every piece, kept or dropped (empty when there is one piece).
+    /// Every piece, kept or dropped, with its time span.
     pub notes: Vec<PieceNote>,
+    /// Stalls inside the pieces: holes within the gap limit but longer
+    /// than a signal's stall threshold.
+    pub stalls: Vec<GapNote>,
+    /// Per track, the fewest and most samples a window of its rule held.
+    pub samples: Vec<(usize, usize)>,
 }
 
 /// The stretches `[a, b]` where a track has samples, split at its holes.
@@ -122,28 +121,39 @@ fn grid(a: Nanos, b: Nanos, h: f64) -> Vec<Nanos> {
         .collect()
 }
 
-/// A track's values at `times` (increasing, within its samples).
-fn on_grid(t: &Track, times: &[Nanos]) -> Vec<f64> {
-    let mut i = 0;
-    times
-        .iter()
-        .map(|&x| {
-            while i + 1 < t.stamps.len() && t.stamps[i + 1] <= x {
-                i += 1;
-            }
-            let a = t.values[i];
-            if t.stamps[i] == x || t.between == Between::Hold || i + 1 == t.stamps.len() {
-                return a;
-            }
-            let b = t.values[i + 1];
+/// A track's values at `times` (increasing, within its samples and
+/// `[a, b]`), and the fewest and most samples a window held.
+fn on_grid(
+    t: &Track,
+    times: &[Nanos],
+    h: f64,
+    (a, b): (Nanos, Nanos),
+) -> (Vec<f64>, (usize, usize)) {
+    // Nanoseconds from the piece's start: exact in f64 below 2⁵³ (104 days).
+    #[allow(clippy::cast_precision_loss)]
+    let rel = |x: Nanos| (x - a) as f64;
+    let stamps: Vec<f64> = t.stamps.iter().map(|&x| rel(x)).collect();
+    let grid: Vec<f64> = times.iter().map(|&x| rel(x)).collect();
+    let g = leeway_data::rates::on_grid(&stamps, t.values, t.rule, &grid, h * 1e9, (0.0, rel(b)));
+    (g.values, g.samples)
+}
+
+/// The stalls of `t` inside `[lo, hi]`: steps longer than its stall
+/// threshold and within its gap limit, as notes.
+fn stalls(t: &Track, lo: Nanos, hi: Nanos, origin: Nanos) -> Vec<GapNote> {
+    t.stamps
+        .windows(2)
+        .filter(|w| w[0] < hi && w[1] > lo)
+        .filter(|w| {
             #[allow(clippy::cast_precision_loss)]
-            let w = (x - t.stamps[i]) as f64 / (t.stamps[i + 1] - t.stamps[i]) as f64;
-            match t.between {
-                // On the branch of the nearer sample, as `--resample` does.
-                Between::Angle if w <= 0.5 => a + w * short_arc(a, b),
-                Between::Angle => b - (1.0 - w) * short_arc(a, b),
-                _ => a + w * (b - a),
-            }
+            let d = (w[1] - w[0]) as f64;
+            d > t.stall && d <= t.limit
+        })
+        .map(|w| GapNote {
+            signal: Some(t.signal.to_string()),
+            from: seconds(w[0], origin),
+            to: seconds(w[1], origin),
+            limit: t.stall / 1e9,
         })
         .collect()
 }
@@ -164,8 +174,9 @@ fn holes(t: &Track, lo: Nanos, hi: Nanos, origin: Nanos) -> Vec<GapNote> {
 }
 
 /// The tracks on a grid of step `h` seconds, named `name` (`name/1`,
-/// `name/2`, … when split).
-pub fn join(tracks: &[Track], h: f64, name: &str) -> Joined {
+/// `name/2`, … when split), within the `keep` windows when given (sorted,
+/// disjoint). Every piece is noted with its time span.
+pub fn join(tracks: &[Track], h: f64, name: &str, keep: Option<&[(Nanos, Nanos)]>) -> Joined {
     let origin = tracks
         .iter()
         .filter_map(|t| t.stamps.first())
@@ -179,29 +190,83 @@ pub fn join(tracks: &[Track], h: f64, name: &str) -> Joined {
     for t in &tracks[1..] {
         common = intersect(&common, &covered(t));
     }
+    let (lo, hi) = overlap(tracks);
+    let mut gaps: Vec<GapNote> = tracks
+        .iter()
+        .flat_map(|t| holes(t, lo, hi, origin))
+        .collect();
+    if let Some(keep) = keep {
+        common = intersect(&common, keep);
+        // Only the holes that cut a kept window split anything.
+        gaps.retain(|g| {
+            keep.iter()
+                .any(|&(a, b)| g.to > seconds(a, origin) && g.from < seconds(b, origin))
+        });
+    }
+    let mut joined = Joined {
+        origin,
+        gaps: merged_notes(gaps),
+        samples: vec![(0, 0); tracks.len()],
+        ..Joined::default()
+    };
+    for (j, &(a, b)) in common.iter().enumerate() {
+        let times = grid(a, b, h);
+        let piece_name = if common.len() > 1 {
+            format!("{name}/{}", j + 1)
+        } else {
+            name.to_string()
+        };
+        let kept = times.len() >= MIN_SAMPLES;
+        // Every piece is noted, kept or not: its time span is in the report.
+        joined.notes.push(PieceNote {
+            experiment: kept.then(|| piece_name.clone()),
+            from: seconds(a, origin),
+            to: seconds(*times.last().unwrap_or(&a), origin),
+            samples: times.len(),
+        });
+        if !kept {
+            continue;
+        }
+        let mut columns = Vec::with_capacity(tracks.len());
+        for (t, seen) in tracks.iter().zip(&mut joined.samples) {
+            let (values, samples) = on_grid(t, &times, h, (a, b));
+            if samples.1 > 0 {
+                *seen = if seen.1 == 0 {
+                    samples
+                } else {
+                    (seen.0.min(samples.0), seen.1.max(samples.1))
+                };
+            }
+            columns.push(values);
+            joined.stalls.extend(stalls(t, a, b, origin));
+        }
+        joined.pieces.push(Piece {
+            name: piece_name,
+            start: a,
+            columns,
+        });
+    }
+    joined.stalls = merged_notes(std::mem::take(&mut joined.stalls));
+    joined
+}
+
+/// The span where every track has samples: the latest first stamp and the
+/// earliest last one.
+fn overlap(tracks: &[Track]) -> (Nanos, Nanos) {
     let lo = tracks
         .iter()
         .filter_map(|t| t.stamps.first())
         .copied()
-        .max()
-        .unwrap_or(0);
-    let hi = tracks
-        .iter()
-        .filter_map(|t| t.stamps.last())
-        .copied()
-        .min()
-        .unwrap_or(0);
-    let mut joined = Joined {
-        origin,
-        gaps: tracks
-            .iter()
-            .flat_map(|t| holes(t, lo, hi, origin))
-            .collect(),
-        ..Joined::default()
-    };
-    joined.gaps.sort_by(|a, b| a.from.total_cmp(&b.from));
-    // Signals of one source share their holes: one note names them all.
-    joined.gaps.dedup_by(|b, a| {
+        .max();
+    let hi = tracks.iter().filter_map(|t| t.stamps.last()).copied().min();
+    (lo.unwrap_or(0), hi.unwrap_or(0))
+}
+
+/// Notes in time order, those of one hole shared by several signals of a
+/// source merged into one that names them all.
+fn merged_notes(mut notes: Vec<GapNote>) -> Vec<GapNote> {
+    notes.sort_by(|a, b| a.from.total_cmp(&b.from));
+    notes.dedup_by(|b, a| {
         let same = a.from == b.from && a.to == b.to;
         if same && let (Some(x), Some(y)) = (&mut a.signal, &b.signal) {
             x.push_str(", ");
@@ -209,32 +274,7 @@ pub fn join(tracks: &[Track], h: f64, name: &str) -> Joined {
         }
         same
     });
-    let split = common.len() > 1;
-    for (j, &(a, b)) in common.iter().enumerate() {
-        let times = grid(a, b, h);
-        let piece_name = if split {
-            format!("{name}/{}", j + 1)
-        } else {
-            name.to_string()
-        };
-        let kept = times.len() >= MIN_SAMPLES;
-        if split {
-            joined.notes.push(PieceNote {
-                experiment: kept.then(|| piece_name.clone()),
-                from: seconds(a, origin),
-                to: seconds(*times.last().unwrap_or(&a), origin),
-                samples: times.len(),
-            });
-        }
-        if kept {
-            joined.pieces.push(Piece {
-                name: piece_name,
-                start: a,
-                columns: tracks.iter().map(|t| on_grid(t, &times)).collect(),
-            });
-        }
-    }
-    joined
+    notes
 }
 
 #[cfg(test)]
@@ -242,6 +282,16 @@ mod tests {
     use super::*;
 
     const S: Nanos = 1_000_000_000;
+    const ANGLE: Between = Between::Angle {
+        turn: 2.0 * std::f64::consts::PI,
+    };
+
+    fn rule(between: Between) -> Rule {
+        Rule {
+            between,
+            reduce: Reduce::Instant,
+        }
+    }
 
     #[test]
     fn held_commands_and_interpolated_measurements_on_the_grid() {
@@ -255,18 +305,20 @@ mod tests {
                 signal: "u",
                 stamps: &u_t,
                 values: &u_v,
-                between: Between::Linear,
+                rule: rule(Between::Linear),
                 limit: 0.5e9,
+                stall: 0.5e9,
             },
             Track {
                 signal: "tau",
                 stamps: &tau_t,
                 values: &tau_v,
-                between: Between::Hold,
+                rule: rule(Between::Hold),
                 limit: 1.25e9,
+                stall: 1.25e9,
             },
         ];
-        let j = join(&tracks, 0.1, "run");
+        let j = join(&tracks, 0.1, "run", None);
         assert_eq!(j.pieces.len(), 1);
         let p = &j.pieces[0];
         // The grid starts at tau's first stamp, 10 ms in; u is interpolated there.
@@ -277,7 +329,8 @@ mod tests {
         assert_eq!(p.columns[1][3], 1.0);
         // Never beyond u's last stamp (10 s).
         assert_eq!(p.columns[0].len(), 100);
-        assert!(j.gaps.is_empty() && j.notes.is_empty());
+        assert!(j.gaps.is_empty() && j.stalls.is_empty());
+        assert_eq!(j.notes.len(), 1);
     }
 
     #[test]
@@ -293,18 +346,20 @@ mod tests {
                 signal: "u",
                 stamps: &t,
                 values: &v,
-                between: Between::Linear,
+                rule: rule(Between::Linear),
                 limit: 0.5e9,
+                stall: 0.5e9,
             },
             Track {
                 signal: "psi",
                 stamps: &other,
                 values: &ov,
-                between: Between::Angle,
+                rule: rule(ANGLE),
                 limit: 0.5e9,
+                stall: 0.5e9,
             },
         ];
-        let j = join(&tracks, 0.1, "run");
+        let j = join(&tracks, 0.1, "run", None);
         let names: Vec<&str> = j.pieces.iter().map(|p| p.name.as_str()).collect();
         assert_eq!(names, ["run/1", "run/2"]);
         assert_eq!(j.gaps.len(), 2);
@@ -329,10 +384,11 @@ mod tests {
             signal: "psi",
             stamps: &t,
             values: &v,
-            between: Between::Angle,
+            rule: rule(ANGLE),
             limit: 2e9,
+            stall: 2e9,
         }];
-        let j = join(&tracks, 0.1, "w");
+        let j = join(&tracks, 0.1, "w", None);
         let mid = j.pieces[0].columns[0][5];
         assert!((mid - std::f64::consts::PI).abs() < 1e-12, "{mid}");
     }

@@ -4,9 +4,10 @@
 //! pass — units, outliers, minimum lengths — loaded or streamed like any
 //! data file.
 
-use crate::join::{Between, Joined, Track, join, seconds};
-use crate::manifest::{Clock, Interpolate, Manifest, SignalSpec, SourceSpec};
+use crate::join::{Between, Joined, Rule, Track, join, seconds};
+use crate::manifest::{Clock, Frame, Interpolate, Keep, Manifest, SignalSpec, SourceSpec, TimeRef};
 use crate::series::{Series, read_table};
+use crate::stamps::Nanos;
 use leeway_data::columns::{Columns, Labels};
 use leeway_data::signals::{Role, required_signals, unit_factor};
 use leeway_data::validate::load_table;
@@ -120,6 +121,8 @@ fn manifest(path: &Path, ir: &Ir) -> Result<Manifest, DataError> {
                 source: 0,
                 field,
                 interpolate: None,
+                frame: None,
+                instant: false,
                 at: file.clone(),
             }
         })
@@ -138,8 +141,13 @@ fn manifest(path: &Path, ir: &Ir) -> Result<Manifest, DataError> {
             at: file,
         }],
         signals,
+        keep: Vec::new(),
     })
 }
+
+/// A stall: a hole longer than this many of a signal's own median steps
+/// (and than one grid step) but within the gap limit, noted.
+const STALL_STEPS: f64 = 10.0;
 
 /// Reads and joins the log at `path`.
 fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, DataError> {
@@ -147,44 +155,50 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
     let specs = match_model(&m, ir)?;
     let h = grid_step(&m, ir, options)?;
     let limit = m.max_gap.unwrap_or(options.max_gap);
-    let series = read_signals(&m, &specs)?;
-    // A quaternion's yaw is in radians: stated in the signal's declared
-    // unit, so that the validating pass converts it back exactly once.
+    let conditions = condition_specs(&m);
+    let mut asked: Vec<&SignalSpec> = specs.iter().map(|(s, _)| *s).collect();
+    asked.extend(&conditions);
+    let mut series = read_signals(&m, &asked)?;
+    let windows: Vec<Series> = series.split_off(specs.len());
     let values: Vec<Vec<f64>> = series
         .iter()
         .zip(&specs)
-        .map(|(s, (spec, _))| {
-            let factor = if spec.yaw {
-                unit_factor(ir, &spec.signal)
-            } else {
-                1.0
-            };
-            s.values[0].iter().map(|v| v / factor).collect()
-        })
+        .map(|(s, (spec, role))| heading_values(ir, spec, role, &s.values[0]))
         .collect();
     let mut tracks = Vec::with_capacity(series.len());
     let mut signals = Vec::with_capacity(series.len());
     for ((s, (spec, role)), values) in series.iter().zip(&specs).zip(&values) {
+        #[allow(clippy::cast_precision_loss)]
         let steps: Vec<f64> = s
             .stamps
             .windows(2)
             .map(|w| (w[1] - w[0]) as f64 / 1e9)
             .collect();
-        let between = between(spec, role);
+        let median = leeway_data::gaps::median(&steps).unwrap_or(h);
+        let rule = Rule::for_signal(
+            between(ir, spec, role),
+            matches!(role, Role::Input(_)),
+            if spec.instant { f64::INFINITY } else { median },
+            h,
+        );
+        let limit = limit.seconds(&steps, h);
         tracks.push(Track {
             signal: &spec.signal,
             stamps: &s.stamps,
             values,
-            between,
-            limit: limit.seconds(&steps, h) * 1e9,
+            rule,
+            limit: limit * 1e9,
+            stall: (STALL_STEPS * median).max(h).min(limit) * 1e9,
         });
-        signals.push(signal_note(&m, spec, s, &steps, between));
+        signals.push(signal_note(&m, spec, s, median, rule));
     }
-    let joined = join(&tracks, h, &m.experiment);
+    let keep = kept_windows(&m, &tracks, &windows)?;
+    let joined = join(&tracks, h, &m.experiment, keep.as_deref());
     check_joined(&m, &joined, &tracks)?;
-    for (note, t) in signals.iter_mut().zip(&tracks) {
+    for ((note, t), samples) in signals.iter_mut().zip(&tracks).zip(&joined.samples) {
         note.first = seconds(t.stamps[0], joined.origin);
         note.last = seconds(t.stamps[t.stamps.len() - 1], joined.origin);
+        note.on_grid = t.rule.describe(*samples);
     }
     let notes = join_notes(&m, &joined, signals);
     Ok(JoinedLog {
@@ -197,23 +211,152 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
     })
 }
 
-/// Every mapped signal's series, in the order of `specs`, each source read
-/// once; a signal with fewer than two samples is an error.
-fn read_signals(m: &Manifest, specs: &[(&SignalSpec, Role)]) -> Result<Vec<Series>, DataError> {
-    let mut series: Vec<(Series, usize)> = Vec::with_capacity(specs.len());
-    for (s, source) in m.sources.iter().enumerate() {
-        let wanted: Vec<usize> = (0..specs.len())
-            .filter(|k| specs[*k].0.source == s)
+/// A signal's values as the grid reads them. A heading is stated in its
+/// declared unit, so that the validating pass converts it exactly once: a
+/// quaternion's yaw (radians) scaled to that unit, and a heading logged in
+/// ENU (yaw from east, counter-clockwise) turned into the NED heading the
+/// model reads, ψ = 90° − yaw.
+fn heading_values(ir: &Ir, spec: &SignalSpec, role: &Role, values: &[f64]) -> Vec<f64> {
+    let factor = unit_factor(ir, &spec.signal);
+    let scale = if spec.yaw { 1.0 / factor } else { 1.0 };
+    let quarter = std::f64::consts::FRAC_PI_2 / factor;
+    match (role, spec.frame) {
+        (Role::Heading, Some(Frame::Enu)) => values.iter().map(|v| quarter - v * scale).collect(),
+        _ => values.iter().map(|v| v * scale).collect(),
+    }
+}
+
+/// The columns the manifest's windows test, as signals to read.
+fn condition_specs(m: &Manifest) -> Vec<SignalSpec> {
+    m.keep
+        .iter()
+        .filter_map(|k| {
+            k.when.as_ref().map(|w| SignalSpec {
+                signal: format!("the window at {}", k.at),
+                source: w.source,
+                field: w.field.clone(),
+                interpolate: None,
+                yaw: false,
+                frame: None,
+                instant: false,
+                at: k.at.clone(),
+            })
+        })
+        .collect()
+}
+
+/// The windows the manifest keeps, as sorted disjoint stretches of stamps
+/// (`None`: the whole log); `conditions` are the series of the windows'
+/// conditions, in order. A window that keeps nothing where every signal
+/// has samples is an error naming it.
+fn kept_windows(
+    m: &Manifest,
+    tracks: &[Track],
+    conditions: &[Series],
+) -> Result<Option<Vec<(Nanos, Nanos)>>, DataError> {
+    if m.keep.is_empty() {
+        return Ok(None);
+    }
+    let origin = tracks.iter().map(|t| t.stamps[0]).min().unwrap_or(0);
+    let lo = tracks.iter().map(|t| t.stamps[0]).max().unwrap_or(0);
+    let hi = tracks
+        .iter()
+        .map(|t| t.stamps[t.stamps.len() - 1])
+        .min()
+        .unwrap_or(0);
+    let mut conditions = conditions.iter();
+    let mut all = Vec::new();
+    for k in &m.keep {
+        let stretches = match &k.when {
+            Some(w) => match conditions.next() {
+                Some(s) => holds(s, |x| w.holds(x)),
+                None => Vec::new(),
+            },
+            None => vec![(Nanos::MIN, Nanos::MAX)],
+        };
+        let (a, b) = (
+            time_of(k.from, origin, Nanos::MIN),
+            time_of(k.to, origin, Nanos::MAX),
+        );
+        let mine: Vec<(Nanos, Nanos)> = stretches
+            .into_iter()
+            .map(|(x, y)| (x.max(a), y.min(b)))
+            .filter(|(x, y)| x <= y)
             .collect();
+        if !mine.iter().any(|(x, y)| *x <= hi && *y >= lo) {
+            return Err(keeps_nothing(m, k, origin, lo, hi));
+        }
+        all.extend(mine);
+    }
+    all.sort_unstable();
+    let mut merged: Vec<(Nanos, Nanos)> = Vec::with_capacity(all.len());
+    for (a, b) in all {
+        match merged.last_mut() {
+            Some(last) if a <= last.1.saturating_add(1) => last.1 = last.1.max(b),
+            _ => merged.push((a, b)),
+        }
+    }
+    Ok(Some(merged))
+}
+
+/// The stretches where `s` meets `test`: from a sample that meets it until
+/// just before the next sample.
+fn holds(s: &Series, test: impl Fn(f64) -> bool) -> Vec<(Nanos, Nanos)> {
+    let mut out: Vec<(Nanos, Nanos)> = Vec::new();
+    for (k, (&t, &x)) in s.stamps.iter().zip(&s.values[0]).enumerate() {
+        if !test(x) {
+            continue;
+        }
+        let end = s.stamps.get(k + 1).map_or(t, |next| next - 1);
+        match out.last_mut() {
+            Some(last) if last.1 + 1 == t => last.1 = end,
+            _ => out.push((t, end)),
+        }
+    }
+    out
+}
+
+/// A window's time as a stamp (`open` when not given).
+fn time_of(t: Option<TimeRef>, origin: Nanos, open: Nanos) -> Nanos {
+    match t {
+        None => open,
+        #[allow(clippy::cast_possible_truncation)]
+        Some(TimeRef::FromStart(s)) => origin.saturating_add((s * 1e9).round() as Nanos),
+        Some(TimeRef::At(ns)) => ns,
+    }
+}
+
+/// The error of a window that keeps nothing.
+fn keeps_nothing(m: &Manifest, k: &Keep, origin: Nanos, lo: Nanos, hi: Nanos) -> DataError {
+    use leeway_model::number::short_number as num;
+    DataError::new(
+        &k.at,
+        format!(
+            "this window keeps nothing of `{}`: every signal has samples only from t = {} to {} s (from the log's first stamp, {})",
+            m.experiment,
+            num(seconds(lo, origin)),
+            num(seconds(hi, origin)),
+            crate::stamps::iso(origin)
+        ),
+        "a window's from/to are seconds from the log's first stamp (or ISO-8601 stamps); a condition must hold somewhere in that span",
+    )
+}
+
+/// Every asked signal's series, in the order of `asked`, each source read
+/// once; a signal with fewer than two samples is an error.
+fn read_signals(m: &Manifest, asked: &[&SignalSpec]) -> Result<Vec<Series>, DataError> {
+    let mut series: Vec<(Series, usize)> = Vec::with_capacity(asked.len());
+    for (s, source) in m.sources.iter().enumerate() {
+        let wanted: Vec<usize> = (0..asked.len()).filter(|k| asked[*k].source == s).collect();
         if wanted.is_empty() {
             continue;
         }
-        let asked: Vec<&SignalSpec> = wanted.iter().map(|k| specs[*k].0).collect();
-        series.extend(read_source(source, &asked)?.into_iter().zip(wanted));
+        let these: Vec<&SignalSpec> = wanted.iter().map(|k| asked[*k]).collect();
+        series.extend(read_source(source, &these)?.into_iter().zip(wanted));
     }
     series.sort_by_key(|(_, k)| *k);
     for (s, k) in &series {
-        let spec = specs[*k].0;
+        let spec = asked[*k];
         if s.stamps.len() < 2 {
             return Err(DataError::new(
                 &spec.at,
@@ -232,27 +375,22 @@ fn read_signals(m: &Manifest, specs: &[(&SignalSpec, Role)]) -> Result<Vec<Serie
 
 /// What the notes say of one signal as read (its first and last stamps are
 /// set once the origin is known).
-fn signal_note(
-    m: &Manifest,
-    spec: &SignalSpec,
-    s: &Series,
-    steps: &[f64],
-    between: Between,
-) -> SignalNote {
+fn signal_note(m: &Manifest, spec: &SignalSpec, s: &Series, median: f64, rule: Rule) -> SignalNote {
     SignalNote {
         signal: spec.signal.clone(),
         source: format!("{}:{}", m.sources[spec.source].file.display(), spec.field),
         samples: s.stamps.len(),
-        median_step: leeway_data::gaps::median(steps).unwrap_or(0.0),
+        median_step: median,
         first: 0.0,
         last: 0.0,
         repeated_stamps: s.repeated,
-        between: match between {
+        between: match rule.between {
             Between::Hold => "hold",
             Between::Linear => "linear",
-            Between::Angle => "angle",
+            Between::Angle { .. } => "angle",
         }
         .into(),
+        on_grid: String::new(),
     }
 }
 
@@ -270,6 +408,7 @@ fn join_notes(m: &Manifest, joined: &Joined, signals: Vec<SignalNote>) -> FileNo
             rows: samples,
             gaps: joined.gaps.clone(),
             pieces: joined.notes.clone(),
+            stalls: joined.stalls.clone(),
             ..TimeNotes::default()
         }],
         origin: Some(crate::stamps::iso(joined.origin)),
@@ -279,11 +418,14 @@ fn join_notes(m: &Manifest, joined: &Joined, signals: Vec<SignalNote>) -> FileNo
 }
 
 /// How a signal is read between samples: a command held, a measurement
-/// interpolated (a heading along the short arc), unless the manifest says.
-fn between(spec: &SignalSpec, role: &Role) -> Between {
+/// interpolated (a heading along the short arc of a turn in its declared
+/// unit: 360 for degrees), unless the manifest says.
+fn between(ir: &Ir, spec: &SignalSpec, role: &Role) -> Between {
     match (spec.interpolate, role) {
         (Some(Interpolate::Hold), _) => Between::Hold,
-        (Some(Interpolate::Linear), Role::Heading) | (None, Role::Heading) => Between::Angle,
+        (Some(Interpolate::Linear), Role::Heading) | (None, Role::Heading) => Between::Angle {
+            turn: 2.0 * std::f64::consts::PI / unit_factor(ir, &spec.signal),
+        },
         (Some(Interpolate::Linear), _) => Between::Linear,
         (None, Role::Input(_)) => Between::Hold,
         (None, _) => Between::Linear,
@@ -348,16 +490,81 @@ fn read_source(source: &SourceSpec, wanted: &[&SignalSpec]) -> Result<Vec<Series
     if source.clock == Clock::Bag {
         return crate::bag_source::read(source, wanted);
     }
-    let fields: Vec<String> = wanted.iter().map(|s| s.field.clone()).collect();
-    let all = leeway_data::with_table(&source.file, "--data", |t| read_table(t, source, &fields))?;
-    Ok((0..fields.len())
-        .map(|j| Series {
+    // A yaw reads a quaternion's four columns `field.x`, `.y`, `.z`, `.w`.
+    let mut fields: Vec<String> = Vec::new();
+    let mut at = Vec::with_capacity(wanted.len());
+    for s in wanted {
+        at.push(fields.len());
+        if s.yaw {
+            fields.extend(QUATERNION.iter().map(|c| format!("{}.{c}", s.field)));
+        } else {
+            fields.push(s.field.clone());
+        }
+    }
+    let all = leeway_data::with_table(&source.file, "--data", |t| {
+        for s in wanted.iter().filter(|s| s.yaw) {
+            quaternion_columns(t, s)?;
+        }
+        read_table(t, source, &fields)
+    })?;
+    Ok(wanted
+        .iter()
+        .zip(at)
+        .map(|(s, j)| Series {
             file: all.file.clone(),
             stamps: all.stamps.clone(),
-            values: vec![all.values[j].clone()],
+            values: vec![if s.yaw {
+                let q = &all.values[j..j + 4];
+                (0..all.stamps.len())
+                    .map(|k| crate::bag::plan::yaw(q[0][k], q[1][k], q[2][k], q[3][k]))
+                    .collect()
+            } else {
+                all.values[j].clone()
+            }],
             repeated: all.repeated,
         })
         .collect())
+}
+
+/// A quaternion's columns, after its name: `orientation.x`, … as ROS 2
+/// exports write a `geometry_msgs/Quaternion`.
+const QUATERNION: [&str; 4] = ["x", "y", "z", "w"];
+
+/// A yaw's four quaternion columns must all be there; a scalar column of
+/// the yaw's name is refused, never read as a heading.
+fn quaternion_columns(
+    t: &dyn leeway_data::validate::Table,
+    s: &SignalSpec,
+) -> Result<(), DataError> {
+    let headers = t.headers();
+    let missing: Vec<String> = QUATERNION
+        .iter()
+        .map(|c| format!("{}.{c}", s.field))
+        .filter(|c| !headers.contains(c))
+        .collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    let why = if headers.contains(&s.field) {
+        format!(
+            "`{}` is one column, and `as = \"yaw\"` reads a quaternion: a scalar is never taken for a yaw",
+            s.field
+        )
+    } else {
+        format!(
+            "`{}` reads a quaternion's yaw, and the source has no column {}",
+            s.signal,
+            missing.join(", ")
+        )
+    };
+    Err(DataError::new(
+        &s.at,
+        why,
+        format!(
+            "a quaternion is four columns `{0}.x`, `{0}.y`, `{0}.z`, `{0}.w`; a heading already in one column is mapped without `as` (its unit in the model's data {{ }} block)",
+            s.field
+        ),
+    ))
 }
 
 /// A log that leaves no experiment: one error saying why.
@@ -405,5 +612,181 @@ pub fn open_path(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Streamed
         open_log(path, ir, options)
     } else {
         leeway_data::open_file(path, ir, options)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::PI;
+    use std::fmt::Write as _;
+
+    fn model(extra: &str) -> Ir {
+        let src = format!(
+            "model M {{ step 0.1 state u, r input n heading psi integrates r {extra}
+             der u = X*u + T*n der r = N*r + M*n
+             nominal {{ X = -0.1, T = 1, N = -0.2, M = 0.5 }} }}"
+        );
+        leeway_structure::compile(&src, &leeway_structure::CompileOptions::default())
+            .ir
+            .unwrap_or_else(|| panic!("the test model compiles"))
+    }
+
+    /// A CSV topic stamped `secs,nsecs` from `rows` of (seconds, cells).
+    fn topic(header: &str, rows: impl Iterator<Item = (f64, String)>) -> String {
+        let mut out = format!("secs,nsecs,{header}\n");
+        for (t, cells) in rows {
+            let ns = (t * 1e9).round() as i64;
+            let _ = writeln!(out, "{},{},{cells}", ns / 1_000_000_000, ns % 1_000_000_000);
+        }
+        out
+    }
+
+    /// A log of three sources: `u`, `r` and `n` at 10 Hz on the grid, the
+    /// heading at 1 Hz turning at 18°/s (`heading` writes its cells), 60 s.
+    fn write_log(dir: &Path, heading_header: &str, heading: impl Fn(f64) -> String, extra: &str) {
+        let fast = (0..=600).map(|k| f64::from(k) / 10.0);
+        let w = |name: &str, text: String| {
+            std::fs::write(dir.join(name), text).unwrap_or_else(|e| panic!("{e}"));
+        };
+        w(
+            "motion.csv",
+            topic(
+                "u,r,n",
+                fast.map(|t| (t, format!("1,{},{}", 0.1 * PI, (t * 7.3).sin()))),
+            ),
+        );
+        w(
+            "heading.csv",
+            topic(
+                heading_header,
+                (0..=60).map(|k| (f64::from(k), heading(f64::from(k)))),
+            ),
+        );
+        let manifest = format!(
+            "[sources.m]\nfile = \"motion.csv\"\ntime = [\"secs\", \"nsecs\"]\n\
+             [sources.h]\nfile = \"heading.csv\"\ntime = [\"secs\", \"nsecs\"]\n\
+             [signals]\nu = \"m:u\"\nr = \"m:r\"\nn = \"m:n\"\n{extra}"
+        );
+        w("log.toml", manifest);
+    }
+
+    fn psi_of(loaded: &LoadedFile) -> Vec<f64> {
+        loaded
+            .experiments
+            .iter()
+            .flat_map(|e| e.heading.clone())
+            .collect()
+    }
+
+    /// The heading turning at 18°/s from 0, as the model reads it (rad).
+    fn truth(k: usize) -> f64 {
+        let t = k as f64 * 0.1;
+        let a = (0.1 * PI * t).rem_euclid(2.0 * PI);
+        if a > PI { a - 2.0 * PI } else { a }
+    }
+
+    fn close_as_angles(got: &[f64]) {
+        assert_eq!(got.len(), 601);
+        for (k, g) in got.iter().enumerate() {
+            let e = leeway_data::rates::short_arc(truth(k), *g);
+            assert!(e.abs() < 1e-9, "sample {k}: {g} against {}", truth(k));
+        }
+    }
+
+    #[test]
+    fn a_heading_in_degrees_is_interpolated_along_the_short_arc_of_degrees() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        // Wrapped at ±180°, 18° between samples: radians' short arc (3.14)
+        // would take every step in degrees for a wrap.
+        write_log(
+            dir.path(),
+            "psi",
+            |t| {
+                let a = (18.0 * t).rem_euclid(360.0);
+                format!("{}", if a > 180.0 { a - 360.0 } else { a })
+            },
+            "psi = \"h:psi\"\n",
+        );
+        let ir = model("data { psi in deg }");
+        let loaded = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        close_as_angles(&psi_of(&loaded));
+        // As a compass writes it, 0–360°, in the same unit.
+        write_log(
+            dir.path(),
+            "psi",
+            |t| format!("{}", (18.0 * t).rem_euclid(360.0)),
+            "psi = \"h:psi\"\n",
+        );
+        let loaded = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        close_as_angles(&psi_of(&loaded));
+    }
+
+    #[test]
+    fn an_enu_quaternion_gives_the_marine_heading_and_a_scalar_yaw_is_refused() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let q = |t: f64| {
+            let yaw = PI / 2.0 - 0.1 * PI * t;
+            format!("0,0,{},{}", (yaw / 2.0).sin(), (yaw / 2.0).cos())
+        };
+        let header = "q.x,q.y,q.z,q.w";
+        write_log(
+            dir.path(),
+            header,
+            q,
+            "psi = { from = \"h:q\", as = \"yaw\", frame = \"enu\" }\n",
+        );
+        let ir = model("");
+        let loaded = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        close_as_angles(&psi_of(&loaded));
+        // The quaternion's z alone, mapped as a yaw: refused, never read.
+        write_log(
+            dir.path(),
+            "q",
+            |t| format!("{}", (0.05 * PI * t).sin()),
+            "psi = { from = \"h:q\", as = \"yaw\", frame = \"ned\" }\n",
+        );
+        let e = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("a scalar yaw is refused"));
+        assert!(e.message.contains("is one column"), "{e}");
+        assert!(e.location.ends_with("log.toml:11:7"), "{e}");
+    }
+
+    #[test]
+    fn windows_keep_their_stretches_and_one_keeping_nothing_is_named() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        let psi = |t: f64| format!("{}", truth((t * 10.0).round() as usize));
+        write_log(
+            dir.path(),
+            "psi",
+            psi,
+            "psi = \"h:psi\"\n[[keep]]\nfrom = 2\nto = 20\n[[keep]]\nwhen = \"m:u\"\nmin = 0.5\nfrom = 40\n",
+        );
+        let ir = model("");
+        let loaded = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let spans: Vec<(f64, f64, usize)> = loaded.notes.experiments[0]
+            .pieces
+            .iter()
+            .map(|p| (p.from, p.to, p.samples))
+            .collect();
+        assert_eq!(spans, [(2.0, 20.0, 181), (40.0, 60.0, 201)]);
+        let names: Vec<&str> = loaded.experiments.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(names, ["log/1", "log/2"]);
+        write_log(
+            dir.path(),
+            "psi",
+            psi,
+            "psi = \"h:psi\"\n[[keep]]\nfrom = 70\n",
+        );
+        let e = load_log(&dir.path().join("log.toml"), &ir, &LoadOptions::default())
+            .err()
+            .unwrap_or_else(|| panic!("a window beyond the log is refused"));
+        assert!(e.message.contains("keeps nothing"), "{e}");
+        assert!(e.location.ends_with("log.toml:12:1"), "{e}");
     }
 }

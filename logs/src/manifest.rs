@@ -20,7 +20,14 @@
 //! [signals]
 //! u = "twist:u"
 //! tau_x = { from = "tau:Fx", interpolate = "linear" }
-//! psi = { from = "bag:/imu.orientation", as = "yaw" }
+//! psi = { from = "bag:/imu.orientation", as = "yaw", frame = "enu" }
+//!
+//! [[keep]]                     # windows: only these stretches are joined
+//! from = 0                     # seconds from the log's first stamp,
+//! to = 700                     # or ISO-8601 text with a UTC offset
+//! [[keep]]
+//! when = "mode:dp"             # where a source's column ...
+//! equals = 0                   # ... equals a value (or min = / max =)
 //! ```
 
 use crate::stamps::TimeUnit;
@@ -44,6 +51,26 @@ struct ManifestFile {
     sources: BTreeMap<String, Spanned<SourceFile>>,
     #[serde(default)]
     signals: BTreeMap<String, Spanned<SignalEntry>>,
+    #[serde(default)]
+    keep: Vec<Spanned<KeepFile>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KeepFile {
+    from: Option<Spanned<TimeValue>>,
+    to: Option<Spanned<TimeValue>>,
+    when: Option<Spanned<String>>,
+    equals: Option<f64>,
+    min: Option<f64>,
+    max: Option<f64>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(untagged)]
+enum TimeValue {
+    Seconds(f64),
+    Text(String),
 }
 
 #[derive(serde::Deserialize)]
@@ -75,6 +102,8 @@ struct FullEntry {
     interpolate: Option<String>,
     #[serde(rename = "as")]
     kind: Option<String>,
+    frame: Option<String>,
+    on_grid: Option<String>,
 }
 
 /// A source's kind and clock.
@@ -131,8 +160,72 @@ pub struct SignalSpec {
     pub field: String,
     /// As declared (`None`: the role's default).
     pub interpolate: Option<Interpolate>,
-    /// A quaternion read as its heading (yaw).
+    /// A quaternion read as its heading (yaw): a bag's orientation, or a
+    /// CSV's four columns `field.x`, `.y`, `.z`, `.w`.
     pub yaw: bool,
+    /// The frame a heading is logged in (`None`: as the model's, NED).
+    pub frame: Option<Frame>,
+    /// Read at the grid time even when faster than the grid
+    /// (`on_grid = "instant"`), not by its mean over the step.
+    pub instant: bool,
+    /// Where it is declared.
+    pub at: String,
+}
+
+/// The world frame a heading is logged in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Frame {
+    /// North-east-down: the heading from north, clockwise (the model's ψ).
+    Ned,
+    /// East-north-up (ROS, REP 103): the yaw from east, counter-clockwise;
+    /// ψ = 90° − yaw.
+    Enu,
+}
+
+/// A time of a window: seconds from the log's first stamp, or a stamp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TimeRef {
+    /// Seconds from the earliest stamp of any signal (the notes' times).
+    FromStart(f64),
+    /// An absolute stamp.
+    At(crate::stamps::Nanos),
+}
+
+/// A condition on a source's column: it holds from a sample that meets it
+/// until the next sample.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Condition {
+    /// Index into [`Manifest::sources`].
+    pub source: usize,
+    /// The column (or the bag's field path).
+    pub field: String,
+    /// The value the column must equal.
+    pub equals: Option<f64>,
+    /// The least value it may have.
+    pub min: Option<f64>,
+    /// The largest value it may have.
+    pub max: Option<f64>,
+}
+
+impl Condition {
+    /// Whether `x` meets the condition.
+    pub fn holds(&self, x: f64) -> bool {
+        self.equals.is_none_or(|e| x == e)
+            && self.min.is_none_or(|m| x >= m)
+            && self.max.is_none_or(|m| x <= m)
+    }
+}
+
+/// A window of the log that is kept: a time range, a condition, or both
+/// (their intersection).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Keep {
+    /// Its start (`None`: the log's).
+    pub from: Option<TimeRef>,
+    /// Its end (`None`: the log's).
+    pub to: Option<TimeRef>,
+    /// Where a source's column meets a condition.
+    pub when: Option<Condition>,
     /// Where it is declared.
     pub at: String,
 }
@@ -153,6 +246,8 @@ pub struct Manifest {
     pub sources: Vec<SourceSpec>,
     /// The signals, in name order.
     pub signals: Vec<SignalSpec>,
+    /// The windows kept (empty: the whole log).
+    pub keep: Vec<Keep>,
 }
 
 /// `file:line:col` of byte `at` in `text`.
@@ -238,6 +333,11 @@ pub fn parse(file: &str, text: &str, stem: &str, folder: &Path) -> Result<Manife
             "add a [signals] table: each model signal = \"source:column\"",
         ));
     }
+    let keep = raw
+        .keep
+        .iter()
+        .map(|k| keep_spec(k, &sources, &at))
+        .collect::<Result<_, _>>()?;
     Ok(Manifest {
         file: file.to_string(),
         experiment: raw.experiment.unwrap_or_else(|| stem.to_string()),
@@ -245,7 +345,149 @@ pub fn parse(file: &str, text: &str, stem: &str, folder: &Path) -> Result<Manife
         max_gap,
         sources,
         signals,
+        keep,
     })
+}
+
+/// A `[[keep]]` window, checked.
+fn keep_spec(
+    k: &Spanned<KeepFile>,
+    sources: &[SourceSpec],
+    at: &dyn Fn(&std::ops::Range<usize>) -> String,
+) -> Result<Keep, DataError> {
+    let here = at(&k.span());
+    let raw = k.get_ref();
+    let time = |v: &Option<Spanned<TimeValue>>| -> Result<Option<TimeRef>, DataError> {
+        let Some(v) = v else { return Ok(None) };
+        match v.get_ref() {
+            TimeValue::Seconds(s) if s.is_finite() => Ok(Some(TimeRef::FromStart(*s))),
+            TimeValue::Seconds(s) => Err(DataError::new(
+                at(&v.span()),
+                format!("a window's time must be finite, not {s}"),
+                SEE_DOCS,
+            )),
+            TimeValue::Text(t) => crate::stamps::iso_nanos(t)
+                .map(|ns| Some(TimeRef::At(ns)))
+                .map_err(|why| {
+                    DataError::new(
+                        at(&v.span()),
+                        why,
+                        "a window's time is seconds from the log's first stamp (a number), or ISO-8601 text with a UTC offset",
+                    )
+                }),
+        }
+    };
+    let (from, to) = (time(&raw.from)?, time(&raw.to)?);
+    if let (Some(TimeRef::FromStart(a)), Some(TimeRef::FromStart(b))) = (from, to)
+        && b <= a
+    {
+        return Err(DataError::new(
+            here,
+            format!("the window from {a} s to {b} s is empty"),
+            "`to` must come after `from`",
+        ));
+    }
+    let bounds = raw.equals.is_some() || raw.min.is_some() || raw.max.is_some();
+    let when = match &raw.when {
+        None if bounds => {
+            return Err(DataError::new(
+                here,
+                "`equals`, `min` and `max` bound a column, and this window names none",
+                "add when = \"source:column\"",
+            ));
+        }
+        None if from.is_none() && to.is_none() => {
+            return Err(DataError::new(
+                here,
+                "this window keeps everything: it has no `from`, `to` or `when`",
+                "give a time range (from, to: seconds from the log's first stamp) or a condition (when = \"source:column\" with equals, min or max)",
+            ));
+        }
+        None => None,
+        Some(w) => Some(condition(w, raw, sources, bounds, at)?),
+    };
+    Ok(Keep {
+        from,
+        to,
+        when,
+        at: here,
+    })
+}
+
+/// A window's `when = "source:column"` with its bounds.
+fn condition(
+    w: &Spanned<String>,
+    raw: &KeepFile,
+    sources: &[SourceSpec],
+    bounds: bool,
+    at: &dyn Fn(&std::ops::Range<usize>) -> String,
+) -> Result<Condition, DataError> {
+    let here = at(&w.span());
+    if !bounds {
+        return Err(DataError::new(
+            here,
+            format!("`when = \"{}\"` has no bound", w.get_ref()),
+            "add equals = VALUE, or min = / max = (inclusive)",
+        ));
+    }
+    if raw.equals.is_some() && (raw.min.is_some() || raw.max.is_some()) {
+        return Err(DataError::new(
+            here,
+            "a window's condition has both `equals` and `min`/`max`",
+            "give equals alone, or a range with min and max",
+        ));
+    }
+    if let (Some(a), Some(b)) = (raw.min, raw.max)
+        && b < a
+    {
+        return Err(DataError::new(
+            here,
+            format!("min = {a} is above max = {b}: the condition never holds"),
+            "swap them",
+        ));
+    }
+    let (source, field) = source_field(w.get_ref(), "when", &here, sources)?;
+    Ok(Condition {
+        source,
+        field,
+        equals: raw.equals,
+        min: raw.min,
+        max: raw.max,
+    })
+}
+
+/// `"source:column"`: the source's index and the column.
+fn source_field(
+    from: &str,
+    what: &str,
+    here: &str,
+    sources: &[SourceSpec],
+) -> Result<(usize, String), DataError> {
+    let keys = || {
+        sources
+            .iter()
+            .map(|s| s.key.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let Some((key, field)) = from.split_once(':') else {
+        return Err(DataError::new(
+            here,
+            format!("`{what} = \"{from}\"` names no source"),
+            format!(
+                "write \"source:column\" with a source of [sources] ({})",
+                keys()
+            ),
+        ));
+    };
+    let Some(source) = sources.iter().position(|s| s.key == key) else {
+        return Err(DataError::new(
+            here,
+            format!("`{what}` reads from source `{key}`, which [sources] does not declare"),
+            format!("the sources are: {}", keys()),
+        ));
+    };
+    Ok((source, field.to_string()))
 }
 
 fn source(
@@ -269,6 +511,15 @@ fn source(
             )
         })?,
     };
+    if let Some(u) = &s.time_unit
+        && (is_bag || matches!(s.time, Some(TimeColumns::Pair(_))))
+    {
+        return Err(DataError::new(
+            at(&u.span()),
+            format!("`time_unit` does not apply to source `{key}`"),
+            "a unit reads one numeric time column; a bag's header stamps and a secs/nsecs pair carry their own",
+        ));
+    }
     let clock = match (&s.time, is_bag) {
         (None, true) => Clock::Bag,
         (Some(_), true) => {
@@ -306,34 +557,28 @@ fn signal_spec(
     at: &dyn Fn(&std::ops::Range<usize>) -> String,
 ) -> Result<SignalSpec, DataError> {
     let here = at(&entry.span());
-    let (from, interpolate, kind) = match entry.get_ref() {
-        SignalEntry::Path(p) => (p.as_str(), None, None),
-        SignalEntry::Full(f) => (f.from.as_str(), f.interpolate.as_deref(), f.kind.as_deref()),
+    let (from, interpolate, kind, frame, on_grid) = match entry.get_ref() {
+        SignalEntry::Path(p) => (p.as_str(), None, None, None, None),
+        SignalEntry::Full(f) => (
+            f.from.as_str(),
+            f.interpolate.as_deref(),
+            f.kind.as_deref(),
+            f.frame.as_deref(),
+            f.on_grid.as_deref(),
+        ),
     };
-    let keys = || {
-        sources
-            .iter()
-            .map(|s| s.key.as_str())
-            .collect::<Vec<_>>()
-            .join(", ")
+    let instant = match on_grid {
+        None => false,
+        Some("instant") => true,
+        Some(other) => {
+            return Err(DataError::new(
+                here,
+                format!("unknown `on_grid = \"{other}\"` for `{signal}`"),
+                "\"instant\" reads the signal at the grid time even when it is faster than the grid; without it, a fast signal is its mean over the step",
+            ));
+        }
     };
-    let Some((key, field)) = from.split_once(':') else {
-        return Err(DataError::new(
-            here,
-            format!("`{signal} = \"{from}\"` names no source"),
-            format!(
-                "write \"source:column\" with a source of [sources] ({})",
-                keys()
-            ),
-        ));
-    };
-    let Some(source) = sources.iter().position(|s| s.key == key) else {
-        return Err(DataError::new(
-            here,
-            format!("`{signal}` reads from source `{key}`, which [sources] does not declare"),
-            format!("the sources are: {}", keys()),
-        ));
-    };
+    let (source, field) = source_field(from, signal, &here, sources)?;
     let interpolate = match interpolate {
         None => None,
         Some("hold") => Some(Interpolate::Hold),
@@ -357,12 +602,33 @@ fn signal_spec(
             ));
         }
     };
+    let frame = match frame {
+        None if yaw => {
+            return Err(DataError::new(
+                here,
+                format!("`{signal}` reads a quaternion's yaw without its frame"),
+                "say which world frame the orientation is in: frame = \"enu\" (ROS, REP 103: yaw from east, counter-clockwise; ψ = 90° − yaw) or frame = \"ned\" (the yaw is the heading from north, clockwise)",
+            ));
+        }
+        None => None,
+        Some("ned") => Some(Frame::Ned),
+        Some("enu") => Some(Frame::Enu),
+        Some(other) => {
+            return Err(DataError::new(
+                here,
+                format!("unknown frame `{other}` for `{signal}`"),
+                "\"enu\" (ROS, REP 103) or \"ned\" (north-east-down, the marine heading)",
+            ));
+        }
+    };
     Ok(SignalSpec {
         signal: signal.to_string(),
         source,
-        field: field.to_string(),
+        field,
         interpolate,
         yaw,
+        frame,
+        instant,
         at: here,
     })
 }
@@ -382,7 +648,8 @@ mod tests {
              [sources.tau]\nfile = \"tau.csv\"\ntime = \"stamp\"\ntime_unit = \"ns\"\n\
              [sources.bag]\nfile = \"f.mcap\"\n\
              [signals]\nu = \"twist:u\"\ntau_x = { from = \"tau:Fx\", interpolate = \"linear\" }\n\
-             psi = { from = \"bag:/imu.orientation\", as = \"yaw\" }\n",
+             psi = { from = \"bag:/imu.orientation\", as = \"yaw\", frame = \"enu\" }\n\
+             [[keep]]\nfrom = 0\nto = 700\n[[keep]]\nwhen = \"tau:mode\"\nequals = 0\n",
         )
         .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(m.experiment, "m");
@@ -397,7 +664,15 @@ mod tests {
             (psi.signal.as_str(), psi.field.as_str(), psi.yaw),
             ("psi", "/imu.orientation", true)
         );
+        assert_eq!(psi.frame, Some(Frame::Enu));
         assert_eq!(m.signals[1].interpolate, Some(Interpolate::Linear));
+        assert_eq!(m.keep.len(), 2);
+        assert_eq!(m.keep[0].from, Some(TimeRef::FromStart(0.0)));
+        let when = m.keep[1]
+            .when
+            .as_ref()
+            .map(|w| (w.source, w.field.as_str()));
+        assert_eq!(when, Some((1, "mode")));
     }
 
     #[test]
@@ -429,6 +704,36 @@ mod tests {
                 "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = { from = \"a:u\", interpolate = \"cubic\" }\n",
                 "m.toml:4:5",
                 "unknown interpolation",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\npsi = { from = \"a:q\", as = \"yaw\" }\n",
+                "m.toml:4:7",
+                "without its frame",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\ntime = [\"s\", \"ns\"]\ntime_unit = \"ms\"\n[signals]\nu = \"a:u\"\n",
+                "m.toml:4:13",
+                "does not apply",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = 5\nto = 2\n",
+                "m.toml:5:1",
+                "is empty",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nwhen = \"b:mode\"\nequals = 1\n",
+                "m.toml:6:8",
+                "does not declare",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nequals = 1\n",
+                "m.toml:5:1",
+                "names none",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = \"10:00\"\n",
+                "m.toml:6:8",
+                "ISO",
             ),
         ];
         for (text, at, says) in cases {

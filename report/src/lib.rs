@@ -85,6 +85,10 @@ pub struct DataExperimentJson {
     /// (`experiment` null) (omitted when not split).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub pieces: Vec<leeway_data::PieceNote>,
+    /// A joined log's stalls: holes within the gap limit, held or
+    /// interpolated across (`limit`: the stall threshold; omitted when none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stalls: Vec<leeway_data::GapNote>,
 }
 
 /// [`FileNotes`] as JSON.
@@ -105,6 +109,7 @@ pub fn data_files_json(notes: &[FileNotes]) -> Vec<DataFileJson> {
                     resampled: e.resampled,
                     gaps: e.gaps.clone(),
                     pieces: e.pieces.clone(),
+                    stalls: e.stalls.clone(),
                 })
                 .collect(),
             origin: f.origin.clone(),

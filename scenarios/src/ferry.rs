@@ -390,7 +390,7 @@ file = \"ferry.mcap\"
 u = \"bag:/navigation/twist_body.twist.linear.x\"
 v = \"bag:/navigation/twist_body.twist.linear.y\"
 r = \"bag:/navigation/twist_body.twist.angular.z\"
-psi = { from = \"bag:/imu.orientation\", as = \"yaw\" }
+psi = { from = \"bag:/imu.orientation\", as = \"yaw\", frame = \"ned\" }
 tau_x = \"bag:/allocator/wrench.wrench.force.x\"
 tau_y = \"bag:/allocator/wrench.wrench.force.y\"
 tau_n = \"bag:/allocator/wrench.wrench.torque.z\"

@@ -12,6 +12,7 @@ pub mod design;
 pub mod engine;
 pub mod ferry;
 pub mod noisy;
+pub mod raw_ferry;
 pub mod study;
 pub mod synth;
 pub mod zigzag;

@@ -400,3 +400,134 @@ fn the_log_as_written_recovers_the_ferry_and_its_dead_time() {
         json(&o)["delay_scan"]
     );
 }
+
+/// The relative errors of `v`'s parameters against the raw ferry's truth,
+/// with their relative standard errors.
+fn raw_errors(v: &serde_json::Value) -> Vec<(&'static str, f64, f64)> {
+    leeway_scenarios::raw_ferry::RAW_TRUTH
+        .iter()
+        .map(|(name, truth)| {
+            let p = v["parameters"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .find(|p| p["name"] == *name);
+            let of = |key: &str| p.and_then(|p| p[key].as_f64()).unwrap_or(f64::NAN);
+            (
+                *name,
+                (of("value") - truth) / truth.abs(),
+                of("std_error") / truth.abs(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn raw_topics_read_by_their_means_recover_the_truth_where_instants_do_not() {
+    use leeway_scenarios::raw_ferry::{RawFerry, write_raw_ferry};
+    for seed in [1, 2] {
+        let dir = Scratch::new(&format!("raw-ferry-{seed}"));
+        let spec = RawFerry {
+            seed,
+            seconds: 1200.0,
+            dp: (500.0, 643.0),
+        };
+        write_raw_ferry(&dir.0, &spec).unwrap_or_else(|e| panic!("{e}"));
+        let model = dir.path("raw-ferry.som").display().to_string();
+        let run = |manifest: &str| {
+            let data = dir.path(manifest).display().to_string();
+            let o = leeway(&[
+                "estimate", &model, "--data", &data, "--method", "ls", "--json",
+            ]);
+            assert_eq!(code(&o), 0, "{}", stderr(&o));
+            json(&o)
+        };
+        let means = run("ferry.toml");
+        // The window leaves the DP stretch out: two pieces, their spans noted.
+        let pieces = &means["data_files"][0]["experiments"][0]["pieces"];
+        let spans: Vec<(f64, f64)> = pieces
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|p| {
+                (
+                    p["from"].as_f64().unwrap_or(-1.0),
+                    p["to"].as_f64().unwrap_or(-1.0),
+                )
+            })
+            .collect();
+        assert_eq!(spans, [(0.0, 499.0), (643.0, 1199.0)], "{pieces}");
+        let on_grid: Vec<&str> = means["data_files"][0]["signals"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|s| s["on_grid"].as_str())
+            .collect();
+        // The forces at 50 Hz by their mean over the step, the 5 Hz motion by
+        // a centred mean.
+        let means_of = |prefix: &str| on_grid.iter().filter(|s| s.starts_with(prefix)).count();
+        assert_eq!(means_of("mean over the step of "), 3, "{on_grid:?}");
+        assert_eq!(means_of("centred mean over the step of "), 4, "{on_grid:?}");
+        // The same topics read at one instant a step (the old rule).
+        let manifest = std::fs::read_to_string(dir.path("ferry.toml")).unwrap_or_default();
+        let instant = ["u", "v", "r"]
+            .iter()
+            .fold(manifest, |m, s| {
+                m.replace(
+                    &format!("{s} = \"nav:{s}\""),
+                    &format!("{s} = {{ from = \"nav:{s}\", on_grid = \"instant\" }}"),
+                )
+            })
+            .replace(
+                "tau_x = \"tau:Fx\"",
+                "tau_x = { from = \"tau:Fx\", on_grid = \"instant\" }",
+            )
+            .replace(
+                "tau_y = \"tau:Fy\"",
+                "tau_y = { from = \"tau:Fy\", on_grid = \"instant\" }",
+            )
+            .replace(
+                "tau_n = \"tau:Mz\"",
+                "tau_n = { from = \"tau:Mz\", on_grid = \"instant\" }",
+            )
+            .replace(
+                "frame = \"enu\" }",
+                "frame = \"enu\", on_grid = \"instant\" }",
+            );
+        dir.write("instant.toml", &instant);
+        let instants = run("instant.toml");
+        let (mean_err, instant_err) = (raw_errors(&means), raw_errors(&instants));
+        // Within statistical tolerance of the truth: three standard errors,
+        // plus 8 % for the model error (the truth is RK4 at 100 Hz, the
+        // model one Euler step a second: 5 % on a 10 s time constant); the
+        // input gains within 5 %.
+        for (name, e, se) in &mean_err {
+            let tolerance = if name.ends_with("_t") {
+                0.05
+            } else {
+                3.0 * se + 0.08
+            };
+            assert!(
+                e.abs() <= tolerance,
+                "seed {seed}, {name}: {:+.1} % (σ {:.1} %)",
+                100.0 * e,
+                100.0 * se
+            );
+        }
+        // One sample a step keeps the ripple and the noise as an error in
+        // the regressors: the gains shrink.
+        let total = |errs: &[(&str, f64, f64)]| errs.iter().map(|(_, e, _)| e.abs()).sum::<f64>();
+        assert!(
+            total(&mean_err) * 2.0 < total(&instant_err),
+            "seed {seed}: {mean_err:?} against {instant_err:?}"
+        );
+        for ((name, m, _), (_, i, _)) in mean_err.iter().zip(&instant_err) {
+            if name.ends_with("_t") {
+                assert!(
+                    i.abs() > 0.2 && m.abs() < i.abs() / 4.0,
+                    "seed {seed}, {name}: {m} against {i}"
+                );
+            }
+        }
+    }
+}
