@@ -1,9 +1,11 @@
-//! Resampling an irregularly stamped experiment onto a uniform grid by linear
-//! interpolation (`--resample H`): the grid `t0, t0 + H, …` within the
-//! experiment's time span. A planar heading is interpolated along the short
-//! arc between neighbouring samples (its unwrapped angle), so a heading that
+//! Resampling an irregularly stamped experiment onto a uniform grid
+//! (`--resample H`): the grid `t0, t0 + H, …` within the experiment's time
+//! span, each column read by the rules of [`crate::rates`] that a robot
+//! log's join uses. A planar heading is interpolated along the short arc
+//! between neighbouring samples (its unwrapped angle), so a heading that
 //! wraps at ±π does not sweep through zero between two samples.
 
+use crate::rates::{Between, Rule, on_grid};
 use leeway_model::experiment::Experiment;
 use leeway_structure::ir::{Ir, Rotation};
 
@@ -23,82 +25,54 @@ fn grid(times: &[f64], h: f64) -> Vec<f64> {
     (0..=n).map(|k| t0 + k as f64 * h).collect()
 }
 
-/// For each grid time, the index `i` of the interval `[times[i], times[i+1]]`
-/// holding it and the fraction within it. `times` strictly increase.
-fn brackets(times: &[f64], grid: &[f64]) -> Vec<(usize, f64)> {
-    let mut i = 0;
-    grid.iter()
-        .map(|&t| {
-            while i + 2 < times.len() && times[i + 1] < t {
-                i += 1;
-            }
-            if times.len() < 2 {
-                return (0, 0.0);
-            }
-            let w = ((t - times[i]) / (times[i + 1] - times[i])).clamp(0.0, 1.0);
-            (i, w)
-        })
-        .collect()
-}
-
-fn linear(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
-    at.iter()
-        .map(|&(i, w)| match (values.get(i), values.get(i + 1)) {
-            (Some(a), Some(b)) => a + w * (b - a),
-            (Some(a), None) => *a,
-            _ => f64::NAN,
-        })
-        .collect()
-}
-
 /// The angle difference `b − a` brought into `[−π, π)`: the short arc a
 /// heading turns between two samples (also the join of a robot log's).
 pub fn short_arc(a: f64, b: f64) -> f64 {
     crate::rates::short_arc(a, b)
 }
 
-fn angular(values: &[f64], at: &[(usize, f64)]) -> Vec<f64> {
-    at.iter()
-        .map(|&(i, w)| match (values.get(i), values.get(i + 1)) {
-            // Expressed on the branch of the nearer sample, so that values at
-            // the stamps are the logged ones and a wrapped log stays wrapped.
-            (Some(a), Some(b)) if w <= 0.5 => a + w * short_arc(*a, *b),
-            (Some(a), Some(b)) => b - (1.0 - w) * short_arc(*a, *b),
-            (Some(a), None) => *a,
-            _ => f64::NAN,
-        })
-        .collect()
-}
-
 /// `e` (stamped `times`, strictly increasing, one per sample) resampled every
-/// `h` seconds. Every column is interpolated linearly; a planar heading (in
-/// radians, after unit conversion) along the short arc.
+/// `h` seconds by the rules of [`crate::rates`]: each column interpolated
+/// linearly (a planar heading, in radians after unit conversion, along the
+/// short arc) when the rows are slower than the grid; when they are faster,
+/// an input is its mean over the step and a measurement its centred mean.
+/// One file declares no command to hold: its inputs are interpolated.
 pub fn resample(ir: &Ir, e: &Experiment, times: &[f64], h: f64) -> Experiment {
     let grid = grid(times, h);
-    let at = brackets(times, &grid);
-    let all = |cols: &[Vec<f64>]| -> Vec<Vec<f64>> {
+    let median = crate::gaps::median(&crate::gaps::steps(times)).unwrap_or(h);
+    let span = match (times.first(), times.last()) {
+        (Some(a), Some(b)) => (*a, *b),
+        _ => (0.0, 0.0),
+    };
+    let read = |cols: &[Vec<f64>], between: Between, input: bool| -> Vec<Vec<f64>> {
+        let rule = Rule::for_signal(between, input, median, h);
         cols.iter()
             .map(|c| {
-                if c.is_empty() {
+                if c.is_empty() || c.len() != times.len() {
                     Vec::new()
                 } else {
-                    linear(c, &at)
+                    on_grid(times, c, rule, &grid, h, span).values
                 }
             })
             .collect()
     };
+    let angle = Between::Angle {
+        turn: 2.0 * std::f64::consts::PI,
+    };
     Experiment {
         name: e.name.clone(),
         h,
-        states: all(&e.states),
-        inputs: all(&e.inputs),
+        states: read(&e.states, Between::Linear, false),
+        inputs: read(&e.inputs, Between::Linear, true),
         heading: if matches!(ir.rotation, Rotation::Planar { .. }) {
-            angular(&e.heading, &at)
+            read(std::slice::from_ref(&e.heading), angle, false)
+                .pop()
+                .unwrap_or_default()
         } else {
             Vec::new()
         },
-        rotation: all(&e.rotation),
-        disturbances: all(&e.disturbances),
+        rotation: read(&e.rotation, Between::Linear, false),
+        disturbances: read(&e.disturbances, Between::Linear, false),
     }
 }
 
