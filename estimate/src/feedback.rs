@@ -3,16 +3,44 @@
 //! `feedback`: an input that the craft's past motion predicts, beyond what
 //! the input's own past explains, was computed from the measurements — a
 //! dynamic-positioning or autopilot stretch, a zigzag's switching rule. Per
-//! window of [`WINDOW_SECONDS`] and per input `u`, two least-squares fits of
-//! `u(k)` are compared: on `1, u(k−1), u(k−2)`, and on those plus every
-//! state at `k, k−1, k−2` (a controller acts on the latest measurement; in
-//! open loop the state at `k` depends only on inputs before `k`). A window
-//! is judged only when the input's innovations there — the samples its own
-//! past does not predict — are many (five per added regressor): an input
-//! that steps a few times a window carries too little evidence, however
-//! well a dozen regressors happen to fit its steps. A window is flagged when the states explain at
-//! least [`EXPLAINED`] of what the input's own past leaves, and the χ² test
-//! of the added terms rejects open loop at 10⁻⁶.
+//! window and per input `u`, two least-squares fits of `u(k)` are
+//! compared: on `1, u(k−1), u(k−2)`, and on those plus the motion at `k,
+//! k−1, k−2` — every state, and the heading of a model with a planar one
+//! (a controller on heading acts on the heading error; an autopilot's rate
+//! term may be the heading's last step rather than the gyro's yaw rate).
+//! A controller acts on the latest measurement; in open loop the motion at
+//! `k` depends only on inputs before `k`.
+//!
+//! The heading is unwrapped along the record (a step from one sample to the
+//! next is taken modulo 2π), not replaced by its sine and cosine: a
+//! controller is linear in the heading error, and one column a lag costs
+//! half of two. Its lags enter taken from its value at the window's first
+//! sample (the intercept absorbs a constant). A heading logged in degrees
+//! is unwrapped wrongly where it steps more than π (3.1°) in a sample; the
+//! model's rotation is wrong then too, and the heading check of the data
+//! warns about it. The model carries no position (a `Row` has
+//! the states, the inputs and the heading), and none is integrated from the
+//! body velocities: a DP controller's position estimate is fast where it
+//! integrates the velocities, which are among the regressors, and slow
+//! where it follows the satellite fixes, which the input's own lags
+//! absorb; on the synthetic ferry the DP windows explain the same with
+//! and without it, and it would cost two regressors.
+//!
+//! A window is [`WINDOW_SECONDS`] long, but at least [`WIDTHS`] times the
+//! full fit's width in samples: at 1 Hz the ferry's fit (three states and
+//! the heading, three lags each, and its own three columns) is 15 wide, so
+//! a window is 75 s, where a fixed 100 samples made it 100 s. A window is
+//! judged only when the input's innovations there — the samples its own
+//! past does not predict — are many (five per added regressor, so a
+//! window of [`WIDTHS`] widths can be judged): an input that steps a few
+//! times a window carries too little evidence, however well a dozen
+//! regressors happen to fit its steps. The last window is judged too: what
+//! is left after a whole window is judged alone when it has at least
+//! [`WIDTHS`] widths, and joins the window before otherwise (alone it
+//! could never hold enough innovations; joined, its samples are judged
+//! with their neighbours rather than not at all). A window is flagged when
+//! the motion explains at least [`EXPLAINED`] of what the input's own past
+//! leaves, and the χ² test of the added terms rejects open loop at 10⁻⁶.
 
 use crate::parallel::{in_order, threads_for};
 use leeway_model::correlation::chi_squared_tail;
@@ -859,6 +887,39 @@ mod tests {
                 assert_eq!(bits(&got.cross), bits(cross), "input {j}");
                 assert_eq!(got.square.to_bits(), square.to_bits(), "input {j}");
             }
+        }
+    }
+
+    #[test]
+    fn the_last_stretch_is_judged_alone_or_with_the_window_before() {
+        let ir = ir();
+        // 10 Hz: windows of 300 samples, the fewest judged 5 × 6 = 30.
+        // 60 samples left after 19 windows are judged alone.
+        let e = record(|k| k >= 5700, 1.0).truncated(5760);
+        let found = feedback(&ir, &e);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].first, found[0].last), (5700, 5759));
+        // 20 are too few: they join the window before.
+        let e = record(|k| k >= 5400, 1.0).truncated(5720);
+        let found = feedback(&ir, &e);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].first, found[0].last), (5400, 5719));
+    }
+
+    #[test]
+    fn the_heading_is_unwrapped_along_the_record() {
+        let mut h = Heading {
+            last: None,
+            base: 0.0,
+        };
+        let read = [3.0, -3.0, 3.1, -3.1, 0.5, f64::NAN, 0.6, -0.3];
+        let got: Vec<f64> = read.iter().map(|psi| h.unwrap(*psi)).collect();
+        let want = [3.0, TAU - 3.0, 3.1, TAU - 3.1, 0.5, f64::NAN, 0.6, -0.3];
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (g - w).abs() < 1e-12 || (g.is_nan() && w.is_nan()),
+                "{got:?}"
+            );
         }
     }
 

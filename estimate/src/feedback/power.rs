@@ -202,7 +202,7 @@ fn ferry_record(seed: u64, seconds: usize, mode: impl Fn(f64) -> Mode) -> Experi
             slow[i] = a * slow[i] + slow_sd[i] * (1.0 - a * a).sqrt() * rng.normal();
             // x'' + 2ζω x' + ω² x = white, scaled to its standard deviation.
             let [x, xd] = wave[i];
-            let drive = wave_sd[i] * (4.0 * zeta * w0.powi(3) / dt).sqrt() * rng.normal();
+            let drive = wave_sd[i] * (4.0 * zeta * w0 * w0 * w0 / dt).sqrt() * rng.normal();
             let xdd = drive - 2.0 * zeta * w0 * xd - w0 * w0 * x;
             wave[i] = [x + dt * (xd + dt * xdd), xd + dt * xdd];
             thrust[i] + slow[i] + wave[i][0]
