@@ -3,27 +3,58 @@
 //! `feedback`: an input that the craft's past motion predicts, beyond what
 //! the input's own past explains, was computed from the measurements — a
 //! dynamic-positioning or autopilot stretch, a zigzag's switching rule. Per
-//! window of [`WINDOW_SECONDS`] and per input `u`, two least-squares fits of
-//! `u(k)` are compared: on `1, u(k−1), u(k−2)`, and on those plus every
-//! state at `k, k−1, k−2` (a controller acts on the latest measurement; in
-//! open loop the state at `k` depends only on inputs before `k`). A window
-//! is judged only when the input's innovations there — the samples its own
-//! past does not predict — are many (five per added regressor): an input
-//! that steps a few times a window carries too little evidence, however
-//! well a dozen regressors happen to fit its steps. A window is flagged when the states explain at
-//! least [`EXPLAINED`] of what the input's own past leaves, and the χ² test
-//! of the added terms rejects open loop at 10⁻⁶.
+//! window and per input `u`, two least-squares fits of `u(k)` are
+//! compared: on `1, u(k−1), u(k−2)`, and on those plus the motion at `k,
+//! k−1, k−2` — every state, and the heading of a model with a planar one
+//! (a controller on heading acts on the heading error; an autopilot's rate
+//! term may be the heading's last step rather than the gyro's yaw rate).
+//! A controller acts on the latest measurement; in open loop the motion at
+//! `k` depends only on inputs before `k`.
+//!
+//! The heading is unwrapped along the record (a step from one sample to the
+//! next is taken modulo 2π), not replaced by its sine and cosine: a
+//! controller is linear in the heading error, and one column a lag costs
+//! half of two. Its lags enter taken from its value at the window's first
+//! sample (the intercept absorbs a constant). A heading logged in degrees
+//! is unwrapped wrongly where it steps more than π (3.1°) in a sample; the
+//! model's rotation is wrong then too, and the heading check of the data
+//! warns about it. The model carries no position (a `Row` has
+//! the states, the inputs and the heading), and none is integrated from the
+//! body velocities: a DP controller's position estimate is fast where it
+//! integrates the velocities, which are among the regressors, and slow
+//! where it follows the satellite fixes, which the input's own lags
+//! absorb; on the synthetic ferry the DP windows explain the same with
+//! and without it, and it would cost two regressors.
+//!
+//! A window is [`WINDOW_SECONDS`] long, but at least [`WIDTHS`] times the
+//! full fit's width in samples: at 1 Hz the ferry's fit (three states and
+//! the heading, three lags each, and its own three columns) is 15 wide, so
+//! a window is 75 s, where a fixed 100 samples made it 100 s. A window is
+//! judged only when the input's innovations there — the samples its own
+//! past does not predict — are many (five per added regressor, so a
+//! window of [`WIDTHS`] widths can be judged): an input that steps a few
+//! times a window carries too little evidence, however well a dozen
+//! regressors happen to fit its steps. The last window is judged too: what
+//! is left after a whole window is judged alone when it has at least
+//! [`WIDTHS`] widths, and joins the window before otherwise (alone it
+//! could never hold enough innovations; joined, its samples are judged
+//! with their neighbours rather than not at all). A window is flagged when
+//! the motion explains at least [`EXPLAINED`] of what the input's own past
+//! leaves, and the χ² test of the added terms rejects open loop at 10⁻⁶.
 
 use crate::parallel::{in_order, threads_for};
 use leeway_model::correlation::chi_squared_tail;
 use leeway_model::experiment::{Row, Source};
-use leeway_structure::ir::Ir;
+use leeway_structure::ir::{Ir, Rotation};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use std::f64::consts::TAU;
 
-/// The window a fit covers, seconds (at least [`MIN_WINDOW`] samples).
+/// The window a fit covers, seconds (at least [`WIDTHS`] times the full
+/// fit's width, in samples).
 pub const WINDOW_SECONDS: f64 = 30.0;
-/// The fewest samples of a window.
-pub const MIN_WINDOW: usize = 100;
+/// The fewest samples of a window, in widths of the full fit: five, as a
+/// window is judged on five innovations per added regressor.
+pub const WIDTHS: usize = 5;
 /// The share of the input's innovation the past motion must explain.
 pub const EXPLAINED: f64 = 0.5;
 /// Lags of the input and of each state in the fits.
@@ -248,11 +279,12 @@ impl Sums {
             .count();
         count as f64
     }
-    /// The share of input `j`'s restricted fit's residual the states
-    /// explain, when the window holds enough innovations and the χ² test (on
-    /// them) rejects that the states add nothing. The full fit is solved
-    /// only for a window that can be judged.
-    fn explained(&self, j: usize) -> Option<f64> {
+    /// The share of input `j`'s restricted fit's residual the motion
+    /// explains, and whether the χ² test (on the innovations) rejects that
+    /// the motion adds nothing; `None` when the window does not hold enough
+    /// innovations to judge. The full fit is solved only for a window that
+    /// can be judged.
+    fn judge(&self, j: usize) -> Option<(f64, bool)> {
         let (b, r) = self.fit(j, OWN)?;
         let q = self.width - OWN;
         let n = self.innovations(j, &b, r);
@@ -261,7 +293,7 @@ impl Sums {
         }
         let (_, f) = self.fit(j, self.width)?;
         let stat = (n - self.width as f64).max(0.0) * (r - f) / f.max(f64::MIN_POSITIVE);
-        (chi_squared_tail(stat, q) < 1e-6).then_some((r - f) / r)
+        Some(((r - f) / r, chi_squared_tail(stat, q) < 1e-6))
     }
 }
 
@@ -375,38 +407,121 @@ pub struct FeedbackScan<'a> {
     source: &'a dyn Source,
     /// Samples a window holds.
     window: usize,
+    /// The fewest samples a window is judged on ([`WIDTHS`] × the full
+    /// fit's width): a last stretch shorter joins the window before it.
+    least: usize,
     sums: Sums,
-    /// The states at k, k−1, …, k−LAGS (the regressors from column OWN on).
+    /// The motion's regressors: the states at k, k−1, …, k−LAGS, then the
+    /// heading unwrapped at k, …, k−LAGS (when the model has one).
     x: Vec<f64>,
+    /// The heading's unwrapping, when the model has a planar heading.
+    heading: Option<Heading>,
+    /// The row of regressors a window's sample gets: `x`, the heading taken
+    /// from its value at the window's first sample (the intercept absorbs
+    /// a constant, and the values stay small however far the craft turned).
+    lagged: Vec<f64>,
     /// Each input's lags k−1, …, k−LAGS.
     lags: Vec<[f64; LAGS]>,
     /// Rows seen before the first whole set of lags (at most `LAGS`).
     seen: usize,
-    flagged: Vec<(usize, usize, Vec<usize>, f64)>,
+    /// Every judged window: first and last sample, each input's share and
+    /// whether its test rejected open loop (`None`: not judged).
+    judged: Vec<Judged>,
     /// Rows pushed.
     k: usize,
     /// The current window's first row.
     start: usize,
 }
 
+/// A window and what the check found there.
+#[derive(Clone, Debug)]
+pub(crate) struct Judged {
+    pub(crate) first: usize,
+    pub(crate) last: usize,
+    /// Per input: the share of its innovation the motion explains, and
+    /// whether the χ² test rejects open loop (`None`: too little evidence).
+    pub(crate) inputs: Vec<Option<(f64, bool)>>,
+}
+
+impl Judged {
+    /// The inputs flagged, and the largest share among them.
+    fn flagged(&self) -> Option<(Vec<usize>, f64)> {
+        let flagged: Vec<(usize, f64)> = self
+            .inputs
+            .iter()
+            .enumerate()
+            .filter_map(|(j, e)| match e {
+                Some((e, true)) if *e >= EXPLAINED => Some((j, *e)),
+                _ => None,
+            })
+            .collect();
+        let most = flagged.iter().map(|(_, e)| *e).fold(0.0, f64::max);
+        (!flagged.is_empty()).then(|| (flagged.into_iter().map(|(j, _)| j).collect(), most))
+    }
+}
+
+/// The heading unwrapped along the record.
+struct Heading {
+    /// The last finite heading read (wrapped, as logged), and its value
+    /// unwrapped: the first read, then steps of less than π.
+    last: Option<(f64, f64)>,
+    /// The heading at the current window's first sample.
+    base: f64,
+}
+
+impl Heading {
+    /// The heading of a model with a planar one.
+    fn of(ir: &Ir) -> Option<Heading> {
+        matches!(ir.rotation, Rotation::Planar { .. }).then_some(Heading {
+            last: None,
+            base: 0.0,
+        })
+    }
+    /// The heading `psi` of the next row, unwrapped: a step from the last
+    /// is taken modulo 2π into `[−π, π]`. A heading that is not finite is
+    /// passed on (its window then has no fit), and the unwrapping goes on
+    /// from the last finite one.
+    fn unwrap(&mut self, psi: f64) -> f64 {
+        if !psi.is_finite() {
+            return psi;
+        }
+        let unwrapped = match self.last {
+            None => psi,
+            Some((read, unwrapped)) => {
+                let step = psi - read;
+                unwrapped + step - TAU * (step / TAU).round()
+            }
+        };
+        self.last = Some((psi, unwrapped));
+        unwrapped
+    }
+}
+
 impl<'a> FeedbackScan<'a> {
     /// The check of `source`, or `None` when there is nothing to check (a
-    /// model without inputs, a record shorter than a window).
+    /// model without inputs, a record shorter than the fewest samples a
+    /// window is judged on).
     pub fn new(ir: &'a Ir, source: &'a dyn Source) -> Option<FeedbackScan<'a>> {
-        if ir.inputs.is_empty() || source.len() < MIN_WINDOW {
+        let heading = Heading::of(ir);
+        let motion = (LAGS + 1) * (ir.states.len() + usize::from(heading.is_some()));
+        let width = OWN + motion;
+        let least = WIDTHS * width;
+        if ir.inputs.is_empty() || source.len() < least {
             return None;
         }
-        let window = ((WINDOW_SECONDS / source.step()).round() as usize).max(MIN_WINDOW);
-        let width = OWN + (LAGS + 1) * ir.states.len();
+        let window = ((WINDOW_SECONDS / source.step()).round() as usize).max(least);
         Some(FeedbackScan {
             ir,
             source,
             window,
+            least,
             sums: Sums::new(width, ir.inputs.len()),
-            x: vec![0.0; width],
+            x: vec![0.0; motion],
+            heading,
+            lagged: vec![0.0; motion],
             lags: vec![[0.0; LAGS]; ir.inputs.len()],
             seen: 0,
-            flagged: Vec::new(),
+            judged: Vec::new(),
             k: 0,
             start: 0,
         })
@@ -414,11 +529,25 @@ impl<'a> FeedbackScan<'a> {
 
     /// The next row of the experiment.
     pub fn push(&mut self, row: &Row) {
-        let (n_states, width) = (self.ir.states.len(), self.x.len());
-        self.x.copy_within(OWN..width - n_states, OWN + n_states);
-        self.x[OWN..OWN + n_states].copy_from_slice(row.states);
+        let n_states = self.ir.states.len();
+        let states = (LAGS + 1) * n_states;
+        self.x.copy_within(0..states - n_states, n_states);
+        self.x[..n_states].copy_from_slice(row.states);
+        self.lagged[..states].copy_from_slice(&self.x[..states]);
+        if let Some(heading) = &mut self.heading {
+            let psi = heading.unwrap(row.heading);
+            if self.k == self.start {
+                heading.base = psi;
+            }
+            let lags = &mut self.x[states..];
+            lags.copy_within(0..LAGS, 1);
+            lags[0] = psi;
+            for (l, x) in self.lagged[states..].iter_mut().zip(&self.x[states..]) {
+                *l = x - heading.base;
+            }
+        }
         if self.seen == LAGS {
-            self.sums.push(&self.x[OWN..], &self.lags, row.inputs);
+            self.sums.push(&self.lagged, &self.lags, row.inputs);
         } else {
             self.seen += 1;
         }
@@ -427,9 +556,11 @@ impl<'a> FeedbackScan<'a> {
             l[0] = *u;
         }
         self.k += 1;
-        let (k, start) = (self.k, self.start);
-        let last = k == self.source.len();
-        if k - start == self.window || (last && k - start >= MIN_WINDOW) {
+        let (k, start, n) = (self.k, self.start, self.source.len());
+        // A whole window is judged, unless what is left after it is too
+        // short to be judged alone: the window then runs to the end.
+        let whole = k - start == self.window && n.saturating_sub(k) >= self.least;
+        if whole || (k == n && k - start >= self.least) {
             self.judge_window();
         }
     }
@@ -437,22 +568,35 @@ impl<'a> FeedbackScan<'a> {
     /// Judges the window that ends at the last row pushed, and starts the next.
     fn judge_window(&mut self) {
         self.sums.settle();
-        let shares: Vec<(usize, f64)> = (0..self.ir.inputs.len())
-            .filter_map(|j| self.sums.explained(j).map(|e| (j, e)))
-            .filter(|(_, e)| *e >= EXPLAINED)
+        let inputs = (0..self.ir.inputs.len())
+            .map(|j| self.sums.judge(j))
             .collect();
-        if !shares.is_empty() {
-            let most = shares.iter().map(|(_, e)| *e).fold(0.0, f64::max);
-            let inputs = shares.iter().map(|(j, _)| *j).collect();
-            self.flagged.push((self.start, self.k - 1, inputs, most));
-        }
+        self.judged.push(Judged {
+            first: self.start,
+            last: self.k - 1,
+            inputs,
+        });
         self.sums.clear();
         self.start = self.k;
     }
 
+    /// Every window judged, in order.
+    #[cfg(test)]
+    pub(crate) fn windows(&self) -> &[Judged] {
+        &self.judged
+    }
+
     /// The flagged stretches, adjacent windows merged.
     pub fn finish(self) -> Vec<Feedback> {
-        merge(self.ir, self.source, self.source.step(), self.flagged)
+        let flagged = self
+            .judged
+            .iter()
+            .filter_map(|w| {
+                w.flagged()
+                    .map(|(inputs, most)| (w.first, w.last, inputs, most))
+            })
+            .collect();
+        merge(self.ir, self.source, self.source.step(), flagged)
     }
 }
 
@@ -491,6 +635,9 @@ fn merge(
     }
     out
 }
+
+#[cfg(test)]
+mod power;
 
 #[cfg(test)]
 mod tests {
@@ -740,6 +887,39 @@ mod tests {
                 assert_eq!(bits(&got.cross), bits(cross), "input {j}");
                 assert_eq!(got.square.to_bits(), square.to_bits(), "input {j}");
             }
+        }
+    }
+
+    #[test]
+    fn the_last_stretch_is_judged_alone_or_with_the_window_before() {
+        let ir = ir();
+        // 10 Hz: windows of 300 samples, the fewest judged 5 × 6 = 30.
+        // 60 samples left after 19 windows are judged alone.
+        let e = record(|k| k >= 5700, 1.0).truncated(5760);
+        let found = feedback(&ir, &e);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].first, found[0].last), (5700, 5759));
+        // 20 are too few: they join the window before.
+        let e = record(|k| k >= 5400, 1.0).truncated(5720);
+        let found = feedback(&ir, &e);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert_eq!((found[0].first, found[0].last), (5400, 5719));
+    }
+
+    #[test]
+    fn the_heading_is_unwrapped_along_the_record() {
+        let mut h = Heading {
+            last: None,
+            base: 0.0,
+        };
+        let read = [3.0, -3.0, 3.1, -3.1, 0.5, f64::NAN, 0.6, -0.3];
+        let got: Vec<f64> = read.iter().map(|psi| h.unwrap(*psi)).collect();
+        let want = [3.0, TAU - 3.0, 3.1, TAU - 3.1, 0.5, f64::NAN, 0.6, -0.3];
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (g - w).abs() < 1e-12 || (g.is_nan() && w.is_nan()),
+                "{got:?}"
+            );
         }
     }
 

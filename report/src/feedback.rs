@@ -60,7 +60,7 @@ fn stretch_alert(f: &Feedback) -> Warning {
 }
 
 /// The help of a closed-loop warning.
-const HELP: &str = "a controller was in the loop there (dynamic positioning, an autopilot); leave the stretch out if the craft met disturbances";
+const HELP: &str = "a controller was in the loop there (dynamic positioning, an autopilot); if the craft met disturbances, keep only the open-loop stretches (a `[[keep]]` window in the log's manifest, docs/logs.md)";
 
 /// One warning for an experiment's many stretches (at least one).
 fn stretches_alert(all: &[Feedback]) -> Warning {
@@ -150,6 +150,7 @@ mod tests {
                 .summary
                 .starts_with("experiment `short`, 0 to 99 s")
         );
+        assert!(alerts[0].help.contains("[[keep]]"), "{}", alerts[0].help);
         // Three stretches still get a warning each.
         assert_eq!(closed_loop_alerts(&all[..3]).len(), 3);
     }
