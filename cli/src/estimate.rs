@@ -17,7 +17,7 @@ use crate::model::load;
 use crate::options::load_options;
 use crate::output::{Status, err, headline, out, print_json, stderr_style, warning_text};
 use crate::problem::{Failure, Problem};
-use leeway_estimate::{Bound, DelayRange, estimate, scan_delay};
+use leeway_estimate::{Bound, DelayRange, estimate, scan_delays};
 use leeway_model::Interpreter;
 use leeway_model::warning::Warning;
 use leeway_report::checks::{data_checks, heading_alerts, unit_alerts_from_peaks};
@@ -71,7 +71,7 @@ fn execute(
     let ir = loaded.ir;
     *model_name = Some(ir.name.clone());
     let load_options = load_options(&ir, args.step, Some(&args.time))?;
-    check_scan(&ir, args.scan_delay.as_ref())?;
+    check_scan(&ir, &args.scan_delay)?;
     let nominal = match &args.nominal {
         Some(path) => Some(crate::params::read(path, &ir, "--nominal")?),
         None => None,
@@ -91,15 +91,23 @@ fn execute(
     warnings.extend(heading_alerts(&ir, &gains));
     warnings.extend(closed_loop_alerts(&checks.closed_loop));
     let options = args.options(nominal);
-    let (result, scan) = match &args.scan_delay {
-        None => (
+    let (result, scans) = if args.scan_delay.is_empty() {
+        (
             estimate(&Interpreter::new(ir.clone()), &sources, &options),
-            None,
-        ),
-        Some(range) => match scan_delay(&ir, &sources, &options, range, args.scan_by) {
-            Ok(scan) => (Ok(scan.estimate.clone()), Some(scan)),
-            Err(e) => (Err(e), None),
-        },
+            Vec::new(),
+        )
+    } else {
+        match scan_delays(&ir, &sources, &options, &args.scan_delay, args.scan_by) {
+            Ok(scans) => {
+                // Never empty (one scan a range); the plain estimate otherwise.
+                let result = match scans.last() {
+                    Some(last) => Ok(last.estimate.clone()),
+                    None => estimate(&Interpreter::new(ir.clone()), &sources, &options),
+                };
+                (result, scans)
+            }
+            Err(e) => (Err(e), Vec::new()),
+        }
     };
     // A file that changed between passes voids whatever was computed.
     if let Some(p) = data.failure() {
@@ -118,17 +126,33 @@ fn execute(
         data_notes,
         units: crate::units::unit_lines(&ir),
         data_units: ir.data_units.clone(),
-        scan,
+        scans,
     })
 }
 
 /// A `--scan-delay` range checked before any work where the model decides
 /// its grid (samples, or seconds with a declared `step`); one in seconds on
 /// a model without `step` is checked against the data's sample time.
-fn check_scan(ir: &leeway_structure::ir::Ir, range: Option<&DelayRange>) -> Result<(), Failure> {
-    let Some(range) = range else {
-        return Ok(());
-    };
+fn check_scan(ir: &leeway_structure::ir::Ir, ranges: &[DelayRange]) -> Result<(), Failure> {
+    let mut seen: Vec<&str> = Vec::new();
+    for range in ranges {
+        if seen.contains(&range.input.as_str()) {
+            return Err(Failure::from(
+                Problem::error(
+                    "invalid-option",
+                    format!("--scan-delay: `{}` is scanned twice", range.input),
+                )
+                .help("scan each input once"),
+            ));
+        }
+        seen.push(&range.input);
+        check_one_scan(ir, range)?;
+    }
+    Ok(())
+}
+
+/// One `--scan-delay` range checked (see [`check_scan`]).
+fn check_one_scan(ir: &leeway_structure::ir::Ir, range: &DelayRange) -> Result<(), Failure> {
     let seconds = matches!(range.lo, Bound::Seconds(_)) || matches!(range.hi, Bound::Seconds(_));
     let Some(h) = ir.step.or((!seconds).then_some(1.0)) else {
         return Ok(());

@@ -318,8 +318,8 @@ mod tests {
         // The box of 1 s passes 0.9 Hz at |sinc(0.9)| = 0.11; a pick keeps it whole.
         assert!(err(&mean) < 0.12, "{}", err(&mean));
         assert!(err(&pick) > 0.9, "{}", err(&pick));
-        // The first window is narrowed to nothing at the span's start.
-        assert_eq!(mean.samples, (0, 50));
+        // The first window narrows to nothing at the span's start: the instant.
+        assert_eq!(mean.samples, (50, 50));
     }
 
     #[test]

@@ -27,9 +27,11 @@
 //! and without it, and it would cost two regressors.
 //!
 //! A window is [`WINDOW_SECONDS`] long, but at least [`WIDTHS`] times the
-//! full fit's width in samples: at 1 Hz the ferry's fit (three states and
-//! the heading, three lags each, and its own three columns) is 15 wide, so
-//! a window is 75 s, where a fixed 100 samples made it 100 s. A window is
+//! full fit's width in samples, and at least [`MIN_WINDOW`]: at 1 Hz the
+//! ferry's fit (three states and the heading, three lags each, and its own
+//! three columns) is 15 wide, so five widths would be 75 s, but on 75
+//! samples the study's smoothed open-loop rudder is "explained" by chance
+//! (82 % in one window), so a window stays 100 samples. A window is
 //! judged only when the input's innovations there — the samples its own
 //! past does not predict — are many (five per added regressor, so a
 //! window of [`WIDTHS`] widths can be judged): an input that steps a few
@@ -55,6 +57,9 @@ pub const WINDOW_SECONDS: f64 = 30.0;
 /// The fewest samples of a window, in widths of the full fit: five, as a
 /// window is judged on five innovations per added regressor.
 pub const WIDTHS: usize = 5;
+/// The fewest samples of any window: on fewer, a smoothed open-loop input
+/// is explained by chance (the study's ship, at 75 samples a window: 82 %).
+pub const MIN_WINDOW: usize = 100;
 /// The share of the input's innovation the past motion must explain.
 pub const EXPLAINED: f64 = 0.5;
 /// Lags of the input and of each state in the fits.
@@ -505,7 +510,7 @@ impl<'a> FeedbackScan<'a> {
         let heading = Heading::of(ir);
         let motion = (LAGS + 1) * (ir.states.len() + usize::from(heading.is_some()));
         let width = OWN + motion;
-        let least = WIDTHS * width;
+        let least = (WIDTHS * width).max(MIN_WINDOW);
         if ir.inputs.is_empty() || source.len() < least {
             return None;
         }
@@ -893,12 +898,13 @@ mod tests {
     #[test]
     fn the_last_stretch_is_judged_alone_or_with_the_window_before() {
         let ir = ir();
-        // 10 Hz: windows of 300 samples, the fewest judged 5 × 6 = 30.
-        // 60 samples left after 19 windows are judged alone.
-        let e = record(|k| k >= 5700, 1.0).truncated(5760);
+        // 10 Hz: windows of 300 samples, the fewest judged 100 (5 × 6 = 30
+        // widths, at least MIN_WINDOW). 100 samples left after 19 windows
+        // are judged alone.
+        let e = record(|k| k >= 5700, 1.0).truncated(5800);
         let found = feedback(&ir, &e);
         assert_eq!(found.len(), 1, "{found:?}");
-        assert_eq!((found[0].first, found[0].last), (5700, 5759));
+        assert_eq!((found[0].first, found[0].last), (5700, 5799));
         // 20 are too few: they join the window before.
         let e = record(|k| k >= 5400, 1.0).truncated(5720);
         let found = feedback(&ir, &e);

@@ -75,7 +75,7 @@ pub use protocol::{
 pub use run::{NOMINAL_LIMIT, estimate, estimate_with};
 pub use runner::PassRunner;
 pub use scan::{
-    Bound, DelayRange, DelayScan, MAX_SCAN_CANDIDATES, ScanBy, ScanPoint, scan_delay,
+    Bound, DelayRange, DelayScan, MAX_SCAN_CANDIDATES, ScanBy, ScanPoint, scan_delay, scan_delays,
     with_dead_time,
 };
 pub use walk::REGRESSOR_LIMIT;

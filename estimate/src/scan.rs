@@ -1,7 +1,9 @@
-//! The dead time of one input found by a scan: θ estimated at each
+//! The dead time of an input found by a scan: θ estimated at each
 //! candidate dead time on a grid of the sample time, each estimate judged by
-//! a criterion ([`ScanBy`]), the best one kept. One implementation for
-//! `leeway estimate --scan-delay` and Python.
+//! a criterion ([`ScanBy`]), the best one kept. Several inputs are scanned
+//! one after another ([`scan_delays`]), each with the dead times chosen
+//! before it. One implementation for `leeway estimate --scan-delay` and
+//! Python.
 
 use crate::method::{Choice, Named, choice};
 use crate::options::EstimateOptions;
@@ -76,6 +78,20 @@ impl DelayRange {
             lo: bound(lo)?,
             hi: bound(hi)?,
         })
+    }
+
+    /// A comma-separated list of ranges (`tau_x=0..2s,tau_y=0..2s`), each
+    /// input at most once.
+    pub fn parse_list(text: &str) -> Result<Vec<DelayRange>, String> {
+        let mut out: Vec<DelayRange> = Vec::new();
+        for part in text.split(',') {
+            let range = DelayRange::parse(part)?;
+            if out.iter().any(|r| r.input == range.input) {
+                return Err(format!("`{}` is scanned twice", range.input));
+            }
+            out.push(range);
+        }
+        Ok(out)
     }
 
     /// The candidate dead times in samples at the sample time `h`, checked:
@@ -173,6 +189,28 @@ pub struct DelayScan {
     pub ir: Ir,
     /// The estimate at the chosen dead time.
     pub estimate: Estimate,
+}
+
+/// Scans the inputs of `ranges` one after another: each scan starts from
+/// the dead times the ones before it chose (the others as the model
+/// declares them). The last scan's estimate is at every chosen dead time.
+/// A coordinate search, not a joint grid: its cost is the sum of the
+/// ranges, not their product, and it finds the joint best when the inputs'
+/// dead times act on the fit apart (as distinct actuators do).
+pub fn scan_delays(
+    ir: &Ir,
+    experiments: &[&dyn Source],
+    options: &EstimateOptions,
+    ranges: &[DelayRange],
+    by: ScanBy,
+) -> Result<Vec<DelayScan>, EstimateError> {
+    let mut scans: Vec<DelayScan> = Vec::with_capacity(ranges.len());
+    for range in ranges {
+        let current = scans.last().map_or(ir, |s| &s.ir);
+        let scan = scan_delay(current, experiments, options, range, by)?;
+        scans.push(scan);
+    }
+    Ok(scans)
 }
 
 /// `ir` with `input`'s dead time set to `samples` (any declared one replaced).

@@ -7,7 +7,7 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::options::{EstimateOptions, load_options};
 use leeway_data::LoadOptions;
-use leeway_estimate::{DelayRange, ScanBy, estimate, scan_delay};
+use leeway_estimate::{DelayRange, ScanBy, estimate, scan_delays};
 use leeway_model::Interpreter;
 use leeway_report::{DelayScanJson, EstimateReport, Estimated, estimate_report, heading_warnings};
 use pyo3::prelude::*;
@@ -52,7 +52,7 @@ fn run_estimate(
     frames: &[data::Frame<'_>],
     load_options: &LoadOptions,
     options: &leeway_estimate::EstimateOptions,
-    scan: Option<&(DelayRange, ScanBy)>,
+    scan: Option<&(Vec<DelayRange>, ScanBy)>,
 ) -> Result<String, Failure> {
     let ir = &model.ir;
     let (loaded, notes) =
@@ -74,11 +74,17 @@ fn run_estimate(
     let (result, scanned) = match scan {
         None => (
             estimate(&Interpreter::new(ir.clone()), &sources, options),
-            None,
+            Vec::new(),
         ),
-        Some((range, by)) => match scan_delay(ir, &sources, options, range, *by) {
-            Ok(s) => (Ok(s.estimate.clone()), Some(s)),
-            Err(e) => (Err(e), None),
+        Some((ranges, by)) => match scan_delays(ir, &sources, options, ranges, *by) {
+            Ok(scans) => match scans.last() {
+                Some(last) => (Ok(last.estimate.clone()), scans),
+                None => (
+                    estimate(&Interpreter::new(ir.clone()), &sources, options),
+                    Vec::new(),
+                ),
+            },
+            Err(e) => (Err(e), Vec::new()),
         },
     };
     // A spill file that could not be read back voids whatever was computed.
@@ -110,7 +116,10 @@ fn run_estimate(
         &notes,
         warnings,
     );
-    report.delay_scan = scanned.as_ref().map(DelayScanJson::of);
+    report.delay_scan = scanned.last().map(DelayScanJson::of);
+    if scanned.len() > 1 {
+        report.delay_scans = scanned.iter().map(DelayScanJson::of).collect();
+    }
     json(&report)
 }
 

@@ -67,14 +67,14 @@ impl EstimateOptions {
     /// reads `--scan-delay`, and its criterion.
     pub(crate) fn scan(
         &self,
-    ) -> Result<Option<(leeway_estimate::DelayRange, leeway_estimate::ScanBy)>, Failure> {
+    ) -> Result<Option<(Vec<leeway_estimate::DelayRange>, leeway_estimate::ScanBy)>, Failure> {
         let Some(text) = &self.scan_delay else {
             return Ok(None);
         };
-        let range = leeway_estimate::DelayRange::parse(text).map_err(|m| {
+        let range = leeway_estimate::DelayRange::parse_list(text).map_err(|m| {
             Failure::option(
                 format!("scan_delay: {m}"),
-                Some("give the input and a range of dead times, e.g. scan_delay=\"tau_x=0..20\" (samples) or \"tau_x=0..2s\" (seconds)".into()),
+                Some("give the input and a range of dead times, e.g. scan_delay=\"tau_x=0..20\" (samples) or \"tau_x=0..2s\" (seconds); several inputs separated by commas are scanned one after another".into()),
             )
         })?;
         let by = choice(self.scan_by.as_deref().unwrap_or("fit"))?;

@@ -186,6 +186,10 @@ pub struct EstimateReport<E> {
     /// times and the one chosen (absent without a scan).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub delay_scan: Option<DelayScanJson>,
+    /// Every scan, in order, when several inputs were scanned (the last is
+    /// `delay_scan`; omitted for one).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub delay_scans: Vec<DelayScanJson>,
 }
 
 /// A dead-time scan as `estimate --json` gives it (docs/json.md).
@@ -463,6 +467,7 @@ pub fn estimate_report_warned<E>(
         notes: Vec::new(),
         errors: Vec::new(),
         delay_scan: None,
+        delay_scans: Vec::new(),
     };
     let o = match result {
         Ok(o) => o,

@@ -183,6 +183,37 @@ fn render_header(o: &mut String, ir: &Ir) {
             );
         }
     }
+    render_delays(o, ir);
+}
+
+/// The declared dead times of inputs, one line: what the equations see.
+fn render_delays(o: &mut String, ir: &Ir) {
+    if ir.delays.is_empty() {
+        return;
+    }
+    let lags: Vec<String> = ir
+        .delays
+        .iter()
+        .map(|d| {
+            let input = ir.inputs.get(d.input).map_or("?", String::as_str);
+            match (d.lag, ir.step) {
+                (crate::ir::Lag::Samples(n), Some(h)) => {
+                    #[allow(clippy::cast_precision_loss)]
+                    let seconds = n as f64 * h;
+                    format!("{input} {n} samples ({seconds} s)")
+                }
+                (crate::ir::Lag::Samples(n), None) => format!("{input} {n} samples"),
+                (crate::ir::Lag::Seconds(s), _) => {
+                    format!("{input} {s} s (whole samples of the data's sample time)")
+                }
+            }
+        })
+        .collect();
+    let _ = writeln!(
+        o,
+        "  dead times: {} (the equations at sample k see the input at k − d)",
+        join_capped(&lags, ", ")
+    );
 }
 
 /// One line per disturbance: frame, components and relative velocities.

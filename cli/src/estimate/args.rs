@@ -75,9 +75,11 @@ pub struct EstimateArgs {
     /// Find an input's dead time: estimate at every dead time from LO to HI (in
     /// samples, or in seconds with a trailing `s`: `tau_x=0..2s`, at most 200
     /// candidates) and keep the best by --scan-by; the curve is printed, then
-    /// the estimate at the chosen dead time.
-    #[arg(long, value_name = "INPUT=LO..HI[s]", value_parser = DelayRange::parse)]
-    pub scan_delay: Option<DelayRange>,
+    /// the estimate at the chosen dead time. Several inputs (repeat the option,
+    /// or separate with commas) are scanned one after another, each with the
+    /// dead times chosen before it.
+    #[arg(long, value_name = "INPUT=LO..HI[s]", value_parser = DelayRange::parse, value_delimiter = ',', action = clap::ArgAction::Append)]
+    pub scan_delay: Vec<DelayRange>,
     /// What --scan-delay judges each dead time by: the estimate's simulation on
     /// the data (fit, as `validate` computes it) or its one-step prediction (residual).
     #[arg(long, default_value = "fit", value_parser = choices::<ScanBy>(), requires = "scan_delay")]

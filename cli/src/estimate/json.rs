@@ -23,7 +23,7 @@ pub fn report(
     result: &Result<Outcome, Failure>,
     warnings: Vec<Warning>,
 ) -> Report {
-    let scan = result.as_ref().ok().and_then(|o| o.scan.as_ref());
+    let scans = result.as_ref().map_or(&[][..], |o| o.scans.as_slice());
     let result = match result {
         Ok(o) => Ok(Estimated {
             model: &o.model,
@@ -43,6 +43,9 @@ pub fn report(
         result,
         warnings,
     );
-    report.delay_scan = scan.map(DelayScanJson::of);
+    report.delay_scan = scans.last().map(DelayScanJson::of);
+    if scans.len() > 1 {
+        report.delay_scans = scans.iter().map(DelayScanJson::of).collect();
+    }
     report
 }

@@ -19,5 +19,5 @@ pub struct Outcome {
     /// The declared units by signal, as written.
     pub data_units: std::collections::BTreeMap<String, String>,
     /// `--scan-delay`: the scan whose chosen dead time `estimate` is at.
-    pub scan: Option<leeway_estimate::DelayScan>,
+    pub scans: Vec<leeway_estimate::DelayScan>,
 }

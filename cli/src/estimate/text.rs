@@ -60,7 +60,7 @@ pub fn render(o: &Outcome) -> String {
         if n == 1 { "" } else { "s" },
         d.equations
     );
-    if let Some(scan) = &o.scan {
+    for scan in &o.scans {
         delay_scan(&mut s, scan);
     }
     parameters(&mut s, e);

@@ -244,7 +244,7 @@ fn dp_record(seed: u64, from: usize) -> Experiment {
 const DP: usize = 140;
 
 /// Where each seed's DP stretch begins: every place relative to the
-/// windows (75 samples at 1 Hz) in steps of 13 s.
+/// windows (100 samples at 1 Hz) in steps of 13 s.
 fn dp_from(seed: u64) -> usize {
     200 + 13 * seed as usize
 }
@@ -267,7 +267,9 @@ fn a_dp_stretch_at_1_hz_is_flagged_and_the_pulses_around_it_are_not() {
                 .iter()
                 .all(|f| covered(std::slice::from_ref(f), from, from + DP) > 0)
         );
-        assert!(outside <= 40, "seed {seed}: {found:?}");
+        // A window is 100 samples at 1 Hz: a flagged one reaches at most
+        // one window beyond the stretch in all.
+        assert!(outside <= 100, "seed {seed}: {found:?}");
     }
 }
 
@@ -292,7 +294,7 @@ fn open_loop_pulses_at_1_hz_are_never_flagged() {
         // Every window was judged: the quiet is the test's, not a lack of
         // innovations.
         let windows = shares(&ir, &e);
-        assert!(windows.len() >= 10, "{}", windows.len());
+        assert!(windows.len() >= 9, "{}", windows.len());
         assert!(
             windows.iter().all(|w| w.inputs.iter().all(Option::is_some)),
             "seed {seed}"
