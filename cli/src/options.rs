@@ -30,6 +30,34 @@ pub struct TimeArgs {
     /// own median step.
     #[arg(long, value_name = "SECONDS", value_parser = positive)]
     pub max_gap: Option<f64>,
+    /// Keep only these windows of a joined log (a manifest or a bag), in
+    /// seconds from its first stamp: `--keep 0..700 --keep 850..` (either
+    /// end may be left open; several are joined). A manifest with its own
+    /// `[[keep]]` windows is an error with this option: one place says.
+    #[arg(long, value_name = "FROM..TO", value_parser = window, action = clap::ArgAction::Append)]
+    pub keep: Vec<(Option<f64>, Option<f64>)>,
+}
+
+/// `--keep FROM..TO`: seconds, either end open, `FROM < TO`.
+pub fn window(s: &str) -> Result<(Option<f64>, Option<f64>), String> {
+    let shape = || format!("`{s}` is not a window FROM..TO in seconds (e.g. 0..700, or 850..)");
+    let (a, b) = s.split_once("..").ok_or_else(shape)?;
+    let end = |t: &str| -> Result<Option<f64>, String> {
+        let t = t.trim();
+        if t.is_empty() {
+            return Ok(None);
+        }
+        match t.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            _ => Err(shape()),
+        }
+    };
+    let (a, b) = (end(a)?, end(b)?);
+    match (a, b) {
+        (None, None) => Err(format!("`{s}` keeps everything: give FROM, TO or both")),
+        (Some(x), Some(y)) if y <= x => Err(format!("`{s}` is empty: TO must come after FROM")),
+        _ => Ok((a, b)),
+    }
 }
 
 /// `--time-tolerance`: a fraction in (0, 0.5) ([`time_tolerance_ok`]).
@@ -57,8 +85,10 @@ pub fn load_options(
     let max_gap = time
         .and_then(|t| t.max_gap)
         .map_or(GapLimit::default(), GapLimit::Seconds);
+    let keep = time.map_or(Vec::new(), |t| t.keep.clone());
     LoadOptions::for_model(ir, step, tolerance, resample)
         .and_then(|o| o.with_max_gap(max_gap))
+        .map(|o| LoadOptions { keep, ..o })
         .map_err(|e| {
         let (message, help) = match e {
             LoadOptionError::SampleTime { option, value } => (

@@ -23,6 +23,10 @@ pub struct LoadOptions {
     /// The longest step resampling may interpolate across: a longer one
     /// splits the experiment ([`GapLimit`]; by default 5 median steps).
     pub max_gap: GapLimit,
+    /// Windows of a joined log to keep (`--keep FROM..TO`): seconds from
+    /// its first stamp, either end open. Empty: the whole log (or the
+    /// manifest's own `[[keep]]` windows).
+    pub keep: Vec<(Option<f64>, Option<f64>)>,
 }
 
 impl Default for LoadOptions {
@@ -32,6 +36,7 @@ impl Default for LoadOptions {
             time_tolerance: DEFAULT_TIME_TOLERANCE,
             resample: None,
             max_gap: GapLimit::default(),
+            keep: Vec::new(),
         }
     }
 }
@@ -133,6 +138,7 @@ impl LoadOptions {
             time_tolerance,
             resample,
             max_gap: GapLimit::default(),
+            keep: Vec::new(),
         })
     }
 }

@@ -151,7 +151,7 @@ const STALL_STEPS: f64 = 10.0;
 
 /// Reads and joins the log at `path`.
 fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, DataError> {
-    let m = manifest(path, ir)?;
+    let m = with_options(manifest(path, ir)?, options)?;
     let specs = match_model(&m, ir)?;
     let h = grid_step(&m, ir, options)?;
     let limit = m.max_gap.unwrap_or(options.max_gap);
@@ -209,6 +209,63 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
         options: options.clone(),
         notes,
     })
+}
+
+/// The manifest with the options the command line gives: an option that
+/// the manifest also sets must agree with it (a conflict is an error, never
+/// silently resolved); `--keep` windows stand where the manifest has none.
+fn with_options(mut m: Manifest, options: &LoadOptions) -> Result<Manifest, DataError> {
+    let conflict = |what: String, hint: &str| Err(DataError::new(&m.file, what, hint.to_string()));
+    if let Some(given) = m.max_gap
+        && options.max_gap != leeway_data::gaps::GapLimit::default()
+        && options.max_gap != given
+    {
+        return conflict(
+            format!(
+                "--max-gap ({}) conflicts with the manifest's gap limit ({})",
+                gap_text(options.max_gap),
+                gap_text(given)
+            ),
+            "give the gap limit in one place: drop --max-gap, or `max_gap` from the manifest",
+        );
+    }
+    if let (Some(step), Some(resample)) = (m.step, options.resample)
+        && (step - resample).abs() > 1e-9 * step
+    {
+        return conflict(
+            format!("--resample {resample} conflicts with the manifest's step = {step}"),
+            "give the grid's step in one place: drop --resample, or `step` from the manifest",
+        );
+    }
+    if !options.keep.is_empty() {
+        if let Some(k) = m.keep.first() {
+            return Err(DataError::new(
+                &k.at,
+                "--keep is given and the manifest has its own [[keep]] windows",
+                "give the windows in one place: drop --keep, or the manifest's [[keep]] tables",
+            ));
+        }
+        m.keep = options
+            .keep
+            .iter()
+            .enumerate()
+            .map(|(i, (from, to))| Keep {
+                from: from.map(TimeRef::FromStart),
+                to: to.map(TimeRef::FromStart),
+                when: None,
+                at: format!("--keep (window {})", i + 1),
+            })
+            .collect();
+    }
+    Ok(m)
+}
+
+/// A gap limit as the user wrote it.
+fn gap_text(g: leeway_data::gaps::GapLimit) -> String {
+    match g {
+        leeway_data::gaps::GapLimit::Seconds(s) => format!("{s} s"),
+        leeway_data::gaps::GapLimit::Steps(n) => format!("{n} median steps"),
+    }
 }
 
 /// A signal's values as the grid reads them. A heading is stated in its
@@ -602,8 +659,21 @@ pub fn load_path(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<LoadedFi
     if is_log(path) {
         load_log(path, ir, options)
     } else {
+        no_windows(path, options)?;
         leeway_data::load_file_noted(path, ir, options)
     }
+}
+
+/// `--keep` on a plain data file: refused, as windows of a log only.
+fn no_windows(path: &Path, options: &LoadOptions) -> Result<(), DataError> {
+    if options.keep.is_empty() {
+        return Ok(());
+    }
+    Err(DataError::new(
+        path.display().to_string(),
+        "--keep keeps windows of a joined log (a manifest or a bag), and this is one data file",
+        "name the file in a manifest with one source (docs/logs.md) to keep windows of it, or cut the file",
+    ))
 }
 
 /// Opens any data file for streaming, as [`load_path`] loads it.
@@ -611,6 +681,7 @@ pub fn open_path(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Streamed
     if is_log(path) {
         open_log(path, ir, options)
     } else {
+        no_windows(path, options)?;
         leeway_data::open_file(path, ir, options)
     }
 }

@@ -18,12 +18,13 @@ type Frame<'py> = (String, Vec<(String, Bound<'py, PyArray1<f64>>)>);
 /// Reads and joins the log at `path` for `model` (`max_gap`: seconds, else
 /// the default rule); the experiments as columns and the notes as JSON.
 #[pyfunction]
-#[pyo3(signature = (model, path, max_gap=None))]
+#[pyo3(signature = (model, path, max_gap=None, keep=Vec::new()))]
 pub fn read_log<'py>(
     py: Python<'py>,
     model: &Model,
     path: &str,
     max_gap: Option<f64>,
+    keep: Vec<(Option<f64>, Option<f64>)>,
 ) -> PyResult<(Vec<Frame<'py>>, String)> {
     let ir = &model.ir;
     let options = load_options(ir, None, None, None)?;
@@ -36,6 +37,19 @@ pub fn read_log<'py>(
         })?,
         None => options,
     };
+    for (from, to) in &keep {
+        let empty = matches!((from, to), (Some(a), Some(b)) if b <= a);
+        let open = from.is_none() && to.is_none();
+        let finite = from.is_none_or(f64::is_finite) && to.is_none_or(f64::is_finite);
+        if empty || open || !finite {
+            return Err(Failure::option(
+                format!("keep=({from:?}, {to:?}) is no window: give finite seconds from the log's first stamp, `from` before `to`"),
+                Some("e.g. keep=[(0, 700), (850, None)]".into()),
+            )
+            .into());
+        }
+    }
+    let options = leeway_data::LoadOptions { keep, ..options };
     let loaded = py
         .detach(|| leeway_logs::load_log(Path::new(path), ir, &options))
         .map_err(|e| Failure::data(&e))?;

@@ -531,3 +531,61 @@ fn raw_topics_read_by_their_means_recover_the_truth_where_instants_do_not() {
         }
     }
 }
+
+#[test]
+fn several_inputs_are_scanned_one_after_another() {
+    let dir = ferry_log("scan-two", false);
+    let data = dir.path("ferry.toml").display().to_string();
+    let o = leeway(&[
+        "estimate",
+        FERRY,
+        "--data",
+        &data,
+        "--scan-delay",
+        "tau_x=8..12,tau_n=8..12",
+        "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let v = json(&o);
+    let scans = v["delay_scans"].as_array().cloned().unwrap_or_default();
+    let chosen: Vec<(String, u64)> = scans
+        .iter()
+        .map(|s| {
+            (
+                s["input"].as_str().unwrap_or_default().to_string(),
+                s["samples"].as_u64().unwrap_or(0),
+            )
+        })
+        .collect();
+    assert_eq!(
+        chosen,
+        [("tau_x".into(), 10), ("tau_n".into(), 10)],
+        "{scans:?}"
+    );
+    assert_eq!(v["delay_scan"]["input"], "tau_n");
+    // An input scanned twice is one usage error before any work.
+    let o = leeway(&[
+        "estimate",
+        FERRY,
+        "--data",
+        &data,
+        "--scan-delay",
+        "tau_x=8..12",
+        "--scan-delay",
+        "tau_x=0..2",
+    ]);
+    assert_eq!(code(&o), 2, "{}", stderr(&o));
+    assert!(stderr(&o).contains("scanned twice"), "{}", stderr(&o));
+}
+
+#[test]
+fn check_lists_the_declared_dead_times() {
+    let o = leeway(&["check", FERRY]);
+    assert!(
+        stdout(&o).contains(
+            "dead times: tau_x 10 samples (1 s), tau_y 10 samples (1 s), tau_n 10 samples (1 s)"
+        ),
+        "{}",
+        stdout(&o)
+    );
+}

@@ -109,7 +109,10 @@ class Designed:
     def runs(self) -> list[list[tuple[str, npt.NDArray[np.float64]]]]: ...
 
 def read_log(
-    model: Model, path: str, max_gap: float | None = None
+    model: Model,
+    path: str,
+    max_gap: float | None = None,
+    keep: list[tuple[float | None, float | None]] = ...,
 ) -> tuple[list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]]]], str]: ...
 def simulate_columns(
     model: Model,
