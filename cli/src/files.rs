@@ -1,4 +1,5 @@
-//! Reading files the user names: text and model sources, with located IO errors.
+//! Reading files the user names: text and model sources, with located IO
+//! errors; and creating the files the CLI writes, never through a symbolic link.
 
 use crate::problem::Problem;
 use leeway_structure::grammar;
@@ -45,4 +46,44 @@ pub fn io_reason(e: &std::io::Error) -> String {
         std::io::ErrorKind::IsADirectory => "it is a directory".to_string(),
         _ => e.to_string(),
     }
+}
+
+/// Opens an output file for writing without following a symbolic link: a
+/// link in the way is refused (`Err` of kind `InvalidInput` naming it), a
+/// regular file is removed and created anew (`create_new`: a link put there
+/// in between makes it fail rather than be followed), a device or a pipe
+/// (`--out /dev/stdout`) is written in place.
+pub fn create_output(path: &Path) -> std::io::Result<std::fs::File> {
+    use std::io::{Error, ErrorKind};
+    let fresh = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+    };
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => Err(Error::new(
+            ErrorKind::InvalidInput,
+            "it is a symbolic link, and leeway never writes through one",
+        )),
+        Ok(m) if m.is_dir() => Err(Error::new(ErrorKind::IsADirectory, "it is a directory")),
+        Ok(m) if m.is_file() => {
+            std::fs::remove_file(path)?;
+            fresh()
+        }
+        Ok(_) => std::fs::OpenOptions::new()
+            .write(true)
+            .truncate(true)
+            .open(path),
+        Err(e) if e.kind() == ErrorKind::NotFound => fresh(),
+        Err(e) => Err(e),
+    }
+}
+
+/// Writes `bytes` into `path` through [`create_output`], every write checked.
+pub fn write_output(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut file = create_output(path)?;
+    file.write_all(bytes)?;
+    file.flush()
 }

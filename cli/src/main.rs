@@ -8,9 +8,10 @@
 //! (`check`: θ not identifiable; `estimate`: θ not identifiable or not
 //! excited by these data, or a sign violation under `--strict`; `simulate`,
 //! `validate`: the simulation diverges); 2 a usage, input/output, syntax,
-//! semantic, data or parameter-file error (for `reproduce`: an option error
-//! or a result file that cannot be written; the verdicts on the paper's
-//! claims never change the exit code). Never a panic.
+//! semantic, data or parameter-file error, or output that cannot be written
+//! to stdout (for `reproduce`: an option error or a result file that cannot
+//! be written; the verdicts on the paper's claims never change the exit
+//! code); 141 stdout closed under it (`| head`), quietly. Never a panic.
 //!
 //! Computation stays in the libraries: this crate reads, validates its own
 //! arguments, calls them and prints. Every numeric option is bounded before
@@ -96,5 +97,5 @@ fn main() -> ExitCode {
             reproduce::run(&args)
         }
     };
-    status.code()
+    output::finish(status)
 }

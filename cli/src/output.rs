@@ -1,6 +1,7 @@
 //! What every subcommand shares: exit statuses, the terminal checks that
 //! decide on colour (ANSI only on a terminal and without `NO_COLOR`),
-//! writers that tolerate a closed pipe, tables and number formatting.
+//! the one writer of stdout (checked: a failed write decides the exit code,
+//! [`finish`]), tables and number formatting.
 
 use leeway_model::warning::Warning;
 use leeway_structure::grammar::RenderStyle;
@@ -49,14 +50,54 @@ pub fn stderr_style() -> RenderStyle {
     style_for(std::io::stderr().is_terminal())
 }
 
-/// Writes to stdout. A closed pipe (`leeway check m.som | head`) is not an
-/// error worth a panic: what cannot be written is dropped.
+/// The first write to stdout that failed; nothing more is written after it.
+static STDOUT_FAILED: std::sync::OnceLock<std::io::Error> = std::sync::OnceLock::new();
+
+/// Writes to stdout and flushes: the only place that does. A failed write
+/// (a full disk, a closed pipe) is kept, later text is dropped, and
+/// [`finish`] turns it into the exit code: never a panic, never a silent 0.
 pub fn out(text: &str) {
     use std::io::Write;
+    if STDOUT_FAILED.get().is_some() {
+        return;
+    }
     let mut stdout = std::io::stdout().lock();
-    let _ = stdout
+    if let Err(e) = stdout
         .write_all(text.as_bytes())
-        .and_then(|()| stdout.flush());
+        .and_then(|()| stdout.flush())
+    {
+        let _ = STDOUT_FAILED.set(e);
+    }
+}
+
+/// The exit code: the command's `status`, unless a write to stdout failed.
+/// A closed pipe (`leeway check m.som | head -1`) exits quietly with 141
+/// (what a shell reports for a process ended by SIGPIPE); any other failure
+/// (`> /dev/full`) says `error[io]: cannot write the output to stdout: …`
+/// and exits 2.
+pub fn finish(status: Status) -> ExitCode {
+    match STDOUT_FAILED.get() {
+        None => status.code(),
+        Some(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::from(141),
+        Some(e) => {
+            err(&headline(
+                stderr_style(),
+                "error",
+                Some("io"),
+                &format!("cannot write the output to stdout: {}", io_reason(e)),
+            ));
+            Status::Error.code()
+        }
+    }
+}
+
+/// An IO error as a reason, without the `(os error N)` its display ends with.
+pub fn io_reason(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    match text.rfind(" (os error ") {
+        Some(i) if text.ends_with(')') => text[..i].to_string(),
+        _ => text,
+    }
 }
 
 /// Writes to stderr, ignoring a closed stream like [`out`].

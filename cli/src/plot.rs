@@ -4,6 +4,8 @@
 //! figure implements [`Figure`]; [`clip_band`] cuts a polyline at the edge of
 //! an axis's band.
 
+use crate::files::create_output;
+use crate::output::io_reason;
 use plotters::chart::MeshStyle;
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
@@ -82,9 +84,12 @@ pub trait Figure {
 }
 
 /// Draws a figure into `path`: a bitmap for a `.png` name, SVG otherwise.
-/// On an error no half-written file is left behind.
+/// The file is created first by [`create_output`] (a symbolic link in the
+/// way is refused, never followed); on an error no half-written file is
+/// left behind.
 pub fn save(path: &Path, figure: &impl Figure) -> Result<(), String> {
     register_fonts()?;
+    create_output(path).map_err(|e| io_reason(&e))?;
     let size = figure.size();
     let png = path
         .extension()

@@ -19,7 +19,8 @@ mod report;
 mod ship;
 mod text;
 
-use crate::output::{Status, err, out, stderr_style};
+use crate::files::write_output;
+use crate::output::{Status, err, io_reason, out, stderr_style};
 use crate::problem::Problem;
 use crate::reproduce::args::ReproduceArgs;
 use crate::reproduce::report::Report;
@@ -122,8 +123,9 @@ fn writable(dir: &Path) -> Result<(), Problem> {
         Problem::error(
             "io",
             format!(
-                "cannot {what} the output directory `{}`: {e}",
-                dir.display()
+                "cannot {what} the output directory `{}`: {}",
+                dir.display(),
+                io_reason(&e)
             ),
         )
         .at(dir.display().to_string())
@@ -131,7 +133,7 @@ fn writable(dir: &Path) -> Result<(), Problem> {
     };
     std::fs::create_dir_all(dir).map_err(|e| problem("create", e))?;
     let probe = dir.join(format!(".leeway-probe-{}", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| problem("write into", e))?;
+    write_output(&probe, b"").map_err(|e| problem("write into", e))?;
     let _ = std::fs::remove_file(&probe);
     Ok(())
 }
@@ -163,9 +165,12 @@ fn write_outputs(model: &dyn Model, report: &Report, dir: &Path) -> Vec<Result<P
 fn write_json(report: &Report, path: &Path) -> Result<PathBuf, Problem> {
     let text = serde_json::to_string_pretty(&json::document(report))
         .map_err(|e| Problem::error("io", format!("cannot serialise the results: {e}")))?;
-    std::fs::write(path, format!("{text}\n")).map_err(|e| {
-        Problem::error("io", format!("cannot write `{}`: {e}", path.display()))
-            .at(path.display().to_string())
+    write_output(path, format!("{text}\n").as_bytes()).map_err(|e| {
+        Problem::error(
+            "io",
+            format!("cannot write `{}`: {}", path.display(), io_reason(&e)),
+        )
+        .at(path.display().to_string())
     })?;
     Ok(path.to_path_buf())
 }

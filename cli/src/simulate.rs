@@ -7,15 +7,17 @@
 //! before the divergence are still written), 2 on any model, file or option error.
 
 use crate::disturbances;
+use crate::files::write_output;
 use crate::input::{initial_values, load_input};
 use crate::model::load;
 use crate::noise;
 use crate::options::load_options;
 use crate::options::positive;
-use crate::output::{Status, err, headline, out, plain, stderr_style, warning_text};
+use crate::output::{Status, err, headline, io_reason, out, plain, stderr_style, warning_text};
 use crate::problem::{Failure, Problem};
 use leeway_data::write_csv;
 use leeway_model::Interpreter;
+use leeway_model::experiment::Source;
 use leeway_model::given::Origin;
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
@@ -132,6 +134,32 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
             .at(args.input.display().to_string())
             .help("declare the dead time in steps, or in seconds that are a whole number of the input's sample time")
     })?;
+    // Rows before the longest dead time only feed the delayed inputs: a
+    // record no longer than it has nothing to simulate.
+    let samples = e.len();
+    if lead.max > 0 && samples <= lead.max {
+        let input = lead
+            .lags
+            .iter()
+            .position(|&d| d == lead.max)
+            .and_then(|i| ir.inputs.get(i))
+            .map_or(String::new(), |name| format!(" (of `{name}`)"));
+        let plural = if samples == 1 { "" } else { "s" };
+        return Err(Problem::error(
+            "too-few-samples",
+            format!(
+                "the input has {samples} sample{plural}, no more than the model's longest dead time{input} of {} samples ({} s): nothing would be simulated",
+                lead.max,
+                lead.max as f64 * e.h
+            ),
+        )
+        .at(args.input.display().to_string())
+        .help(format!(
+            "give an input of more than {} samples: the first {} only feed the delayed inputs, the trajectory starts after them",
+            lead.max, lead.max
+        ))
+        .into());
+    }
     let t0 = match lead.max {
         0 => input.t0,
         d => input.t0 + d as f64 * e.h,
@@ -147,9 +175,12 @@ fn execute(args: &SimulateArgs, warnings: &mut Vec<Warning>) -> Result<Status, F
     write_csv(&ir, &[&result], t0, &mut buffer)
         .map_err(|error| Problem::error("io", format!("cannot write the trajectory: {error}")))?;
     match &args.out {
-        Some(path) => std::fs::write(path, &buffer).map_err(|error| {
-            Problem::error("io", format!("cannot write `{}`: {error}", path.display()))
-                .at(path.display().to_string())
+        Some(path) => write_output(path, &buffer).map_err(|error| {
+            Problem::error(
+                "io",
+                format!("cannot write `{}`: {}", path.display(), io_reason(&error)),
+            )
+            .at(path.display().to_string())
         })?,
         None => out(&String::from_utf8_lossy(&buffer)),
     }

@@ -9,12 +9,12 @@
 
 use crate::error::DesignError;
 use crate::excitation::Excitation;
-use crate::operating::{OperatingPoint, operating_point};
+use crate::operating::operating_point;
 use crate::plan::{Conditions, Family, SAMPLES};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
 use crate::report::{self, Design, FamilyScore};
-use crate::signs::{Held, held, pointwise_states};
-use crate::trial::{Run, margins, simulate, start_headings, true_system};
+use crate::signs::{held, pointwise_states};
+use crate::trial::{Base, Fitted, Run, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
@@ -44,49 +44,6 @@ impl Default for DesignOptions {
             seed: 0,
             pilot: 100,
         }
-    }
-}
-
-/// One experiment before its excitation: its pattern, what it holds, where.
-#[derive(Clone, Debug)]
-pub struct Base {
-    /// ±1 per sign argument.
-    pub pattern: SignPattern,
-    /// The arguments it holds.
-    pub held: Vec<Held>,
-    /// Its operating point.
-    pub operating: OperatingPoint,
-}
-
-/// An excitation fitted to the bases: one per run, and how it fared.
-#[derive(Clone, Debug)]
-pub struct Fitted {
-    /// The family.
-    pub family: Family,
-    /// Per run.
-    pub excitations: Vec<Excitation>,
-    /// Fraction of each input's room used.
-    pub scale: f64,
-    /// Per run, per held argument: the smallest nominal margin over the
-    /// samples and starting headings.
-    pub min_margins: Vec<Vec<f64>>,
-}
-
-impl Fitted {
-    /// Whether every held argument keeps its side with its band.
-    pub fn feasible(&self) -> bool {
-        self.min_margins.iter().flatten().all(|m| *m >= 0.0)
-    }
-    /// The runs at `n` samples each.
-    pub fn runs(&self, bases: &[Base], n: usize, c: &Conditions) -> Vec<Run> {
-        bases
-            .iter()
-            .zip(&self.excitations)
-            .map(|(b, e)| Run {
-                x0: b.operating.steady.states.clone(),
-                inputs: e.generate(n, &c.limits),
-            })
-            .collect()
     }
 }
 
@@ -198,7 +155,8 @@ pub fn design(
     Ok(report::assemble(report::Parts {
         model,
         conditions: &c,
-        options,
+        method: options.method,
+        target: options.target,
         centring,
         bases: &bases,
         fitted,

@@ -4,11 +4,10 @@
 //! length; which estimators' sign assumptions the design meets; and, where
 //! nothing fits, what falls short and what would work.
 
-use crate::design::{Base, DesignOptions, Fitted};
 use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction};
 use crate::signs::{Held, held};
-use crate::trial::{Run, margins, simulate, start_headings, true_system};
+use crate::trial::{Base, Fitted, Run, margins, simulate, start_headings, true_system};
 use leeway_estimate::Method;
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
@@ -319,8 +318,10 @@ pub struct Parts<'a> {
     pub model: &'a dyn Model,
     /// The conditions (noise resolved).
     pub conditions: &'a Conditions,
-    /// The caller's options.
-    pub options: &'a DesignOptions,
+    /// The estimator designed for (the caller's option).
+    pub method: Method,
+    /// The relative standard error wanted for every θ (the caller's option).
+    pub target: Option<f64>,
     /// The centring designed for.
     pub centring: Centring,
     /// The experiments' bases.
@@ -352,7 +353,7 @@ pub fn assemble(p: Parts) -> Design {
     let ir = p.model.ir();
     let c = p.conditions;
     let n = p.runs.first().map_or(0, |r| r.inputs.len());
-    let kind = p.options.method.predictor();
+    let kind = p.method.predictor();
     let experiments = p
         .bases
         .iter()
@@ -393,7 +394,7 @@ pub fn assemble(p: Parts) -> Design {
     }
     Design {
         model: ir.name.clone(),
-        method: p.options.method.name().to_string(),
+        method: p.method.name().to_string(),
         centring: p.centring.name().to_string(),
         aggregate: p.aggregate,
         feasible: shortfalls.is_empty() && p.prediction.is_some(),
@@ -406,7 +407,7 @@ pub fn assemble(p: Parts) -> Design {
         prediction: p
             .prediction
             .as_ref()
-            .map(|pr| prediction_report(ir, pr, (n, c.h), p.options.target, p.fitted.scale)),
+            .map(|pr| prediction_report(ir, pr, (n, c.h), p.target, p.fitted.scale)),
         methods: method_signs(p.model, c, p.bases, &p.runs, kind),
         shortfalls,
         proposals,
@@ -419,7 +420,7 @@ pub fn assemble(p: Parts) -> Design {
         predicted: p.prediction,
         conditions: Some(c.clone()),
         centring_used: Some(p.centring),
-        method_used: Some(p.options.method),
+        method_used: Some(p.method),
         noise_used: Some(p.noise),
         validation: p.validation,
     }

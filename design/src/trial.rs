@@ -1,14 +1,18 @@
-//! A designed run at sea, simulated: the plan's true system
+//! A designed run at sea: its base before the excitation ([`Base`]), the
+//! excitation fitted to the bases ([`Fitted`]) and the run they make
+//! ([`Run`]); simulated: the plan's true system
 //! ([`true_system`]), the nominal trajectory (mean disturbances, no noise)
 //! and a realisation (random disturbances and noise, seeded), and the
 //! margins of the held sign arguments along a true trajectory.
 
-use crate::plan::Conditions;
+use crate::excitation::Excitation;
+use crate::operating::OperatingPoint;
+use crate::plan::{Conditions, Family};
 use crate::signs::Held;
 use leeway_model::experiment::Experiment;
 use leeway_model::model::{Model, Signals, planar_rotation};
 use leeway_scenarios::synth::{TrueSystem, Truth, experiment};
-use leeway_structure::ir::Rotation;
+use leeway_structure::ir::{Rotation, SignPattern};
 
 /// One run of a design: where it starts and what it commands.
 #[derive(Clone, Debug)]
@@ -17,6 +21,49 @@ pub struct Run {
     pub x0: Vec<f64>,
     /// `inputs[k][i]`.
     pub inputs: Vec<Vec<f64>>,
+}
+
+/// One experiment before its excitation: its pattern, what it holds, where.
+#[derive(Clone, Debug)]
+pub struct Base {
+    /// ±1 per sign argument.
+    pub pattern: SignPattern,
+    /// The arguments it holds.
+    pub held: Vec<Held>,
+    /// Its operating point.
+    pub operating: OperatingPoint,
+}
+
+/// An excitation fitted to the bases: one per run, and how it fared.
+#[derive(Clone, Debug)]
+pub struct Fitted {
+    /// The family.
+    pub family: Family,
+    /// Per run.
+    pub excitations: Vec<Excitation>,
+    /// Fraction of each input's room used.
+    pub scale: f64,
+    /// Per run, per held argument: the smallest nominal margin over the
+    /// samples and starting headings.
+    pub min_margins: Vec<Vec<f64>>,
+}
+
+impl Fitted {
+    /// Whether every held argument keeps its side with its band.
+    pub fn feasible(&self) -> bool {
+        self.min_margins.iter().flatten().all(|m| *m >= 0.0)
+    }
+    /// The runs at `n` samples each.
+    pub fn runs(&self, bases: &[Base], n: usize, c: &Conditions) -> Vec<Run> {
+        bases
+            .iter()
+            .zip(&self.excitations)
+            .map(|(b, e)| Run {
+                x0: b.operating.steady.states.clone(),
+                inputs: e.generate(n, &c.limits),
+            })
+            .collect()
+    }
 }
 
 /// The plan's true system: θ, the disturbances' means, spreads and

@@ -1,8 +1,11 @@
 //! What `design --out DIR` writes: per run the input file `simulate` reads
 //! (`run-N.csv`: the nominal trajectory beside the inputs, in the model's
 //! data columns), its margins over time (`run-N-margins.csv`),
-//! `design.json` (the document `--json` prints) and the figure.
+//! `design.json` (the document `--json` prints) and the figure; each
+//! created anew, a symbolic link in the way refused (`files::create_output`).
 
+use crate::files::write_output;
+use crate::output::io_reason;
 use crate::problem::Problem;
 use leeway_data::write_csv;
 use leeway_design::report::Design;
@@ -31,18 +34,16 @@ pub fn write(
         let path = dir.join(format!("run-{}.csv", e + 1));
         let mut text = Vec::new();
         write_csv(ir, &[record], 0.0, &mut text).map_err(|err| io(&path, &err))?;
-        std::fs::write(&path, text).map_err(|err| io(&path, &err))?;
+        write_output(&path, &text).map_err(|err| io(&path, &io_reason(&err)))?;
         written.push(path.display().to_string());
         let path = dir.join(format!("run-{}-margins.csv", e + 1));
-        std::fs::write(&path, margins_csv(model, design, e)).map_err(|err| io(&path, &err))?;
+        write_output(&path, margins_csv(model, design, e).as_bytes())
+            .map_err(|err| io(&path, &io_reason(&err)))?;
         written.push(path.display().to_string());
     }
     let path = dir.join("design.json");
-    std::fs::write(
-        &path,
-        leeway_design::document::json(design, verification) + "\n",
-    )
-    .map_err(|e| io(&path, &e))?;
+    let json = leeway_design::document::json(design, verification) + "\n";
+    write_output(&path, json.as_bytes()).map_err(|e| io(&path, &io_reason(&e)))?;
     written.push(path.display().to_string());
     for name in ["design.svg", "design.png"] {
         let path = dir.join(name);

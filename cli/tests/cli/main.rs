@@ -10,6 +10,7 @@ mod delay;
 mod design;
 mod estimate;
 mod logs;
+mod output;
 mod parquet;
 mod reproduce;
 mod simulate;
