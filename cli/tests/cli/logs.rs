@@ -589,3 +589,48 @@ fn check_lists_the_declared_dead_times() {
         stdout(&o)
     );
 }
+
+#[test]
+fn keep_windows_from_the_command_line_and_options_given_twice_must_agree() {
+    let dir = ferry_log("keep", false);
+    let data = dir.path("ferry.toml").display().to_string();
+    let o = leeway(&[
+        "estimate", FERRY, "--data", &data, "--method", "ls", "--keep", "0..250", "--keep",
+        "420..", "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let pieces = json(&o)["data_files"][0]["experiments"][0]["pieces"].clone();
+    let spans: Vec<(f64, f64)> = pieces
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| (p["from"].as_f64().unwrap_or(-1.0), p["to"].as_f64().unwrap_or(-1.0)))
+        .collect();
+    // The velocities' hole (400–405.8 s) lies between the windows.
+    assert_eq!(spans.len(), 2, "{pieces}");
+    assert_eq!(spans[0], (0.0, 250.0), "{pieces}");
+    assert!(spans[1].0 == 420.0 && spans[1].1 > 590.0, "{pieces}");
+    // A window beyond the log: one error naming it.
+    let o = leeway(&["estimate", FERRY, "--data", &data, "--keep", "5000.."]);
+    assert_ne!(code(&o), 0);
+    no_panic(&o);
+    assert!(stderr(&o).contains("--keep (window 1)"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("keeps nothing"), "{}", stderr(&o));
+    // --max-gap against the manifest's own limit: an error, never a silent pick.
+    rewrite(&dir, "ferry.toml", |t| t.replace("experiment = \"ferry\"", "experiment = \"ferry\"\nmax_gap = 2.0"));
+    let o = leeway(&["estimate", FERRY, "--data", &data, "--max-gap", "1"]);
+    assert_ne!(code(&o), 0);
+    assert!(stderr(&o).contains("conflicts with the manifest's gap limit"), "{}", stderr(&o));
+    // The same limit in both places agrees.
+    let o = leeway(&["estimate", FERRY, "--data", &data, "--max-gap", "2", "--method", "ls"]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // --keep with the manifest's own windows, and on one data file.
+    rewrite(&dir, "ferry.toml", |t| t + "[[keep]]\nfrom = 0\nto = 300\n");
+    let o = leeway(&["estimate", FERRY, "--data", &data, "--keep", "0..100"]);
+    assert_ne!(code(&o), 0);
+    assert!(stderr(&o).contains("[[keep]] windows"), "{}", stderr(&o));
+    let csv = dir.path("tau.csv").display().to_string();
+    let o = leeway(&["estimate", FERRY, "--data", &csv, "--keep", "0..100"]);
+    assert_ne!(code(&o), 0);
+    assert!(stderr(&o).contains("one data file"), "{}", stderr(&o));
+}
