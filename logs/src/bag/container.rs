@@ -111,7 +111,7 @@ impl<R: Read> Container<R> {
     fn not_mcap(&self) -> DataError {
         DataError::new(
             &self.file,
-            "not an MCAP file (no MCAP magic where the file starts)",
+            "not an MCAP file: no MCAP magic where it starts (offset 0)",
             "leeway reads ROS 2 bags stored as MCAP: the .mcap file in the bag's folder \
              (sqlite3 .db3 bags: `ros2 bag convert` them to MCAP)",
         )
