@@ -86,7 +86,7 @@ fn damage(bytes: &[u8], case: usize, rng: &mut Seeded) -> Vec<u8> {
             // A record's length, or a field near its start (a chunk's
             // sizes), set to a large or a slightly wrong value.
             let records = record_offsets(bytes);
-            let at = records[rng.range(0, records.len())] + 1 + 8 * rng.range(0, 5);
+            let at = (records[rng.range(0, records.len())] + 1 + 8 * rng.range(0, 5)).min(n - 8);
             let value = match rng.range(0, 3) {
                 0 => u64::MAX,
                 1 => 1 << rng.range(20, 63),
