@@ -4,9 +4,10 @@
 //! each with its stamps ([`read::Stamped`]); [`path::FieldPath`] names a
 //! signal (`/navigation/twist_body.twist.linear.x`) and
 //! [`path::Extract`] says whether to take the number or a quaternion's
-//! heading. The container is the `mcap` crate's; the `ros2msg` schemas
-//! ([`schema`]) and CDR messages ([`cdr`]) are read here, each path
-//! compiled once per channel ([`plan`]). [`write`](mod@write) writes bags of common
+//! heading. The container is read record by record ([`container`]:
+//! lengths bounded, every CRC checked), its chunks decompressed by the
+//! `mcap` crate; the `ros2msg` schemas ([`schema`]) and CDR messages
+//! ([`cdr`]) are read here, each path compiled once per channel ([`plan`]). [`write`](mod@write) writes bags of common
 //! message types, for tests and examples.
 //!
 //! ```
@@ -39,6 +40,7 @@
 //! ```
 
 pub mod cdr;
+pub mod container;
 pub mod path;
 pub mod plan;
 pub mod read;

@@ -111,6 +111,12 @@ pub fn pair_nanos(secs: &str, nanos: &str) -> Result<Nanos, String> {
         .trim()
         .parse()
         .map_err(|_| format!("`{}` is not a whole number of nanoseconds", nanos.trim()))?;
+    seconds_and_nanos(s, n)
+}
+
+/// Whole seconds and nanoseconds in `0..1e9` (as a CSV pair or a ROS 2
+/// message's `header.stamp` holds them) → ns since the epoch.
+pub fn seconds_and_nanos(s: i64, n: i64) -> Result<Nanos, String> {
     if !(0..1_000_000_000).contains(&n) {
         return Err(format!(
             "nanoseconds `{n}` outside 0..=999999999 (the fraction of the second, as ROS writes it)"

@@ -4,18 +4,18 @@
 
 use std::collections::HashMap;
 use std::fs::File;
-use std::io::Read;
+use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use leeway_data::error::DataError;
-use mcap::McapError;
 use mcap::records::{Channel, Record};
-use mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
 use super::cdr::DecodeError;
+use super::container::Container;
 use super::path::{Extract, FieldPath, Segment};
 use super::plan::{Plan, PlanError};
 use super::schema::{BaseType, Count, Schema, short_name};
+use crate::stamps::seconds_and_nanos;
 
 /// Where a signal's time stamps come from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,14 +41,6 @@ pub struct Stamped {
     pub message_type: String,
 }
 
-/// Bytes asked of the file at once, whatever the reader needs: large reads
-/// for small records, and a buffer that grows only with data the file has
-/// (a corrupt length asks for more than is there).
-const READ_SIZE: usize = 1 << 20;
-
-/// A record longer than this is corrupt (images and point clouds are far smaller).
-const RECORD_LIMIT: usize = 1 << 30;
-
 /// Topics listed in an error, at most.
 const LISTED_TOPICS: usize = 20;
 
@@ -66,44 +58,36 @@ const LISTED_TOPICS: usize = 20;
 /// `path` is the `.mcap` file, or a rosbag2 folder holding exactly one.
 pub fn read_bag(path: &Path, requests: &[(FieldPath, Extract)]) -> Result<Vec<Stamped>, DataError> {
     let path = &mcap_file(path)?;
-    let mut file = File::open(path).map_err(|e| {
+    let file = File::open(path).map_err(|e| {
         DataError::new(
             path.display().to_string(),
             format!("cannot open the bag: {e}"),
             "check the path (a ROS 2 bag's data is the .mcap file in its folder)",
         )
     })?;
+    let len = file.metadata().map(|m| m.len()).map_err(|e| {
+        DataError::new(
+            path.display().to_string(),
+            format!("cannot read the bag's size: {e}"),
+            "check the file system",
+        )
+    })?;
     let mut pass = Pass::new(path, requests);
-    // Each chunk is checked (CRC) whole before any of its messages is
-    // decoded: a corrupt chunk is an error, never garbage values.
-    let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default()
-            .with_prevalidate_chunk_crcs(true)
-            .with_record_length_limit(RECORD_LIMIT),
+    // Every length is bounded by the bytes left, every CRC checked; each
+    // chunk is checked whole before any of its messages is decoded, and a
+    // CRC mismatch at the end (the data section's, the summary's) refuses
+    // the whole file: a damaged bag is an error, never other numbers.
+    let mut container = Container::new(
+        BufReader::with_capacity(READ_SIZE, file),
+        path.display().to_string(),
+        len,
     );
-    while let Some(event) = reader.next_event() {
-        match event.map_err(|e| pass.container_error(&e))? {
-            LinearReadEvent::ReadRequest(_) => {
-                let buffer = reader.insert(READ_SIZE);
-                let read = file.read(buffer).map_err(|e| {
-                    DataError::new(
-                        pass.at_byte(),
-                        format!("cannot read the bag: {e}"),
-                        "check the file system",
-                    )
-                })?;
-                pass.bytes_read += read as u64;
-                reader.notify_read(read);
-            }
-            LinearReadEvent::Record { data, opcode } => {
-                let record =
-                    mcap::parse_record(opcode, data).map_err(|e| pass.container_error(&e))?;
-                pass.record(record)?;
-            }
-        }
-    }
+    container.read(|record, at| pass.record(record, at))?;
     pass.finish()
 }
+
+/// Bytes asked of the file at once.
+const READ_SIZE: usize = 1 << 20;
 
 /// The `.mcap` file of a rosbag2 folder (the path itself if it is a file).
 fn mcap_file(path: &Path) -> Result<PathBuf, DataError> {
@@ -167,7 +151,6 @@ struct Pass<'a> {
     /// Every channel seen; `None` for those with nothing requested.
     channels: HashMap<u16, Option<ChannelPlan>>,
     topics: Vec<String>,
-    bytes_read: u64,
 }
 
 impl<'a> Pass<'a> {
@@ -189,7 +172,6 @@ impl<'a> Pass<'a> {
             schemas: HashMap::new(),
             channels: HashMap::new(),
             topics: Vec::new(),
-            bytes_read: 0,
         }
     }
 
@@ -197,34 +179,8 @@ impl<'a> Pass<'a> {
         self.path.display().to_string()
     }
 
-    fn at_byte(&self) -> String {
-        format!("{}: near byte {}", self.file(), self.bytes_read)
-    }
-
-    fn container_error(&self, error: &McapError) -> DataError {
-        let (message, hint) = match error {
-            McapError::BadMagic => (
-                "not an MCAP file (no MCAP magic where the file starts or ends)".to_string(),
-                "leeway reads ROS 2 bags stored as MCAP: the .mcap file in the bag's folder \
-                 (sqlite3 .db3 bags: `ros2 bag convert` them to MCAP)",
-            ),
-            McapError::UnexpectedEof | McapError::UnexpectedEoc => (
-                "the bag ends in the middle of a record: it is truncated".to_string(),
-                "copy the file again, or recover it with `mcap recover`",
-            ),
-            McapError::BadChunkCrc { .. } | McapError::DecompressionError(_) => (
-                format!("a corrupt chunk: {error}"),
-                "copy the file again, or recover what is intact with `mcap recover`",
-            ),
-            other => (
-                format!("the MCAP container is corrupt: {other}"),
-                "copy the file again, or recover what is intact with `mcap recover`",
-            ),
-        };
-        DataError::new(self.at_byte(), message, hint)
-    }
-
-    fn record(&mut self, record: Record) -> Result<(), DataError> {
+    /// One record of the file (`at`: its offset, or its chunk's).
+    fn record(&mut self, record: Record, at: u64) -> Result<(), DataError> {
         match record {
             Record::Schema { header, data } => {
                 self.schemas
@@ -237,7 +193,7 @@ impl<'a> Pass<'a> {
                 self.channels.insert(channel.id, plan);
             }
             Record::Message { header, data } => {
-                self.message(header.channel_id, header.log_time, &data)?
+                self.message(header.channel_id, header.log_time, &data, at)?
             }
             _ => {}
         }
@@ -318,12 +274,20 @@ impl<'a> Pass<'a> {
         }))
     }
 
-    fn message(&mut self, channel: u16, log_time: u64, data: &[u8]) -> Result<(), DataError> {
+    fn message(
+        &mut self,
+        channel: u16,
+        log_time: u64,
+        data: &[u8],
+        at: u64,
+    ) -> Result<(), DataError> {
         let path = self.path;
         let Some(slot) = self.channels.get_mut(&channel) else {
             return Err(DataError::new(
-                format!("{}: near byte {}", path.display(), self.bytes_read),
-                format!("a message on channel {channel}, which no channel record defines"),
+                path.display().to_string(),
+                format!(
+                    "a message on channel {channel}, which no channel record defines (offset {at})"
+                ),
                 "the bag is corrupt; recover what is intact with `mcap recover`",
             ));
         };
@@ -345,7 +309,15 @@ impl<'a> Pass<'a> {
                 // Both exact: an int32 and a uint32 are exact in an f64.
                 let sec = sec.read(data).map_err(located)? as i64;
                 let nanosec = nanosec.read(data).map_err(located)? as i64;
-                sec * 1_000_000_000 + nanosec
+                // As a CSV pair is checked: nanosec is the fraction of the second.
+                seconds_and_nanos(sec, nanosec).map_err(|why| {
+                    DataError::new(
+                        format!("{}: topic {}, message {index}", path.display(), plan.topic),
+                        format!("header.stamp: {why}"),
+                        "the bag is corrupt, or its publisher wrote an invalid \
+                         builtin_interfaces/Time (nanosec below 10^9)",
+                    )
+                })?
             }
             None => i64::try_from(log_time).unwrap_or(i64::MAX),
         };

@@ -12,7 +12,7 @@ use std::path::Path;
 
 use leeway_data::error::DataError;
 use mcap::records::MessageHeader;
-use mcap::{WriteOptions, Writer};
+use mcap::{Attachment, Compression, WriteOptions, Writer};
 
 /// A message type the writer knows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -206,6 +206,27 @@ impl Cdr {
     }
 }
 
+/// How a bag is laid out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BagFormat {
+    /// Messages in zstd chunks (rosbag2's default), or written directly in
+    /// the data section (`false`).
+    pub chunked: bool,
+    /// CRC-32s of the chunks, the data section (in `DataEnd`), the summary
+    /// (in the footer) and the attachments; `false` writes 0, "not computed".
+    pub checksums: bool,
+}
+
+impl Default for BagFormat {
+    /// Chunked, with every checksum: as rosbag2 writes.
+    fn default() -> BagFormat {
+        BagFormat {
+            chunked: true,
+            checksums: true,
+        }
+    }
+}
+
 /// A topic added to a [`BagWriter`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TopicId(usize);
@@ -235,13 +256,25 @@ fn write_error(path: &str, error: impl std::fmt::Display) -> DataError {
 }
 
 impl BagWriter {
-    /// Creates the bag file at `path` (an MCAP file, profile `ros2`).
+    /// Creates the bag file at `path` (an MCAP file, profile `ros2`), in
+    /// zstd chunks with every checksum.
     pub fn create(path: &Path) -> Result<BagWriter, DataError> {
+        BagWriter::create_as(path, BagFormat::default())
+    }
+
+    /// Creates the bag file at `path` laid out as `format` says.
+    pub fn create_as(path: &Path, format: BagFormat) -> Result<BagWriter, DataError> {
         let shown = path.display().to_string();
         let file = File::create(path).map_err(|e| write_error(&shown, e))?;
         let writer = WriteOptions::new()
             .profile("ros2")
             .library("leeway")
+            .use_chunks(format.chunked)
+            .compression(format.chunked.then_some(Compression::Zstd))
+            .calculate_chunk_crcs(format.checksums)
+            .calculate_data_section_crc(format.checksums)
+            .calculate_summary_section_crc(format.checksums)
+            .calculate_attachment_crcs(format.checksums)
             .create(BufWriter::new(file))
             .map_err(|e| write_error(&shown, e))?;
         Ok(BagWriter {
@@ -335,6 +368,20 @@ impl BagWriter {
             .map_err(|e| write_error(&self.path, e))
     }
 
+    /// Writes an attachment (a file stored in the bag, e.g. a calibration):
+    /// readers skip it, its CRC checked.
+    pub fn attach(&mut self, name: &str, log_time: u64, data: &[u8]) -> Result<(), DataError> {
+        self.writer
+            .attach(&Attachment {
+                log_time,
+                create_time: log_time,
+                name: name.to_string(),
+                media_type: "application/octet-stream".to_string(),
+                data: data.into(),
+            })
+            .map_err(|e| write_error(&self.path, e))
+    }
+
     /// Writes the summary and closes the file.
     pub fn finish(mut self) -> Result<(), DataError> {
         self.writer
@@ -362,7 +409,16 @@ pub struct TopicSeries {
 /// Writes `series` to a bag at `path`, the topics' messages interleaved in
 /// stamp order (as a recorder logs them).
 pub fn write_bag(path: &Path, series: &[TopicSeries]) -> Result<(), DataError> {
-    let mut writer = BagWriter::create(path)?;
+    write_bag_as(path, series, BagFormat::default())
+}
+
+/// [`write_bag`] laid out as `format` says (unchunked, without checksums).
+pub fn write_bag_as(
+    path: &Path,
+    series: &[TopicSeries],
+    format: BagFormat,
+) -> Result<(), DataError> {
+    let mut writer = BagWriter::create_as(path, format)?;
     let mut ids = Vec::new();
     for s in series {
         let lengths_agree = s.columns.len() == s.kind.columns().len()

@@ -27,7 +27,8 @@ fn a_truncated_bag_says_where() {
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).expect("written");
     let error = read(&cut, &[("/twist.twist.linear.x", Extract::Number)]).expect_err("truncated");
     assert!(error.message.contains("truncated"), "{error:?}");
-    assert!(error.location.contains("cut.mcap: near byte"), "{error:?}");
+    assert!(error.message.contains("(offset "), "{error:?}");
+    assert!(error.location.ends_with("cut.mcap"), "{error:?}");
 }
 
 #[test]
@@ -42,7 +43,10 @@ fn a_corrupt_chunk_is_found_by_its_checksum_or_its_codec() {
     let flipped = dir.path().join("flipped.mcap");
     std::fs::write(&flipped, &bytes).expect("written");
     let error = read(&flipped, &[("/twist.twist.linear.x", Extract::Number)]).expect_err("corrupt");
-    assert!(error.message.contains("corrupt"), "{error:?}");
+    assert!(
+        error.message.contains("corrupt") || error.message.starts_with("chunk CRC mismatch"),
+        "{error:?}"
+    );
     assert!(error.hint.contains("mcap recover"), "{error:?}");
 }
 
@@ -216,5 +220,12 @@ fn a_record_claiming_more_bytes_than_the_file_has_is_truncation() {
     std::fs::write(&path, &bytes).expect("written");
     let error = read(&path, &[("/twist.twist.linear.x", Extract::Number)]).expect_err("cut short");
     assert!(error.message.contains("truncated"), "{error:?}");
-    assert_eq!(error.location, format!("{}: near byte 81", path.display()));
+    assert!(
+        error
+            .message
+            .starts_with("a Header record declares 900000000 bytes, and the file has 64"),
+        "{error:?}"
+    );
+    assert!(error.message.ends_with("(offset 8)"), "{error:?}");
+    assert_eq!(error.location, path.display().to_string());
 }

@@ -1,5 +1,6 @@
 //! leeway-logs' integration tests (one binary).
 
+mod bag_damage;
 mod bag_errors;
 mod bag_fuzz;
 mod bag_python;
