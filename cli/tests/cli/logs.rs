@@ -604,7 +604,12 @@ fn keep_windows_from_the_command_line_and_options_given_twice_must_agree() {
         .as_array()
         .into_iter()
         .flatten()
-        .map(|p| (p["from"].as_f64().unwrap_or(-1.0), p["to"].as_f64().unwrap_or(-1.0)))
+        .map(|p| {
+            (
+                p["from"].as_f64().unwrap_or(-1.0),
+                p["to"].as_f64().unwrap_or(-1.0),
+            )
+        })
         .collect();
     // The velocities' hole (400–405.8 s) lies between the windows.
     assert_eq!(spans.len(), 2, "{pieces}");
@@ -617,12 +622,30 @@ fn keep_windows_from_the_command_line_and_options_given_twice_must_agree() {
     assert!(stderr(&o).contains("--keep (window 1)"), "{}", stderr(&o));
     assert!(stderr(&o).contains("keeps nothing"), "{}", stderr(&o));
     // --max-gap against the manifest's own limit: an error, never a silent pick.
-    rewrite(&dir, "ferry.toml", |t| t.replace("experiment = \"ferry\"", "experiment = \"ferry\"\nmax_gap = 2.0"));
+    rewrite(&dir, "ferry.toml", |t| {
+        t.replace(
+            "experiment = \"ferry\"",
+            "experiment = \"ferry\"\nmax_gap = 2.0",
+        )
+    });
     let o = leeway(&["estimate", FERRY, "--data", &data, "--max-gap", "1"]);
     assert_ne!(code(&o), 0);
-    assert!(stderr(&o).contains("conflicts with the manifest's gap limit"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("conflicts with the manifest's gap limit"),
+        "{}",
+        stderr(&o)
+    );
     // The same limit in both places agrees.
-    let o = leeway(&["estimate", FERRY, "--data", &data, "--max-gap", "2", "--method", "ls"]);
+    let o = leeway(&[
+        "estimate",
+        FERRY,
+        "--data",
+        &data,
+        "--max-gap",
+        "2",
+        "--method",
+        "ls",
+    ]);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     // --keep with the manifest's own windows, and on one data file.
     rewrite(&dir, "ferry.toml", |t| t + "[[keep]]\nfrom = 0\nto = 300\n");
