@@ -46,8 +46,7 @@ pub fn samples(rule: BudgetRule, experiments: usize, h: f64) -> Result<usize, De
     } else {
         format!("{e} experiments")
     };
-    // `!(count <= max)`: also NaN.
-    if !(count <= SAMPLES.1 as f64) {
+    if count.is_nan() || count > SAMPLES.1 as f64 {
         return Err(DesignError::plan(
             format!(
                 "{what} is more than {} samples per experiment ({shared}), the most leeway plans",
@@ -81,7 +80,10 @@ pub fn samples(rule: BudgetRule, experiments: usize, h: f64) -> Result<usize, De
 /// from a target precision), rounded up; `None` when that is more than
 /// [`SAMPLES`]`.1` (beyond what leeway plans) or not a number.
 pub fn needed(samples: f64) -> Option<usize> {
-    (samples >= 0.0 && samples <= SAMPLES.1 as f64).then(|| samples.ceil() as usize)
+    // In 0..=SAMPLES.1: exact as a count once rounded up.
+    (0.0..=SAMPLES.1 as f64)
+        .contains(&samples)
+        .then(|| samples.ceil() as usize)
 }
 
 /// A count of samples a run needs, in words: `1200 samples`, or `more than

@@ -247,8 +247,8 @@ pub fn locate(e: DesignError, text: &str, json: bool) -> DesignError {
     let at = if is_json(text, json) {
         let mut de = serde_json::Deserializer::from_str(text);
         let scan = Scan {
-            path: String::new(),
-            target: Some(&path),
+            path: "",
+            target: Some(path.as_slice()),
         };
         match serde::de::DeserializeSeed::deserialize(scan, &mut de) {
             Err(found) if found.to_string().starts_with(FOUND) => {

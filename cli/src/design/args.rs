@@ -53,10 +53,8 @@ pub struct DesignArgs {
     pub json: bool,
 }
 
-/// Most Monte Carlo runs of a verification (the bound Python's
-/// `leeway.design` checks too: `leeway_design::bounds`).
-pub const MAX_RUNS: usize = leeway_design::bounds::TRIALS;
-
+/// At most `leeway_design::bounds::TRIALS` (Python's `leeway.design` meets
+/// the same bound).
 fn runs(s: &str) -> Result<usize, String> {
     let m: usize = s
         .parse()

@@ -471,7 +471,8 @@ fn a_plan_reads_as_it_says() {
         ),
         (
             "three.json",
-            format!("{{{inputs},\n \"step\": 0.05}}").replace("[-6000, 6000]}, \"tau_y\"", "[-35, 35, 1e308]}, \"tau_y\""),
+            format!("{{{inputs},\n \"step\": 0.05}}")
+                .replace("[-6000, 6000]}, \"tau_y\"", "[-35, 35, 1e308]}, \"tau_y\""),
             ":1:",
             "this one has 3",
         ),
