@@ -464,10 +464,12 @@ fn a_plan_reads_as_it_says() {
             "`step` is given twice",
         ),
         (
+            // serde refuses a struct's field twice, but a map (inputs,
+            // disturbances, noise, nominal) kept the last.
             "nested.json",
-            format!("{{{inputs},\n \"budget\": {{\"time\": 100,\n  \"time\": 1e308}}}}"),
-            ":3:8",
-            "`budget.time` is given twice",
+            format!("{{{inputs},\n \"noise\": {{\"u\": 0.01,\n  \"u\": 10}}}}"),
+            ":3:5",
+            "`noise.u` is given twice",
         ),
         (
             "three.json",
