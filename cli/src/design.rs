@@ -18,7 +18,7 @@ mod text;
 
 use crate::design::args::{DesignArgs, MethodArg};
 use crate::files::read_text;
-use crate::input::load_input;
+use crate::input::load_compared;
 use crate::model::load;
 use crate::options::load_options;
 use crate::output::{Status, err, out, stderr_style};
@@ -27,7 +27,7 @@ use leeway_design::compare::compare;
 use leeway_design::design::{DesignOptions, design};
 use leeway_design::document::json_with;
 use leeway_design::error::DesignError;
-use leeway_design::plan::parse;
+use leeway_design::plan::{locate, parse};
 use leeway_design::report::Design;
 use leeway_design::trial::Run;
 use leeway_design::verify::{Verification, verify};
@@ -61,10 +61,10 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         .plan
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-    let plan = parse(&text, json).map_err(|e| problem(&e, &plan_name))?;
-    let conditions = plan
-        .conditions(model.ir())
-        .map_err(|e| problem(&e, &plan_name))?;
+    // A plan error at its value's line and column.
+    let located = |e: DesignError| problem(&locate(e, &text, json), &plan_name);
+    let plan = parse(&text, json).map_err(located)?;
+    let conditions = plan.conditions(model.ir()).map_err(located)?;
     let options = DesignOptions {
         method: match args.method {
             MethodArg::Iv3 => Method::Iv3,
@@ -77,7 +77,7 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
     let pool = pool(args.threads)?;
     let design = pool
         .install(|| design(&model, &conditions, &options))
-        .map_err(|e| problem(&e, &plan_name))?;
+        .map_err(located)?;
     let verification = match args.verify {
         Some(m) if design.feasible => {
             pool.install(|| verify_with_progress(&model, &design, m, args.seed))
@@ -127,7 +127,7 @@ fn given_runs(
     paths
         .iter()
         .map(|path| {
-            let input = load_input(path, ir, &options, &[])?;
+            let input = load_compared(path, ir, &options)?;
             let e = input.experiment;
             let n = e.inputs.first().map_or(0, Vec::len);
             Ok(Run {
@@ -194,9 +194,10 @@ fn problem(e: &DesignError, plan: &str) -> Failure {
     if let Some(at) = at {
         p = p.at(at);
     }
-    // A plan the design cannot read is an input error (2); a model or
-    // conditions no plan can serve is a valid input without a result (1).
-    if e.code != "plan" {
+    // A plan the design cannot read or an option out of bounds is an input
+    // error (2); a model or conditions no plan can serve is a valid input
+    // without a result (1).
+    if e.code != "plan" && e.code != "invalid-option" {
         p.status = Status::Unsupported;
     }
     p.into()

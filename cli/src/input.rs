@@ -113,6 +113,22 @@ pub fn load_input(
     .map_err(|e| Problem::data(&e).into())
 }
 
+/// `design --compare`'s names for the same reader: a run starts at its
+/// first row (there is no `--x0`), at the design's sample time.
+const COMPARE_NAMES: OptionNames = OptionNames {
+    x0: |_| "nothing else: `design --compare` has no --x0".to_string(),
+    step: "a `step` in the plan",
+};
+
+/// Loads an input file given to `design --compare` (as [`load_input`];
+/// errors name `--compare`).
+pub fn load_compared(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<Input, Failure> {
+    with_table(path, "--compare", |table| {
+        read_input(table, ir, options, &[], &COMPARE_NAMES)
+    })
+    .map_err(|e| Problem::data(&e).into())
+}
+
 /// Parses the input file's bytes (see [`load_input`]).
 #[cfg(test)]
 pub fn parse_input(

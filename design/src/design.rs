@@ -10,7 +10,7 @@
 use crate::error::DesignError;
 use crate::excitation::Excitation;
 use crate::operating::operating_point;
-use crate::plan::{Conditions, Family, SAMPLES};
+use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
 use crate::report::{self, Design, FamilyScore};
 use crate::signs::{held, pointwise_states};
@@ -54,20 +54,19 @@ pub fn design(
     options: &DesignOptions,
 ) -> Result<Design, DesignError> {
     let ir = model.ir();
+    crate::bounds::pilot(options.pilot).map_err(|why| {
+        DesignError::option(
+            why,
+            "fewer pilot trials: each is a simulated trial and its estimate",
+        )
+    })?;
     let kind = options.method.predictor();
     let (centring, patterns, choose_one, mut assumptions) = experiments(model, kind)?;
     assumptions.extend(c.assumptions.iter().cloned());
     let runs_needed = if choose_one { 1 } else { patterns.len() };
-    let n = c.budget.samples(runs_needed, c.h);
-    if n < SAMPLES.0 {
-        return Err(DesignError::plan(
-            format!("the budget buys {n} samples per experiment for {runs_needed} experiments"),
-            &format!(
-                "a run needs at least {} samples: raise budget.time",
-                SAMPLES.0
-            ),
-        ));
-    }
+    // Every run length below is at most this one: bounded before anything
+    // is allocated for it.
+    let n = c.budget.samples(runs_needed, c.h)?;
     let pointwise = pointwise_states(ir, kind);
     let mut bases = bases(model, c, kind, &patterns, &pointwise, choose_one)?;
     let time_scale = bases

@@ -16,6 +16,9 @@ pub struct DesignError {
     pub line: Option<usize>,
     /// Column in the plan file (1-based).
     pub column: Option<usize>,
+    /// The plan's value at fault (`budget.time`), located in the file's
+    /// text by [`crate::plan::locate`].
+    pub key: Option<String>,
 }
 
 impl DesignError {
@@ -27,6 +30,7 @@ impl DesignError {
             hint: hint.to_string(),
             line: None,
             column: None,
+            key: None,
         }
     }
     /// A model or conditions no plan can serve.
@@ -37,7 +41,20 @@ impl DesignError {
             hint: hint.to_string(),
             line: None,
             column: None,
+            key: None,
         }
+    }
+    /// An option out of its bounds (`pilot`).
+    pub fn option(message: String, hint: &str) -> DesignError {
+        DesignError {
+            code: "invalid-option",
+            ..DesignError::cannot(&message, hint)
+        }
+    }
+    /// About the plan's value `key` (`budget.time`, `inputs.f.range`).
+    pub fn key(mut self, key: &str) -> DesignError {
+        self.key = Some(key.to_string());
+        self
     }
     /// Located at a line and column of the plan file.
     pub fn at(mut self, line: usize, column: usize) -> DesignError {

@@ -11,6 +11,7 @@
 //! Seeded throughout: the same plan and seed give the same design and the
 //! same verification, whatever the thread count.
 
+pub mod bounds;
 pub mod compare;
 pub mod design;
 pub mod distributed;

@@ -37,7 +37,8 @@ pub struct PlanFile {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InputLimits {
-    /// `[low, high]`, in the input's units.
+    /// `[low, high]`, in the input's units (exactly two numbers).
+    #[serde(deserialize_with = "pair")]
     pub range: [f64; 2],
     /// Largest change per second (optional).
     pub rate: Option<f64>,
@@ -174,32 +175,51 @@ pub enum BudgetRule {
 }
 
 impl BudgetRule {
-    /// Samples per experiment when `experiments` share the budget.
-    pub fn samples(self, experiments: usize, h: f64) -> usize {
-        match self {
-            BudgetRule::Samples(n) => n,
-            BudgetRule::Time(t) => (t / h / experiments.max(1) as f64).floor() as usize,
-            BudgetRule::Each(t) => (t / h).floor() as usize,
-        }
+    /// Samples per experiment when `experiments` share the budget at
+    /// sample time `h`, within [`SAMPLES`] ([`crate::bounds::samples`]).
+    pub fn samples(self, experiments: usize, h: f64) -> Result<usize, DesignError> {
+        crate::bounds::samples(self, experiments, h)
     }
 }
 
 /// The default time per experiment when the plan gives no budget, s.
 pub const DEFAULT_SECONDS: f64 = 600.0;
-/// Bounds on samples per experiment.
-pub const SAMPLES: (usize, usize) = (50, 10_000_000);
+pub use crate::bounds::SAMPLES;
+
+/// `range = [low, high]`: exactly two numbers (a fixed-size array would
+/// drop a third in TOML).
+fn pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    let values = Vec::<f64>::deserialize(d)?;
+    match values[..] {
+        [low, high] => Ok([low, high]),
+        _ => Err(serde::de::Error::custom(format!(
+            "a range is [low, high], two numbers; this one has {}",
+            values.len()
+        ))),
+    }
+}
+
+/// Whether the text is read as JSON: `json`, or text starting with `{`.
+pub fn is_json(text: &str, json: bool) -> bool {
+    json || text.trim_start().starts_with('{')
+}
 
 /// Reads a plan file's text: JSON when `json` (or when the text starts with
-/// `{`), TOML otherwise. Syntax errors carry the line and column.
+/// `{`), TOML otherwise. Syntax errors carry the line and column; a key
+/// given twice is refused in either (TOML by its grammar, JSON here, at
+/// every level).
 pub fn parse(text: &str, json: bool) -> Result<PlanFile, DesignError> {
-    if json || text.trim_start().starts_with('{') {
-        serde_json::from_str(text).map_err(|e| {
+    if is_json(text, json) {
+        let located = |e: serde_json::Error| {
             DesignError::plan(
                 format!("{e}"),
                 "the plan is JSON (docs/design.md lists its fields)",
             )
             .at(e.line(), e.column())
-        })
+        };
+        let mut scan = serde_json::Deserializer::from_str(text);
+        serde::de::DeserializeSeed::deserialize(Scan::default(), &mut scan).map_err(located)?;
+        serde_json::from_str(text).map_err(located)
     } else {
         toml::from_str(text).map_err(|e| {
             let at = e.span().map(|s| line_col(text, s.start));
@@ -213,6 +233,123 @@ pub fn parse(text: &str, json: bool) -> Result<PlanFile, DesignError> {
                 None => err,
             }
         })
+    }
+}
+
+/// `e` at the line and column of its key (`budget.time`) in the plan's
+/// text, when it names one the text gives and is not located yet; `e`
+/// otherwise.
+pub fn locate(e: DesignError, text: &str, json: bool) -> DesignError {
+    let Some(key) = e.key.clone().filter(|_| e.line.is_none()) else {
+        return e;
+    };
+    let path: Vec<&str> = key.split('.').collect();
+    let at = if is_json(text, json) {
+        let mut de = serde_json::Deserializer::from_str(text);
+        let scan = Scan {
+            path: "",
+            target: Some(path.as_slice()),
+        };
+        match serde::de::DeserializeSeed::deserialize(scan, &mut de) {
+            Err(found) if found.to_string().starts_with(FOUND) => {
+                Some((found.line(), found.column()))
+            }
+            _ => None,
+        }
+    } else {
+        toml_span(text, &path).map(|byte| line_col(text, byte))
+    };
+    match at {
+        Some((l, c)) => e.at(l, c),
+        None => e,
+    }
+}
+
+/// Where the value at `path` starts in a TOML text.
+fn toml_span(text: &str, path: &[&str]) -> Option<usize> {
+    let table = toml::de::DeTable::parse(text).ok()?;
+    let (first, rest) = path.split_first()?;
+    let mut value = table.get_ref().get(*first)?;
+    for key in rest {
+        value = value.get_ref().get(*key)?;
+    }
+    Some(value.span().start)
+}
+
+/// The message that marks the key [`locate`] looks for.
+const FOUND: &str = "\u{0}found";
+
+/// A walk over a JSON value that refuses a key given twice in any object
+/// (serde_json keeps the last), or stops at the key `target` with [`FOUND`]
+/// (serde_json's error then says where it is).
+#[derive(Clone, Copy, Default)]
+struct Scan<'a> {
+    /// Where the walk is, `inputs.f.` (empty at the top).
+    path: &'a str,
+    /// The key sought, from here down.
+    target: Option<&'a [&'a str]>,
+}
+
+impl<'de> serde::de::DeserializeSeed<'de> for Scan<'_> {
+    type Value = ();
+    fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> serde::de::Visitor<'de> for Scan<'_> {
+    type Value = ();
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_str<E>(self, _: &str) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_unit<E>(self) -> Result<(), E> {
+        Ok(())
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let inner = Scan {
+            target: None,
+            ..self
+        };
+        while seq.next_element_seed(inner)?.is_some() {}
+        Ok(())
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+        use serde::de::Error;
+        let mut seen = std::collections::BTreeSet::new();
+        while let Some(key) = map.next_key::<String>()? {
+            let target = match self.target {
+                Some([only]) if *only == key => return Err(A::Error::custom(FOUND)),
+                Some([first, rest @ ..]) if *first == key => Some(rest),
+                _ => None,
+            };
+            let path = format!("{}{key}", self.path);
+            if !seen.insert(key) {
+                return Err(A::Error::custom(format!(
+                    "`{path}` is given twice (a key is given once)"
+                )));
+            }
+            let below = format!("{path}.");
+            map.next_value_seed(Scan {
+                path: &below,
+                target,
+            })?;
+        }
+        Ok(())
     }
 }
 
@@ -250,6 +387,7 @@ impl PlanFile {
                             format!("excitation = \"{name}\" is not a family"),
                             "use auto, pulses, prbs, multisine or zigzag",
                         )
+                        .key("excitation")
                     })?,
             ),
         };
@@ -302,7 +440,8 @@ impl PlanFile {
             return Err(DesignError::plan(
                 format!("step = {h} is not a sample time"),
                 "give a positive sample time in seconds, at most 3600",
-            ));
+            )
+            .key("step"));
         }
         Ok(h)
     }
@@ -329,7 +468,8 @@ impl PlanFile {
                     return Err(DesignError::plan(
                         format!("inputs.{name}.range = [{low}, {high}] is not a range"),
                         "give [low, high] with low < high, both finite",
-                    ));
+                    )
+                    .key(&format!("inputs.{name}.range")));
                 }
                 let per_sample = match l.rate {
                     None => f64::INFINITY,
@@ -338,7 +478,8 @@ impl PlanFile {
                         return Err(DesignError::plan(
                             format!("inputs.{name}.rate = {r} is not a rate"),
                             "give the largest change per second, positive",
-                        ));
+                        )
+                        .key(&format!("inputs.{name}.rate")));
                     }
                 };
                 Ok(Limits {
@@ -379,12 +520,14 @@ impl PlanFile {
             (Some(_), Some(_)) => Err(DesignError::plan(
                 "the budget gives both `time` and `samples`".to_string(),
                 "give the total time at sea (`time`, s) or the samples per experiment (`samples`), not both",
-            )),
+            )
+            .key("budget.samples")),
             (Some(t), None) if t.is_finite() && t > 0.0 => Ok(BudgetRule::Time(t)),
             (Some(t), None) => Err(DesignError::plan(
                 format!("budget.time = {t} is not a duration"),
                 "give the total time at sea in seconds",
-            )),
+            )
+            .key("budget.time")),
             (None, Some(n)) if (SAMPLES.0..=SAMPLES.1).contains(&n) => Ok(BudgetRule::Samples(n)),
             (None, Some(n)) => Err(DesignError::plan(
                 format!(
@@ -392,7 +535,8 @@ impl PlanFile {
                     SAMPLES.0, SAMPLES.1
                 ),
                 "give the samples per experiment",
-            )),
+            )
+            .key("budget.samples")),
             (None, None) => {
                 assumptions.push(format!(
                     "budget: {DEFAULT_SECONDS} s per experiment (the plan gives none)"
@@ -463,7 +607,21 @@ impl PlanFile {
                         d.name
                     ),
                     "sensor noise belongs to a medium declared `measured`; give the states' noise under [noise]",
-                ));
+                )
+                .key(&key("sensor_noise")));
+            }
+            if p.correlation_time.is_some()
+                && each(&key("std"), &p.std, k)?.iter().all(|s| *s == 0.0)
+            {
+                return Err(DesignError::plan(
+                    format!(
+                        "{} is given but {} does not vary about its mean (no std)",
+                        key("correlation_time"),
+                        d.name
+                    ),
+                    "a correlation time is that of the variation about the mean: give std too, or leave correlation_time out",
+                )
+                .key(&key("correlation_time")));
             }
             fill("sensor_noise", &p.sensor_noise, &mut m.sensor, false)?;
             let t = p.correlation_time.unwrap_or(0.0);
@@ -496,7 +654,8 @@ fn each(key: &str, v: &Option<PerComponent>, k: usize) -> Result<Vec<f64>, Desig
                 xs.len()
             ),
             "give one number for every component, or one per component in the model's order",
-        )),
+        )
+        .key(key)),
     }
 }
 
@@ -507,7 +666,8 @@ fn finite(key: &str, x: f64) -> Result<(), DesignError> {
         Err(DesignError::plan(
             format!("{key} = {x} is not a number"),
             "give a finite number",
-        ))
+        )
+        .key(key))
     }
 }
 
@@ -518,7 +678,8 @@ fn non_negative(key: &str, x: f64) -> Result<(), DesignError> {
         Err(DesignError::plan(
             format!("{key} = {x} is not a non-negative number"),
             "a standard deviation, time or bound is ≥ 0 and finite",
-        ))
+        )
+        .key(key))
     }
 }
 
@@ -535,6 +696,7 @@ fn unknown<'a>(
         ),
         &format!("the model's: {}", known.join(", ")),
     )
+    .key(&format!("{table}.{name}"))
 }
 
 fn singular(table: &str) -> &str {

@@ -58,11 +58,14 @@ impl Prediction {
     }
 
     /// The shortest run (samples per experiment) at which every θ with a
-    /// nominal value is known to `target` relative standard error.
-    pub fn samples_for(&self, target: f64) -> Option<usize> {
+    /// nominal value is known to `target` relative standard error: `None`
+    /// when no θ has one; `Some(None)` when it is more than
+    /// [`crate::bounds::SAMPLES`] allows (beyond what leeway plans).
+    pub fn samples_for(&self, target: f64) -> Option<Option<usize>> {
         let worst = self.relative().into_iter().flatten().fold(0.0, f64::max);
-        (worst > 0.0 && target > 0.0)
-            .then(|| (self.samples as f64 * (worst / target) * (worst / target)).ceil() as usize)
+        (worst > 0.0 && target > 0.0).then(|| {
+            crate::bounds::needed(self.samples as f64 * (worst / target) * (worst / target))
+        })
     }
 
     /// θ with a nominal value the realisation left without a standard

@@ -223,10 +223,11 @@ pub struct CurvePoint {
 pub struct Target {
     /// The relative standard error asked for.
     pub relative: f64,
-    /// Samples per experiment.
-    pub samples: usize,
-    /// Seconds per experiment.
-    pub seconds: f64,
+    /// Samples per experiment (`None`: more than
+    /// [`crate::bounds::SAMPLES`] allows, beyond what leeway plans).
+    pub samples: Option<usize>,
+    /// Seconds per experiment (`None` as `samples`).
+    pub seconds: Option<f64>,
     /// Whether the budget covers it.
     pub within_budget: bool,
 }
@@ -553,12 +554,12 @@ fn prediction_report(
         p.samples_for(t).map(|samples| Target {
             relative: t,
             samples,
-            seconds: samples as f64 * h,
-            within_budget: samples <= n,
+            seconds: samples.map(|s| s as f64 * h),
+            within_budget: samples.is_some_and(|s| s <= n),
         })
     });
-    if let Some(t) = &target {
-        lengths.push(t.samples);
+    if let Some(s) = target.as_ref().and_then(|t| t.samples) {
+        lengths.push(s);
     }
     lengths.sort_unstable();
     lengths.dedup();
@@ -590,8 +591,10 @@ fn prediction_report(
                     name: q.name.clone(),
                     relative: r,
                     help: format!(
-                        "run {} samples per experiment for {:.0} %, or excite {term} more: {}",
-                        (n as f64 * (r / limit) * (r / limit)).ceil(),
+                        "run {} per experiment for {:.0} %, or excite {term} more: {}",
+                        crate::bounds::needed_words(crate::bounds::needed(
+                            n as f64 * (r / limit) * (r / limit)
+                        )),
                         limit * 100.0,
                         excite_help(ir, i, room_used)
                     ),

@@ -12,10 +12,11 @@ use crate::failure::Failure;
 use crate::model::Model;
 use crate::options::choice;
 use leeway_data::write;
+use leeway_design::bounds::{PILOT, TRIALS, pilot};
 use leeway_design::design::{DesignOptions, design};
 use leeway_design::distributed::{summarise, trial, verifiable};
 use leeway_design::document::json;
-use leeway_design::plan::parse;
+use leeway_design::plan::{locate, parse};
 use leeway_design::report::Design;
 use leeway_design::verify::verify;
 use leeway_estimate::Method;
@@ -35,10 +36,9 @@ pub struct DesignArgs {
     pilot: usize,
 }
 
-/// The CLI's bounds (cli/src/design/args.rs), checked here too so that a
+/// The CLI's bounds (`leeway_design::bounds`), checked here too so that a
 /// caller past the Python half meets the same limits.
-const MAX_PILOT: usize = 1000;
-const MAX_RUNS: usize = 10_000;
+const MAX_RUNS: usize = TRIALS;
 
 impl DesignArgs {
     fn options(&self) -> Result<DesignOptions, Failure> {
@@ -58,9 +58,9 @@ impl DesignArgs {
                 Some("target=0.05 or target=\"5%\"".into()),
             ));
         }
-        if self.pilot > MAX_PILOT {
+        if pilot(self.pilot).is_err() {
             return Err(Failure::option(
-                format!("pilot={} is not in 0..={MAX_PILOT}", self.pilot),
+                format!("pilot={} is not in 0..={PILOT}", self.pilot),
                 None,
             ));
         }
@@ -79,6 +79,7 @@ impl DesignArgs {
 fn failure(e: &leeway_design::error::DesignError, plan: &str, located: bool) -> Failure {
     let class = match e.code {
         "plan" => "PlanError",
+        "invalid-option" => "OptionError",
         "not-identifiable" => "Unidentifiable",
         _ => "DesignError",
     };
@@ -122,7 +123,9 @@ impl Designed {
             let design = design(&interpreter, &conditions, &options)?;
             Ok((interpreter, design))
         });
-        let (interpreter, design) = made.map_err(|e| failure(&e, plan_name, located))?;
+        // A plan error at its value's line and column, as the CLI's.
+        let (interpreter, design) =
+            made.map_err(|e| failure(&locate(e, plan, json), plan_name, located))?;
         Ok(Designed {
             interpreter,
             design,

@@ -143,6 +143,24 @@ def test_a_plan_error_is_located_at_its_line_and_column(rov: leeway.Model, tmp_p
         leeway.design(rov, tmp_path / "missing.toml")
 
 
+def test_a_budget_beyond_the_cli_s_bound_is_a_located_plan_error(rov: leeway.Model, tmp_path: Path) -> None:
+    # The bound of budget.samples (10 million per experiment) holds for a
+    # time budget over a step too, refused at once as the CLI refuses it
+    # (design/tests/design/bounds.rs covers the Rust both share).
+    plan = tmp_path / "long.toml"
+    plan.write_text(ROV_PLAN.read_text().replace("time = 1200", "time = 1e308"))
+    with pytest.raises(leeway.PlanError) as e:
+        leeway.design(rov, plan, pilot=0)
+    line = next(i for i, text in enumerate(plan.read_text().splitlines(), 1) if text.startswith("time = 1e308"))
+    assert e.value.location == f"{plan}:{line}:8"
+    assert "more than 10000000 samples" in str(e.value)
+    o = run_leeway("design", str(ROV), "--plan", str(plan))
+    assert o.returncode == 2 and f"{plan}:{line}:8" in o.stderr and "more than 10000000 samples" in o.stderr
+    with pytest.raises(leeway.PlanError) as e:
+        leeway.design(rov, {"step": 1e-9, "inputs": {name: {"range": [-4000, 4000]} for name in rov.inputs}}, pilot=0)
+    assert e.value.location == "plan" and "more than 10000000 samples" in str(e.value)
+
+
 def test_the_windy_blimp_is_infeasible_not_an_error(tmp_path: Path) -> None:
     plan = tmp_path / "windy.toml"
     plan.write_text(WINDY_BLIMP)

@@ -53,29 +53,20 @@ pub struct DesignArgs {
     pub json: bool,
 }
 
-/// Most Monte Carlo runs of a verification.
-pub const MAX_RUNS: usize = 10_000;
-
+/// At most `leeway_design::bounds::TRIALS` (Python's `leeway.design` meets
+/// the same bound).
 fn runs(s: &str) -> Result<usize, String> {
     let m: usize = s
         .parse()
         .map_err(|_| format!("`{s}` is not a number of runs"))?;
-    if (1..=MAX_RUNS).contains(&m) {
-        Ok(m)
-    } else {
-        Err(format!("{m} runs: give 1 to {MAX_RUNS}"))
-    }
+    leeway_design::bounds::trials(m)
 }
 
 fn pilot(s: &str) -> Result<usize, String> {
     let k: usize = s
         .parse()
         .map_err(|_| format!("`{s}` is not a number of trials"))?;
-    if k <= 1000 {
-        Ok(k)
-    } else {
-        Err(format!("{k} pilot trials: give 0 to 1000"))
-    }
+    leeway_design::bounds::pilot(k)
 }
 
 fn threads(s: &str) -> Result<usize, String> {

@@ -207,18 +207,29 @@ fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
         curve.join(", ")
     );
     if let Some(t) = &p.target {
-        let _ = writeln!(
-            s,
-            "  target {} %: {} s per experiment ({} samples){}",
-            num(100.0 * t.relative),
-            num(t.seconds),
-            t.samples,
-            if t.within_budget {
-                ", within the budget"
-            } else {
-                ", beyond the budget"
+        match (t.samples, t.seconds) {
+            (Some(samples), Some(seconds)) => {
+                let _ = writeln!(
+                    s,
+                    "  target {} %: {} s per experiment ({samples} samples){}",
+                    num(100.0 * t.relative),
+                    num(seconds),
+                    if t.within_budget {
+                        ", within the budget"
+                    } else {
+                        ", beyond the budget"
+                    }
+                );
             }
-        );
+            _ => {
+                let _ = writeln!(
+                    s,
+                    "  target {} %: {} per experiment",
+                    num(100.0 * t.relative),
+                    leeway_design::bounds::needed_words(None)
+                );
+            }
+        }
     }
     for q in &p.poorly_determined {
         let _ = writeln!(

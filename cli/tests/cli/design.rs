@@ -391,3 +391,128 @@ fn a_new_craft_goes_from_check_to_validate() {
     let fit = v["mean"]["r"].as_f64().expect("fit");
     assert!(fit > 80.0, "r: {fit} in {v}");
 }
+
+/// The ROV's inputs, for plans that differ elsewhere.
+const ROV_INPUTS: &str = "[inputs.tau_x]\nrange = [-6000, 6000]\n[inputs.tau_y]\nrange = [-6000, 6000]\n[inputs.tau_n]\nrange = [-4000, 4000]\n";
+
+#[test]
+fn a_budget_beyond_the_bound_is_a_located_error_in_well_under_a_second() {
+    let dir = Scratch::new("design-bounds");
+    for (name, head, budget, at) in [
+        ("tiny-step", "step = 1e-300\n", "time = 1200\n", ":9:8"),
+        ("huge-time", "step = 0.05\n", "time = 1e308\n", ":9:8"),
+        ("nano-step", "step = 1e-9\n", "time = 1200\n", ":9:8"),
+        ("long-time", "step = 0.05\n", "time = 1e7\n", ":9:8"),
+    ] {
+        let plan = dir.write(
+            &format!("{name}.toml"),
+            &format!("{head}{ROV_INPUTS}[budget]\n{budget}"),
+        );
+        let start = std::time::Instant::now();
+        let o = leeway(&["design", "examples/models/rov.som", "--plan", &plan]);
+        let took = start.elapsed();
+        no_panic(&o);
+        let err = stderr(&o);
+        assert_eq!(code(&o), 2, "{name}: {err}");
+        assert!(err.contains(&format!("{plan}{at}")), "{name}: {err}");
+        assert!(err.contains("budget.time = "), "{name}: {err}");
+        assert!(err.contains("more than 10000000 samples"), "{name}: {err}");
+        assert!(err.contains("lengthen step"), "{name}: {err}");
+        // Refused before anything is simulated (the debug build's time).
+        assert!(took < std::time::Duration::from_secs(5), "{name}: {took:?}");
+    }
+}
+
+#[test]
+fn a_target_beyond_the_bound_is_said_so() {
+    let dir = Scratch::new("design-target-bound");
+    let plan = rov_plan(&dir);
+    let args = [
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--target",
+        "1e-300",
+    ];
+    let o = leeway(&args);
+    no_panic(&o);
+    let text = stdout(&o);
+    assert_eq!(code(&o), 0, "{text}{}", stderr(&o));
+    assert!(
+        text.contains("more than 10000000 samples (beyond what leeway plans)"),
+        "{text}"
+    );
+    assert!(!text.contains("18446744073709551615"), "{text}");
+    let o = leeway(&[&args[..], &["--json"]].concat());
+    let d = json(&o);
+    assert!(d["prediction"]["target"]["samples"].is_null(), "{d}");
+    assert_eq!(d["prediction"]["target"]["within_budget"], false);
+}
+
+#[test]
+fn a_plan_reads_as_it_says() {
+    let dir = Scratch::new("design-reads");
+    let inputs = r#""inputs": {"tau_x": {"range": [-6000, 6000]}, "tau_y": {"range": [-6000, 6000]}, "tau_n": {"range": [-4000, 4000]}}"#;
+    for (name, text, at, says) in [
+        (
+            "top.json",
+            format!("{{\"step\": 0.05,\n {inputs},\n \"step\": 1e-9}}"),
+            ":3:7",
+            "`step` is given twice",
+        ),
+        (
+            // serde refuses a struct's field twice, but a map (inputs,
+            // disturbances, noise, nominal) kept the last.
+            "nested.json",
+            format!("{{{inputs},\n \"noise\": {{\"u\": 0.01,\n  \"u\": 10}}}}"),
+            ":3:5",
+            "`noise.u` is given twice",
+        ),
+        (
+            "three.json",
+            format!("{{{inputs},\n \"step\": 0.05}}")
+                .replace("[-6000, 6000]}, \"tau_y\"", "[-35, 35, 1e308]}, \"tau_y\""),
+            ":1:",
+            "this one has 3",
+        ),
+        (
+            "three.toml",
+            ROV_INPUTS.replacen("[-6000, 6000]", "[-35, 35, 1e308]", 1),
+            ":2:9",
+            "this one has 3",
+        ),
+    ] {
+        let plan = dir.write(name, &text);
+        let o = leeway(&["design", "examples/models/rov.som", "--plan", &plan]);
+        no_panic(&o);
+        let err = stderr(&o);
+        assert_eq!(code(&o), 2, "{name}: {err}");
+        assert!(err.contains(&format!("{plan}{at}")), "{name}: {err}");
+        assert!(err.contains(says), "{name}: {err}");
+    }
+}
+
+#[test]
+fn compare_errors_name_compare() {
+    let dir = Scratch::new("design-compare-name");
+    let plan = rov_plan(&dir);
+    let missing = dir.path("missing.csv").display().to_string();
+    let o = leeway(&[
+        "design",
+        "examples/models/rov.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--compare",
+        &missing,
+    ]);
+    no_panic(&o);
+    let err = stderr(&o);
+    assert_eq!(code(&o), 2, "{err}");
+    assert!(err.contains("--compare"), "{err}");
+    assert!(!err.contains("--input"), "{err}");
+}

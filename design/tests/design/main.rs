@@ -1,6 +1,7 @@
 //! leeway-design's integration tests: one binary (one link keeps the test
 //! build lean), a module per subject.
 
+mod bounds;
 mod common;
 mod examples;
 mod rov;

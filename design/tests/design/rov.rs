@@ -94,12 +94,13 @@ fn predicted_errors_scale_as_one_over_the_root_of_the_run_length() {
     }
     // The target's run length meets the target, and no shorter one does.
     let t = p.target.as_ref().expect("target");
-    let worst = at(t.samples).worst_relative;
+    let samples = t.samples.expect("within the bound");
+    let worst = at(samples).worst_relative;
     assert!(
         worst <= 0.05 * (1.0 + 1e-9) && worst > 0.05 * (1.0 - 1e-3),
         "{worst}"
     );
-    assert_eq!(t.within_budget, t.samples <= 3000);
+    assert_eq!(t.within_budget, samples <= 3000);
 }
 
 #[test]

@@ -154,7 +154,8 @@ class Design:
     """The unmeasured disturbance means: the plan's ``mean`` and the predicted ``std_error``."""
     worst_relative: float | None
     target: dict[str, Any] | None
-    """The run a ``target`` precision needs: ``relative``, ``samples``, ``seconds``, ``within_budget``."""
+    """The run a ``target`` precision needs: ``relative``, ``samples``, ``seconds``
+    (both ``None`` past 10 million samples, beyond what leeway plans), ``within_budget``."""
     poorly_determined: tuple[dict[str, Any], ...]
     methods: tuple[dict[str, Any], ...]
     """Per estimator, whether the design keeps the signs it assumes."""
