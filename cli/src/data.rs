@@ -222,11 +222,15 @@ pub fn data_notes(notes: &[FileNotes]) -> Vec<String> {
 /// A joined log's signals read by their mean over the step, and its
 /// stalls: what the grid did that picking one sample would not say.
 fn grid_notes(f: &FileNotes) -> Vec<String> {
-    use leeway_model::number::short_number as num;
+    use leeway_model::number::{short_number as num, time_number as time};
     let mut lines: Vec<String> = f
         .signals
         .iter()
-        .filter(|s| s.on_grid.starts_with("mean") || s.on_grid.starts_with("centred"))
+        .filter(|s| {
+            s.on_grid.starts_with("mean")
+                || s.on_grid.starts_with("centred")
+                || s.on_grid.contains("slower than the grid")
+        })
         .map(|s| format!("{}: {}: {}", f.file, s.signal, s.on_grid))
         .collect();
     for e in &f.experiments {
@@ -235,8 +239,8 @@ fn grid_notes(f: &FileNotes) -> Vec<String> {
                 "{}: {} stalled from t = {} to {} s ({} s, beyond {} s but within the gap limit): {} across",
                 f.file,
                 g.signal.as_deref().unwrap_or("a signal"),
-                num(g.from),
-                num(g.to),
+                time(g.from),
+                time(g.to),
                 num(g.to - g.from),
                 num(g.limit),
                 "held or interpolated"
@@ -259,7 +263,7 @@ const MAX_SPLIT_LINES: usize = 8;
 /// The gaps that split an experiment and the pieces they left, one line
 /// each, at most [`MAX_SPLIT_LINES`] of each.
 fn split_notes(file: &str, e: &leeway_data::TimeNotes) -> Vec<String> {
-    use leeway_model::number::short_number as num;
+    use leeway_model::number::{short_number as num, time_number as time};
     let more = |n: usize, what: &str| {
         (n > MAX_SPLIT_LINES).then(|| {
             format!(
@@ -277,15 +281,15 @@ fn split_notes(file: &str, e: &leeway_data::TimeNotes) -> Vec<String> {
         lines.push(format!(
             "{file}: experiment `{}` split: no samples{what} from t = {} to {} s ({} s, beyond the gap limit of {} s); not interpolated across",
             e.experiment,
-            num(g.from),
-            num(g.to),
+            time(g.from),
+            time(g.to),
             num(g.to - g.from),
             num(g.limit)
         ));
     }
     lines.extend(more(e.gaps.len(), "gaps"));
     for p in e.pieces.iter().take(MAX_SPLIT_LINES) {
-        let span = format!("t = {} to {} s", num(p.from), num(p.to));
+        let span = format!("t = {} to {} s", time(p.from), time(p.to));
         lines.push(match &p.experiment {
             Some(name) => format!("{file}: `{name}`: {span}, {} samples", p.samples),
             None => format!(

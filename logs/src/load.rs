@@ -199,6 +199,13 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
         note.first = seconds(t.stamps[0], joined.origin);
         note.last = seconds(t.stamps[t.stamps.len() - 1], joined.origin);
         note.on_grid = t.rule.describe(*samples);
+        if note.median_step > 1.5 * h {
+            // A slow source is read at the grid time: say how seldom it changes.
+            note.on_grid.push_str(&format!(
+                " (slower than the grid: a sample every {} steps)",
+                leeway_model::number::short_number(note.median_step / h)
+            ));
+        }
     }
     let notes = join_notes(&m, &joined, signals);
     Ok(JoinedLog {

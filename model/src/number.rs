@@ -2,6 +2,17 @@
 //! the 17 of a raw `f64` (`step -0.10000000000000142 s`). JSON documents keep
 //! full precision; only words use this.
 
+/// A time in seconds to the millisecond, trailing zeros dropped (`1799.7`,
+/// `300`): a time in a report names the instant, where four significant
+/// digits would round 1799.7 s to 1800.
+pub fn time_number(x: f64) -> String {
+    if !x.is_finite() {
+        return format!("{x}");
+    }
+    let text = trim_zeros(format!("{x:.3}"));
+    if text == "-0" { "0".to_string() } else { text }
+}
+
 /// A number for a message: four significant digits, `-0` as `0`, no
 /// trailing zeros (`0.1`, `-1.45`, `1.234e-5`). JSON keeps full precision.
 pub fn short_number(x: f64) -> String {

@@ -47,7 +47,11 @@ fn stretch_alert(f: &Feedback) -> Warning {
             num(f.from),
             num(f.to)
         ),
-        HELP,
+        format!(
+            "{CONTROLLER}; if the craft met disturbances, leave the stretch out: keep the rest, `--keep ..{}` and `--keep {}..` in seconds from the experiment's start (for a piece of a log, add the piece's start, which the data notes print), or the same as [[keep]] windows in the log's manifest (docs/logs.md)",
+            num(f.from),
+            num(f.to)
+        ),
         format!(
             "experiment `{}`, samples {}–{} (t = {} to {} s from its start): the past motion explains {share} of what the inputs' own past leaves of {inputs}; {ASSUMES}",
             f.experiment,
@@ -60,7 +64,10 @@ fn stretch_alert(f: &Feedback) -> Warning {
 }
 
 /// The help of a closed-loop warning.
-const HELP: &str = "a controller was in the loop there (dynamic positioning, an autopilot); if the craft met disturbances, keep only the open-loop stretches (a `[[keep]]` window in the log's manifest, docs/logs.md)";
+const HELP: &str = "a controller was in the loop there (dynamic positioning, an autopilot); if the craft met disturbances, keep only the open-loop stretches (`--keep`, or [[keep]] windows in the log's manifest, docs/logs.md)";
+
+/// What a closed-loop warning's help starts with.
+const CONTROLLER: &str = "a controller was in the loop there (dynamic positioning, an autopilot)";
 
 /// One warning for an experiment's many stretches (at least one).
 fn stretches_alert(all: &[Feedback]) -> Warning {
@@ -151,6 +158,13 @@ mod tests {
                 .starts_with("experiment `short`, 0 to 99 s")
         );
         assert!(alerts[0].help.contains("[[keep]]"), "{}", alerts[0].help);
+        // A stretch alone names the windows that leave it out.
+        assert!(
+            alerts[1].help.contains("`--keep ..0` and `--keep 99..`")
+                && alerts[1].help.contains("[[keep]]"),
+            "{}",
+            alerts[1].help
+        );
         // Three stretches still get a warning each.
         assert_eq!(closed_loop_alerts(&all[..3]).len(), 3);
     }

@@ -25,6 +25,7 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--combine": ("combine", "text"),
     "--resample": ("resample", "number"),
     "--max-gap": ("max_gap", "number"),
+    "--keep": ("keep", "name"),
     "--step": ("step", "number"),
     "--time-tolerance": ("time_tolerance", "number"),
     "--lags": ("lags", "number"),
