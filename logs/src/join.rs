@@ -377,6 +377,47 @@ mod tests {
     }
 
     #[test]
+    fn a_stall_within_the_gap_limit_is_noted_and_a_window_bounds_the_pieces() {
+        // Forces at 50 Hz with a 3.13 s hole; a limit of 5 s bridges it.
+        let mut t: Vec<Nanos> = (0..=500).map(|k| k * S / 50).collect();
+        t.extend((0..=2000).map(|k| 13_130_000_000 + k * S / 50));
+        let v: Vec<f64> = t.iter().map(|x| (*x as f64 / 1e9).sin()).collect();
+        let u_t: Vec<Nanos> = (0..=50).map(|k| k * S).collect();
+        let u_v = vec![1.0; u_t.len()];
+        let tracks = [
+            Track {
+                signal: "tau_x",
+                stamps: &t,
+                values: &v,
+                rule: Rule::for_signal(Between::Hold, true, 0.02, 1.0),
+                limit: 5e9,
+                stall: 1e9,
+            },
+            Track {
+                signal: "u",
+                stamps: &u_t,
+                values: &u_v,
+                rule: rule(Between::Linear),
+                limit: 5e9,
+                stall: 10e9,
+            },
+        ];
+        let j = join(&tracks, 1.0, "run", None);
+        assert_eq!(j.pieces.len(), 1);
+        assert!(j.gaps.is_empty());
+        assert_eq!(j.stalls.len(), 1, "{:?}", j.stalls);
+        assert_eq!((j.stalls[0].from, j.stalls[0].to), (10.0, 13.13));
+        assert_eq!(j.stalls[0].signal.as_deref(), Some("tau_x"));
+        // The forces by their mean over the step: 50 samples a whole step.
+        assert_eq!(j.samples[0].1, 50);
+        // A window from 20 to 30 s keeps one piece, its span noted.
+        let j = join(&tracks, 1.0, "run", Some(&[(20 * S, 30 * S)]));
+        assert_eq!(j.pieces.len(), 1);
+        assert_eq!((j.notes[0].from, j.notes[0].to, j.notes[0].samples), (20.0, 30.0, 11));
+        assert!(j.stalls.is_empty(), "the stall lies outside the window");
+    }
+
+    #[test]
     fn a_heading_wraps_along_the_short_arc() {
         let t = [0, S];
         let v = [3.1, -3.1];
