@@ -115,13 +115,15 @@ fn manifest(path: &Path, ir: &Ir) -> Result<Manifest, DataError> {
         .into_iter()
         .map(|(signal, role)| {
             let field = column_name(ir, &signal);
+            let yaw = role == Role::Heading && field.ends_with("orientation");
             SignalSpec {
-                yaw: role == Role::Heading && field.ends_with("orientation"),
+                yaw,
                 signal,
                 source: 0,
                 field,
                 interpolate: None,
-                frame: None,
+                // A bag without a manifest follows ROS (REP 103): ENU.
+                frame: yaw.then_some(Frame::Enu),
                 instant: false,
                 at: file.clone(),
             }

@@ -390,7 +390,7 @@ file = \"ferry.mcap\"
 u = \"bag:/navigation/twist_body.twist.linear.x\"
 v = \"bag:/navigation/twist_body.twist.linear.y\"
 r = \"bag:/navigation/twist_body.twist.angular.z\"
-psi = { from = \"bag:/imu.orientation\", as = \"yaw\", frame = \"ned\" }
+psi = { from = \"bag:/imu.orientation\", as = \"yaw\", frame = \"enu\" }
 tau_x = \"bag:/allocator/wrench.wrench.force.x\"
 tau_y = \"bag:/allocator/wrench.wrench.force.y\"
 tau_n = \"bag:/allocator/wrench.wrench.torque.z\"
@@ -453,7 +453,9 @@ pub fn write_ferry_bag(dir: &Path) -> Result<(), DataError> {
             kind: MessageKind::Imu,
             frame_id: "imu_link".into(),
             stamps: heading_t,
-            columns: std::iter::once(heading[0].clone())
+            // REP 103: the orientation in ENU, its yaw from east
+            // counter-clockwise, 90° − the heading.
+            columns: std::iter::once(heading[0].iter().map(|psi| wrap(PI / 2.0 - psi)).collect())
                 .chain((0..6).map(|_| zeros(nh)))
                 .collect(),
         },
