@@ -5,8 +5,26 @@
 //! Python's `leeway.design` meet the same bounds.
 
 use crate::error::DesignError;
-use crate::plan::BudgetRule;
 use leeway_model::number::short_number as num;
+
+/// How the run length follows from the budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BudgetRule {
+    /// Samples per experiment.
+    Samples(usize),
+    /// Total seconds, shared by the experiments.
+    Time(f64),
+    /// Seconds per experiment.
+    Each(f64),
+}
+
+impl BudgetRule {
+    /// Samples per experiment when `experiments` share the budget at
+    /// sample time `h`, within [`SAMPLES`] ([`samples`]).
+    pub fn samples(self, experiments: usize, h: f64) -> Result<usize, DesignError> {
+        samples(self, experiments, h)
+    }
+}
 
 /// Samples per experiment: at least 50, at most 10 million — the range
 /// `budget.samples` allows, and the bound of every other count of samples

@@ -163,24 +163,7 @@ pub struct Conditions {
     pub assumptions: Vec<String>,
 }
 
-/// How the run length follows from the budget.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum BudgetRule {
-    /// Samples per experiment.
-    Samples(usize),
-    /// Total seconds, shared by the experiments.
-    Time(f64),
-    /// Seconds per experiment.
-    Each(f64),
-}
-
-impl BudgetRule {
-    /// Samples per experiment when `experiments` share the budget at
-    /// sample time `h`, within [`SAMPLES`] ([`crate::bounds::samples`]).
-    pub fn samples(self, experiments: usize, h: f64) -> Result<usize, DesignError> {
-        crate::bounds::samples(self, experiments, h)
-    }
-}
+pub use crate::bounds::BudgetRule;
 
 /// The default time per experiment when the plan gives no budget, s.
 pub const DEFAULT_SECONDS: f64 = 600.0;

@@ -413,7 +413,10 @@ mod tests {
         // A window from 20 to 30 s keeps one piece, its span noted.
         let j = join(&tracks, 1.0, "run", Some(&[(20 * S, 30 * S)]));
         assert_eq!(j.pieces.len(), 1);
-        assert_eq!((j.notes[0].from, j.notes[0].to, j.notes[0].samples), (20.0, 30.0, 11));
+        assert_eq!(
+            (j.notes[0].from, j.notes[0].to, j.notes[0].samples),
+            (20.0, 30.0, 11)
+        );
         assert!(j.stalls.is_empty(), "the stall lies outside the window");
     }
 
