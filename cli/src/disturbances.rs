@@ -38,8 +38,18 @@ pub fn given(ir: &Ir, specs: &[String]) -> Result<Given, Problem> {
         .iter()
         .flat_map(|spec| spec.split(','))
         .map(str::trim)
-        .filter(|s| !s.is_empty())
         .collect();
+    // An empty item says nothing: a trailing comma or `--disturbance ''`
+    // is more likely a value lost on the way than a choice.
+    if let Some(spec) = specs
+        .iter()
+        .find(|s| s.split(',').any(|i| i.trim().is_empty()))
+    {
+        return Err(bad(
+            spec,
+            "an empty item (a trailing or doubled comma, or an empty value)".into(),
+        ));
+    }
     let zero = items.iter().any(|i| i.eq_ignore_ascii_case("zero"));
     let mut named = Vec::with_capacity(items.len());
     for item in items.iter().filter(|i| !i.eq_ignore_ascii_case("zero")) {
@@ -199,5 +209,11 @@ mod tests {
         );
         let e = given(&ir, &["wind_n=1".into()]).err().map(|p| p.message);
         assert!(e.is_some_and(|m| m.contains("is measured")));
+        // Nothing said is refused, never read as "no disturbance given".
+        for empty in ["", "north=0.1,", "north=0.1,,east=0"] {
+            let e = given(&ir, &[empty.into()]).err().map(|p| p.message);
+            assert!(e.is_some_and(|m| m.contains("an empty item")), "{empty:?}");
+        }
+        assert!(given(&ir, &[]).is_ok());
     }
 }
