@@ -87,12 +87,18 @@ fn derivative(x: [f64; 4], tau: [f64; 3]) -> [f64; 4] {
     ]
 }
 
-fn rk4(x: [f64; 4], tau: [f64; 3], h: f64) -> [f64; 4] {
-    let add = |a: [f64; 4], b: [f64; 4], s: f64| std::array::from_fn(|i| a[i] + s * b[i]);
-    let k1 = derivative(x, tau);
-    let k2 = derivative(add(x, k1, h / 2.0), tau);
-    let k3 = derivative(add(x, k2, h / 2.0), tau);
-    let k4 = derivative(add(x, k3, h), tau);
+/// One RK4 step of `f` (the state's derivative under the held force `tau`).
+pub(crate) fn rk4<const N: usize>(
+    f: impl Fn([f64; N], [f64; 3]) -> [f64; N],
+    x: [f64; N],
+    tau: [f64; 3],
+    h: f64,
+) -> [f64; N] {
+    let add = |a: [f64; N], b: [f64; N], s: f64| std::array::from_fn(|i| a[i] + s * b[i]);
+    let k1 = f(x, tau);
+    let k2 = f(add(x, k1, h / 2.0), tau);
+    let k3 = f(add(x, k2, h / 2.0), tau);
+    let k4 = f(add(x, k3, h), tau);
     std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
 }
 
@@ -160,7 +166,7 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng, publish: &[f64]) -> Truth {
         states.push(x);
         errors.push(e);
         e = std::array::from_fn(|i| a * e[i] + b * NAV_ERROR[i] * normal(rng));
-        x = rk4(x, force, FINE);
+        x = rk4(derivative, x, force, FINE);
     }
     Truth {
         states,
@@ -170,7 +176,7 @@ fn simulate(spec: &FerryLog, rng: &mut ChaCha8Rng, publish: &[f64]) -> Truth {
 }
 
 /// An angle in (−π, π].
-fn wrap(a: f64) -> f64 {
+pub(crate) fn wrap(a: f64) -> f64 {
     let w = a - 2.0 * PI * (a / (2.0 * PI)).round();
     if w <= -PI { w + 2.0 * PI } else { w }
 }
@@ -218,7 +224,7 @@ fn state_at(truth: &Truth, t: f64) -> [f64; 4] {
 }
 
 /// `secs,nsecs` of `t` seconds from the start (whole nanoseconds).
-fn stamp_columns(t: f64) -> (i64, i64) {
+pub(crate) fn stamp_columns(t: f64) -> (i64, i64) {
     let ns = (t * 1e9).round() as i64;
     (
         EPOCH_SECONDS + ns.div_euclid(1_000_000_000),

@@ -9,6 +9,7 @@
 //! 1 s grid; the truth is RK4 at 100 Hz. [`RAW_MODEL`] is the model, and
 //! [`write_raw_ferry`] writes the topics with their manifest.
 
+use crate::ferry::{rk4, stamp_columns, wrap};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -16,8 +17,6 @@ use std::f64::consts::FRAC_PI_2;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The log's first stamp: 2026-05-14T08:00:00Z.
-const EPOCH_SECONDS: i64 = 1_778_745_600;
 /// The RK4 step of the truth.
 const FINE: f64 = 0.01;
 
@@ -111,25 +110,6 @@ fn derivative(x: [f64; 6], tau: [f64; 3]) -> [f64; 6] {
     ]
 }
 
-fn rk4(x: [f64; 6], tau: [f64; 3], h: f64) -> [f64; 6] {
-    let add = |a: [f64; 6], b: [f64; 6], s: f64| std::array::from_fn(|i| a[i] + s * b[i]);
-    let k1 = derivative(x, tau);
-    let k2 = derivative(add(x, k1, h / 2.0), tau);
-    let k3 = derivative(add(x, k2, h / 2.0), tau);
-    let k4 = derivative(add(x, k3, h), tau);
-    std::array::from_fn(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
-}
-
-/// An angle in (−π, π].
-fn wrap(a: f64) -> f64 {
-    let w = a - std::f64::consts::TAU * (a / std::f64::consts::TAU).round();
-    if w <= -std::f64::consts::PI {
-        w + std::f64::consts::TAU
-    } else {
-        w
-    }
-}
-
 /// The dynamic-positioning controller: a PD on the position error (rotated
 /// into the body frame) and on the heading error, from measured motion.
 fn dp(x: [f64; 6], target: [f64; 3]) -> [f64; 3] {
@@ -156,15 +136,6 @@ fn stamps(seconds: f64, rate: f64, rng: &mut ChaCha8Rng) -> Vec<f64> {
         t += (1.0 + 0.2 * rng.random_range(-1.0..1.0)) / rate;
     }
     out
-}
-
-/// `secs,nsecs` of `t` seconds from the start.
-fn stamp(t: f64) -> (i64, i64) {
-    let ns = (t * 1e9).round() as i64;
-    (
-        EPOCH_SECONDS + ns.div_euclid(1_000_000_000),
-        ns.rem_euclid(1_000_000_000),
-    )
 }
 
 /// The topics as CSV text.
@@ -220,7 +191,7 @@ fn simulate(spec: &RawFerry) -> Topics {
         }
         let force = acting.checked_sub(1).map_or([0.0; 3], |j| published[j]);
         states.push(x);
-        x = rk4(x, force, FINE);
+        x = rk4(derivative, x, force, FINE);
     }
     let at = |t: f64| -> [f64; 6] {
         let s = t / FINE;
@@ -233,7 +204,7 @@ fn simulate(spec: &RawFerry) -> Topics {
         String::from("secs,nsecs,orientation.x,orientation.y,orientation.z,orientation.w\n");
     for &t in &nav_t {
         let x = at(t);
-        let (s, ns) = stamp(t);
+        let (s, ns) = stamp_columns(t);
         let m: Vec<f64> = (0..3)
             .map(|i| x[i] + NAV_NOISE[i] * normal(&mut rng))
             .collect();
@@ -249,13 +220,13 @@ fn simulate(spec: &RawFerry) -> Topics {
     }
     let mut tau = String::from("secs,nsecs,Fx,Fy,Mz\n");
     for (&t, f) in publish.iter().zip(&published) {
-        let (s, ns) = stamp(t);
+        let (s, ns) = stamp_columns(t);
         let _ = writeln!(tau, "{s},{ns},{},{},{}", f[0], f[1], f[2]);
     }
     let mut mode = String::from("secs,nsecs,dp\n");
     for k in 0..=(spec.seconds as i64) {
         let t = k as f64;
-        let (s, ns) = stamp(t);
+        let (s, ns) = stamp_columns(t);
         let on = i32::from((spec.dp.0..spec.dp.1).contains(&t));
         let _ = writeln!(mode, "{s},{ns},{on}");
     }
