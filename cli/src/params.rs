@@ -6,7 +6,9 @@
 
 use crate::files::read_text;
 use crate::problem::{Failure, Problem};
-use leeway_model::given::{disturbance_slots, given_value_ok, parameter_names};
+use leeway_model::given::{
+    disturbance_slots, estimated_unmeasured, given_value_ok, parameter_names,
+};
 use leeway_structure::grammar::line_col;
 use leeway_structure::ir::Ir;
 use serde_json::Value;
@@ -140,7 +142,8 @@ fn disturbance_means(
         }
         Some(_) => return Err(problem("`disturbances` is not an object".into())),
     }
-    let given: Vec<(&str, f64)> = named.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    let named: Vec<(&str, f64)> = named.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+    let given = estimated_unmeasured(ir, &named);
     disturbance_slots(ir, &given).map_err(|p| {
         problem(format!(
             "the estimate's disturbance `{}` does not fit model `{}`: {}",

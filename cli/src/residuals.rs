@@ -1,7 +1,8 @@
-//! `leeway validate --resid`: the one-step-ahead residual analysis of each
-//! θ on the validation data (`leeway_model::residuals`, the code
-//! `leeway.residuals` runs) — whiteness and independence of the inputs,
-//! printed as a table after the fits, and as `residuals` in `--json`.
+//! `leeway validate --resid`: the residual analysis of each θ's free-run
+//! simulation on the validation data (`leeway_model::residuals`, the code
+//! `leeway.residuals` runs) — independence of the inputs (the verdict) and
+//! whiteness (information), printed as a table after the fits, and as
+//! `residuals` in `--json`.
 
 use crate::output::table;
 use crate::problem::Problem;
@@ -14,10 +15,11 @@ use std::fmt::Write;
 /// The residual options of `leeway validate`.
 #[derive(Debug, clap::Args)]
 pub struct ResidArgs {
-    /// Analyse the one-step-ahead residuals (MATLAB's `resid`): each θ
-    /// predicts every sample from the measured state one sample before;
-    /// the residuals are tested for whiteness and for independence of the
-    /// inputs.
+    /// Analyse the simulation errors (MATLAB's `resid` on an output-error
+    /// model): each θ's free run from the first measured state; its errors
+    /// are tested for independence of the inputs (the verdict) and for
+    /// whiteness (information: white for the true model only when the
+    /// disturbances do not vary).
     #[arg(long)]
     pub resid: bool,
     /// The largest lag the residual tests use.
@@ -85,8 +87,13 @@ pub fn render(results: &[ModelResiduals]) -> String {
         let t = &m.tests;
         let _ = writeln!(
             s,
-            "\n{}: one-step residuals, N = {}, lags 1..{}; 99 % band ±{:.4} per lag, verdicts at 1 % over all lags (±{:.4}, inputs ±{:.4})",
-            m.name, t.samples, t.lags, t.band, t.white_band, t.input_band
+            "\n{}: free-run simulation errors, N = {}, lags 1..{}; 99 % band ±{:.4} per lag for a white error",
+            m.name, t.samples, t.lags, t.band
+        );
+        let _ = writeln!(
+            s,
+            "verdict: independent of the inputs, at 1 % over all lags (±{:.4}·√P, P for the colour of error and input); whiteness is information (±{:.4})",
+            t.input_band, t.white_band
         );
         let mut rows = vec![
             [
@@ -97,6 +104,7 @@ pub fn render(results: &[ModelResiduals]) -> String {
                 "Ljung-Box Q",
                 "p",
                 "lags outside",
+                "independent",
             ]
             .map(String::from)
             .to_vec(),
@@ -106,17 +114,25 @@ pub fn render(results: &[ModelResiduals]) -> String {
                 st.state.clone(),
                 number(st.std, 5),
                 number(st.max_abs, 3),
-                if st.white { "yes" } else { "NO" }.into(),
+                if st.white { "yes" } else { "no" }.into(),
                 number(st.ljung_box, 1),
                 number(st.p_value, 3),
                 lags(&st.outside),
+                if st.independent { "yes" } else { "NO" }.into(),
             ]);
         }
         s.push_str(&table(&rows));
         let mut rows = vec![
-            ["state", "input", "max |r|", "independent", "lags outside"]
-                .map(String::from)
-                .to_vec(),
+            [
+                "state",
+                "input",
+                "max |r|",
+                "band",
+                "independent",
+                "lags outside",
+            ]
+            .map(String::from)
+            .to_vec(),
         ];
         for st in &t.states {
             for i in &st.inputs {
@@ -124,6 +140,7 @@ pub fn render(results: &[ModelResiduals]) -> String {
                     st.state.clone(),
                     i.input.clone(),
                     number(i.max_abs, 3),
+                    number(i.band, 3),
                     if i.independent { "yes" } else { "NO" }.into(),
                     lags(&i.outside),
                 ]);
@@ -132,6 +149,13 @@ pub fn render(results: &[ModelResiduals]) -> String {
         if rows.len() > 1 {
             s.push('\n');
             s.push_str(&table(&rows));
+        }
+        if !t.diverged.is_empty() {
+            let _ = writeln!(
+                s,
+                "diverged: {} (the simulation left the finite numbers: not independent)",
+                t.diverged.join(", ")
+            );
         }
     }
     s

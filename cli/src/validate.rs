@@ -142,6 +142,9 @@ struct Outcome {
     plot: Option<PathBuf>,
     /// The plot could not be drawn (the fits are still reported; exit 2).
     plot_problem: Option<Problem>,
+    /// Parameter files refused while others were read: each reported, the
+    /// others still validated (exit 2).
+    refused: Vec<Failure>,
     /// With `--resid`.
     residuals: Option<Vec<ModelResiduals>>,
 }
@@ -171,7 +174,7 @@ pub fn run(args: &ValidateArgs) -> Status {
     let mut warnings: Vec<Warning> = Vec::new();
     let result = execute(args, &mut warnings);
     let status = match &result {
-        Ok(o) if o.plot_problem.is_some() => Status::Error,
+        Ok(o) if o.plot_problem.is_some() || !o.refused.is_empty() => Status::Error,
         Ok(o)
             if o.models
                 .iter()
@@ -208,6 +211,7 @@ pub fn run(args: &ValidateArgs) -> Status {
                 report.data_files = data_files_json(&o.notes);
                 report.data_units = Ordered(o.data_units);
                 if let Some(first) = o.models.first() {
+                    report.params = first.params.clone();
                     report.experiments = first.experiments.clone();
                     report.mean = first.mean.clone();
                 }
@@ -217,6 +221,9 @@ pub fn run(args: &ValidateArgs) -> Status {
                     Some(p) => report.errors = Failure::from(p).json(),
                     None => report.plot = o.plot.map(|p| p.display().to_string()),
                 }
+                report
+                    .errors
+                    .extend(o.refused.iter().flat_map(Failure::json));
             }
             Err(f) => report.errors = f.json(),
         }
@@ -233,6 +240,11 @@ pub fn run(args: &ValidateArgs) -> Status {
         }
         for w in &warnings {
             err(&warning_text(style, w, false));
+        }
+        if let Ok(o) = &result {
+            for f in &o.refused {
+                err(&f.render(style, "validated"));
+            }
         }
         match &result {
             Err(f) => err(&f.render(style, "validated")),
@@ -252,13 +264,25 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, 
     let ir = loaded.ir;
     let options = load_options(&ir, args.step, Some(&args.time))?;
     let given = disturbances::given(&ir, &args.disturbances)?;
-    let (mut thetas, mut held) = (Vec::new(), Vec::new());
+    let (mut thetas, mut held, mut kept, mut refused) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     for p in &args.params {
-        let file = crate::params::read_file(p, &ir, "--params")?;
-        let (h, warning) = disturbances::held(&ir, &given, &file, p);
-        warnings.extend(warning);
-        thetas.push(file.theta);
-        held.push(h);
+        match crate::params::read_file(p, &ir, "--params") {
+            Ok(file) => {
+                let (h, warning) = disturbances::held(&ir, &given, &file, p);
+                warnings.extend(warning);
+                thetas.push(file.theta);
+                held.push(h);
+                kept.push(p.clone());
+            }
+            Err(f) => refused.push(f),
+        }
+    }
+    // One refused file does not void the comparison of the others.
+    if kept.is_empty()
+        && let Some(first) = refused.into_iter().next()
+    {
+        return Err(first);
     }
     let dist: Vec<Vec<f64>> = held.iter().map(|h| h.values.clone()).collect();
     let (experiments, notes) = load_data(&ir, &args.data, &options)?;
@@ -277,7 +301,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, 
     };
     let mut outputs = ir.states.clone();
     outputs.extend(heading.iter().cloned());
-    let names = model_names(&args.params);
+    let names = model_names(&kept);
     let model = Interpreter::new(ir.clone());
     let mut panels = measured_panels(&ir, &outputs, &experiments);
     let comparison = compare(&model, &thetas, &names, &experiments, &dist);
@@ -317,8 +341,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, 
             })
             .collect();
         results.push(ModelFits {
-            params: args
-                .params
+            params: kept
                 .get(results.len())
                 .map(|p| p.display().to_string())
                 .unwrap_or_default(),
@@ -353,6 +376,7 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, 
             .collect(),
         plot,
         plot_problem,
+        refused,
         residuals,
     })
 }

@@ -16,7 +16,9 @@ pub struct ColumnEstimate {
     pub value: Option<f64>,
     /// Standard error (estimated columns only).
     pub std_error: Option<f64>,
-    /// `estimated`, `held at nominal`, `held at 0`, `dropped`.
+    /// `estimated`; `aggregate` (a θ that estimates the sum in
+    /// `estimates`, with parameters held beside it); `held at nominal`,
+    /// `held at 0`, `dropped` (each with its reason in parentheses).
     pub status: String,
     /// What the value estimates, in moments and parameter names.
     pub estimates: String,

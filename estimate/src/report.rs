@@ -124,6 +124,18 @@ impl Estimator<'_> {
                         "dropped (structurally dependent: absorbed by kept columns)".to_string(),
                     )
                 };
+                let mut estimates = self.column_texts[c].clone();
+                let mut status = status;
+                if kind == "theta" && status == "estimated" {
+                    // A parameter that estimates a sum says so in its
+                    // status, in every output (text, JSON, Python).
+                    if let Some(sum) = self.numeric_aggregate(&col.name) {
+                        estimates = sum;
+                    }
+                    if estimates != col.name {
+                        status = "aggregate".to_string();
+                    }
+                }
                 ColumnEstimate {
                     name: col.name.clone(),
                     kind,
@@ -134,10 +146,20 @@ impl Estimator<'_> {
                         None
                     },
                     status,
-                    estimates: self.column_texts[c].clone(),
+                    estimates,
                 }
             })
             .collect()
+    }
+
+    /// The sum a parameter estimates when a measured-medium parameter was
+    /// held beside it (`N_r estimates N_r - 47*(W_uv + 0.001)`).
+    fn numeric_aggregate(&self, name: &str) -> Option<String> {
+        let prefix = format!("{name} estimates ");
+        self.aggregates.iter().find_map(|a| {
+            let rest = a.strip_prefix(&prefix)?;
+            Some(rest.split(" (").next().unwrap_or(rest).to_string())
+        })
     }
 
     /// Each parameter's standard error and their covariance, where estimated.

@@ -380,8 +380,10 @@ impl Estimator<'_> {
             let kept = &self.ir.predictors.get(self.kind)[cols[*k]].name;
             let held = if value == 0.0 {
                 p.name.clone()
+            } else if value < 0.0 {
+                format!("({} + {})", p.name, short_number(-value))
             } else {
-                format!("({} - {value})", p.name)
+                format!("({} - {})", p.name, short_number(value))
             };
             let coef = round_sig(*a);
             self.aggregates.push(format!(

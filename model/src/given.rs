@@ -86,6 +86,22 @@ pub fn disturbance_slots(ir: &Ir, given: &[(&str, f64)]) -> Result<Vec<Option<f6
     Ok(values)
 }
 
+/// An estimate's disturbance means without the components `ir` measures:
+/// IV2 (the augmented predictor) estimates the mean of a measured medium
+/// too, and a simulation takes a measured medium's values from the data.
+pub fn estimated_unmeasured<'a>(ir: &Ir, means: &[(&'a str, f64)]) -> Vec<(&'a str, f64)> {
+    means
+        .iter()
+        .filter(|(name, _)| {
+            !ir.components.iter().any(|c| {
+                let d = &ir.disturbances[c.disturbance];
+                d.measured && (*name == c.name || *name == format!("{}.{}", d.name, c.name))
+            })
+        })
+        .copied()
+        .collect()
+}
+
 /// Where the constant value of an unmeasured disturbance component in a
 /// simulation comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,8 @@
 //! `leeway.residuals`: the residual analysis of `leeway validate --resid`
 //! (`leeway_model::residuals`) on frames loaded as `leeway.validate` loads
-//! them — one-step-ahead predictions, residuals, and their whiteness and
-//! input-independence tests.
+//! them — the free run's errors and their input-independence (the
+//! verdict) and whiteness tests; one-step-ahead predictions for
+//! `leeway.predict`.
 
 use crate::data::{self, FrameArg, borrow_frames};
 use crate::failure::Failure;
@@ -9,12 +10,14 @@ use crate::model::Model;
 use crate::options::load_options;
 use crate::simulate::{check_theta, held};
 use leeway_model::Interpreter;
-use leeway_model::residuals::analyse;
+use leeway_model::residuals::{analyse, one_step as predict};
+use leeway_model::simulate::Disturbances;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
 /// One experiment: its name, step, and per state the measurement, the
-/// one-step prediction and the residual (NaN at the first sample).
+/// model's value (the free run, or the one-step prediction) and the error
+/// (NaN where there is none).
 type Columns<'py> = (
     String,
     f64,
@@ -24,16 +27,18 @@ type Columns<'py> = (
 );
 
 /// The experiments' columns, the tests as JSON (the `residuals` object of
-/// `leeway validate --json --resid`) and the warnings (a disturbance zero
-/// by default).
+/// `leeway validate --json --resid`; `null` for one-step predictions) and
+/// the warnings (a disturbance zero by default).
 type Analysed<'py> = (Vec<Columns<'py>>, String, Vec<String>);
 
 /// The residual analysis of `model` with `theta` on the frames'
-/// experiments, unmeasured disturbances held as `leeway.simulate` holds
-/// them (`disturbances`, `zero`, the estimate's `means`), tested at lags up
-/// to `lags`. The GIL is released while loading and computing.
+/// experiments — the free run's errors and their tests at lags up to
+/// `lags` — or, with `one_step`, the one-step-ahead predictions and their
+/// errors (no tests). Unmeasured disturbances are held as `leeway.simulate`
+/// holds them (`disturbances`, `zero`, the estimate's `means`). The GIL is
+/// released while loading and computing.
 #[pyfunction]
-#[pyo3(signature = (model, frames, theta, disturbances, lags, zero=false, means=None, step=None, time_tolerance=0.05, resample=None))]
+#[pyo3(signature = (model, frames, theta, disturbances, lags, zero=false, means=None, step=None, time_tolerance=0.05, resample=None, one_step=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn residual_analysis<'py>(
     py: Python<'py>,
@@ -47,22 +52,40 @@ pub fn residual_analysis<'py>(
     step: Option<f64>,
     time_tolerance: f64,
     resample: Option<f64>,
+    one_step: bool,
 ) -> PyResult<Analysed<'py>> {
     let ir = &model.ir;
     check_theta(ir, &theta)?;
     let options = load_options(ir, step, Some(time_tolerance), resample)?;
     let (dist, _, warning) = held(ir, &disturbances, zero, means.as_deref(), "theta")?;
     let frames = borrow_frames(&frames)?;
-    let (experiments, analysis) = py.detach(|| -> Result<_, Failure> {
+    let (experiments, runs, tests) = py.detach(|| -> Result<_, Failure> {
         let (experiments, _notes) = data::load(ir, &frames, &options)?;
         let interpreter = Interpreter::new(ir.clone());
+        if one_step {
+            let runs = experiments
+                .iter()
+                .map(|e| {
+                    let o = predict(&interpreter, &theta, e, Disturbances::Constant(&dist));
+                    (o.predicted, o.residuals)
+                })
+                .collect();
+            return Ok((experiments, runs, "null".to_string()));
+        }
         let analysis = analyse(&interpreter, &theta, &experiments, &dist, lags).map_err(|m| {
             Failure::option(
                 format!("lags={lags}: {m}"),
                 Some("give fewer lags, e.g. lags=25, or more samples".into()),
             )
         })?;
-        Ok((experiments, analysis))
+        let tests = serde_json::to_string(&analysis.tests)
+            .map_err(|e| Failure::option(format!("the tests could not be written: {e}"), None))?;
+        let runs = analysis
+            .simulated
+            .into_iter()
+            .map(|r| (r.simulated, r.residuals))
+            .collect();
+        Ok((experiments, runs, tests))
     })?;
     let arrays = |columns: &[Vec<f64>]| -> Vec<Bound<'py, PyArray1<f64>>> {
         columns
@@ -70,20 +93,19 @@ pub fn residual_analysis<'py>(
             .map(|c| PyArray1::from_slice(py, c))
             .collect()
     };
+    let runs: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = runs;
     let columns = experiments
         .iter()
-        .zip(&analysis.one_step)
-        .map(|(e, o)| {
+        .zip(&runs)
+        .map(|(e, (model_values, errors))| {
             (
                 e.name.clone(),
                 e.h,
                 arrays(&e.states),
-                arrays(&o.predicted),
-                arrays(&o.residuals),
+                arrays(model_values),
+                arrays(errors),
             )
         })
         .collect();
-    let tests = serde_json::to_string(&analysis.tests)
-        .map_err(|e| Failure::option(format!("the tests could not be written: {e}"), None))?;
     Ok((columns, tests, warning.into_iter().collect()))
 }

@@ -19,8 +19,8 @@ use leeway_model::Interpreter;
 use leeway_model::Source;
 use leeway_model::experiment::column_name;
 use leeway_model::given::{
-    NoiseOption, SimulationNoise, components_hint, disturbance_slots, given_value_ok,
-    held_disturbances, simulation_noise,
+    NoiseOption, SimulationNoise, components_hint, disturbance_slots, estimated_unmeasured,
+    given_value_ok, held_disturbances, simulation_noise,
 };
 use leeway_model::simulate::Disturbances;
 use leeway_model::simulate::simulate_written;
@@ -101,6 +101,10 @@ pub(crate) fn held(
         let mut named = Vec::with_capacity(pairs.len());
         for (name, v) in pairs {
             named.push((name.as_str(), checked(label, name, *v)?));
+        }
+        if label != "disturbances" {
+            // An estimate's means: a medium this model measures comes from the data.
+            named = estimated_unmeasured(ir, &named);
         }
         disturbance_slots(ir, &named).map_err(|p| {
             Failure::option(format!("{label}: {}", p.reason), Some(components_hint(ir)))

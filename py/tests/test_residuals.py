@@ -1,8 +1,9 @@
 """Residual analysis from Python (``leeway.residuals``, ``leeway.predict``):
-on data simulated by the model itself with white process noise the
-one-step residuals are that noise and pass whiteness and independence of
-the input; with a wrong θ or a missing term they fail. Fixed seeds. The
-analysis is the one ``leeway validate --resid --json`` prints."""
+on data simulated by the model itself with white measurement noise the
+true model's simulation errors are that noise and pass independence of the
+input (the verdict) and whiteness; with process noise they are coloured
+yet still independent; with a wrong θ or a missing term they fail. Fixed
+seeds. The analysis is the one ``leeway validate --resid --json`` prints."""
 
 from __future__ import annotations
 
@@ -34,13 +35,17 @@ model Boat {
 THETA = {"a": 0.9, "c": -0.02, "b": 0.1}
 
 
-def boat_data(n: int, seed: int, sd: float = 0.01) -> pd.DataFrame:
+def boat_data(n: int, seed: int, sd: float = 0.01, process: float = 0.0) -> pd.DataFrame:
+    """The boat's true response to a random staircase, plus white
+    measurement noise of deviation ``sd`` and white process noise of
+    deviation ``process``."""
     rng = np.random.default_rng(seed)
     tau = np.repeat(rng.uniform(0.0, 2.0, n // 20 + 1), 20)[:n]
     u = np.zeros(n)
     for k in range(n - 1):
-        u[k + 1] = 0.9 * u[k] - 0.02 * u[k] * abs(u[k]) + 0.1 * tau[k] + sd * rng.standard_normal()
-    return pd.DataFrame({"time": np.arange(n) * 0.1, "u": u, "tau": tau})
+        u[k + 1] = 0.9 * u[k] - 0.02 * u[k] * abs(u[k]) + 0.1 * tau[k] + process * rng.standard_normal()
+    measured = u + sd * rng.standard_normal(n)
+    return pd.DataFrame({"time": np.arange(n) * 0.1, "u": measured, "tau": tau})
 
 
 @pytest.fixture(scope="module")
@@ -48,35 +53,42 @@ def boat() -> leeway.Model:
     return leeway.Model.from_str(BOAT)
 
 
-def test_the_true_model_leaves_white_noise(boat) -> None:  # type: ignore[no-untyped-def]
+def test_the_true_model_leaves_its_measurement_noise(boat) -> None:  # type: ignore[no-untyped-def]
     data = {"run1": boat_data(3000, 1), "run2": boat_data(2000, 2)}
     r = leeway.residuals(boat, THETA, data)
     assert r.samples == 2999 + 1999 and r.lags == 25
     assert r.band == pytest.approx(2.5758 / np.sqrt(4998), rel=1e-4)
-    assert r.white and r.independent, str(r)
-    assert r.tests.loc["u", "p_value"] > 0.01
-    assert r.tests.loc["u", "std"] == pytest.approx(0.01, rel=0.05)
-    # Residuals per experiment, the first sample of each without one.
+    assert r.independent and r.white, str(r)
+    assert r.document["errors"] == "simulation" and r.diverged == []
+    assert r.tests.loc["u", "std"] == pytest.approx(0.01, rel=0.1)
+    # Errors per experiment, the first sample of each without one.
     assert list(r.residuals.index.get_level_values("experiment").unique()) == ["run1", "run2"]
     first = r.residuals.xs(0, level="sample")
     assert first["u"].isna().all()
-    # e(k+1) = x(k+1) − x̂(k+1|k), and x̂ is the model's one step.
+    # e(k) = x(k) − x̂(k), x̂ the free run from the first measurement.
     run = data["run1"]
-    expected = 0.9 * run["u"] - 0.02 * run["u"] * run["u"].abs() + 0.1 * run["tau"]
-    predicted = r.predicted.loc["run1", "u"].to_numpy()
-    np.testing.assert_allclose(predicted[1:], expected.to_numpy()[:-1], rtol=1e-12)
+    free = np.zeros(len(run))
+    free[0] = run["u"].iloc[0]
+    for k in range(len(run) - 1):
+        free[k + 1] = 0.9 * free[k] - 0.02 * free[k] * abs(free[k]) + 0.1 * run["tau"].iloc[k]
+    np.testing.assert_allclose(r.simulated.loc["run1", "u"].to_numpy(), free, rtol=1e-12)
     np.testing.assert_allclose(
-        r.residuals.loc["run1", "u"].to_numpy()[1:], run["u"].to_numpy()[1:] - predicted[1:], rtol=1e-12
+        r.residuals.loc["run1", "u"].to_numpy()[1:], run["u"].to_numpy()[1:] - free[1:], rtol=1e-12, atol=1e-15
     )
     assert r.autocorrelation.shape == (25, 1) and r.cross_correlation.shape == (51, 1)
-    assert "white" in str(r)
+    assert "verdict: independent" in str(r)
+
+
+def test_process_noise_colours_the_error_but_not_the_verdict(boat) -> None:  # type: ignore[no-untyped-def]
+    r = leeway.residuals(boat, THETA, boat_data(3000, 8, process=0.01))
+    assert not r.white and r.independent, str(r)
+    assert r.input_tests.loc[("u", "tau"), "band"] > r.input_band
 
 
 def test_a_wrong_theta_fails(boat) -> None:  # type: ignore[no-untyped-def]
     r = leeway.residuals(boat, {"a": 0.8, "c": -0.02, "b": 0.1}, boat_data(3000, 3))
-    assert not r.white and not r.independent, str(r)
-    assert r.tests.loc["u", "p_value"] < 1e-6
-    assert len(r.tests.loc["u", "outside"]) > 0
+    assert not r.independent, str(r)
+    assert len(r.input_tests.loc[("u", "tau"), "outside"]) > 0
 
 
 def test_a_missing_term_fails() -> None:
@@ -86,13 +98,16 @@ def test_a_missing_term_fails() -> None:
     x, y = data[["u", "tau"]].to_numpy()[:-1], data["u"].to_numpy()[1:]
     a, b = np.linalg.lstsq(x, y, rcond=None)[0]
     r = leeway.residuals(linear, {"a": a, "b": b}, data)
-    assert not (r.white and r.independent), str(r)
+    assert not r.independent, str(r)
 
 
 def test_predict_is_one_step_and_refuses_more(boat) -> None:  # type: ignore[no-untyped-def]
     data = boat_data(200, 5)
     p = leeway.predict(boat, THETA, data)
     assert list(p.columns) == ["time", "u"] and np.isnan(p["u"].iloc[0])
+    # x̂(k+1|k) is the model's one step from the measured x(k).
+    u, tau = data["u"].to_numpy(), data["tau"].to_numpy()
+    np.testing.assert_allclose(p["u"].to_numpy()[1:], (0.9 * u - 0.02 * u * np.abs(u) + 0.1 * tau)[:-1], rtol=1e-12)
     with pytest.raises(leeway.OptionError, match="only one-step"):
         leeway.predict(boat, THETA, data, k=2)
     with pytest.raises(leeway.OptionError, match="lags"):

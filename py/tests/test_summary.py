@@ -80,3 +80,19 @@ def test_version_is_the_crates() -> None:
 
     assert re.fullmatch(r"\d+\.\d+\.\d+.*", leeway.__version__)
     assert leeway.__version__ == version("leeway")
+
+
+def test_aggregates_are_labelled_as_such(est) -> None:  # type: ignore[no-untyped-def]
+    # A wind that barely varies: its parameters are held, and the ones they
+    # are combined with estimate sums — "aggregate" in the status, the
+    # document and the summary, never "estimated".
+    p = est.params
+    sums = p[p["aggregate"].notna()]
+    assert len(sums) > 0, p
+    assert (sums["status"] == "aggregate").all(), sums
+    assert (p.loc[p["status"] == "estimated", "aggregate"].isna()).all()
+    assert not any("- -" in str(s) for s in sums["estimates"])
+    text = str(est.summary())
+    for name, row in sums.iterrows():
+        line = next(x for x in text.splitlines() if x.startswith(f"{name} "))
+        assert f"aggregate: estimates {row['estimates']}" in line, line

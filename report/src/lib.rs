@@ -308,6 +308,9 @@ pub fn aggregate_of(c: &ColumnEstimate, aggregates: &[String]) -> Option<String>
     if c.kind != "theta" || c.value.is_none() || c.status.starts_with("held") {
         return None;
     }
+    if c.status == "aggregate" {
+        return Some(c.estimates.clone());
+    }
     if c.estimates != c.name && !c.estimates.is_empty() {
         return Some(c.estimates.clone());
     }

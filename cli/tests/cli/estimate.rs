@@ -151,6 +151,29 @@ fn estimate_prints_tables_and_warnings_for_people() {
         "{err}"
     );
     assert!(!out.contains('\u{1b}') && !err.contains('\u{1b}'));
+    // The JSON says "aggregate" where the text does (it said "estimated").
+    let o = leeway(&["estimate", SHIP, "--data", &data, "--json"]);
+    let v = json(&o);
+    let parameters = v["parameters"].as_array().cloned().unwrap_or_default();
+    let sums: Vec<_> = parameters
+        .iter()
+        .filter(|p| !p["aggregate"].is_null())
+        .collect();
+    assert!(!sums.is_empty(), "{parameters:?}");
+    for p in &sums {
+        assert_eq!(p["status"], "aggregate", "{p}");
+        assert_eq!(p["estimates"], p["aggregate"], "{p}");
+        assert!(
+            !p["estimates"].as_str().unwrap_or("").contains("- -"),
+            "{p}"
+        );
+    }
+    assert!(
+        parameters
+            .iter()
+            .filter(|p| p["status"] == "estimated")
+            .all(|p| p["aggregate"].is_null())
+    );
 }
 
 /// `--refine-subsample`: the refinement on the first fifth of a long run
@@ -686,6 +709,62 @@ fn estimate_then_validate_round_trips_the_parameters() {
     assert!(stderr(&o).contains("missing parameters"), "{}", stderr(&o));
 }
 
+/// `validate` takes every estimate leeway writes: IV2 treats a measured
+/// wind as unmeasured and reports its mean, which the validation (taking
+/// the wind from the data) leaves aside. And one refused parameter file is
+/// reported without voiding the comparison of the others (exit 2).
+#[test]
+fn validate_takes_an_iv2_estimate_and_survives_a_refused_file() {
+    let dir = Scratch::new("iv2-validate");
+    let model = ship();
+    let data = dir.write("run.csv", &estimation_csv(3000, 10.0, 203));
+    let val = study::validation_experiment(&model, 500);
+    let val_file = dir.write("val.csv", &csv_text(&model, &[&val]));
+    let o = leeway(&[
+        "estimate", SHIP, "--data", &data, "--method", "iv2", "--json",
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let iv2 = dir.write("iv2.json", &stdout(&o));
+    assert!(
+        !json(&o)["disturbances"]["wind"].is_null(),
+        "IV2 reports the measured wind's mean: {}",
+        stdout(&o)
+    );
+    let o = leeway(&[
+        "validate", SHIP, "--params", &iv2, "--data", &val_file, "--json",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 0, "{}", stdout(&o));
+    let v = json(&o);
+    assert!(
+        v["disturbances"].get("wind").is_none()
+            || v["models"][0]["disturbances"].get("wind").is_none(),
+        "{v}"
+    );
+    let bad = dir.write("bad.json", "{\"X_u\": 1}\n");
+    let o = leeway(&[
+        "validate", SHIP, "--params", &bad, "--params", &iv2, "--data", &val_file, "--json",
+    ]);
+    no_panic(&o);
+    assert_eq!(code(&o), 2, "{}", stdout(&o));
+    let v = json(&o);
+    assert_eq!(v["models"].as_array().map(Vec::len), Some(1), "{v}");
+    assert_eq!(v["models"][0]["name"], "iv2");
+    assert_eq!(v["params"], iv2.as_str());
+    assert!(
+        v["errors"][0]["location"]
+            .as_str()
+            .is_some_and(|l| l.contains("bad.json")),
+        "{v}"
+    );
+    let o = leeway(&[
+        "validate", SHIP, "--params", &bad, "--params", &iv2, "--data", &val_file,
+    ]);
+    assert_eq!(code(&o), 2);
+    assert!(stdout(&o).contains("iv2"), "{}", stdout(&o));
+    assert!(stderr(&o).contains("bad.json"), "{}", stderr(&o));
+}
+
 #[test]
 fn simulate_writes_a_data_file_that_validates() {
     let dir = Scratch::new("simulate");
@@ -973,13 +1052,16 @@ fn validate_resid_reports_the_residual_tests() {
     assert_eq!(code(&o), 0, "{}", stderr(&o));
     let text = stdout(&o);
     for label in [
-        "truth: one-step residuals, N = 599, lags 1..25",
+        "truth: free-run simulation errors, N = 599, lags 1..25",
+        "verdict: independent of the inputs",
         "Ljung-Box Q",
-        "independent",
         "tau1",
     ] {
         assert!(text.contains(label), "`{label}` missing:\n{text}");
     }
+    // The true parameters pass the verdict (the one-step test refused
+    // them: with measurement noise their one-step error is MA(1)).
+    assert!(!text.contains("NO"), "the true model is refused:\n{text}");
     let o = leeway(&[
         "validate",
         SHIP,
@@ -998,6 +1080,7 @@ fn validate_resid_reports_the_residual_tests() {
     assert_eq!(v["residuals"][0]["name"], "truth");
     assert_eq!(tests["lags"], 10);
     assert_eq!(tests["samples"], 599);
+    assert_eq!(tests["errors"], "simulation");
     let states = tests["states"].as_array().cloned().unwrap_or_default();
     assert_eq!(states.len(), leeway_model::Model::ir(&model).states.len());
     assert_eq!(

@@ -1,10 +1,15 @@
-//! Residual analysis on data simulated by the model itself with white
-//! process noise: the one-step residuals are that noise, so they pass the
-//! whiteness and input-independence tests; with a wrong θ, or a model that
-//! misses a term of the data's dynamics, they fail. Fixed seeds.
+//! Residual analysis on data simulated by the model with white
+//! *measurement* noise (the paper's assumption), and with a coloured
+//! disturbance the model does not hold: the true model's free-run errors
+//! are independent of the inputs at the test's nominal level (the verdict),
+//! white when nothing varies; a wrong θ or a model that misses a term of
+//! the data's dynamics fails. The one-step errors of the true model are
+//! MA(1) (lag-1 correlation −½): why they are not what is tested. Fixed
+//! seeds.
 
 use leeway_model::experiment::Row;
-use leeway_model::residuals::{DEFAULT_LAGS, analyse, normal_quantile};
+use leeway_model::residuals::{DEFAULT_LAGS, analyse, normal_quantile, one_step};
+use leeway_model::simulate::Disturbances;
 use leeway_model::{Experiment, Interpreter, Model, Signals};
 use leeway_structure::ir::Ir;
 use rand::{RngExt, SeedableRng};
@@ -37,21 +42,40 @@ fn ir(source: &str) -> Ir {
     c.ir.unwrap_or_else(|| panic!("the test model compiles: {:?}", c.diagnostics))
 }
 
-/// `n` samples of `x(k+1) = step(x(k), u(k)) + w(k)`, inputs a random
-/// staircase (held 20 samples), `w` white Gaussian-like of deviation `sd`.
-fn simulated(n: usize, seed: u64, sd: f64) -> Experiment {
+/// How the data differ from the model's free run.
+#[derive(Clone, Copy)]
+struct Noise {
+    /// Deviation of the white measurement noise on every state.
+    measured: f64,
+    /// Deviation of an AR(1) moment (pole 0.98) on `der r` the model lacks.
+    force: f64,
+}
+
+/// A sum of 12 uniforms less 6: mean 0, deviation 1, nearly normal.
+fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
+    (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0
+}
+
+/// `n` samples of the model's step with `theta`, plus `noise`, the inputs
+/// a random staircase (held 20 samples).
+fn recorded(n: usize, seed: u64, theta: &[f64], noise: Noise) -> Experiment {
     let ir = ir(MODEL);
     let model = Interpreter::new(ir.clone());
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut e = Experiment::new(&ir, "sim", 0.1);
     let (mut x, mut u) = (vec![1.0, 0.0], vec![0.0, 0.0]);
     let (mut f, mut next) = (vec![0.0; 2], vec![0.0; 2]);
+    let mut force = 0.0;
     for k in 0..n {
         if k % 20 == 0 {
             u = vec![rng.random_range(0.0..2.0), rng.random_range(-1.0..1.0)];
         }
+        let measured: Vec<f64> = x
+            .iter()
+            .map(|x| x + noise.measured * gaussian(&mut rng))
+            .collect();
         let row = Row {
-            states: &x,
+            states: &measured,
             inputs: &u,
             heading: 0.0,
             rotation: &[],
@@ -64,72 +88,120 @@ fn simulated(n: usize, seed: u64, sd: f64) -> Experiment {
             rotation: &[],
             disturbances: &[],
         };
-        model.step(&THETA, 0.1, &sig, &mut f, &mut next);
-        for (x, next) in x.iter_mut().zip(&next) {
-            // A sum of 12 uniforms less 6: mean 0, deviation 1, nearly normal.
-            let w: f64 = (0..12).map(|_| rng.random_range(0.0..1.0)).sum::<f64>() - 6.0;
-            *x = next + sd * w;
-        }
+        model.step(theta, 0.1, &sig, &mut f, &mut next);
+        force = 0.98 * force + noise.force * gaussian(&mut rng);
+        x.copy_from_slice(&next);
+        x[1] += 0.1 * force;
     }
     e
 }
 
+const MEASURED: Noise = Noise {
+    measured: 0.01,
+    force: 0.0,
+};
+
+/// The share of `records` seeded records of `n` samples on which `model`
+/// with `theta` is refused (some state not independent of the inputs), and
+/// on which some state is not white.
+fn refusals(model: &str, theta: &[f64], noise: Noise, records: u64, n: usize) -> (f64, f64) {
+    let model = Interpreter::new(ir(model));
+    let (mut refused, mut coloured) = (0, 0);
+    for seed in 0..records {
+        let data = [recorded(n, 1000 + seed, &THETA, noise)];
+        let a = analyse(&model, theta, &data, &[], DEFAULT_LAGS).expect("enough samples");
+        refused += usize::from(a.tests.states.iter().any(|s| !s.independent));
+        coloured += usize::from(a.tests.states.iter().any(|s| !s.white));
+    }
+    (
+        refused as f64 / records as f64,
+        coloured as f64 / records as f64,
+    )
+}
+
 #[test]
-fn residuals_of_the_true_model_are_its_process_noise_and_white() {
-    let data = [simulated(3000, 1, 0.01), simulated(2000, 2, 0.01)];
+fn the_true_model_passes_at_the_nominal_level_with_measurement_noise() {
+    // 1 % per state and family; two states: at most ~2 % of records
+    // refused. 200 records: 0–4 refusals is the 95 % range of a 1 % test
+    // per state; 8 would be a test that rejects the true model.
+    let (refused, coloured) = refusals(MODEL, &THETA, MEASURED, 200, 1500);
+    assert!(
+        refused <= 0.035,
+        "true model refused on {refused} of records"
+    );
+    // Whiteness is information, near its level: the run starts from a
+    // noisy first measurement, a transient the first lags see.
+    assert!(
+        coloured <= 0.06,
+        "true model's errors coloured on {coloured}"
+    );
+}
+
+#[test]
+fn a_coloured_disturbance_fails_whiteness_but_not_the_verdict() {
+    // An unmodelled AR(1) moment: the true model's free-run error is
+    // coloured (whiteness fails, for any model), yet independent of the
+    // inputs — the √P band keeps the verdict at its level (the band of a
+    // white error refuses 90 % of these records).
+    let noise = Noise {
+        measured: 0.01,
+        force: 0.02,
+    };
+    let (refused, coloured) = refusals(MODEL, &THETA, noise, 100, 1500);
+    assert!(coloured >= 0.9, "coloured on only {coloured} of records");
+    assert!(
+        refused <= 0.05,
+        "true model refused on {refused} of records"
+    );
+}
+
+#[test]
+fn a_missing_term_or_a_wrong_theta_is_refused() {
+    // θ of the reduced model: the drag folded into X_u at the mean speed.
+    let (refused, _) = refusals(MISSING, &[-0.45, 0.5, -0.8, 0.4], MEASURED, 20, 1500);
+    assert_eq!(refused, 1.0, "a model without u|u| passed on some records");
+    let (refused, _) = refusals(MODEL, &[-0.2, -0.1, 0.4, -0.8, 0.4], MEASURED, 20, 1500);
+    assert_eq!(refused, 1.0, "a wrong X_u, X_tau passed on some records");
+}
+
+#[test]
+fn the_errors_are_the_free_runs_aligned_with_the_records() {
+    let data = [
+        recorded(300, 1, &THETA, MEASURED),
+        recorded(200, 2, &THETA, MEASURED),
+    ];
     let model = Interpreter::new(ir(MODEL));
     let a = analyse(&model, &THETA, &data, &[], DEFAULT_LAGS).expect("enough samples");
-    assert_eq!(a.tests.samples, 2999 + 1999);
-    assert!((a.tests.band - 2.5758 / (4998f64).sqrt()).abs() < 1e-4);
+    assert_eq!(a.tests.samples, 299 + 199);
+    assert_eq!(a.tests.errors, "simulation");
+    assert!((a.tests.band - 2.5758 / (498f64).sqrt()).abs() < 1e-4);
+    let run = &a.simulated[1];
+    assert!(run.residuals[0][0].is_nan());
+    assert_eq!(run.residuals[0].len(), 200);
+    // The simulation starts from the first measurement, then runs free.
+    assert_eq!(run.simulated[0][0], data[1].states[0][0]);
+    let free = leeway_model::simulate::simulate(&model, &THETA, &data[1], Disturbances::None);
+    assert_eq!(run.simulated, free.states);
     for s in &a.tests.states {
         assert!(
-            s.white,
-            "{}: lags outside {:?}, max {:?}",
-            s.state, s.outside, s.max_abs
-        );
-        assert!(
-            s.p_value.is_some_and(|p| p > 0.01),
-            "{}: p {:?}",
-            s.state,
-            s.p_value
-        );
-        assert!(
-            s.std.is_some_and(|sd| (sd - 0.01).abs() < 0.001),
-            "{}: std {:?}",
+            s.std.is_some_and(|sd| (sd - 0.01).abs() < 0.002),
+            "{}: std {:?} is not the measurement noise",
             s.state,
             s.std
         );
-        for i in &s.inputs {
-            assert!(i.independent, "{} × {}: {:?}", s.state, i.input, i.outside);
-        }
     }
-    // The first sample of each experiment has no prediction.
-    assert!(a.one_step[1].residuals[0][0].is_nan());
-    assert_eq!(a.one_step[1].residuals[0].len(), 2000);
 }
 
 #[test]
-fn a_wrong_theta_fails_whiteness_and_independence() {
-    let data = [simulated(3000, 3, 0.01)];
+fn the_true_models_one_step_errors_are_ma1_under_measurement_noise() {
+    // Why the one-step errors are not tested: e(k+1) ≈ v(k+1) − v(k).
+    let data = recorded(3000, 7, &THETA, MEASURED);
     let model = Interpreter::new(ir(MODEL));
-    let wrong = [-0.2, -0.1, 0.4, -0.8, 0.4];
-    let a = analyse(&model, &wrong, &data, &[], DEFAULT_LAGS).expect("enough samples");
-    let u = &a.tests.states[0];
-    assert!(!u.white && u.p_value.is_some_and(|p| p < 1e-6), "{u:?}");
-    assert!(u.inputs.iter().any(|i| !i.independent), "{u:?}");
-    // The yaw rate's θ is right: its residual stays white.
-    assert!(a.tests.states[1].white);
-}
-
-#[test]
-fn a_missing_term_fails_whiteness() {
-    let data = [simulated(3000, 4, 0.01)];
-    let model = Interpreter::new(ir(MISSING));
-    // θ of the reduced model: the drag folded into X_u at the mean speed.
-    let a = analyse(&model, &[-0.45, 0.5, -0.8, 0.4], &data, &[], DEFAULT_LAGS).expect("enough");
-    let u = &a.tests.states[0];
-    assert!(!u.white, "{u:?}");
-    assert!(u.inputs.iter().any(|i| !i.independent), "{u:?}");
+    let one = one_step(&model, &THETA, &data, Disturbances::None);
+    let e: Vec<&[f64]> = vec![&one.residuals[0][1..]];
+    let r = leeway_model::correlation::autocorrelation(&leeway_model::correlation::centred(&e), 1);
+    let r1 = r[0].expect("defined");
+    assert!((r1 + 0.5).abs() < 0.06, "lag-1 correlation {r1}");
 }
 
 #[test]
@@ -141,7 +213,7 @@ fn the_normal_quantile_is_the_tabulated_one() {
 
 #[test]
 fn too_many_lags_is_an_error() {
-    let data = [simulated(20, 5, 0.01)];
+    let data = [recorded(20, 5, &THETA, MEASURED)];
     let model = Interpreter::new(ir(MODEL));
     let e = analyse(&model, &THETA, &data, &[], 19).expect_err("19 lags on 19 samples");
     assert!(e.contains("19 residual samples"), "{e}");

@@ -286,7 +286,7 @@ class Estimate:
         )
 
     def __repr__(self) -> str:
-        estimated = int((self.params["status"] == "estimated").sum())
+        estimated = int(self.params["status"].isin(["estimated", "aggregate"]).sum())
         n = sum(e["samples"] for e in self.experiments)
         return (
             f"<leeway.Estimate {self.method} of {self.document.get('model')}: "

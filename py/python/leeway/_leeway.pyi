@@ -162,6 +162,7 @@ def residual_analysis(
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
+    one_step: bool = False,
 ) -> tuple[
     list[
         tuple[

@@ -60,15 +60,20 @@ def table(params: pd.DataFrame, alpha: float = 0.05) -> pd.DataFrame:
     out["lower"] = estimate - z * se
     out["upper"] = estimate + z * se
     out["status"] = params["status"]
-    out["note"] = [
-        "" if not math.isnan(s) else _why(status)
-        for s, status in zip(se, params["status"])
-    ]
+    sums = params["estimates"] if "estimates" in params else [None] * len(params)
+    out["note"] = [_note(s, status, total) for s, status, total in zip(se, params["status"], sums)]
     return out
 
 
+def _note(se: float, status: Any, total: Any) -> str:
+    """Why a row has no inference, or what an aggregate's row estimates."""
+    if status == "aggregate":
+        return f"aggregate: estimates {total}"
+    return "" if not math.isnan(se) else _why(status)
+
+
 def _why(status: Any) -> str:
-    if isinstance(status, str) and status != "estimated":
+    if isinstance(status, str) and status not in ("estimated", "aggregate"):
         return f"no standard error: {status}"
     return "no standard error: the covariance could not be computed"
 

@@ -102,11 +102,18 @@ def compare(
     return fig
 
 
+def _input_band(analysis: ResidualAnalysis, state: str, u: str) -> float:
+    """The per-lag 99 % band of one cross-correlation: the white band times √P."""
+    widened = analysis.input_tests.loc[(state, u), "band"]
+    return analysis.band if widened is None else analysis.band * widened / analysis.input_band
+
+
 def residuals(analysis: ResidualAnalysis) -> Any:
     """The residual analysis of ``leeway.residuals``: one row per state,
-    its autocorrelation at lags 1..M, then its cross-correlation with each
-    input at lags −M..M, each with the 99 % band ±2.576/√N (dashed).
-    Returns the ``Figure``."""
+    its simulation error's autocorrelation at lags 1..M with the 99 % band
+    ±2.576/√N of a white error, then its cross-correlation with each input
+    at lags −M..M with the 99 % band widened by √P for the colour of both
+    series (dashed). Returns the ``Figure``."""
     plt = _pyplot()
     states = list(analysis.tests.index)
     inputs = list(dict.fromkeys(u for _, u in analysis.cross_correlation.columns))
@@ -116,18 +123,18 @@ def residuals(analysis: ResidualAnalysis) -> Any:
     band = analysis.band
     for row, state in zip(axes, states):
         auto = analysis.autocorrelation[state]
-        panels = [(row[0], auto, f"{state}: autocorrelation")]
+        panels = [(row[0], auto, f"{state}: autocorrelation", band)]
         panels += [
-            (ax, analysis.cross_correlation[(state, u)], f"{state} × {u}")
+            (ax, analysis.cross_correlation[(state, u)], f"{state} × {u}", _input_band(analysis, state, u))
             for ax, u in zip(row[1:], inputs)
         ]
-        for ax, series, title in panels:
+        for ax, series, title, band in panels:
             ax.vlines(series.index, 0, series.to_numpy(), color="tab:blue")
             ax.axhline(band, linestyle="--", color="tab:red", label="99 % band")
             ax.axhline(-band, linestyle="--", color="tab:red")
             ax.axhline(0, color="black", linewidth=0.5)
             ax.set_title(title, fontsize="small")
             ax.set_xlabel("lag")
-    fig.suptitle(f"Residual analysis: N={analysis.samples}, 99 % band ±{band:.3f}")
+    fig.suptitle(f"Simulation errors: N={analysis.samples}, 99 % band ±{analysis.band:.3f} for a white error")
     fig.tight_layout()
     return fig
