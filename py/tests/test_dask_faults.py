@@ -385,6 +385,20 @@ def test_dasks_no_worker_errors_are_worker_lost_errors(
     assert elapsed < PASS_TIMEOUT, elapsed
 
 
+def test_the_clients_own_is_used_and_a_closed_one_is_a_worker_lost_error(
+    ship: leeway.Model, versions: dict[str, list[Path]], tmp_path: Path
+) -> None:
+    # Dask's `wait` waits through the default client; a client made with
+    # set_as_default=False is not it ("No clients found" before).
+    files = place(versions["old"], tmp_path / "data")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as c:
+        with Client(c, set_as_default=False) as client:
+            assert estimate_json(ship, files, client) == cli(files)
+        with pytest.raises(leeway.EstimateError) as e:
+            estimate_json(ship, files, client)
+    assert e.value.code == "worker-lost" and "ClosedClientError" in e.value.message, e.value
+
+
 @pytest.mark.parametrize("value", [0, -1.0, float("nan"), "30", True])
 def test_no_workers_timeout_is_a_positive_number_of_seconds(ship: leeway.Model, value: Any) -> None:
     client = Client.__new__(Client)  # never reached: the options are checked first

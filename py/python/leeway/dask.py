@@ -286,10 +286,11 @@ def _lost_types() -> tuple[type[BaseException], ...]:
     from asyncio import CancelledError as AsyncCancelled
     from concurrent.futures import CancelledError
 
+    from distributed.client import ClosedClientError
     from distributed.comm.core import CommClosedError
     from distributed.scheduler import KilledWorker
 
-    return (CommClosedError, KilledWorker, *_TIMEOUTS, OSError, CancelledError, AsyncCancelled)
+    return (CommClosedError, KilledWorker, *_TIMEOUTS, OSError, CancelledError, AsyncCancelled, ClosedClientError)
 
 
 def _no_worker_types() -> tuple[type[BaseException], ...]:
@@ -351,7 +352,10 @@ def _wait(client: Any, futures: list[Any], timeout: float | None, workers: _Work
         if step <= 0:
             raise TimeoutError
         try:
-            wait(futures, timeout=step)  # type: ignore[no-untyped-call]
+            # `wait` waits through the default client: make it this one
+            # (a client made with set_as_default=False is not).
+            with client.as_current():
+                wait(futures, timeout=step)  # type: ignore[no-untyped-call]
             return
         except _TIMEOUTS:
             pass
