@@ -29,6 +29,7 @@ import pandas as pd
 import pytest
 
 distributed = pytest.importorskip("distributed")
+import dask  # noqa: E402
 from distributed import Client, LocalCluster  # noqa: E402
 from distributed.diagnostics.plugin import WorkerPlugin  # noqa: E402
 
@@ -316,6 +317,98 @@ def test_a_pass_that_cannot_finish_is_a_worker_lost_error(
     assert "failed twice" in e.value.message and e.value.hint
     if fault == "stalled":
         assert "timed out" in e.value.message
+
+
+class KillForGood(WorkerPlugin):
+    """Kills its worker when a task whose key starts with `prefix` starts,
+    having told its nanny not to start another: once every worker has
+    started one, the cluster has no worker left, and none comes back."""
+
+    def __init__(self, prefix: str) -> None:
+        self.prefix = prefix
+
+    def setup(self, worker) -> None:  # type: ignore[no-untyped-def]
+        self.worker = worker
+
+    def transition(self, key, start, finish, **kwargs) -> None:  # type: ignore[no-untyped-def]
+        if finish == "executing" and str(key).startswith(self.prefix):
+            self.worker.loop.add_callback(self.die)
+
+    async def die(self) -> None:
+        async with self.worker.rpc(self.worker.nanny) as nanny:
+            await nanny.close_gracefully(reason="test: no worker comes back")
+        os._exit(1)
+
+
+def estimate_without_workers(ship: leeway.Model, files: list[str], **options: Any) -> tuple[leeway.EstimateError, float]:
+    """An estimate on a fresh cluster whose workers all die at their first
+    facts task: its error, and how long it took."""
+    with cluster() as c, Client(c) as client:
+        client.register_plugin(KillForGood("_facts"))
+        start = time.monotonic()
+        with pytest.raises(leeway.EstimateError) as e:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", leeway.LeewayWarning)
+                leeway.dask.estimate(ship, files, client, **options)
+        elapsed = time.monotonic() - start
+        assert client.nthreads() == {}, "a worker is left"
+    return e.value, elapsed
+
+
+def test_a_pass_left_without_workers_is_a_worker_lost_error_under_the_default_options(
+    ship: leeway.Model, versions: dict[str, list[Path]], tmp_path: Path
+) -> None:
+    # Under timeout=3600 s, the pass ends once the scheduler has had no
+    # worker for no_workers_timeout (30 s by default), without a second
+    # attempt: not an hour, nor two.
+    files = place(versions["old"], tmp_path / "data")
+    error, elapsed = estimate_without_workers(ship, files)
+    print(f"no worker left: worker-lost after {elapsed:.1f} s")
+    assert error.code == "worker-lost", error
+    assert "no worker for 30 s" in error.message and "start workers" in (error.hint or "")
+    assert 30.0 <= elapsed < 30.0 + 30.0, elapsed
+
+
+def test_dasks_no_worker_errors_are_worker_lost_errors(
+    ship: leeway.Model, versions: dict[str, list[Path]], tmp_path: Path
+) -> None:
+    # With Dask's own no-workers-timeout, the scheduler fails the waiting
+    # tasks (NoWorkerError, or NoValidWorkerError for a task that was
+    # waiting before the last worker left): leeway's error, not Dask's.
+    # leeway's own wait is off, so that only Dask's can end the pass.
+    files = place(versions["old"], tmp_path / "data")
+    with dask.config.set({"distributed.scheduler.no-workers-timeout": "2s"}):
+        error, elapsed = estimate_without_workers(ship, files, timeout=PASS_TIMEOUT, no_workers_timeout=None)
+    print(f"Dask's no-workers-timeout: after {elapsed:.1f} s: {error}")
+    assert error.code == "worker-lost", error
+    assert "NoWorkerError" in error.message or "NoValidWorkerError" in error.message, error
+    assert elapsed < PASS_TIMEOUT, elapsed
+
+
+def test_the_clients_own_is_used_and_a_closed_one_is_a_worker_lost_error(
+    ship: leeway.Model, versions: dict[str, list[Path]], tmp_path: Path
+) -> None:
+    # Dask's `wait` waits through the default client; a client made with
+    # set_as_default=False is not it ("No clients found" before).
+    files = place(versions["old"], tmp_path / "data")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=":0") as c:
+        with Client(c, set_as_default=False) as client:
+            assert estimate_json(ship, files, client) == cli(files)
+        with pytest.raises(leeway.EstimateError) as e:
+            estimate_json(ship, files, client)
+    assert e.value.code == "worker-lost" and "ClosedClientError" in e.value.message, e.value
+
+
+@pytest.mark.parametrize("value", [0, -1.0, float("nan"), "30", True])
+def test_no_workers_timeout_is_a_positive_number_of_seconds(ship: leeway.Model, value: Any) -> None:
+    client = Client.__new__(Client)  # never reached: the options are checked first
+    for call in (
+        lambda: leeway.dask.estimate(ship, ["run.csv"], client, no_workers_timeout=value),
+        lambda: leeway.dask.study(ship, client, no_workers_timeout=value),
+    ):
+        with pytest.raises(leeway.OptionError) as e:
+            call()
+        assert e.value.code == "invalid-option" and "no_workers_timeout" in str(e.value), e.value
 
 
 @pytest.mark.skipif(not os.environ.get("LEEWAY_DASK_CAMPAIGN"), reason="set LEEWAY_DASK_CAMPAIGN=N for the campaign")

@@ -37,6 +37,7 @@ ends.
 
 from __future__ import annotations
 
+import asyncio
 import hashlib
 import json
 import os
@@ -269,15 +270,96 @@ def _run(
     return _answer(answered)
 
 
+# What a wait that ran out raises: distributed raises asyncio's, which on
+# Python 3.10 is not the builtin TimeoutError.
+_TIMEOUTS: tuple[type[BaseException], ...] = (TimeoutError, asyncio.TimeoutError)
+
+# Seconds a pass waits while the scheduler has no worker at all, unless
+# told otherwise (`no_workers_timeout=`), and how often it asks.
+_NO_WORKERS_TIMEOUT = 30.0
+_POLL = 1.0
+
+
 def _lost_types() -> tuple[type[BaseException], ...]:
-    """What a lost worker, connection or stalled cluster raises in the client."""
+    """What a lost worker, connection or stalled cluster raises in the
+    client: worth one more attempt of the pass."""
     from asyncio import CancelledError as AsyncCancelled
     from concurrent.futures import CancelledError
 
+    from distributed.client import ClosedClientError
     from distributed.comm.core import CommClosedError
     from distributed.scheduler import KilledWorker
 
-    return (CommClosedError, KilledWorker, TimeoutError, OSError, CancelledError, AsyncCancelled)
+    return (CommClosedError, KilledWorker, *_TIMEOUTS, OSError, CancelledError, AsyncCancelled, ClosedClientError)
+
+
+def _no_worker_types() -> tuple[type[BaseException], ...]:
+    """What the scheduler fails a task with when it had no worker to run it
+    on for Dask's ``distributed.scheduler.no-workers-timeout`` (a task that
+    was already waiting when the last worker left gets
+    ``NoValidWorkerError``, as a task whose restrictions no worker meets):
+    another attempt would wait as long again."""
+    from distributed.scheduler import NoValidWorkerError, NoWorkerError
+
+    return (NoWorkerError, NoValidWorkerError)
+
+
+def _no_worker(what: str, why: str, wait: str) -> EstimateError:
+    return EstimateError(
+        f"the {what} pass failed: {why}",
+        code="worker-lost",
+        hint="start workers, or see why they stopped (the workers' logs, client.scheduler_info()), "
+        f"and run it again; {wait} is how long a pass waits with no worker, if workers take longer to start",
+    )
+
+
+class _Workers:
+    """Whether the cluster still has a worker. Dask waits for workers to
+    come for as long as it is asked to, so a pass whose workers all died
+    would wait out its whole ``timeout``, twice: :meth:`check` raises
+    ``worker-lost`` once the scheduler has had no worker for ``grace``
+    seconds (``None``: never)."""
+
+    def __init__(self, client: Any, what: str, grace: float | None) -> None:
+        self.client, self.what, self.grace = client, what, grace
+        self.none_since: float | None = None  # kept across the pass's attempts
+
+    def check(self) -> None:
+        if self.grace is None:
+            return
+        # A scheduler that does not answer raises OSError or TimeoutError:
+        # a lost connection, as while waiting for the pass.
+        if self.client.nthreads(callback_timeout=30):
+            self.none_since = None
+            return
+        now = time.monotonic()
+        if self.none_since is None:
+            self.none_since = now
+        elif now - self.none_since >= self.grace:
+            why = f"the cluster has had no worker for {self.grace:g} s"
+            raise _no_worker(self.what, why, "no_workers_timeout=")
+
+
+def _wait(client: Any, futures: list[Any], timeout: float | None, workers: _Workers) -> None:
+    """Returns when every future is done; raises ``TimeoutError`` after
+    ``timeout`` seconds, and ``worker-lost`` as ``workers`` says, asking
+    the scheduler every second."""
+    from distributed import wait
+
+    deadline = None if timeout is None else time.monotonic() + timeout
+    while True:
+        step = _POLL if deadline is None else min(_POLL, deadline - time.monotonic())
+        if step <= 0:
+            raise TimeoutError
+        try:
+            # `wait` waits through the default client: make it this one
+            # (a client made with set_as_default=False is not).
+            with client.as_current():
+                wait(futures, timeout=step)  # type: ignore[no-untyped-call]
+            return
+        except _TIMEOUTS:
+            pass
+        workers.check()
 
 
 def _mapped(
@@ -285,30 +367,40 @@ def _mapped(
     what: str,
     f: Callable[..., Answer],
     timeout: float | None,
+    no_workers: float | None,
     *args: list[Any],
     keep: list[Any] | None = None,
 ) -> list[Any]:
     """``f`` mapped over ``args`` on the cluster (each task retried twice by
     Dask), waited for at most ``timeout`` seconds; a lost worker or
     connection, or a timeout, costs one more attempt of the whole pass and
-    then ends in ``EstimateError`` (``worker-lost``), never a hang. A task's
-    ``LeewayError`` is raised as it is. ``keep`` receives the futures of the
-    attempt that answered: their results stay on the workers that made them
-    while it holds them."""
-    from distributed import wait
-
-    lost = _lost_types()
+    then ends in ``EstimateError`` (``worker-lost``), never a hang. A
+    cluster with no worker for ``no_workers`` seconds, or a task Dask
+    failed for want of a worker, ends the pass at once in ``worker-lost``.
+    A task's ``LeewayError`` is raised as it is. ``keep`` receives the
+    futures of the attempt that answered: their results stay on the
+    workers that made them while it holds them."""
+    lost, no_worker = _lost_types(), _no_worker_types()
+    workers = _Workers(client, what, no_workers)
     last: BaseException | None = None
     for _ in range(2):
         futures: list[Any] = []
         try:
             futures = client.map(f, *args, pure=False, retries=2)
             start = time.monotonic()
-            wait(futures, timeout=timeout)  # type: ignore[no-untyped-call]
+            _wait(client, futures, timeout, workers)
             left = None if timeout is None else max(1.0, timeout - (time.monotonic() - start))
-            answers = _gather(client, futures, left)
-        except LeewayError:
+            # Every task is done: a gather that waits is one whose results
+            # were lost with their worker, bounded as a wait without one.
+            answers = _gather(client, futures, _sooner(left, no_workers))
+        except LeewayError:  # no worker left: another attempt would find none
+            _cancel(client, futures)
             raise
+        except no_worker as e:
+            _cancel(client, futures)
+            first = str(e).splitlines()[0] if str(e) else ""
+            why = f"Dask found no worker to run it on ({type(e).__name__}: {first})"
+            raise _no_worker(what, why, "Dask's distributed.scheduler.no-workers-timeout") from None
         except lost as e:
             last = e
             _cancel(client, futures)
@@ -319,13 +411,18 @@ def _mapped(
         if keep is not None:
             keep[:] = futures
         return [value for _, value in answers]
-    reason = "timed out" if isinstance(last, TimeoutError) else f"{type(last).__name__}: {last}"
+    reason = "timed out" if isinstance(last, _TIMEOUTS) else f"{type(last).__name__}: {last}"
     raise EstimateError(
         f"the {what} pass failed twice: a worker or the connection to the cluster was lost ({reason})",
         code="worker-lost",
         hint="check the cluster (client.scheduler_info(), the workers' logs) and run the estimate again; "
         "pass timeout= (seconds a pass may take) if passes are legitimately slow",
     )
+
+
+def _sooner(a: float | None, b: float | None) -> float | None:
+    """The shorter of two limits, either of which may be none (``None``)."""
+    return b if a is None else a if b is None else min(a, b)
 
 
 def _gather(client: Any, futures: list[Any], timeout: float | None) -> list[Answer]:
@@ -353,6 +450,19 @@ def _clear(client: Any, token: str) -> None:
         client.sync(client._run, _forget, token, on_error="ignore", callback_timeout=30)
     except Exception:
         pass
+
+
+_NO_WORKERS_HINT = "seconds a pass waits while the cluster has no worker, or None to wait for one"
+
+
+def _seconds(name: str, value: float | None, hint: str) -> float | None:
+    """A positive number of seconds, or ``None``."""
+    if value is None:
+        return None
+    seconds = _number(name, value)
+    if seconds <= 0:
+        raise OptionError(f"{name}={seconds} is not positive", code="invalid-option", hint=hint)
+    return seconds
 
 
 def _client(client: Any) -> Any:
@@ -394,6 +504,7 @@ def estimate(
     client: Any = None,
     *,
     timeout: float | None = 3600.0,
+    no_workers_timeout: float | None = _NO_WORKERS_TIMEOUT,
     **options: Any,
 ) -> Estimate:
     """Estimates like :func:`leeway.estimate` (the same keyword options and
@@ -404,13 +515,15 @@ def estimate(
 
     Each task is retried twice by Dask and a failed pass once more; a pass
     that does not end within ``timeout`` seconds, or fails again, raises
-    ``EstimateError`` (``worker-lost``). A file that changes during the
-    estimate raises ``DataError`` (``data-changed``)."""
+    ``EstimateError`` (``worker-lost``). So does, at once, a pass during
+    which the cluster has had no worker for ``no_workers_timeout`` seconds
+    (30 by default; ``None`` waits for workers to come, up to ``timeout``),
+    or whose tasks Dask failed for want of a worker (``NoWorkerError``,
+    ``NoValidWorkerError``). A file that changes during the estimate raises
+    ``DataError`` (``data-changed``)."""
     client = _client(client)
-    if timeout is not None:
-        timeout = _number("timeout", timeout)
-        if timeout <= 0:
-            raise OptionError(f"timeout={timeout} is not positive", code="invalid-option", hint="seconds a pass may take, or None")
+    timeout = _seconds("timeout", timeout, "seconds a pass may take, or None")
+    no_workers = _seconds("no_workers_timeout", no_workers_timeout, _NO_WORKERS_HINT)
     paths = _paths(experiments)
     if not paths:
         raise DataError(
@@ -430,7 +543,7 @@ def estimate(
     # that worker is lost, Dask opens the file again on another.
     openings: list[Any] = []
     try:
-        opened = _mapped(client, "open", _open, timeout, models, paths, settings, tokens, keep=openings)
+        opened = _mapped(client, "open", _open, timeout, no_workers, models, paths, settings, tokens, keep=openings)
         identities = [identity for _, _, identity in opened]
         offsets = []
         total = 0
@@ -442,7 +555,8 @@ def estimate(
         # arguments: no scatter, whose broadcast can wedge on a lost worker.
         def facts(request: bytes) -> list[bytes]:
             parts = _mapped(
-                client, "facts", _facts, timeout, openings, models, paths, settings, tokens, identities, [request] * n
+                client, "facts", _facts, timeout, no_workers,
+                openings, models, paths, settings, tokens, identities, [request] * n,
             )
             return [b for part in parts for b in part]
 
@@ -452,6 +566,7 @@ def estimate(
                 "moment",
                 _run,
                 timeout,
+                no_workers,
                 openings,
                 models,
                 paths,
@@ -466,7 +581,7 @@ def estimate(
         result = mapreduce.estimate(model, paths, [s for s, _, _ in opened], facts, run, chosen)
         # Every file is still the one the estimate read (a change after its
         # last pass would otherwise go unseen): one light task per file.
-        _mapped(client, "final", _verify, timeout, paths, identities)
+        _mapped(client, "final", _verify, timeout, no_workers, paths, identities)
         return result
     finally:
         openings.clear()
@@ -486,14 +601,18 @@ def study(
     cases: Sequence[str] = ("low", "high"),
     seed: int = 2024,
     paper_iv: bool = False,
+    no_workers_timeout: float | None = _NO_WORKERS_TIMEOUT,
 ) -> dict[str, Any]:
     """The paper's Monte Carlo study (``leeway reproduce``; ``model`` is the
     study's ship, examples/models/ship.som) with its runs spread over the
     workers of ``client``: one task per run and case, each simulating its
     record from its own seed. Returns the study's figures per case and
     estimator and its claims (``cases``, ``claims``), the same as
-    ``reproduce``'s ``results.json`` for the same options."""
+    ``reproduce``'s ``results.json`` for the same options. A cluster left
+    with no worker for ``no_workers_timeout`` seconds raises
+    ``EstimateError`` (``worker-lost``), as in :func:`estimate`."""
     client = _client(client)
+    no_workers = _seconds("no_workers_timeout", no_workers_timeout, _NO_WORKERS_HINT)
     if isinstance(n, (str, bytes)) or not isinstance(n, Sequence):
         raise OptionError(f"n={n!r} is not a list of record lengths", code="invalid-option", hint="n=[1000, 2000]")
     if isinstance(cases, (str, bytes)) or not isinstance(cases, Sequence):
@@ -512,6 +631,7 @@ def study(
         "study",
         _study_run,
         None,  # a study's runs take what they take; a lost worker is retried
+        no_workers,
         [model] * k,
         [config] * k,
         [c for c, _ in tasks],
@@ -561,6 +681,7 @@ def verify_design(
     target: float | str | None = None,
     pilot: int = 100,
     method: str = "iv3",
+    no_workers_timeout: float | None = _NO_WORKERS_TIMEOUT,
 ) -> _design.Design:
     """:func:`leeway.design` with ``verify=runs``, the Monte Carlo trials of
     the verification spread over the workers of ``client`` (one task per
@@ -568,8 +689,11 @@ def verify_design(
     the options, as the driver does, rather than receive it). Returns the
     same ``Design`` as ``leeway.design(model, plan, verify=runs, …)``, its
     verification bit for bit. A design that does not keep every held sign
-    is returned unverified (``verification`` is ``None``), as locally."""
+    is returned unverified (``verification`` is ``None``), as locally. A
+    cluster left with no worker for ``no_workers_timeout`` seconds raises
+    ``EstimateError`` (``worker-lost``), as in :func:`estimate`."""
     client = _client(client)
+    no_workers = _seconds("no_workers_timeout", no_workers_timeout, _NO_WORKERS_HINT)
     options = _design._options(target, seed, pilot, method)
     count = _design._runs("runs", runs, optional=False)
     assert count is not None  # not optional
@@ -582,6 +706,7 @@ def verify_design(
         "verification",
         _design_trial,
         None,  # trials take what they take; a lost worker is retried
+        no_workers,
         [model] * count,
         [plan_text] * count,
         [options] * count,
