@@ -279,10 +279,8 @@ fn execute(args: &ValidateArgs, warnings: &mut Vec<Warning>) -> Result<Outcome, 
         }
     }
     // One refused file does not void the comparison of the others.
-    if kept.is_empty()
-        && let Some(first) = refused.into_iter().next()
-    {
-        return Err(first);
+    if kept.is_empty() && !refused.is_empty() {
+        return Err(refused.swap_remove(0));
     }
     let dist: Vec<Vec<f64>> = held.iter().map(|h| h.values.clone()).collect();
     let (experiments, notes) = load_data(&ir, &args.data, &options)?;

@@ -280,6 +280,9 @@ fn failure(code: &str, message: &str) -> String {
     if names.is_empty() {
         format!("{code}: {}", message.split(": ").next().unwrap_or(message))
     } else {
-        format!("{code}: {} not separately excited", names.join(", "))
+        format!(
+            "{code}: {} not separately excited by these runs (a condition on the data, not the structure)",
+            names.join(", ")
+        )
     }
 }

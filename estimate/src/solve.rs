@@ -369,7 +369,7 @@ impl Estimator<'_> {
                     self.combo_names(cols, combo)
                 ),
                 format!(
-                    "add runs where the {medium}-relative velocity changes sign or the {medium} varies; --verbose: the exact combination"
+                    "a data condition, not a structural one: add runs where the {medium} varies or its relative velocity changes sign"
                 ),
                 detail,
             )

@@ -32,6 +32,10 @@ pub struct CheckReport {
     search_cut: Option<String>,
     /// θ identifiable from one experiment whatever its sign pattern.
     any_single_pattern: bool,
+    /// Conditions on the data, not on the structure, for the verdict to
+    /// hold on a record (a measured medium must vary); `estimate` checks
+    /// them on its data, `design` plans for them.
+    data_conditions: Vec<String>,
     /// `--aggregate` was given.
     aggregate: bool,
     /// The instruments' centring the verdicts assume (`--centring`, or the
@@ -284,6 +288,7 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Ch
         verdict: (!c.has_errors() || c.only_unidentifiable()).then(|| r.verdict()),
         search_cut: r.search_cut.clone(),
         any_single_pattern: r.any_single_pattern,
+        data_conditions: leeway_structure::render::data_conditions(ir),
         aggregate,
         centring: r.centring.map(|c| CentringJson {
             name: c.name(),
@@ -451,6 +456,7 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> CheckReport {
         verdict: None,
         search_cut: None,
         any_single_pattern: false,
+        data_conditions: Vec::new(),
         aggregate,
         centring: None,
         regressors: Vec::new(),

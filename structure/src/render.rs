@@ -375,8 +375,13 @@ fn render_nuisance(o: &mut String, ir: &Ir) {
     let r = &ir.report;
     let _ = writeln!(
         o,
-        "\nNuisance reduction at {}: {} -> {}",
+        "\nNuisance reduction at {}{}: {} -> {}",
         patterns_text(ir, &r.patterns, PredictorKind::Measured),
+        if r.any_single_pattern && r.patterns.len() == 1 {
+            " (one pattern shown; any single one identifies θ)"
+        } else {
+            ""
+        },
         r.nuisance.before,
         r.nuisance.after
     );
@@ -386,6 +391,35 @@ fn render_nuisance(o: &mut String, ir: &Ir) {
     for d in &r.nuisance.dropped {
         let _ = writeln!(o, "  dropped {:<24} {}", d.name, d.reason);
     }
+}
+
+/// What the data must also do for a structurally identifiable θ to be
+/// estimated: conditions on the data, not on the structure, which
+/// `estimate` checks on the data it is given and `design` plans for. One
+/// line per measured medium whose parameters need it to vary.
+pub fn data_conditions(ir: &Ir) -> Vec<String> {
+    ir.disturbances
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.measured)
+        .filter_map(|(i, d)| {
+            let names: Vec<String> = ir
+                .parameters
+                .iter()
+                .filter(|p| p.medium == Some(i))
+                .map(|p| format!("`{}`", p.name))
+                .collect();
+            (!names.is_empty()).then(|| {
+                format!(
+                    "{} ({}, measured): only from data in which the {} varies and moves differently from the other media; in a steady {} their regressors are combinations of the others, and `estimate` holds them with a warning",
+                    names.join(", "),
+                    d.name,
+                    d.name,
+                    d.name
+                )
+            })
+        })
+        .collect()
 }
 
 /// Whether θ is identifiable, and from which experiments.
@@ -417,6 +451,16 @@ fn render_verdict(o: &mut String, ir: &Ir) {
             r.required_patterns.len(),
             patterns_text(ir, &r.required_patterns, PredictorKind::Measured)
         );
+    }
+    let conditions = data_conditions(ir);
+    if r.identifiable && !conditions.is_empty() {
+        let _ = writeln!(
+            o,
+            "  (structurally: from data that excite every regressor; conditions on the data, checked by `estimate` and planned for by `design`:)"
+        );
+        for c in conditions {
+            let _ = writeln!(o, "    - {c}");
+        }
     }
     if let Some(cut) = r.search_cut.as_ref().filter(|_| r.identifiable) {
         let _ = writeln!(

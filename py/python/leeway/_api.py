@@ -138,8 +138,13 @@ class Check:
     parameters: tuple[str, ...]
     outputs: tuple[str, ...]
     required_sign_patterns: tuple[SignPattern, ...]
+    """The smallest set of experiments' sign patterns that identifies θ;
+    with ``any_single_pattern``, one example (any single pattern does)."""
     analysed_sign_patterns: tuple[SignPattern, ...]
     any_single_pattern: bool
+    data_conditions: tuple[str, ...]
+    """Conditions on the data, not the structure (a measured medium must
+    vary): ``estimate`` checks them on its data, ``design`` plans for them."""
     centring: str | None
     """The instruments' centring the verdicts assume (``experiment``,
     ``pooled`` or ``none``); ``None`` when the model has errors."""
@@ -179,6 +184,7 @@ class Check:
             required_sign_patterns=tuple(d["required_sign_patterns"]),
             analysed_sign_patterns=tuple(d["analysed_sign_patterns"]),
             any_single_pattern=d["any_single_pattern"],
+            data_conditions=tuple(d.get("data_conditions", [])),
             centring=(d.get("centring") or {}).get("name"),
             regressors=regressors,
             combinations=combinations,
