@@ -37,11 +37,14 @@ pub struct PlanFile {
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InputLimits {
-    /// `[low, high]`, in the input's units (exactly two numbers).
+    /// `[low, high]` (exactly two numbers), in `unit`.
     #[serde(deserialize_with = "pair")]
     pub range: [f64; 2],
-    /// Largest change per second (optional).
+    /// Largest change per second (optional), in `unit` per second.
     pub rate: Option<f64>,
+    /// The unit of `range` and `rate`: by default the unit the model's
+    /// `data { }` reads the input in (`in deg`), else the model's own.
+    pub unit: Option<String>,
 }
 
 /// One number for every component, or one per component.
@@ -454,9 +457,14 @@ impl PlanFile {
                     )
                     .key(&format!("inputs.{name}.range")));
                 }
+                let (unit, factor, angle) = input_unit(ir, name, l.unit.as_deref())?;
+                let (low, high) = (low * factor, high * factor);
+                if angle && low.abs().max(high.abs()) > std::f64::consts::PI {
+                    return Err(absurd_angle(ir, name, l.range, &unit));
+                }
                 let per_sample = match l.rate {
                     None => f64::INFINITY,
-                    Some(r) if r.is_finite() && r > 0.0 => r * h,
+                    Some(r) if r.is_finite() && r > 0.0 => r * factor * h,
                     Some(r) => {
                         return Err(DesignError::plan(
                             format!("inputs.{name}.rate = {r} is not a rate"),
@@ -474,6 +482,8 @@ impl PlanFile {
             .collect()
     }
 
+    /// Noise per state and for the heading, each in its signal's data unit
+    /// (`noise.r` in deg/s for `r in deg/s`), returned in the model's.
     fn noise(&self, ir: &Ir) -> Result<(Vec<Option<f64>>, Option<f64>), DesignError> {
         let heading = match &ir.rotation {
             Rotation::Planar { heading, .. } => Some(heading.as_str()),
@@ -489,12 +499,13 @@ impl PlanFile {
             }
             non_negative(&format!("noise.{name}"), *value)?;
         }
-        let states = ir
-            .states
-            .iter()
-            .map(|s| self.noise.get(s).copied())
-            .collect();
-        Ok((states, heading.and_then(|h| self.noise.get(h).copied())))
+        let base = |name: &str| {
+            self.noise
+                .get(name)
+                .map(|v| v * leeway_structure::units::factor_of(ir, name))
+        };
+        let states = ir.states.iter().map(|s| base(s)).collect();
+        Ok((states, heading.and_then(base)))
     }
 
     fn budget(&self, assumptions: &mut Vec<String>) -> Result<BudgetRule, DesignError> {
@@ -528,6 +539,57 @@ impl PlanFile {
             }
         }
     }
+}
+
+/// The unit an input's plan values are in, its factor to the model's unit,
+/// and whether the input is an angle. `given` (the plan's `unit`) must be
+/// of the kind the model's `data { }` declares for the input.
+fn input_unit(
+    ir: &Ir,
+    name: &str,
+    given: Option<&str>,
+) -> Result<(String, f64, bool), DesignError> {
+    use leeway_structure::units::{Kind, names_of, unit};
+    let declared = ir.data_units.get(name).and_then(|u| Some((u.clone(), unit(u)?)));
+    let key = format!("inputs.{name}.unit");
+    match (given, declared) {
+        (None, None) => Ok(("the model's unit".into(), 1.0, false)),
+        (None, Some((u, (kind, f)))) => Ok((u, f, kind == Kind::Angle)),
+        (Some(g), None) => Err(DesignError::plan(
+            format!("inputs.{name}.unit = \"{g}\": the model declares no unit for `{name}`"),
+            &format!(
+                "give the range in the model's own unit and leave out `unit`, or declare the log's unit in the model's data {{ }} block (`{name} = \"column\" in {g}`)"
+            ),
+        )
+        .key(&key)),
+        (Some(g), Some((u, (kind, _)))) => match unit(g) {
+            Some((k, f)) if k == kind => Ok((g.to_string(), f, kind == Kind::Angle)),
+            _ => Err(DesignError::plan(
+                format!(
+                    "inputs.{name}.unit = \"{g}\" is not {} (the model reads `{name}` in {u})",
+                    kind.name()
+                ),
+                &format!("give one of {}", names_of(&[kind])),
+            )
+            .key(&key)),
+        },
+    }
+}
+
+/// The error for an angle range beyond ±π rad in the model's unit: most
+/// likely degrees read as radians.
+fn absurd_angle(ir: &Ir, name: &str, range: [f64; 2], unit: &str) -> DesignError {
+    let declared = ir.data_units.get(name).map_or("rad", String::as_str);
+    DesignError::plan(
+        format!(
+            "inputs.{name}.range = [{}, {}] {unit} is beyond ±180° for the angle `{name}`",
+            range[0], range[1]
+        ),
+        &format!(
+            "plan values are in the unit the model's data {{ }} reads `{name}` in ({declared}): give degrees with `unit = \"deg\"`, radians with `unit = \"rad\"`"
+        ),
+    )
+    .key(&format!("inputs.{name}.range"))
 }
 
 /// Per-component statistics of every medium.

@@ -136,13 +136,17 @@ impl FamilyScore {
     }
 }
 
-/// One input of a run.
+/// One input of a run, in the unit the model's data use for it (the run
+/// files' unit).
 #[derive(Clone, Debug, Serialize)]
 pub struct InputPlan {
     /// The static offset.
     pub offset: f64,
     /// The excitation's amplitude about it.
     pub amplitude: f64,
+    /// The unit of both: the model's `data { }` unit for the input, or
+    /// null for the model's own.
+    pub unit: Option<String>,
 }
 
 /// A held argument in a run.
@@ -444,9 +448,13 @@ fn planned_run(
         .map(|(i, name)| {
             (
                 name.clone(),
-                InputPlan {
-                    offset: ex.offsets[i],
-                    amplitude: ex.amplitudes[i],
+                {
+                    let factor = leeway_structure::units::factor_of(ir, name);
+                    InputPlan {
+                        offset: ex.offsets[i] / factor,
+                        amplitude: ex.amplitudes[i] / factor,
+                        unit: ir.data_units.get(name).cloned(),
+                    }
                 },
             )
         })

@@ -70,7 +70,10 @@ fn experiment(
         .filter_map(|i| {
             run.inputs
                 .get(i)
-                .map(|p| format!("{i} = {} ± {}", num(p.offset), num(p.amplitude)))
+                .map(|p| {
+                    let unit = p.unit.as_ref().map_or(String::new(), |u| format!(" {u}"));
+                    format!("{i} = {} ± {}{unit}", num(p.offset), num(p.amplitude))
+                })
         })
         .collect();
     let _ = writeln!(

@@ -5,4 +5,5 @@ mod bounds;
 mod common;
 mod examples;
 mod rov;
+mod units;
 mod verification;

@@ -119,7 +119,9 @@ class Design:
     """A trial design, as ``leeway design --json`` reports it.
 
     ``experiments``: per run, its sign ``pattern``, per input the
-    ``offset`` and excitation ``amplitude``, the ``steady`` state, the
+    ``offset`` and excitation ``amplitude`` in its ``unit`` (the model's
+    ``data { }`` unit, as in the run files; None: the model's own), the
+    ``steady`` state, the
     ``held`` arguments with their margins (the dicts of ``leeway design
     --json``). ``prediction``: per parameter the ``nominal`` value, the
     predicted ``std_error`` at the budget's run length, ``relative`` to the
