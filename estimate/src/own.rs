@@ -18,6 +18,7 @@ use crate::free_run::FreeRunSums;
 use crate::method::Method;
 use crate::outcome::{EstimateError, OwnSimulation, StateFit, err};
 use crate::protocol::{Pass, PassRequest, Summary};
+use leeway_model::warning::Warning;
 
 impl Estimator<'_> {
     /// Simulates the reported θ on every experiment (one pass) and fits it.
@@ -88,8 +89,9 @@ impl Estimator<'_> {
         })
     }
 
-    /// What an estimate whose own simulation fails is reported with: a
-    /// warning naming the likely causes (an error under `strict`).
+    /// What an estimate whose own simulation fails — it diverges, or some
+    /// state fits worse than its mean — is reported with: a warning naming
+    /// the likely causes (an error under `strict`).
     pub(super) fn own_simulation_problem(
         &self,
         own: &OwnSimulation,
@@ -101,12 +103,21 @@ impl Estimator<'_> {
                 leeway_structure::grammar::and_list(own.diverged.iter().map(|e| format!("`{e}`")))
             )
         } else {
-            match own.mean_fit {
-                Some(fit) if fit < 0.0 => format!(
-                    "fits the data worse than their mean (mean fit of the states {fit:.1} %)"
-                ),
-                _ => return None,
+            // Per state: one state worse than its mean is a model that does
+            // not simulate the craft, whatever the others' fits.
+            let worse: Vec<String> = own
+                .fits
+                .iter()
+                .filter_map(|f| f.fit.filter(|fit| *fit < 0.0).map(|fit| format!("{} {fit:.1} %", f.state)))
+                .collect();
+            if worse.is_empty() {
+                return None;
             }
+            format!(
+                "fits the data worse than their mean in {} (mean fit of the states {})",
+                worse.join(", "),
+                own.mean_fit.map_or("undefined".to_string(), |m| format!("{m:.1} %"))
+            )
         };
         let mut causes = vec![
             "the input depends on the measurements (a closed loop such as an autopilot or dynamic positioning: the estimators assume open loop, paper A1)".to_string(),
@@ -132,4 +143,37 @@ impl Estimator<'_> {
             "compare with --method ls, record open-loop experiments (or those parts of the log), and validate on held-out data before using this model",
         ))
     }
+
+    /// A warning for the states the estimate simulates poorly on its own
+    /// data (a fit within `[0, POOR_OWN_FIT)` %): not a failure — a state
+    /// that barely varies fits poorly for a good model too — but never
+    /// silent, since the mean over states can hide one.
+    pub(super) fn poor_own_fit(&self, own: &OwnSimulation) -> Option<Warning> {
+        let poor: Vec<String> = own
+            .fits
+            .iter()
+            .filter_map(|f| {
+                f.fit
+                    .filter(|fit| (0.0..POOR_OWN_FIT).contains(fit))
+                    .map(|fit| format!("`{}` {fit:.0} %", f.state))
+            })
+            .collect();
+        (own.diverged.is_empty() && !poor.is_empty()).then(|| {
+            Warning::new(
+                "poor-own-fit",
+                format!(
+                    "the estimate simulates its own data poorly in {} (below {POOR_OWN_FIT:.0} %)",
+                    poor.join(", ")
+                ),
+                "excite those states more, look for a missing term, and validate on held-out data",
+                format!(
+                    "the estimate's free run on the data it was estimated from fits {} (per state, normalised fit; below {POOR_OWN_FIT:.0} % a model barely simulates the state, unless the state barely varies in the record)",
+                    poor.join(", ")
+                ),
+            )
+        })
+    }
 }
+
+/// The own-data fit (%) below which a state is said to be simulated poorly.
+pub const POOR_OWN_FIT: f64 = 50.0;

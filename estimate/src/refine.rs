@@ -421,6 +421,8 @@ impl Estimator<'_> {
                 .biasing(),
             );
             converged = false;
+        } else if let Some(w) = own.as_ref().and_then(|o| self.poor_own_fit(o)) {
+            self.warnings.push(w);
         }
         let mut estimate = self.finish(
             sign_patterns,
