@@ -550,7 +550,10 @@ fn input_unit(
     given: Option<&str>,
 ) -> Result<(String, f64, bool), DesignError> {
     use leeway_structure::units::{Kind, names_of, unit};
-    let declared = ir.data_units.get(name).and_then(|u| Some((u.clone(), unit(u)?)));
+    let declared = ir
+        .data_units
+        .get(name)
+        .and_then(|u| Some((u.clone(), unit(u)?)));
     let key = format!("inputs.{name}.unit");
     match (given, declared) {
         (None, None) => Ok(("the model's unit".into(), 1.0, false)),

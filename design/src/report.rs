@@ -446,17 +446,14 @@ fn planned_run(
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            (
-                name.clone(),
-                {
-                    let factor = leeway_structure::units::factor_of(ir, name);
-                    InputPlan {
-                        offset: ex.offsets[i] / factor,
-                        amplitude: ex.amplitudes[i] / factor,
-                        unit: ir.data_units.get(name).cloned(),
-                    }
-                },
-            )
+            (name.clone(), {
+                let factor = leeway_structure::units::factor_of(ir, name);
+                InputPlan {
+                    offset: ex.offsets[i] / factor,
+                    amplitude: ex.amplitudes[i] / factor,
+                    unit: ir.data_units.get(name).cloned(),
+                }
+            })
         })
         .collect();
     let steady = ir

@@ -105,18 +105,15 @@ impl Estimator<'_> {
         } else {
             // Per state: one state worse than its mean is a model that does
             // not simulate the craft, whatever the others' fits.
-            let worse: Vec<String> = own
-                .fits
-                .iter()
-                .filter_map(|f| f.fit.filter(|fit| *fit < 0.0).map(|fit| format!("{} {fit:.1} %", f.state)))
-                .collect();
+            let worse = worse_than_mean(own);
             if worse.is_empty() {
                 return None;
             }
             format!(
                 "fits the data worse than their mean in {} (mean fit of the states {})",
                 worse.join(", "),
-                own.mean_fit.map_or("undefined".to_string(), |m| format!("{m:.1} %"))
+                own.mean_fit
+                    .map_or("undefined".to_string(), |m| format!("{m:.1} %"))
             )
         };
         let mut causes = vec![
@@ -172,6 +169,45 @@ impl Estimator<'_> {
                 ),
             )
         })
+    }
+}
+
+/// The states the own simulation fits below 0 % (worse than their mean),
+/// each with its fit: `["u -3.2 %"]`.
+fn worse_than_mean(own: &OwnSimulation) -> Vec<String> {
+    own.fits
+        .iter()
+        .filter_map(|f| {
+            f.fit
+                .filter(|fit| *fit < 0.0)
+                .map(|fit| format!("{} {fit:.1} %", f.state))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_state_worse_than_its_mean_is_named_whatever_the_mean() {
+        // The survey boat's case: a mean of 34 % hid a state below zero.
+        let fit = |state: &str, fit: f64| StateFit {
+            state: state.into(),
+            fit: Some(fit),
+        };
+        let own = OwnSimulation {
+            fits: vec![fit("u", -4.6), fit("v", 40.0), fit("r", 66.0)],
+            mean_fit: Some(33.8),
+            diverged: Vec::new(),
+        };
+        assert_eq!(worse_than_mean(&own), vec!["u -4.6 %".to_string()]);
+        let good = OwnSimulation {
+            fits: vec![fit("u", 4.6), fit("v", 40.0)],
+            mean_fit: Some(22.3),
+            diverged: Vec::new(),
+        };
+        assert!(worse_than_mean(&good).is_empty());
     }
 }
 

@@ -68,12 +68,10 @@ fn experiment(
         .inputs
         .iter()
         .filter_map(|i| {
-            run.inputs
-                .get(i)
-                .map(|p| {
-                    let unit = p.unit.as_ref().map_or(String::new(), |u| format!(" {u}"));
-                    format!("{i} = {} ± {}{unit}", num(p.offset), num(p.amplitude))
-                })
+            run.inputs.get(i).map(|p| {
+                let unit = p.unit.as_ref().map_or(String::new(), |u| format!(" {u}"));
+                format!("{i} = {} ± {}{unit}", num(p.offset), num(p.amplitude))
+            })
         })
         .collect();
     let _ = writeln!(

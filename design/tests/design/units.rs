@@ -64,16 +64,23 @@ fn a_plan_in_degrees_and_the_same_plan_in_radians_give_the_same_runs() {
     }
     let delta = &deg.experiments[0].inputs["delta"];
     assert_eq!(delta.unit.as_deref(), Some("deg"));
-    assert!(delta.offset.abs() + delta.amplitude <= 35.0 + 1e-9, "{delta:?}");
+    assert!(
+        delta.offset.abs() + delta.amplitude <= 35.0 + 1e-9,
+        "{delta:?}"
+    );
 }
 
 #[test]
 fn an_angle_beyond_half_a_turn_names_the_likely_slip() {
-    let e = planned("range = [-35, 35]\nunit = \"rad\"").map(|_| ()).expect_err("±35 rad");
+    let e = planned("range = [-35, 35]\nunit = \"rad\"")
+        .map(|_| ())
+        .expect_err("±35 rad");
     assert_eq!(e.key.as_deref(), Some("inputs.delta.range"), "{e:?}");
     assert_eq!((e.line, e.column), (Some(4), Some(9)), "{e:?}");
     assert!(e.message.contains("beyond ±180°"), "{e:?}");
     assert!(e.hint.contains("unit = \"deg\""), "{e:?}");
-    let e = planned("range = [-35, 35]\nunit = \"m/s\"").map(|_| ()).expect_err("a speed");
+    let e = planned("range = [-35, 35]\nunit = \"m/s\"")
+        .map(|_| ())
+        .expect_err("a speed");
     assert!(e.message.contains("is not an angle"), "{e:?}");
 }
