@@ -103,18 +103,12 @@ impl Estimator<'_> {
                 leeway_structure::grammar::and_list(own.diverged.iter().map(|e| format!("`{e}`")))
             )
         } else {
-            // Per state: one state worse than its mean is a model that does
-            // not simulate the craft, whatever the others' fits.
-            let worse = worse_than_mean(own);
-            if worse.is_empty() {
-                return None;
+            match own.mean_fit {
+                Some(fit) if fit < 0.0 => format!(
+                    "fits the data worse than their mean (mean fit of the states {fit:.1} %)"
+                ),
+                _ => return None,
             }
-            format!(
-                "fits the data worse than their mean in {} (mean fit of the states {})",
-                worse.join(", "),
-                own.mean_fit
-                    .map_or("undefined".to_string(), |m| format!("{m:.1} %"))
-            )
         };
         let mut causes = vec![
             "the input depends on the measurements (a closed loop such as an autopilot or dynamic positioning: the estimators assume open loop, paper A1)".to_string(),
@@ -142,29 +136,36 @@ impl Estimator<'_> {
     }
 
     /// A warning for the states the estimate simulates poorly on its own
-    /// data (a fit within `[0, POOR_OWN_FIT)` %): not a failure — a state
-    /// that barely varies fits poorly for a good model too — but never
-    /// silent, since the mean over states can hide one.
+    /// data (a fit below `POOR_OWN_FIT` %; below 0, worse than the
+    /// state's mean): per state, since the mean over states can hide one.
+    /// Not a failure of the estimate (that is the mean's, above): a state
+    /// that barely varies fits poorly for a good model too.
     pub(super) fn poor_own_fit(&self, own: &OwnSimulation) -> Option<Warning> {
         let poor: Vec<String> = own
             .fits
             .iter()
             .filter_map(|f| {
                 f.fit
-                    .filter(|fit| (0.0..POOR_OWN_FIT).contains(fit))
+                    .filter(|fit| *fit < POOR_OWN_FIT)
                     .map(|fit| format!("`{}` {fit:.0} %", f.state))
             })
             .collect();
+        let worse = worse_than_mean(own);
+        let below_mean = if worse.is_empty() {
+            ""
+        } else {
+            "; below 0 %: worse than the state's mean"
+        };
         (own.diverged.is_empty() && !poor.is_empty()).then(|| {
             Warning::new(
                 "poor-own-fit",
                 format!(
-                    "the estimate simulates its own data poorly in {} (below {POOR_OWN_FIT:.0} %)",
+                    "the estimate simulates its own data poorly in {} (below {POOR_OWN_FIT:.0} %{below_mean})",
                     poor.join(", ")
                 ),
                 "excite those states more, look for a missing term, and validate on held-out data",
                 format!(
-                    "the estimate's free run on the data it was estimated from fits {} (per state, normalised fit; below {POOR_OWN_FIT:.0} % a model barely simulates the state, unless the state barely varies in the record)",
+                    "the estimate's free run on the data it was estimated from fits {} (per state, normalised fit; below {POOR_OWN_FIT:.0} % a model barely simulates the state, unless the state barely varies in the record{below_mean})",
                     poor.join(", ")
                 ),
             )
