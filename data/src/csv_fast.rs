@@ -14,7 +14,7 @@
 //! lines end in lone CRs, whose header row the fast path would not take,
 //! or that are not regular files are read by [`Records`] from the start.
 
-use crate::csv::{Records, Resume, cell, header_place};
+use crate::csv::{MAX_LINE_BYTES, Records, Resume, cell, header_place};
 use crate::csv_chunk::{Chunk, Selection, field, parse_chunk, plain_line};
 use crate::error::DataError;
 use crate::notes::LoadedFile;
@@ -58,7 +58,8 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
 /// batch) and threads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Batching {
-    /// Bytes per chunk (a line longer than a batch is still read whole).
+    /// Bytes per chunk (a line longer than a batch is still read whole, up
+    /// to [`MAX_LINE_BYTES`]).
     pub chunk: usize,
     /// Threads (chunks per batch), at least 1.
     pub threads: usize,
@@ -152,8 +153,11 @@ impl CsvFile {
         let eof = head.len() < want;
         let header = header_end(&head, eof).filter(|_| regular);
         let Some(header_end) = header else {
-            // The exact reader from the start.
-            input.seek(SeekFrom::Start(0)).map_err(read_error)?;
+            // The exact reader from the start (a pipe cannot seek, and
+            // nothing of it was read).
+            if regular {
+                input.seek(SeekFrom::Start(0)).map_err(read_error)?;
+            }
             let records = Records::new(&file, BufReader::with_capacity(FIRST_BUFFER, input), what)?;
             return Ok(CsvFile {
                 headers: records.headers().to_vec(),
@@ -260,7 +264,8 @@ impl Fast {
         self.text.clear();
         self.text.reserve_exact(self.carry.len() + want);
         self.text.append(&mut self.carry);
-        // Whole lines: read on until a line end (or the file's end).
+        // Whole lines: read on until a line end (or the file's end), or
+        // past a line the exact reader refuses (the chunk stops there).
         loop {
             if !self.eof {
                 // Exactly: `read_to_end` would double the buffer.
@@ -277,7 +282,7 @@ impl Fast {
                     self.text.truncate(last + 1);
                     break;
                 }
-                None if !self.eof => {}
+                None if !self.eof && self.text.len() <= MAX_LINE_BYTES => {}
                 _ => break,
             }
         }
