@@ -6,4 +6,5 @@ mod bag_fuzz;
 mod bag_python;
 mod bag_round_trip;
 mod bag_schema;
+mod bounded_reads;
 mod common;
