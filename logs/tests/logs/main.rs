@@ -8,3 +8,4 @@ mod bag_round_trip;
 mod bag_schema;
 mod bounded_reads;
 mod common;
+mod manifest_fuzz;
