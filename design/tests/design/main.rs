@@ -4,5 +4,6 @@
 mod bounds;
 mod common;
 mod examples;
+mod plan_fuzz;
 mod rov;
 mod verification;
