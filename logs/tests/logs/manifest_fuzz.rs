@@ -988,7 +988,7 @@ fn mutated_manifests_load_as_they_say_or_are_refused_where_never_a_panic() {
     let cases: usize = std::env::var("LEEWAY_FUZZ_MANIFEST")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(400);
+        .unwrap_or(1000);
     let started = std::time::Instant::now();
     let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
     let sources = write_sources(dir.path());
