@@ -71,6 +71,8 @@ struct KeepFile {
 enum TimeValue {
     Seconds(f64),
     Text(String),
+    /// A TOML date-time, written without quotes: read as its text.
+    Stamp(toml::value::Datetime),
 }
 
 #[derive(serde::Deserialize)]
@@ -423,23 +425,27 @@ fn keep_spec(
     let raw = k.get_ref();
     let time = |v: &Option<Spanned<TimeValue>>| -> Result<Option<TimeRef>, DataError> {
         let Some(v) = v else { return Ok(None) };
-        match v.get_ref() {
-            TimeValue::Seconds(s) if s.is_finite() => Ok(Some(TimeRef::FromStart(*s))),
-            TimeValue::Seconds(s) => Err(DataError::new(
-                at(&v.span()),
-                format!("a window's time must be finite, not {s}"),
-                SEE_DOCS,
-            )),
-            TimeValue::Text(t) => crate::stamps::iso_nanos(t)
-                .map(|ns| Some(TimeRef::At(ns)))
-                .map_err(|why| {
-                    DataError::new(
-                        at(&v.span()),
-                        why,
-                        "a window's time is seconds from the log's first stamp (a number), or ISO-8601 text with a UTC offset",
-                    )
-                }),
-        }
+        let text = match v.get_ref() {
+            TimeValue::Seconds(s) if s.is_finite() => return Ok(Some(TimeRef::FromStart(*s))),
+            TimeValue::Seconds(s) => {
+                return Err(DataError::new(
+                    at(&v.span()),
+                    format!("a window's time must be finite, not {s}"),
+                    SEE_DOCS,
+                ));
+            }
+            TimeValue::Text(t) => t.clone(),
+            TimeValue::Stamp(d) => d.to_string(),
+        };
+        crate::stamps::iso_nanos(&text)
+            .map(|ns| Some(TimeRef::At(ns)))
+            .map_err(|why| {
+                DataError::new(
+                    at(&v.span()),
+                    why,
+                    "a window's time is seconds from the log's first stamp (a number), or ISO-8601 text with a UTC offset",
+                )
+            })
     };
     let (from, to) = (time(&raw.from)?, time(&raw.to)?);
     if let (Some(TimeRef::FromStart(a)), Some(TimeRef::FromStart(b))) = (from, to)
@@ -740,6 +746,27 @@ mod tests {
     }
 
     #[test]
+    fn a_window_may_be_a_toml_date_time_or_text_of_the_same_instant() {
+        let window = |from: &str| {
+            parsed(&format!(
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = {from}\n"
+            ))
+            .map(|m| m.keep[0].from)
+            .unwrap_or_else(|e| panic!("{from}: {e}"))
+        };
+        let at = Some(TimeRef::At(1_700_000_016_500_000_000));
+        for from in [
+            "2023-11-14T22:13:36.5Z",
+            "\"2023-11-14T22:13:36.5Z\"",
+            "2023-11-14T23:13:36.5+01:00",
+            "\"2023-11-14T21:13:36.5-01:00\"",
+            "2023-11-14 22:13:36.5z",
+        ] {
+            assert_eq!(window(from), at, "{from}");
+        }
+    }
+
+    #[test]
     fn every_mistake_is_located() {
         let cases = [
             (
@@ -798,6 +825,11 @@ mod tests {
                 "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = \"10:00\"\n",
                 "m.toml:6:8",
                 "ISO",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = 2023-11-14T22:13:36\n",
+                "m.toml:6:8",
+                "no UTC offset",
             ),
         ];
         for (text, at, says) in cases {
