@@ -173,6 +173,8 @@ enum V {
     Table(Vec<(String, V)>),
     /// A number in arrays this deep, written as text (no recursion here).
     Deep(usize),
+    /// Written as it is: a TOML date-time.
+    Raw(String),
 }
 
 impl V {
@@ -483,14 +485,15 @@ fn neutral(tree: &mut V, rng: &mut Seeded) {
                 *tree = V::Float(*i as f64);
             }
         }
-        V::Str(_) | V::Bool(_) | V::Deep(_) => {}
+        V::Str(_) | V::Bool(_) | V::Deep(_) | V::Raw(_) => {}
     }
 }
 
-/// Defaults said out loud: the experiment's name (the manifest's stem),
-/// a one-column clock's `time_unit = "s"` where it reads seconds or ISO
-/// text, a signal in full (`{ from = ... }`), its interpolation as the role
-/// has it (an input held, a state or heading linear).
+/// Defaults said out loud and instants spelled otherwise: the experiment's
+/// name (the manifest's stem), a one-column clock's `time_unit = "s"`
+/// where it reads ISO text, a window's stamp at another offset or as a
+/// TOML date-time, a signal in full (`{ from = ... }`), its interpolation
+/// as the role has it (an input held, a state or heading linear).
 fn defaults(tree: &mut V, rng: &mut Seeded) {
     if tree.get("experiment").is_none()
         && rng.one_in(2)
@@ -513,6 +516,22 @@ fn defaults(tree: &mut V, rng: &mut Seeded) {
                 if iso {
                     fields.push(("time_unit".into(), V::Str("s".into())));
                 }
+            }
+        }
+    }
+    // A window's stamp as the same instant at another offset, or as a
+    // TOML date-time.
+    if let Some(V::Array(windows)) = tree.get("keep") {
+        for window in windows {
+            if let Some(from) = window.get("from")
+                && *from == V::Str("2023-11-14T22:13:36Z".into())
+            {
+                *from = match rng.range(0, 4) {
+                    0 => V::Str("2023-11-14T23:43:36+01:30".into()),
+                    1 => V::Raw("2023-11-14T22:13:36Z".into()),
+                    2 => V::Raw("2023-11-14 21:13:36.000-01:00".into()),
+                    _ => from.clone(),
+                };
             }
         }
     }
@@ -637,6 +656,7 @@ impl Writer<'_> {
             V::Str(s) => self.string(s),
             V::Bool(b) => b.to_string(),
             V::Deep(depth) => format!("{}1{}", "[".repeat(*depth), "]".repeat(*depth)),
+            V::Raw(text) => text.clone(),
             V::Array(items) => {
                 let parts: Vec<String> = items.iter().map(|v| self.value(v)).collect();
                 let comma = if !items.is_empty() && self.rng.one_in(4) {
