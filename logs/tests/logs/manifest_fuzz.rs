@@ -575,7 +575,8 @@ impl Writer<'_> {
         }
     }
     fn space(&mut self) -> &'static str {
-        *self.rng.pick(&["", " ", "  ", "\t"])
+        const SPACES: [&str; 4] = ["", " ", "  ", "\t"];
+        SPACES[self.rng.range(0, SPACES.len())]
     }
     fn key(&mut self, k: &str) -> String {
         let bare = !k.is_empty()
@@ -857,6 +858,9 @@ enum Kind {
 /// What the cases found.
 #[derive(Debug, Default)]
 struct Outcomes {
+    /// Cases of each kind: the same manifest said differently, changed,
+    /// damaged bytes, a damaged source.
+    kinds: [usize; 4],
     loaded: usize,
     refused: usize,
     panics: usize,
@@ -1036,6 +1040,7 @@ fn mutated_manifests_load_as_they_say_or_are_refused_where_never_a_panic() {
             5 | 6 => Kind::Damaged,
             _ => Kind::Source,
         };
+        outcomes.kinds[kind as usize] += 1;
         let mut damaged = None;
         let bytes = match kind {
             Kind::Same => {
