@@ -266,23 +266,35 @@ impl Fast {
         self.text.append(&mut self.carry);
         // Whole lines: read on until a line end (or the file's end), or
         // past a line the exact reader refuses (the chunk stops there).
+        // Only the bytes just read are searched: a line longer than a batch
+        // costs its length, not its length squared.
+        let mut searched = 0;
         loop {
             if !self.eof {
-                // Exactly: `read_to_end` would double the buffer.
-                self.text.reserve_exact(want);
+                // Exactly, for a batch: `read_to_end` would double the
+                // buffer. A line longer than a batch grows it as a vector
+                // grows (in as many reads as it has batches).
+                if searched == 0 {
+                    self.text.reserve_exact(want);
+                } else {
+                    self.text.reserve(want);
+                }
                 let n = (&mut self.input)
                     .take(want as u64)
                     .read_to_end(&mut self.text)
                     .map_err(|e| io_failure(&self.file, &self.what, &e))?;
                 self.eof = n < want;
             }
-            match self.text.iter().rposition(|b| *b == b'\n') {
+            let last = memchr::memrchr(b'\n', &self.text[searched..]).map(|k| searched + k);
+            match last {
                 Some(last) if !self.eof => {
                     self.carry.extend_from_slice(&self.text[last + 1..]);
                     self.text.truncate(last + 1);
                     break;
                 }
-                None if !self.eof && self.text.len() <= MAX_LINE_BYTES => {}
+                None if !self.eof && self.text.len() <= MAX_LINE_BYTES => {
+                    searched = self.text.len();
+                }
                 _ => break,
             }
         }
