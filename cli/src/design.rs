@@ -27,7 +27,7 @@ use leeway_design::compare::compare;
 use leeway_design::design::{DesignOptions, design};
 use leeway_design::document::json_with;
 use leeway_design::error::DesignError;
-use leeway_design::plan::{locate, parse};
+use leeway_design::plan::{MAX_PLAN_BYTES, locate, parse};
 use leeway_design::report::Design;
 use leeway_design::trial::Run;
 use leeway_design::verify::{Verification, verify};
@@ -56,7 +56,7 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
     let loaded = load(&args.model, false)?;
     let model = Interpreter::new(loaded.ir);
     let plan_name = args.plan.display().to_string();
-    let text = read_text(&args.plan, "plan")?;
+    let text = read_text(&args.plan, "plan", MAX_PLAN_BYTES)?;
     let json = args
         .plan
         .extension()

@@ -6,17 +6,48 @@ use leeway_structure::grammar;
 use leeway_structure::grammar::source::Refused;
 use std::path::Path;
 
-/// Reads a text file; a problem names the path and what went wrong.
-pub fn read_text(path: &Path, what: &str) -> Result<String, Problem> {
+/// The most bytes of a parameter file (`--params`, `--nominal`): 64 MiB,
+/// room for an estimate's document with its covariance, far below memory.
+pub const MAX_PARAMS_BYTES: u64 = 64 << 20;
+
+/// Reads a text file of at most `limit` bytes; a problem names the path
+/// and what went wrong. A larger regular file is refused by its size before
+/// it is read, and at most `limit + 1` bytes are read from anything else (a
+/// pipe, a device: `/dev/zero` costs `limit`, not all memory).
+pub fn read_text(path: &Path, what: &str, limit: u64) -> Result<String, Problem> {
+    use std::io::Read;
     let file = path.display().to_string();
-    std::fs::read_to_string(path).map_err(|e| {
-        let reason = match e.kind() {
-            std::io::ErrorKind::NotFound => "no such file".to_string(),
-            std::io::ErrorKind::InvalidData => "it is not UTF-8 text".to_string(),
-            _ => e.to_string(),
-        };
+    let refused = |reason: String| {
         Problem::error("io", format!("cannot read {what} `{file}`: {reason}")).at(&file)
-    })
+    };
+    let io = |e: std::io::Error| {
+        refused(match e.kind() {
+            std::io::ErrorKind::NotFound => "no such file".to_string(),
+            std::io::ErrorKind::IsADirectory => "it is a directory".to_string(),
+            _ => e.to_string(),
+        })
+    };
+    let larger =
+        |size: String| refused(format!("it is larger than {} ({size})", bytes_text(limit)));
+    let handle = std::fs::File::open(path).map_err(io)?;
+    let size = handle.metadata().map_err(io)?.len();
+    if size > limit {
+        return Err(larger(format!("{size} bytes")));
+    }
+    let mut bytes = Vec::new();
+    handle.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(larger("it goes on past that".to_string()));
+    }
+    String::from_utf8(bytes).map_err(|_| refused("it is not UTF-8 text".to_string()))
+}
+
+/// A limit in words: `1 MiB`, `64 MiB`.
+fn bytes_text(limit: u64) -> String {
+    match limit {
+        l if l % (1 << 20) == 0 => format!("{} MiB", l >> 20),
+        l => format!("{l} bytes"),
+    }
 }
 
 /// Reads a model file: its size is checked before reading (a file over

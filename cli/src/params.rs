@@ -4,7 +4,7 @@
 //! and every name must be a model parameter: nothing is silently ignored or
 //! filled in. Problems are located at `file:line:column` of the offending key.
 
-use crate::files::read_text;
+use crate::files::{MAX_PARAMS_BYTES, read_text};
 use crate::problem::{Failure, Problem};
 use leeway_model::given::{
     disturbance_slots, estimated_unmeasured, given_value_ok, parameter_names,
@@ -33,7 +33,7 @@ pub struct ParameterFile {
 /// θ and the disturbance means read from `path` (given with `flag`).
 pub fn read_file(path: &Path, ir: &Ir, flag: &str) -> Result<ParameterFile, Failure> {
     let file = path.display().to_string();
-    let text = read_text(path, &format!("the {flag} file"))?;
+    let text = read_text(path, &format!("the {flag} file"), MAX_PARAMS_BYTES)?;
     parse(&file, &text, ir, flag).map_err(Failure::Problems)
 }
 
@@ -45,7 +45,7 @@ pub fn parse(file: &str, text: &str, ir: &Ir, flag: &str) -> Result<ParameterFil
     let invalid = |e: serde_json::Error| {
         vec![
             Problem::error("invalid-params", format!("not valid JSON: {e}"))
-                .at(format!("{file}:{}:{}", e.line(), e.column()))
+                .at(json_place(file, text, &e))
                 .help(&help),
         ]
     };
@@ -303,6 +303,19 @@ fn key_offset(text: &str, from: usize, key: &str, object: bool) -> Option<usize>
     None
 }
 
+/// `file:line:column` of a JSON error as an editor shows it: serde_json's
+/// column 0 (a line end read, as in a string broken by one) is the
+/// previous line's end, where the line end is.
+fn json_place(file: &str, text: &str, e: &serde_json::Error) -> String {
+    match (e.line(), e.column()) {
+        (line @ 2.., 0) => {
+            let previous = text.split('\n').nth(line - 2).unwrap_or("");
+            format!("{file}:{}:{}", line - 1, previous.chars().count() + 1)
+        }
+        (line, column) => format!("{file}:{}:{}", line.max(1), column.max(1)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -365,6 +378,27 @@ mod tests {
             "{}",
             problems[0].message
         );
+    }
+
+    #[test]
+    fn a_string_broken_by_a_line_end_is_located_at_that_line_end() {
+        let problems = parse("p.json", "{\"a\": 1, \"b\n\": 2}", &ir(), "--params")
+            .err()
+            .unwrap_or_default();
+        assert_eq!(problems[0].location.as_deref(), Some("p.json:1:12"));
+    }
+
+    #[test]
+    fn a_value_reads_to_its_bits() {
+        // serde_json's default parser reads this one an ulp off.
+        let read = parse(
+            "p.json",
+            r#"{"a": -9.285898019307274000e-148, "b": 1}"#,
+            &ir(),
+            "--params",
+        )
+        .map(|p| p.theta[0].to_bits());
+        assert_eq!(read.ok(), Some((-9.285_898_019_307_274e-148_f64).to_bits()));
     }
 
     #[test]

@@ -10,6 +10,11 @@
 //! CRLF outside quotes is folded to `" \n"` and a lone CR (classic Mac OS
 //! line ends) to `"\n"`, both of the same length, so records start on their
 //! own line and byte offsets stay those of the file.
+//!
+//! A line, and a record (a quoted cell may run over lines), holds at most
+//! [`MAX_LINE_BYTES`]: the filter never holds more, and a longer one is an
+//! error at its line and byte, so a file without line ends (a binary file,
+//! `/dev/zero`) costs 1 MiB, not all memory.
 
 use crate::error::DataError;
 use crate::notes::LoadedFile;
@@ -20,6 +25,11 @@ use crate::validate::{Table, load_table, missing, not_a_number, not_finite, uniq
 use leeway_model::experiment::Experiment;
 use leeway_structure::ir::Ir;
 use std::path::Path;
+
+/// The most bytes of a CSV line, its line end included, and of a record
+/// (a quoted cell may run over lines): 1 MiB. A longer one is an error at
+/// its line and byte, never read whole.
+pub const MAX_LINE_BYTES: usize = 1 << 20;
 
 /// Parses CSV text (see [`load_csv`](crate::csv_fast::load_csv)); `file`
 /// names it in errors.
@@ -46,7 +56,8 @@ pub fn parse_csv_noted(
 /// blank lines (only whitespace) outside quoted cells, counts them, and
 /// remembers where it dropped them, so that the csv reader's line and byte
 /// positions map back to the file's physical lines and bytes. Its memory is
-/// the current line plus one entry per run of dropped lines, never the file.
+/// the current line plus one entry per run of dropped lines, never the file:
+/// a line or a record longer than [`MAX_LINE_BYTES`] stops it ([`Overlong`]).
 struct Filter<R> {
     inner: R,
     line: Vec<u8>,
@@ -67,6 +78,79 @@ struct Filter<R> {
     error: Option<std::io::Error>,
     /// How the file ends its lines, once its first line end is read.
     ends: Option<LineEnds>,
+    /// Where the csv reader stands after the kept lines served (a quoted
+    /// cell open or not), as its own state machine reads them.
+    quoting: Quoting,
+    /// The record being served: its first physical line, its first byte,
+    /// its bytes so far.
+    record: (u64, u64, usize),
+    /// The line or record that stopped the filter, for the message.
+    overlong: Option<Overlong>,
+}
+
+/// A line or a record longer than [`MAX_LINE_BYTES`]: where it starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Overlong {
+    /// A record over several lines (a quoted cell not closed), not one line.
+    record: bool,
+    /// Its first physical line (from 1).
+    line: u64,
+    /// Its first byte in the file.
+    byte: u64,
+}
+
+impl Overlong {
+    /// The located error.
+    fn error(self, file: &str) -> DataError {
+        let limit = MAX_LINE_BYTES;
+        if self.record {
+            DataError::new(
+                format!("{file}:{}", self.line),
+                format!(
+                    "a record longer than 1 MiB: the quoted cell opened in it (from byte {}) is not closed within {limit} bytes",
+                    self.byte
+                ),
+                "a quote at the start of a cell runs to the next quote, over line ends: close the cell, or remove the stray quote",
+            )
+        } else {
+            DataError::new(
+                format!("{file}:{}", self.line),
+                format!(
+                    "a line longer than 1 MiB: no line end within {limit} bytes from byte {}",
+                    self.byte
+                ),
+                "a CSV data file holds one row per line: is it a binary file (a Parquet file is read as one when its name ends in .parquet), or text without line ends?",
+            )
+        }
+    }
+}
+
+/// The csv reader's state at a byte, as far as a record's end goes: its
+/// state machine (csv-core's, with `"` quoting and doubled quotes, no
+/// escape) reduced to what decides whether a line end ends the record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Quoting {
+    /// At the start of a cell: a quote opens a quoted cell.
+    Start,
+    /// In an unquoted cell (a quote is a character like any).
+    Plain,
+    /// In a quoted cell: a line end is part of it.
+    Quoted,
+    /// Just after a quote in a quoted cell: closed, unless a quote follows.
+    Closed,
+}
+
+impl Quoting {
+    /// The state after the kept line `line` (its line end included).
+    fn after(self, line: &[u8]) -> Quoting {
+        line.iter().fold(self, |state, &b| match (state, b) {
+            (Quoting::Quoted, b'"') => Quoting::Closed,
+            (Quoting::Quoted, _) => Quoting::Quoted,
+            (Quoting::Start | Quoting::Closed, b'"') => Quoting::Quoted,
+            (_, b',' | b'\n') => Quoting::Start,
+            (_, _) => Quoting::Plain,
+        })
+    }
 }
 
 impl<R: std::io::BufRead> Filter<R> {
@@ -86,6 +170,9 @@ impl<R: std::io::BufRead> Filter<R> {
             blanks: 0,
             error: None,
             ends: None,
+            quoting: Quoting::Start,
+            record: (0, 0, 0),
+            overlong: None,
         }
     }
     /// A filter that starts reading at the start of a line, `at.byte`
@@ -147,6 +234,13 @@ impl<R: std::io::BufRead> Filter<R> {
             self.physical += 1;
             let start = self.byte;
             self.byte += n as u64;
+            if n > MAX_LINE_BYTES {
+                return Err(self.stop(Overlong {
+                    record: false,
+                    line: self.physical,
+                    byte: start,
+                }));
+            }
             if !self.in_quotes {
                 match self.line.iter().find(|b| !b.is_ascii_whitespace()) {
                     None => {
@@ -173,6 +267,19 @@ impl<R: std::io::BufRead> Filter<R> {
             if quotes % 2 == 1 {
                 self.in_quotes = !self.in_quotes;
             }
+            // The record this line belongs to, bounded as a line is.
+            if self.quoting != Quoting::Quoted {
+                self.record = (self.physical, start, 0);
+            }
+            self.record.2 += n;
+            if self.record.2 > MAX_LINE_BYTES {
+                let (line, byte, _) = self.record;
+                return Err(self.stop(Overlong {
+                    record: true,
+                    line,
+                    byte,
+                }));
+            }
             // CRLF outside quotes becomes " \n" (same length, so byte offsets
             // hold; the space is trimmed): the csv reader then ends records
             // at `\n` only and its positions count lines as an editor does.
@@ -186,8 +293,24 @@ impl<R: std::io::BufRead> Filter<R> {
             {
                 self.line[len - 1] = b'\n';
             }
+            self.quoting = match (quotes, self.quoting) {
+                // No quote: the state only tells a quoted cell (it goes on)
+                // from any other (the line end ends the record).
+                (0, Quoting::Quoted) => Quoting::Quoted,
+                (0, _) => Quoting::Start,
+                _ => self.quoting.after(&self.line),
+            };
             return Ok(true);
         }
+    }
+    /// Stops at an overlong line or record: kept for the message, and an
+    /// error for the csv reader, which stops.
+    fn stop(&mut self, overlong: Overlong) -> std::io::Error {
+        self.overlong = Some(overlong);
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "a line or record longer than 1 MiB",
+        )
     }
 }
 
@@ -201,9 +324,11 @@ enum LineEnds {
 }
 
 /// Appends one physical line to `line`, with its end, and returns the bytes
-/// read. How the file ends its lines (`ends`) is decided from its first
-/// buffer: a CR without any LF there is a file of returns; anything else
-/// ends lines at LF (a CR then is part of a line, as it always was).
+/// read: at most [`MAX_LINE_BYTES`] + 1, so that a longer line is told
+/// without being read whole. How the file ends its lines (`ends`) is
+/// decided from its first buffer: a CR without any LF there is a file of
+/// returns; anything else ends lines at LF (a CR then is part of a line, as
+/// it always was).
 fn read_line<R: std::io::BufRead>(
     inner: &mut R,
     line: &mut Vec<u8>,
@@ -222,9 +347,10 @@ fn read_line<R: std::io::BufRead>(
             decided
         }
     };
+    let mut bounded = std::io::Read::take(inner, MAX_LINE_BYTES as u64 + 1);
     match ends {
-        LineEnds::Feed => inner.read_until(b'\n', line),
-        LineEnds::Return => inner.read_until(b'\r', line),
+        LineEnds::Feed => std::io::BufRead::read_until(&mut bounded, b'\n', line),
+        LineEnds::Return => std::io::BufRead::read_until(&mut bounded, b'\r', line),
     }
 }
 
@@ -438,6 +564,9 @@ fn io_error<R: std::io::BufRead>(
     e: &csv::Error,
 ) -> Option<DataError> {
     if let csv::ErrorKind::Io(io) = e.kind() {
+        if let Some(overlong) = r.get_ref().overlong {
+            return Some(overlong.error(file));
+        }
         let why = r
             .get_ref()
             .error

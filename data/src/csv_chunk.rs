@@ -6,12 +6,15 @@
 //! lines dropped and counted as its line filter does, and rows that are
 //! plain lines (as many cells as the header, each without quotes or quoted
 //! simply: `"run 1"`) split at commas and trimmed as the csv crate's
-//! `Trim::All` does. It stops at the first line
-//! it does not take, for the exact reader to go on from there. A cell is
-//! parsed here only when the fast parser reads all of it to a finite
-//! number, which `str::parse::<f64>` (both
-//! correctly rounded) reads to the same bits; any other cell is left for
-//! [`cell`](crate::csv::cell) to read (or refuse) from the line's text.
+//! `Trim::All` does. It stops at the first line it does not take (a line
+//! longer than [`MAX_LINE_BYTES`] among them: the exact reader refuses
+//! it), for the exact reader to go on from there. A cell is parsed here
+//! only when the fast parser reads all of it to a finite number, which
+//! `str::parse::<f64>` (both correctly rounded) reads to the same bits; any
+//! other cell is left for [`cell`](crate::csv::cell) to read (or refuse)
+//! from the line's text.
+
+use crate::csv::MAX_LINE_BYTES;
 
 /// The rows of a chunk: the selected columns' values and where each row is.
 #[derive(Debug, Default)]
@@ -97,28 +100,33 @@ pub(crate) fn parse_chunk(text: &[u8], selection: &Selection, chunk: &mut Chunk)
     let mut pos = 0;
     let mut dropped = false;
     while pos < text.len() {
+        // A line longer than the filter holds (its line end included) is
+        // the exact reader's to refuse, at its line and byte.
+        let end = line_end(text, pos);
+        if (end + 1).min(text.len()) - pos > MAX_LINE_BYTES {
+            chunk.stop = Some(pos);
+            return;
+        }
         // As the filter: a line of whitespace is blank, one whose first
         // other byte is `#` a comment.
         let first = text[pos..]
             .iter()
             .position(|b| *b == b'\n' || !b.is_ascii_whitespace())
             .map_or(text.len(), |k| pos + k);
-        let end = match text.get(first) {
+        match text.get(first) {
             None | Some(b'\n') => {
                 chunk.blanks += 1;
                 dropped = true;
-                first
             }
             Some(b'#') => {
                 chunk.comments += 1;
                 dropped = true;
-                line_end(text, first)
             }
             Some(_) => {
-                let Some(end) = take_row(&mut chunk.values, text, pos, selection) else {
+                if !take_row(&mut chunk.values, &text[pos..end], selection) {
                     chunk.stop = Some(pos);
                     return;
-                };
+                }
                 if dropped {
                     chunk
                         .drops
@@ -127,38 +135,30 @@ pub(crate) fn parse_chunk(text: &[u8], selection: &Selection, chunk: &mut Chunk)
                 }
                 chunk.lines.push(chunk.physical);
                 chunk.spans.push((pos, end));
-                end
             }
-        };
+        }
         chunk.physical += 1;
         pos = end + 1;
     }
 }
 
-/// Where the line holding `from` ends (its LF, or the text's end).
+/// Where the line holding `from` ends (its LF, or the text's end): found by
+/// `memchr`'s vectorised search.
 fn line_end(text: &[u8], from: usize) -> usize {
     memchr::memchr(b'\n', &text[from..]).map_or(text.len(), |k| from + k)
 }
 
-/// Appends the selected values of the row whose line starts at `pos` and
-/// returns the line's end; `None` (nothing appended) for a line with a
-/// quote other than a simply quoted cell's (see [`cell_text`]) or a cell
-/// count other than the header's. The line's end, its quotes and its
-/// commas are found by `memchr`'s vectorised searches.
-fn take_row(
-    values: &mut Vec<f64>,
-    text: &[u8],
-    pos: usize,
-    selection: &Selection,
-) -> Option<usize> {
-    let end = line_end(text, pos);
-    let line = &text[pos..end];
-    let taken = if memchr::memchr(b'"', line).is_some() {
+/// Appends the selected values of the row `line` (without its line end);
+/// false (nothing appended) for a line with a quote other than a simply
+/// quoted cell's (see [`cell_text`]) or a cell count other than the
+/// header's. The line's quotes and its commas are found by `memchr`'s
+/// vectorised searches.
+fn take_row(values: &mut Vec<f64>, line: &[u8], selection: &Selection) -> bool {
+    if memchr::memchr(b'"', line).is_some() {
         take_quoted(values, line, selection)
     } else {
         take_plain(values, line, selection)
-    };
-    taken.then_some(end)
+    }
 }
 
 /// [`take_row`] for a line without quotes.

@@ -14,7 +14,7 @@
 //! lines end in lone CRs, whose header row the fast path would not take,
 //! or that are not regular files are read by [`Records`] from the start.
 
-use crate::csv::{Records, Resume, cell, header_place};
+use crate::csv::{MAX_LINE_BYTES, Records, Resume, cell, header_place};
 use crate::csv_chunk::{Chunk, Selection, field, parse_chunk, plain_line};
 use crate::error::DataError;
 use crate::notes::LoadedFile;
@@ -58,7 +58,8 @@ pub fn open_csv(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<StreamedF
 /// batch) and threads.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Batching {
-    /// Bytes per chunk (a line longer than a batch is still read whole).
+    /// Bytes per chunk (a line longer than a batch is still read whole, up
+    /// to [`MAX_LINE_BYTES`]).
     pub chunk: usize,
     /// Threads (chunks per batch), at least 1.
     pub threads: usize,
@@ -152,8 +153,11 @@ impl CsvFile {
         let eof = head.len() < want;
         let header = header_end(&head, eof).filter(|_| regular);
         let Some(header_end) = header else {
-            // The exact reader from the start.
-            input.seek(SeekFrom::Start(0)).map_err(read_error)?;
+            // The exact reader from the start (a pipe cannot seek, and
+            // nothing of it was read).
+            if regular {
+                input.seek(SeekFrom::Start(0)).map_err(read_error)?;
+            }
             let records = Records::new(&file, BufReader::with_capacity(FIRST_BUFFER, input), what)?;
             return Ok(CsvFile {
                 headers: records.headers().to_vec(),
@@ -260,24 +264,37 @@ impl Fast {
         self.text.clear();
         self.text.reserve_exact(self.carry.len() + want);
         self.text.append(&mut self.carry);
-        // Whole lines: read on until a line end (or the file's end).
+        // Whole lines: read on until a line end (or the file's end), or
+        // past a line the exact reader refuses (the chunk stops there).
+        // Only the bytes just read are searched: a line longer than a batch
+        // costs its length, not its length squared.
+        let mut searched = 0;
         loop {
             if !self.eof {
-                // Exactly: `read_to_end` would double the buffer.
-                self.text.reserve_exact(want);
+                // Exactly, for a batch: `read_to_end` would double the
+                // buffer. A line longer than a batch grows it as a vector
+                // grows (in as many reads as it has batches).
+                if searched == 0 {
+                    self.text.reserve_exact(want);
+                } else {
+                    self.text.reserve(want);
+                }
                 let n = (&mut self.input)
                     .take(want as u64)
                     .read_to_end(&mut self.text)
                     .map_err(|e| io_failure(&self.file, &self.what, &e))?;
                 self.eof = n < want;
             }
-            match self.text.iter().rposition(|b| *b == b'\n') {
+            let last = memchr::memrchr(b'\n', &self.text[searched..]).map(|k| searched + k);
+            match last {
                 Some(last) if !self.eof => {
                     self.carry.extend_from_slice(&self.text[last + 1..]);
                     self.text.truncate(last + 1);
                     break;
                 }
-                None if !self.eof => {}
+                None if !self.eof && self.text.len() <= MAX_LINE_BYTES => {
+                    searched = self.text.len();
+                }
                 _ => break,
             }
         }

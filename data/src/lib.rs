@@ -50,7 +50,7 @@ pub mod validate;
 pub mod write;
 
 pub use columns::{Columns, Labels, load_columns, open_columns};
-pub use csv::{Records, parse_csv, parse_csv_noted};
+pub use csv::{MAX_LINE_BYTES, Records, parse_csv, parse_csv_noted};
 pub use csv_fast::{Batching, CsvFile, load_csv, load_csv_noted, open_csv};
 pub use error::DataError;
 pub use file::{load_file_noted, open_file, with_table};

@@ -46,7 +46,9 @@ pub const BATCH: usize = 4096;
 const EXACT: i64 = 1 << 53;
 
 /// True when `path` names a Parquet file: its extension is `.parquet`, or
-/// its first bytes are the magic `PAR1`.
+/// it is a regular file whose first bytes are the magic `PAR1`. A pipe or
+/// a device is not looked into: the bytes read would be gone for the CSV
+/// reader (and a pipe without a writer would wait).
 pub fn is_parquet(path: &Path) -> bool {
     use std::io::Read;
     if path
@@ -54,6 +56,9 @@ pub fn is_parquet(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("parquet"))
     {
         return true;
+    }
+    if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+        return false;
     }
     let mut magic = [0u8; 4];
     std::fs::File::open(path)
@@ -173,6 +178,16 @@ impl ParquetFile {
     /// Opens a file and reads its metadata (the footer): a file that is
     /// not Parquet, is cut short or is damaged is one error naming it.
     pub fn open(path: &Path) -> Result<ParquetFile, DataError> {
+        // Asked before opening: a pipe without a writer would wait.
+        if let Ok(m) = std::fs::metadata(path)
+            && !m.is_file()
+        {
+            return Err(DataError::new(
+                path.display().to_string(),
+                "not a regular file (a directory, a pipe or a device): a Parquet file is read from its end",
+                "save the Parquet data to a file and name that file",
+            ));
+        }
         let (file, handle) = open_path(path, "--data")?;
         let size = handle.metadata().map(|m| m.len()).unwrap_or(0);
         if size == 0 {

@@ -203,8 +203,11 @@ pub fn finite(v: f64, at: impl FnOnce() -> String) -> Result<f64, DataError> {
 
 /// Every column named once: a repeated name is an error at its second place.
 pub fn unique_headers(headers: &[String], at: impl Fn(usize) -> String) -> Result<(), DataError> {
+    // Each name's first column: a header of a million cells is checked in
+    // a moment, not in quadratic time.
+    let mut first = std::collections::BTreeMap::new();
     for (i, h) in headers.iter().enumerate() {
-        if let Some(j) = headers[..i].iter().position(|g| g == h) {
+        if let Some(&j) = first.get(h.as_str()) {
             return Err(DataError::new(
                 at(i),
                 format!(
@@ -215,6 +218,7 @@ pub fn unique_headers(headers: &[String], at: impl Fn(usize) -> String) -> Resul
                 "rename one of them; leeway will not guess which is meant",
             ));
         }
+        first.insert(h.as_str(), i);
     }
     Ok(())
 }

@@ -168,6 +168,10 @@ pub struct Conditions {
 
 pub use crate::bounds::BudgetRule;
 
+/// The most bytes of a plan file: 1 MiB, as a model's source. The front
+/// ends read no more of a file (a pipe, `/dev/zero`) than this and a byte.
+pub const MAX_PLAN_BYTES: u64 = 1 << 20;
+
 /// The default time per experiment when the plan gives no budget, s.
 pub const DEFAULT_SECONDS: f64 = 600.0;
 pub use crate::bounds::SAMPLES;
@@ -197,11 +201,12 @@ pub fn is_json(text: &str, json: bool) -> bool {
 pub fn parse(text: &str, json: bool) -> Result<PlanFile, DesignError> {
     if is_json(text, json) {
         let located = |e: serde_json::Error| {
+            let (line, column) = json_place(text, e.line(), e.column());
             DesignError::plan(
                 format!("{e}"),
                 "the plan is JSON (docs/design.md lists its fields)",
             )
-            .at(e.line(), e.column())
+            .at(line, column)
         };
         let mut scan = serde_json::Deserializer::from_str(text);
         serde::de::DeserializeSeed::deserialize(Scan::default(), &mut scan).map_err(located)?;
@@ -229,12 +234,11 @@ pub fn locate(e: DesignError, text: &str, json: bool) -> DesignError {
     let Some(key) = e.key.clone().filter(|_| e.line.is_none()) else {
         return e;
     };
-    let path: Vec<&str> = key.split('.').collect();
     let at = if is_json(text, json) {
         let mut de = serde_json::Deserializer::from_str(text);
         let scan = Scan {
             path: "",
-            target: Some(path.as_slice()),
+            target: Some(&key),
         };
         match serde::de::DeserializeSeed::deserialize(scan, &mut de) {
             Err(found) if found.to_string().starts_with(FOUND) => {
@@ -243,7 +247,10 @@ pub fn locate(e: DesignError, text: &str, json: bool) -> DesignError {
             _ => None,
         }
     } else {
-        toml_span(text, &path).map(|byte| line_col(text, byte))
+        toml::de::DeTable::parse(text)
+            .ok()
+            .and_then(|table| toml_find(table.get_ref(), &key))
+            .map(|byte| line_col(text, byte))
     };
     match at {
         Some((l, c)) => e.at(l, c),
@@ -251,15 +258,31 @@ pub fn locate(e: DesignError, text: &str, json: bool) -> DesignError {
     }
 }
 
-/// Where the value at `path` starts in a TOML text.
-fn toml_span(text: &str, path: &[&str]) -> Option<usize> {
-    let table = toml::de::DeTable::parse(text).ok()?;
-    let (first, rest) = path.split_first()?;
-    let mut value = table.get_ref().get(*first)?;
-    for key in rest {
-        value = value.get_ref().get(*key)?;
+/// serde_json's line and column as an editor shows them: its column 0
+/// (a line end read, as in a string broken by one) is the previous line's
+/// end, where the line end is.
+fn json_place(text: &str, line: usize, column: usize) -> (usize, usize) {
+    match (line, column) {
+        (2.., 0) => {
+            let previous = text.split('\n').nth(line - 2).unwrap_or("");
+            (line - 1, previous.chars().count() + 1)
+        }
+        _ => (line.max(1), column.max(1)),
     }
-    Some(value.span().start)
+}
+
+/// Where the value at the dotted `key` starts in a TOML table: a name
+/// may hold dots itself (`inputs."a.b"`), so each key of the table that
+/// begins the rest is tried.
+fn toml_find(table: &toml::de::DeTable<'_>, key: &str) -> Option<usize> {
+    table.iter().find_map(|(k, v)| {
+        let k: &str = k.get_ref();
+        if key == k {
+            return Some(v.span().start);
+        }
+        let rest = key.strip_prefix(k)?.strip_prefix('.')?;
+        toml_find(v.get_ref().as_table()?, rest)
+    })
 }
 
 /// The message that marks the key [`locate`] looks for.
@@ -272,8 +295,8 @@ const FOUND: &str = "\u{0}found";
 struct Scan<'a> {
     /// Where the walk is, `inputs.f.` (empty at the top).
     path: &'a str,
-    /// The key sought, from here down.
-    target: Option<&'a [&'a str]>,
+    /// The dotted key sought, from here down (a name may hold dots).
+    target: Option<&'a str>,
 }
 
 impl<'de> serde::de::DeserializeSeed<'de> for Scan<'_> {
@@ -319,9 +342,11 @@ impl<'de> serde::de::Visitor<'de> for Scan<'_> {
         let mut seen = std::collections::BTreeSet::new();
         while let Some(key) = map.next_key::<String>()? {
             let target = match self.target {
-                Some([only]) if *only == key => return Err(A::Error::custom(FOUND)),
-                Some([first, rest @ ..]) if *first == key => Some(rest),
-                _ => None,
+                Some(sought) if sought == key => return Err(A::Error::custom(FOUND)),
+                Some(sought) => sought
+                    .strip_prefix(key.as_str())
+                    .and_then(|rest| rest.strip_prefix('.')),
+                None => None,
             };
             let path = format!("{}{key}", self.path);
             if !seen.insert(key) {
@@ -773,6 +798,46 @@ mod tests {
         )
         .expect("reads");
         assert_eq!(format!("{t:?}"), format!("{j:?}"));
+    }
+
+    #[test]
+    fn a_name_holding_a_dot_is_located() {
+        for (text, json, at) in [
+            ("[inputs.\"th.rust\"]\nrange = [0, 1]\n", false, (1, 1)),
+            ("[inputs]\n\"th.rust\".range = [0, 1]\n", false, (2, 1)),
+            (
+                "{\"inputs\": {\n\"th.rust\": {\"range\": [0, 1]}}}",
+                true,
+                (2, 9),
+            ),
+        ] {
+            let e = DesignError::plan("unknown".into(), "").key("inputs.th.rust");
+            let e = locate(e, text, json);
+            assert_eq!((e.line, e.column), (Some(at.0), Some(at.1)), "{text}");
+        }
+    }
+
+    #[test]
+    fn a_json_string_broken_by_a_line_end_is_located_at_that_line_end() {
+        let e = parse("{\"budget\": {\"t\nime\": 1800}}", true).expect_err("refused");
+        assert_eq!((e.line, e.column), (Some(1), Some(15)), "{e:?}");
+    }
+
+    #[test]
+    fn a_json_plan_reads_its_numbers_to_their_bits() {
+        // serde_json's default parser reads this one an ulp off.
+        let text =
+            r#"{"nominal": {"Y_v": -9.285898019307274000e-148, "X_u": 2.2250738585072011e-308}}"#;
+        let p = parse(text, true).expect("reads");
+        let want = |s: &str| s.parse::<f64>().map(f64::to_bits).ok();
+        assert_eq!(
+            p.nominal.get("Y_v").map(|x| x.to_bits()),
+            want("-9.285898019307274e-148")
+        );
+        assert_eq!(
+            p.nominal.get("X_u").map(|x| x.to_bits()),
+            want("2.2250738585072011e-308")
+        );
     }
 
     #[test]

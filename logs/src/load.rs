@@ -135,7 +135,9 @@ fn manifest(path: &Path, ir: &Ir) -> Result<Manifest, DataError> {
             .file_stem()
             .map_or("bag".into(), |s| s.to_string_lossy().into_owned()),
         step: None,
+        step_at: None,
         max_gap: None,
+        max_gap_at: None,
         sources: vec![SourceSpec {
             key: "bag".into(),
             file: path.to_path_buf(),
@@ -224,12 +226,20 @@ fn joined(path: &Path, ir: &Ir, options: &LoadOptions) -> Result<JoinedLog, Data
 /// the manifest also sets must agree with it (a conflict is an error, never
 /// silently resolved); `--keep` windows stand where the manifest has none.
 fn with_options(mut m: Manifest, options: &LoadOptions) -> Result<Manifest, DataError> {
-    let conflict = |what: String, hint: &str| Err(DataError::new(&m.file, what, hint.to_string()));
+    // At the manifest's value.
+    let conflict = |at: &Option<String>, what: String, hint: &str| {
+        Err(DataError::new(
+            at.as_deref().unwrap_or(&m.file),
+            what,
+            hint.to_string(),
+        ))
+    };
     if let Some(given) = m.max_gap
         && options.max_gap != leeway_data::gaps::GapLimit::default()
         && options.max_gap != given
     {
         return conflict(
+            &m.max_gap_at,
             format!(
                 "--max-gap ({}) conflicts with the manifest's gap limit ({})",
                 gap_text(options.max_gap),
@@ -242,6 +252,7 @@ fn with_options(mut m: Manifest, options: &LoadOptions) -> Result<Manifest, Data
         && (step - resample).abs() > 1e-9 * step
     {
         return conflict(
+            &m.step_at,
             format!("--resample {resample} conflicts with the manifest's step = {step}"),
             "give the grid's step in one place: drop --resample, or `step` from the manifest",
         );
@@ -538,7 +549,8 @@ fn grid_step(m: &Manifest, ir: &Ir, options: &LoadOptions) -> Result<f64, DataEr
     let declared = ir.step.or(options.step);
     match (m.step.or(options.resample), declared) {
         (Some(g), Some(d)) if (g - d).abs() > 1e-9 * d => Err(DataError::new(
-            &m.file,
+            // At the manifest's step when it is the grid's.
+            m.step_at.as_deref().unwrap_or(&m.file),
             format!("the grid step {g} s differs from the model's sample time {d} s"),
             "drop `step` from the manifest (the model's step is used), or make them equal",
         )),
@@ -553,6 +565,7 @@ fn grid_step(m: &Manifest, ir: &Ir, options: &LoadOptions) -> Result<f64, DataEr
 
 /// A source's requested signals: one series per signal, each with its own stamps.
 fn read_source(source: &SourceSpec, wanted: &[&SignalSpec]) -> Result<Vec<Series>, DataError> {
+    a_file(source)?;
     if source.clock == Clock::Bag {
         return crate::bag_source::read(source, wanted);
     }
@@ -590,6 +603,52 @@ fn read_source(source: &SourceSpec, wanted: &[&SignalSpec]) -> Result<Vec<Series
             repeated: all.repeated,
         })
         .collect())
+}
+
+/// A source must be a file (a bag also its rosbag2 folder): a manifest
+/// never makes leeway wait on a pipe or a terminal, or read a device. Asked
+/// before the source is opened (opening a pipe waits for its writer); a
+/// path that does not exist is left to the reader's own error.
+fn a_file(source: &SourceSpec) -> Result<(), DataError> {
+    let Ok(kind) = std::fs::metadata(&source.file).map(|m| m.file_type()) else {
+        return Ok(());
+    };
+    let what = match kind {
+        k if k.is_file() => return Ok(()),
+        k if k.is_dir() && source.clock == Clock::Bag => return Ok(()),
+        k if k.is_dir() => "a folder",
+        k => special(k),
+    };
+    Err(DataError::new(
+        &source.at,
+        format!(
+            "source `{}` is {what}, not a file: `{}`",
+            source.key,
+            source.file.display()
+        ),
+        "a log's sources are the files its logger wrote (a bag also its folder); name them in [sources]",
+    ))
+}
+
+/// What a file that is neither a regular file nor a folder is.
+#[cfg(unix)]
+fn special(kind: std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if kind.is_fifo() {
+        "a pipe (FIFO)"
+    } else if kind.is_socket() {
+        "a socket"
+    } else if kind.is_char_device() || kind.is_block_device() {
+        "a device"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// What a file that is neither a regular file nor a folder is.
+#[cfg(not(unix))]
+fn special(_: std::fs::FileType) -> &'static str {
+    "not a regular file"
 }
 
 /// A quaternion's columns, after its name: `orientation.x`, … as ROS 2
@@ -834,6 +893,49 @@ mod tests {
             .unwrap_or_else(|| panic!("a scalar yaw is refused"));
         assert!(e.message.contains("is one column"), "{e}");
         assert!(e.location.ends_with("log.toml:11:7"), "{e}");
+    }
+
+    #[test]
+    fn an_option_against_the_manifests_value_is_located_at_that_value() {
+        let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+        write_log(
+            dir.path(),
+            "psi",
+            |t| format!("{}", 0.1 * t),
+            "psi = \"h:psi\"\n",
+        );
+        let path = dir.path().join("log.toml");
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{e}"));
+        std::fs::write(
+            &path,
+            format!("experiment = \"a\"\nstep = 0.2\n  max_gap = 2.0\n{text}"),
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let error = |options: &LoadOptions| {
+            load_log(&path, &model(""), options)
+                .err()
+                .unwrap_or_else(|| panic!("refused"))
+        };
+        let gap = LoadOptions {
+            max_gap: leeway_data::gaps::GapLimit::Seconds(1.0),
+            ..LoadOptions::default()
+        };
+        let e = error(&gap);
+        assert!(e.location.ends_with("log.toml:3:13"), "{e}");
+        assert!(e.message.contains("--max-gap (1 s) conflicts"), "{e}");
+        let resample = LoadOptions {
+            resample: Some(0.1),
+            ..LoadOptions::default()
+        };
+        let e = error(&resample);
+        assert!(e.location.ends_with("log.toml:2:8"), "{e}");
+        // The manifest's step against the model's: at the step.
+        let e = error(&LoadOptions::default());
+        assert!(e.location.ends_with("log.toml:2:8"), "{e}");
+        assert!(
+            e.message.contains("differs from the model's sample time"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -71,6 +71,8 @@ struct KeepFile {
 enum TimeValue {
     Seconds(f64),
     Text(String),
+    /// A TOML date-time, written without quotes: read as its text.
+    Stamp(toml::value::Datetime),
 }
 
 #[derive(serde::Deserialize)]
@@ -240,8 +242,12 @@ pub struct Manifest {
     pub experiment: String,
     /// The grid's step, when the manifest gives one.
     pub step: Option<f64>,
+    /// Where the manifest gives its step (`manifest:line:col`).
+    pub step_at: Option<String>,
     /// The gap limit, when the manifest gives one.
     pub max_gap: Option<GapLimit>,
+    /// Where the manifest gives its gap limit.
+    pub max_gap_at: Option<String>,
     /// The files, in key order.
     pub sources: Vec<SourceSpec>,
     /// The signals, in name order.
@@ -258,14 +264,38 @@ fn place(file: &str, text: &str, at: usize) -> String {
     format!("{file}:{line}:{col}")
 }
 
-/// Reads the manifest at `path`.
+/// The most bytes of a manifest: 1 MiB, some ten thousand lines. A larger
+/// file (or one without end, `/dev/zero`) is refused, never read whole.
+pub const MAX_MANIFEST_BYTES: u64 = 1 << 20;
+
+/// Reads the manifest at `path`: at most [`MAX_MANIFEST_BYTES`], told by
+/// its size and, for a pipe or a device whose size says nothing, by the
+/// bytes read.
 pub fn read(path: &Path) -> Result<Manifest, DataError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| {
+    let too_large = |size: String| {
         DataError::new(
+            &file,
+            format!("the log manifest is larger than 1 MiB ({size}): it is not a manifest"),
+            "a manifest is a small TOML file naming the log's sources (docs/logs.md); check the path given to --data",
+        )
+    };
+    let bytes = read_bounded(path, MAX_MANIFEST_BYTES).map_err(|e| match e {
+        Bounded::Io(e) => DataError::new(
             &file,
             format!("cannot read the log manifest: {e}"),
             "check the path given to --data",
+        ),
+        Bounded::Larger(Some(size)) => too_large(format!("{size} bytes")),
+        Bounded::Larger(None) => too_large("it goes on past that".to_string()),
+    })?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let before = String::from_utf8_lossy(&e.as_bytes()[..valid]);
+        DataError::new(
+            place(&file, &before, valid),
+            "the log manifest is not UTF-8 text",
+            "save the manifest as UTF-8 (TOML is UTF-8); check the path given to --data",
         )
     })?;
     let stem = path
@@ -273,6 +303,34 @@ pub fn read(path: &Path) -> Result<Manifest, DataError> {
         .map_or("log".to_string(), |s| s.to_string_lossy().into_owned());
     let folder = path.parent().unwrap_or(Path::new(""));
     parse(&file, &text, &stem, folder)
+}
+
+/// Why a file read whole with a bound was not read.
+enum Bounded {
+    /// It could not be opened or read.
+    Io(std::io::Error),
+    /// It is larger than the bound: its size when its metadata tells it.
+    Larger(Option<u64>),
+}
+
+/// The bytes of `path`, at most `limit` of them: a larger regular file is
+/// refused by its size before it is read, and no more than `limit + 1`
+/// bytes are read from anything (a pipe, a device).
+fn read_bounded(path: &Path, limit: u64) -> Result<Vec<u8>, Bounded> {
+    use std::io::Read;
+    let file = std::fs::File::open(path).map_err(Bounded::Io)?;
+    let size = file.metadata().map_err(Bounded::Io)?.len();
+    if size > limit {
+        return Err(Bounded::Larger(Some(size)));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(Bounded::Io)?;
+    if bytes.len() as u64 > limit {
+        return Err(Bounded::Larger(None));
+    }
+    Ok(bytes)
 }
 
 /// Parses a manifest's `text` (`file` names it in messages; `stem` is the
@@ -338,11 +396,19 @@ pub fn parse(file: &str, text: &str, stem: &str, folder: &Path) -> Result<Manife
         .iter()
         .map(|k| keep_spec(k, &sources, &at))
         .collect::<Result<_, _>>()?;
+    let step_at = raw.step.as_ref().map(|v| at(&v.span()));
+    let max_gap_at = raw
+        .max_gap
+        .as_ref()
+        .or(raw.max_gap_steps.as_ref())
+        .map(|v| at(&v.span()));
     Ok(Manifest {
         file: file.to_string(),
         experiment: raw.experiment.unwrap_or_else(|| stem.to_string()),
         step,
+        step_at,
         max_gap,
+        max_gap_at,
         sources,
         signals,
         keep,
@@ -359,23 +425,27 @@ fn keep_spec(
     let raw = k.get_ref();
     let time = |v: &Option<Spanned<TimeValue>>| -> Result<Option<TimeRef>, DataError> {
         let Some(v) = v else { return Ok(None) };
-        match v.get_ref() {
-            TimeValue::Seconds(s) if s.is_finite() => Ok(Some(TimeRef::FromStart(*s))),
-            TimeValue::Seconds(s) => Err(DataError::new(
-                at(&v.span()),
-                format!("a window's time must be finite, not {s}"),
-                SEE_DOCS,
-            )),
-            TimeValue::Text(t) => crate::stamps::iso_nanos(t)
-                .map(|ns| Some(TimeRef::At(ns)))
-                .map_err(|why| {
-                    DataError::new(
-                        at(&v.span()),
-                        why,
-                        "a window's time is seconds from the log's first stamp (a number), or ISO-8601 text with a UTC offset",
-                    )
-                }),
-        }
+        let text = match v.get_ref() {
+            TimeValue::Seconds(s) if s.is_finite() => return Ok(Some(TimeRef::FromStart(*s))),
+            TimeValue::Seconds(s) => {
+                return Err(DataError::new(
+                    at(&v.span()),
+                    format!("a window's time must be finite, not {s}"),
+                    SEE_DOCS,
+                ));
+            }
+            TimeValue::Text(t) => t.clone(),
+            TimeValue::Stamp(d) => d.to_string(),
+        };
+        crate::stamps::iso_nanos(&text)
+            .map(|ns| Some(TimeRef::At(ns)))
+            .map_err(|why| {
+                DataError::new(
+                    at(&v.span()),
+                    why,
+                    "a window's time is seconds from the log's first stamp (a number), or ISO-8601 text with a UTC offset",
+                )
+            })
     };
     let (from, to) = (time(&raw.from)?, time(&raw.to)?);
     if let (Some(TimeRef::FromStart(a)), Some(TimeRef::FromStart(b))) = (from, to)
@@ -676,6 +746,27 @@ mod tests {
     }
 
     #[test]
+    fn a_window_may_be_a_toml_date_time_or_text_of_the_same_instant() {
+        let window = |from: &str| {
+            parsed(&format!(
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = {from}\n"
+            ))
+            .map(|m| m.keep[0].from)
+            .unwrap_or_else(|e| panic!("{from}: {e}"))
+        };
+        let at = Some(TimeRef::At(1_700_000_016_500_000_000));
+        for from in [
+            "2023-11-14T22:13:36.5Z",
+            "\"2023-11-14T22:13:36.5Z\"",
+            "2023-11-14T23:13:36.5+01:00",
+            "\"2023-11-14T21:13:36.5-01:00\"",
+            "2023-11-14 22:13:36.5z",
+        ] {
+            assert_eq!(window(from), at, "{from}");
+        }
+    }
+
+    #[test]
     fn every_mistake_is_located() {
         let cases = [
             (
@@ -734,6 +825,11 @@ mod tests {
                 "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = \"10:00\"\n",
                 "m.toml:6:8",
                 "ISO",
+            ),
+            (
+                "[sources.a]\nfile = \"a.csv\"\n[signals]\nu = \"a:u\"\n[[keep]]\nfrom = 2023-11-14T22:13:36\n",
+                "m.toml:6:8",
+                "no UTC offset",
             ),
         ];
         for (text, at, says) in cases {

@@ -76,14 +76,19 @@ pub fn read_table(
     fields: &[String],
 ) -> Result<Series, DataError> {
     let headers = table.headers().to_vec();
+    // The header is not shown: a manifest may name any file, and an error
+    // says nothing of a file beyond the columns the manifest asked for.
     let find = |name: &str| {
         headers.iter().position(|h| h == name).ok_or_else(|| {
             DataError::new(
                 table.header_at(None),
-                format!("source `{}` has no column `{name}`", source.key),
                 format!(
-                    "its columns are: {} (the manifest's `{}` names them)",
-                    leeway_structure::grammar::join_capped(&headers, ", "),
+                    "source `{}` has no column `{name}` (its header row has {} columns)",
+                    source.key,
+                    headers.len()
+                ),
+                format!(
+                    "the manifest's `{}` names the source's columns as its header row spells them (case and spaces count)",
                     source.at
                 ),
             )

@@ -12,6 +12,7 @@ mod estimate;
 mod logs;
 mod output;
 mod parquet;
+mod readers;
 mod reproduce;
 mod simulate;
 mod words;

@@ -531,3 +531,146 @@ fn the_fast_path_hands_its_parsed_cells_over_and_leaves_the_others() {
         [[Some(1.5), None, Some(-2e3)], [Some(4.0), None, None]],
     );
 }
+
+/// The exact reader's transcript of `text` and the fast reader's for a few
+/// batchings, all alike; the exact one returned.
+fn read_alike(text: &[u8], columns: &[usize]) -> Vec<String> {
+    let f = file_of(text);
+    let want = exact(f.path(), columns, None);
+    for (chunk, threads) in [(1 << 20, 2), (1 << 16, 3), (100, 1)] {
+        let (got, _) = fast(f.path(), Batching { chunk, threads }, columns, None);
+        assert_eq!(got, want, "chunk {chunk}, threads {threads}");
+    }
+    want
+}
+
+/// The last entry of a transcript: its end or its error.
+fn last(transcript: &[String]) -> &str {
+    transcript.last().map_or("", String::as_str)
+}
+
+#[test]
+fn a_line_longer_than_a_mib_is_an_error_at_its_line_and_byte_by_either_reader() {
+    let head = b"time,u\n1,2\n".to_vec();
+    let long = |end: &[u8]| {
+        let mut text = head.clone();
+        text.extend(std::iter::repeat_n(b'7', 2 << 20));
+        text.extend_from_slice(end);
+        text
+    };
+    // Without a line end, with one and rows after, a comment line: the
+    // error is at line 3, from byte 11, never the line read whole.
+    for text in [long(b""), long(b"\n3,4\n"), {
+        let mut t = head.clone();
+        t.push(b'#');
+        t.extend(long(b"\n")[head.len()..].iter());
+        t
+    }] {
+        let started = std::time::Instant::now();
+        let t = read_alike(&text, &[0, 1]);
+        assert!(
+            last(&t).contains("location: \"") && last(&t).contains(":3\""),
+            "{t:?}"
+        );
+        assert!(
+            last(&t).contains(
+                "a line longer than 1 MiB: no line end within 1048576 bytes from byte 11"
+            ),
+            "{t:?}"
+        );
+        assert!(started.elapsed().as_secs() < 20);
+    }
+    // A line of exactly the limit, its line end included, is read.
+    let mut text = head.clone();
+    text.push(b'#');
+    text.extend(std::iter::repeat_n(b' ', MAX_LINE_BYTES - 2));
+    text.extend_from_slice(b"\n3,4\n");
+    let t = read_alike(&text, &[0, 1]);
+    assert!(last(&t).starts_with("end (1, 0)"), "{t:?}");
+    // One byte more is refused.
+    text.insert(head.len() + 1, b' ');
+    let t = read_alike(&text, &[0, 1]);
+    assert!(last(&t).contains("a line longer than 1 MiB"), "{t:?}");
+}
+
+#[test]
+fn a_quoted_cell_left_open_over_a_mib_of_lines_is_an_error_at_its_first_line() {
+    let mut text = b"time,u\n1,2\n3,\"4\n".to_vec();
+    for _ in 0..(600 << 10) {
+        text.extend_from_slice(b"5,6\n");
+    }
+    let t = read_alike(&text, &[0, 1]);
+    assert!(last(&t).contains(":3\""), "{t:?}");
+    assert!(
+        last(&t)
+            .contains("a record longer than 1 MiB: the quoted cell opened in it (from byte 11)"),
+        "{t:?}"
+    );
+    // A quote inside an unquoted cell is a character like any (the csv
+    // reader's rule), not an open quoted cell: the rows after it read.
+    let mut text = b"time,u,note\n1,2,Joe\"s boat\n".to_vec();
+    for k in 0..(300 << 10) {
+        text.extend_from_slice(format!("{k},6,x\n").as_bytes());
+    }
+    let t = read_alike(&text, &[0, 1]);
+    assert!(last(&t).starts_with("end"), "{}", last(&t));
+    assert_eq!(t.len(), 2 + 1 + (300 << 10));
+}
+
+#[test]
+fn text_without_line_ends_costs_a_mib_not_all_memory() {
+    // An endless stream of zeros (as `/dev/zero`): one located error.
+    let zeros = std::io::BufReader::new(std::io::repeat(0));
+    let e = Records::new("zeros", zeros, "--data")
+        .err()
+        .unwrap_or_else(|| panic!("zeros are refused"));
+    assert_eq!(e.location, "zeros:1");
+    assert!(e.message.contains("from byte 0"), "{e:?}");
+    // The device itself, by path, as the CLI opens it.
+    if Path::new("/dev/zero").exists() {
+        let e = crate::file::with_table(Path::new("/dev/zero"), "--data", |_| Ok(()))
+            .err()
+            .unwrap_or_else(|| panic!("/dev/zero is refused"));
+        assert_eq!(e.location, "/dev/zero:1", "{e:?}");
+    }
+}
+
+#[test]
+fn a_pipe_is_read_as_a_stream_and_never_peeked_at() {
+    let dir = tempfile::tempdir().unwrap_or_else(|e| panic!("{e}"));
+    let fifo = dir.path().join("log.csv");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if !made.is_ok_and(|s| s.success()) {
+        eprintln!("no mkfifo here: skipped");
+        return;
+    }
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            // Opening waits for the reader; one reader, one stream.
+            let mut w = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&fifo)
+                .unwrap_or_else(|e| panic!("{e}"));
+            std::io::Write::write_all(&mut w, b"time,u\n1,2\n3,4\n").is_ok()
+        })
+    };
+    let (done, outcome) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let read = crate::file::with_table(&fifo, "--data", |t| {
+            let mut rows = Vec::new();
+            while t.next_row()? {
+                rows.push((t.number(0, "time")?, t.number(1, "u")?));
+            }
+            Ok((t.headers().to_vec(), rows))
+        });
+        let _ = done.send(read);
+    });
+    let read = outcome
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .unwrap_or_else(|_| panic!("reading the pipe hangs"));
+    let (headers, rows) = read.unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(headers, ["time", "u"]);
+    assert_eq!(rows, [(1.0, 2.0), (3.0, 4.0)]);
+    assert!(writer.join().unwrap_or(false), "the writer wrote it all");
+}

@@ -4,6 +4,7 @@
 mod bounds;
 mod common;
 mod examples;
+mod plan_fuzz;
 mod rov;
 mod units;
 mod verification;

@@ -9,7 +9,7 @@ use leeway_logs::bag::path::Extract;
 use leeway_logs::bag::read::Stamped;
 use leeway_logs::bag::write::{BagFormat, write_bag_as};
 
-use crate::common::{ferry_series, read};
+use crate::common::{Seeded, ferry_series, read};
 
 const REQUESTS: &[(&str, Extract)] = &[
     ("/twist.twist.linear.x", Extract::Number),
@@ -18,23 +18,6 @@ const REQUESTS: &[(&str, Extract)] = &[
     ("/imu.orientation_covariance[4]", Extract::Number),
     ("/wrench.wrench.torque.z", Extract::Number),
 ];
-
-/// splitmix64: a seeded stream, enough to pick bytes to damage.
-struct Seeded(u64);
-
-impl Seeded {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// In `from..to` (`to > from`).
-    fn range(&mut self, from: usize, to: usize) -> usize {
-        from + (self.next() % (to - from) as u64) as usize
-    }
-}
 
 /// Every stamp and value, bit for bit.
 fn numbers(signals: &[Stamped]) -> Vec<(i64, u64)> {

@@ -1,4 +1,4 @@
-//! Bags for the tests, written with `logs::bag::write`.
+//! Bags for the tests, written with `logs::bag::write`, and the fuzzers' seeded stream.
 
 use std::path::{Path, PathBuf};
 
@@ -62,4 +62,30 @@ pub fn read(bag: &Path, paths: &[(&str, Extract)]) -> Result<Vec<Stamped>, leewa
         .map(|(text, extract)| (FieldPath::parse(text).expect("a valid path"), *extract))
         .collect();
     read_bag(bag, &requests)
+}
+
+/// splitmix64: a seeded stream, enough to pick bytes to damage and
+/// mutations to make.
+pub struct Seeded(pub u64);
+
+impl Seeded {
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// In `from..to` (`to > from`).
+    pub fn range(&mut self, from: usize, to: usize) -> usize {
+        from + (self.next() % (to - from) as u64) as usize
+    }
+    /// True once in `n` times.
+    pub fn one_in(&mut self, n: usize) -> bool {
+        self.range(0, n) == 0
+    }
+    /// One of `items` (not empty).
+    pub fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
+        &items[self.range(0, items.len())]
+    }
 }

@@ -6,4 +6,6 @@ mod bag_fuzz;
 mod bag_python;
 mod bag_round_trip;
 mod bag_schema;
+mod bounded_reads;
 mod common;
+mod manifest_fuzz;
