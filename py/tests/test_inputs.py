@@ -256,3 +256,14 @@ def test_a_datetime_time_column_is_read_as_the_parquet_reader_reads_it(ship, shi
     drop = ("file", "data", "data_files")
     assert json.dumps({k: v for k, v in ours.items() if k not in drop}) == json.dumps(
         {k: v for k, v in cli.items() if k not in drop})
+
+
+def test_dev_zero_as_a_model_or_a_plan_is_an_error_in_bounded_memory() -> None:
+    # Read whole, a file without end was all memory; now 1 MiB and a
+    # located error, as the CLI.
+    with pytest.raises(leeway.ModelError, match="larger than 1 MiB") as e:
+        leeway.Model.load("/dev/zero")
+    assert e.value.location == "/dev/zero"
+    boat = leeway.Model.from_str("model M { state u\ninput t\nder u = a*u + b*t\nnominal { a = -1, b = 1 } }")
+    with pytest.raises(leeway.PlanError, match="larger than 1 MiB"):
+        leeway.design(boat, "/dev/zero")

@@ -60,7 +60,11 @@ def test_residuals_draws_autocorrelation_and_input_correlations_with_the_band() 
     axes = fig.get_axes()
     assert len(axes) == len(boat.states) * (1 + len(boat.inputs))
     assert axes[0].get_title() == "u: autocorrelation" and axes[1].get_title() == "u × tau"
-    for ax in axes:
+    # The autocorrelation's band is a white error's; a cross-correlation's
+    # is widened by √P for the colour of the error and the input.
+    widened = analysis.band * analysis.input_tests.loc[("u", "tau"), "band"] / analysis.input_band
+    for ax, band in zip(axes, [analysis.band, widened]):
         bands = sorted(line.get_ydata()[0] for line in ax.get_lines() if line.get_linestyle() == "--")
-        assert bands == pytest.approx([-analysis.band, analysis.band])
+        assert bands == pytest.approx([-band, band])
+    assert widened >= analysis.band
     matplotlib.pyplot.close(fig)

@@ -73,7 +73,8 @@ def test_cov_is_labelled_symmetric_and_its_diagonal_gives_the_standard_errors(
     m = cov.to_numpy()
     assert np.array_equal(m, m.T, equal_nan=True)  # exactly, not within round-off
     se = est.params["std_error"].to_numpy()
-    estimated = (est.params["status"] == "estimated").to_numpy()
+    # Estimated alone or as an aggregate with a held parameter.
+    estimated = est.params["status"].isin(["estimated", "aggregate"]).to_numpy()
     assert estimated.any() and not estimated.all()  # this light-wind turn holds W_uu
     diag = np.diag(m)
     # The standard error is √diag, computed once in Rust: equal bits.

@@ -18,9 +18,32 @@ import pandas as pd
 from . import _leeway, _summary
 from ._data import Data, Frame, _handover
 from ._hints import python_spelling
-from .errors import EstimateError, LeewayWarning, OptionError
+from .errors import EstimateError, LeewayError, LeewayWarning, ModelError, OptionError
 
 T = TypeVar("T")
+
+
+# The CLI's bounds on files read whole (docs/data-files.md, "Limits"): a
+# device or a file without end (/dev/zero) is an error, not all memory.
+MAX_MODEL_BYTES = 1 << 20
+MAX_PLAN_BYTES = 1 << 20
+
+
+def read_bounded(
+    path: str | os.PathLike[str], limit: int, what: str, error: type[LeewayError], hint: str
+) -> bytes:
+    """The bytes of ``path``, at most ``limit`` of them: one more is an
+    ``error`` of code ``what`` located at the file."""
+    with open(path, "rb") as f:
+        data = f.read(limit + 1)
+    if len(data) > limit:
+        raise error(
+            f"the {what} file is larger than {limit >> 20} MiB",
+            code=what,
+            location=os.fspath(path),
+            hint=hint,
+        )
+    return data
 
 
 class Model:
@@ -37,8 +60,10 @@ class Model:
         """Reads and compiles a ``.som`` file. Raises ``ModelError`` with
         every diagnostic located at ``file:line:col``; ``OSError`` when the
         file cannot be read."""
-        with open(path, "rb") as f:
-            data = f.read()
+        data = read_bounded(
+            path, MAX_MODEL_BYTES, "model", ModelError,
+            "a model of a few hundred lines is a few kB: is this the .som file?",
+        )
         return cls(_leeway.Model.compile_bytes(data, os.fspath(path), aggregate))
 
     @classmethod

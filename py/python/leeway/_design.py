@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from . import _leeway
-from ._api import Model, _integer, _is_bool, _native, _text
+from ._api import MAX_PLAN_BYTES, Model, _integer, _is_bool, _native, _text, read_bounded
 from ._hints import python_spelling
 from .errors import OptionError, PlanError
 
@@ -297,7 +297,10 @@ def _plan(plan: Any) -> tuple[str, bool, str, bool]:
         return text, True, "plan", False
     if isinstance(plan, (str, os.PathLike)):
         path = Path(plan)
-        data = path.read_bytes()
+        data = read_bounded(
+            path, MAX_PLAN_BYTES, "plan", PlanError,
+            "a plan is a few lines of TOML or JSON: is this the plan file?",
+        )
         try:
             text = data.decode("utf-8")
         except UnicodeDecodeError as e:
