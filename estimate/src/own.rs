@@ -186,6 +186,9 @@ fn worse_than_mean(own: &OwnSimulation) -> Vec<String> {
         .collect()
 }
 
+/// The own-data fit (%) below which a state is said to be simulated poorly.
+pub const POOR_OWN_FIT: f64 = 50.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -211,6 +214,3 @@ mod tests {
         assert!(worse_than_mean(&good).is_empty());
     }
 }
-
-/// The own-data fit (%) below which a state is said to be simulated poorly.
-pub const POOR_OWN_FIT: f64 = 50.0;

@@ -26,6 +26,9 @@ type Columns<'py> = (
     Vec<Bound<'py, PyArray1<f64>>>,
 );
 
+/// One experiment's model values and errors, per state.
+type Run = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// The experiments' columns, the tests as JSON (the `residuals` object of
 /// `leeway validate --json --resid`; `null` for one-step predictions) and
 /// the warnings (a disturbance zero by default).
@@ -59,7 +62,7 @@ pub fn residual_analysis<'py>(
     let options = load_options(ir, step, Some(time_tolerance), resample)?;
     let (dist, _, warning) = held(ir, &disturbances, zero, means.as_deref(), "theta")?;
     let frames = borrow_frames(&frames)?;
-    let (experiments, runs, tests) = py.detach(|| -> Result<_, Failure> {
+    let (experiments, runs, tests) = py.detach(|| -> Result<(_, Vec<Run>, _), Failure> {
         let (experiments, _notes) = data::load(ir, &frames, &options)?;
         let interpreter = Interpreter::new(ir.clone());
         if one_step {
@@ -93,7 +96,6 @@ pub fn residual_analysis<'py>(
             .map(|c| PyArray1::from_slice(py, c))
             .collect()
     };
-    let runs: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = runs;
     let columns = experiments
         .iter()
         .zip(&runs)

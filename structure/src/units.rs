@@ -87,7 +87,7 @@ pub fn factor(name: &str) -> f64 {
 
 /// The factor of the unit a model's `data { }` declares for `signal` (1
 /// when it declares none).
-pub fn factor_of(ir: &crate::Ir, signal: &str) -> f64 {
+pub fn factor_of(ir: &crate::ir::Ir, signal: &str) -> f64 {
     ir.data_units.get(signal).map_or(1.0, |u| factor(u))
 }
 
