@@ -204,24 +204,10 @@ def residuals(
     one-step error is MA(1) and fails every whiteness test.
     ``data``, ``step``, ``time_tolerance`` and ``resample`` are as for
     ``leeway.validate``."""
-    checked_theta = _theta(model, theta)
     checked_lags = _integer("lags", lags, 1, 100_000)
-    given, zero = _disturbances(disturbances)
-    experiments, document, issued = _native(
-        _leeway.residual_analysis,
-        model._core,
-        _handover(model, data),
-        checked_theta,
-        given,
-        checked_lags,
-        zero,
-        _means(theta),
-        _seconds("step", step),
-        _seconds("time_tolerance", time_tolerance, optional=False),
-        _seconds("resample", resample),
+    experiments, document = _run_native(
+        model, theta, data, checked_lags, disturbances, step, time_tolerance, resample, one_step=False
     )
-    for w in issued:
-        warnings.warn(python_spelling(w), LeewayWarning, stacklevel=2)
     return _analysis(json.loads(document), experiments, model.states)
 
 
@@ -250,22 +236,42 @@ def predict(
             code="invalid-option",
             hint="use k=1, or leeway.simulate for a simulation from the first sample",
         )
+    experiments, _ = _run_native(
+        model, theta, data, 1, disturbances, step, time_tolerance, resample, one_step=True
+    )
+    return _frame(experiments, model.states, 1)
+
+
+def _run_native(
+    model: Model,
+    theta: Theta,
+    data: Data,
+    lags: int,
+    disturbances: Disturbances,
+    step: float | None,
+    time_tolerance: float,
+    resample: float | None,
+    *,
+    one_step: bool,
+) -> tuple[list[Any], str]:
+    """The native analysis (free run and tests, or one-step predictions),
+    its warnings issued at the caller's caller."""
     checked_theta = _theta(model, theta)
     given, zero = _disturbances(disturbances)
-    experiments, _, issued = _native(
+    experiments, document, issued = _native(
         _leeway.residual_analysis,
         model._core,
         _handover(model, data),
         checked_theta,
         given,
-        1,
+        lags,
         zero,
         _means(theta),
         _seconds("step", step),
         _seconds("time_tolerance", time_tolerance, optional=False),
         _seconds("resample", resample),
-        True,
+        one_step,
     )
     for w in issued:
-        warnings.warn(python_spelling(w), LeewayWarning, stacklevel=2)
-    return _frame(experiments, model.states, 1)
+        warnings.warn(python_spelling(w), LeewayWarning, stacklevel=3)
+    return experiments, document
