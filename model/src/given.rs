@@ -66,11 +66,7 @@ pub fn disturbance_slots(ir: &Ir, given: &[(&str, f64)]) -> Result<Vec<Option<f6
     let mut values = vec![None; ir.components.len()];
     for (index, &(name, v)) in given.iter().enumerate() {
         let problem = |reason: String| NameProblem { index, reason };
-        let found = ir.components.iter().position(|c| {
-            let d = &ir.disturbances[c.disturbance].name;
-            name == c.name || name == format!("{d}.{}", c.name)
-        });
-        let Some(i) = found else {
+        let Some(i) = component_named(ir, name) else {
             return Err(problem(format!("`{name}` is not a disturbance component")));
         };
         if ir.disturbances[ir.components[i].disturbance].measured {
@@ -93,10 +89,8 @@ pub fn estimated_unmeasured<'a>(ir: &Ir, means: &[(&'a str, f64)]) -> Vec<(&'a s
     means
         .iter()
         .filter(|(name, _)| {
-            !ir.components.iter().any(|c| {
-                let d = &ir.disturbances[c.disturbance];
-                d.measured && (*name == c.name || *name == format!("{}.{}", d.name, c.name))
-            })
+            component_named(ir, name)
+                .is_none_or(|i| !ir.disturbances[ir.components[i].disturbance].measured)
         })
         .copied()
         .collect()
@@ -199,15 +193,19 @@ pub fn held_disturbances(
     HeldDisturbances { values, origins }
 }
 
+/// The component `name` stands for, `north` or `current.north`.
+fn component_named(ir: &Ir, name: &str) -> Option<usize> {
+    ir.components.iter().position(|c| {
+        let d = &ir.disturbances[c.disturbance].name;
+        name == c.name || name == format!("{d}.{}", c.name)
+    })
+}
+
 /// The components a name stands for, measured or not: one component
 /// (`north` or `current.north`, as [`disturbance_slots`] reads it) or every
 /// component of a medium (`current`); empty when it is neither.
 pub fn named_components(ir: &Ir, name: &str) -> Vec<usize> {
-    let one = ir.components.iter().position(|c| {
-        let d = &ir.disturbances[c.disturbance].name;
-        name == c.name || name == format!("{d}.{}", c.name)
-    });
-    match one {
+    match component_named(ir, name) {
         Some(i) => vec![i],
         None => (0..ir.components.len())
             .filter(|&i| ir.disturbances[ir.components[i].disturbance].name == name)
