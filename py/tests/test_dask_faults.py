@@ -366,7 +366,10 @@ def test_a_pass_left_without_workers_is_a_worker_lost_error_under_the_default_op
     print(f"no worker left: worker-lost after {elapsed:.1f} s")
     assert error.code == "worker-lost", error
     assert "no worker for 30 s" in error.message and "start workers" in (error.hint or "")
-    assert 30.0 <= elapsed < 30.0 + 30.0, elapsed
+    # The bound is loose on purpose: the pass opens its files and starts
+    # before the workers die (61 s once on a loaded CI machine); what it
+    # rules out is waiting for `timeout` (3600 s).
+    assert 30.0 <= elapsed < 300.0, elapsed
 
 
 def test_dasks_no_worker_errors_are_worker_lost_errors(
