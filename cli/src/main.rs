@@ -37,7 +37,9 @@ mod design;
 mod disturbances;
 mod estimate;
 mod files;
+mod fmt;
 mod input;
+mod lsp;
 mod model;
 mod noise;
 mod options;
@@ -76,6 +78,10 @@ enum Command {
     Reproduce(reproduce::args::ReproduceArgs),
     /// Plan the trial for a craft: runs, operating points, excitation, predicted accuracy; --verify by Monte Carlo.
     Design(design::args::DesignArgs),
+    /// Rewrite .som models in the canonical layout; --check lists those that differ (exit 1).
+    Fmt(fmt::FmtArgs),
+    /// The language server for editors, over stdin and stdout (docs/editor.md).
+    Lsp(lsp::LspArgs),
 }
 
 fn main() -> ExitCode {
@@ -87,6 +93,8 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Validate(args) => validate::run(&args),
         Command::Design(args) => design::run(&args),
+        Command::Fmt(args) => fmt::run(&args),
+        Command::Lsp(args) => lsp::run(&args),
         Command::Reproduce(args) => {
             // Bounds across options, reported like clap's own (exit 2).
             if let Err(message) = reproduce::args::check_work(&args) {

@@ -422,6 +422,14 @@ pub fn data_conditions(ir: &Ir) -> Vec<String> {
         .collect()
 }
 
+/// The verdict section of the report alone (`Identifiability of θ` and
+/// its lines), for a caller that shows it apart (the language server).
+pub fn verdict(ir: &Ir) -> String {
+    let mut o = String::new();
+    render_verdict(&mut o, ir);
+    o
+}
+
 /// Whether θ is identifiable, and from which experiments.
 fn render_verdict(o: &mut String, ir: &Ir) {
     let r = &ir.report;
