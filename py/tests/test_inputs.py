@@ -31,7 +31,7 @@ def ship() -> leeway.Model:
 def ship_unstepped() -> leeway.Model:
     """The ship without `step`: its sample time comes from the time column."""
     source = SHIP.read_text()
-    line = "    step 1.0                                  // sample time h; der x = f gives x+ = x + h f\n"
+    line = "    step 1.0                  // sample time h; der x = f gives x+ = x + h f\n"
     assert line in source
     return leeway.Model.from_str(source.replace(line, ""), file="ship-unstepped.som")
 
