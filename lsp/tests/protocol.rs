@@ -1,0 +1,226 @@
+//! The protocol, scripted in process: initialize, open, change, hover,
+//! definition, references, symbols, completion, formatting, shutdown on
+//! every example model and every broken fixture; the diagnostics equal to
+//! `leeway check`'s, their ranges in UTF-16 columns.
+
+mod support;
+
+use support::{Client, URI, utf16_position};
+use leeway_grammar::Severity;
+use leeway_structure::{CompileOptions, compile};
+use serde_json::{Value, json};
+use std::path::{Path, PathBuf};
+
+fn models() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/models");
+    let mut found = Vec::new();
+    for dir in [root.clone(), root.join("broken")] {
+        for e in std::fs::read_dir(dir).expect("examples").flatten() {
+            if e.path().extension().is_some_and(|x| x == "som") {
+                found.push(e.path());
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+fn range_of(text: &str, start: usize, end: usize) -> Value {
+    let (l0, c0) = utf16_position(text, start);
+    let (l1, c1) = utf16_position(text, end);
+    json!({"start": {"line": l0, "character": c0}, "end": {"line": l1, "character": c1}})
+}
+
+/// What the server must publish for `text`: check's diagnostics (code,
+/// severity, first line, range of the primary label), then the verdict.
+fn expected(text: &str) -> Vec<(String, u64, String, Value)> {
+    let c = compile(text, &CompileOptions::default());
+    let (model, _) = leeway_grammar::parse(text);
+    let name = model.as_ref().map(|m| m.name.span);
+    let mut out: Vec<(String, u64, String, Value)> = c
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let at = d.primary_span().or(name).unwrap_or_default();
+            let severity = match d.severity {
+                Severity::Error => 1,
+                Severity::Warning => 2,
+                Severity::Note => 3,
+            };
+            (d.code.clone(), severity, d.message.clone(), range_of(text, at.start, at.end))
+        })
+        .collect();
+    if let (Some(ir), Some(at)) = (&c.ir, name) {
+        let verdict = leeway_structure::render::verdict(ir);
+        let first = verdict.trim().lines().next().unwrap_or("").to_string();
+        out.push(("identifiability".into(), 3, first, range_of(text, at.start, at.end)));
+    }
+    out
+}
+
+fn received(published: &[Value]) -> Vec<(String, u64, String, Value)> {
+    published
+        .iter()
+        .map(|d| {
+            let message = d["message"].as_str().unwrap_or("");
+            (
+                d["code"].as_str().unwrap_or("").to_string(),
+                d["severity"].as_u64().unwrap_or(0),
+                message.lines().next().unwrap_or("").to_string(),
+                d["range"].clone(),
+            )
+        })
+        .collect()
+}
+
+/// Applies the server's whole-document edits.
+fn apply_edits(text: &str, edits: &Value) -> String {
+    match edits.as_array().map(Vec::as_slice) {
+        Some([]) | None => text.to_string(),
+        Some([edit]) => {
+            assert_eq!(edit["range"]["start"], json!({"line": 0, "character": 0}));
+            edit["newText"].as_str().expect("text").to_string()
+        }
+        Some(more) => panic!("{} edits", more.len()),
+    }
+}
+
+#[test]
+fn scripted_session_on_every_example_and_broken_fixture() {
+    let all = models();
+    assert!(all.len() > 50);
+    for path in all {
+        let what = path.display().to_string();
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let mut c = Client::start();
+        c.open(&text);
+        assert_eq!(received(&c.diagnostics(1)), expected(&text), "{what}: on open");
+
+        // An edit: a non-ASCII comment line at the top shifts every range by a line.
+        let header = "// ψ ≈ 1 😀 (UTF-16: the emoji counts two)\n";
+        c.notify(
+            "textDocument/didChange",
+            json!({"textDocument": {"uri": URI, "version": 2},
+                   "contentChanges": [{"range": {"start": {"line": 0, "character": 0},
+                                                 "end": {"line": 0, "character": 0}},
+                                       "text": header}]}),
+        );
+        let edited = format!("{header}{text}");
+        assert_eq!(received(&c.diagnostics(2)), expected(&edited), "{what}: after a change");
+
+        let (model, _) = leeway_grammar::parse(&edited);
+        let ir = compile(&edited, &CompileOptions::default()).ir;
+        if let Some(ir) = &ir {
+            // Hover on every term: its regressors.
+            for t in &ir.terms {
+                let (l, ch) = utf16_position(&edited, t.span.start);
+                let h = c.request("textDocument/hover", c.at(l, ch));
+                let md = h["contents"]["value"].as_str().unwrap_or("");
+                assert!(md.contains(&format!("**term** `{}`", t.text)), "{what}: hover on `{}`:\n{md}", t.text);
+                assert!(md.contains("Φ "), "{what}: no Φ column in\n{md}");
+            }
+        }
+        if let Some(model) = &model {
+            // Definition of every name used in an equation: a declaration of it.
+            let uses = names_in_equations(model);
+            for (name, start) in uses {
+                let (l, ch) = utf16_position(&edited, start);
+                let found = c.request("textDocument/definition", c.at(l, ch));
+                let spots = found.as_array().cloned().unwrap_or_default();
+                assert!(!spots.is_empty(), "{what}: no definition of `{name}`");
+                for s in spots {
+                    let r = &s["range"];
+                    let line = edited.lines().nth(r["start"]["line"].as_u64().unwrap_or(0) as usize).unwrap_or("");
+                    let col = r["start"]["character"].as_u64().unwrap_or(0) as usize;
+                    let at: String = String::from_utf16_lossy(&line.encode_utf16().skip(col).take(name.encode_utf16().count()).collect::<Vec<_>>());
+                    assert_eq!(at, name, "{what}: definition of `{name}`");
+                }
+            }
+            let symbols = c.request("textDocument/documentSymbol", json!({"textDocument": {"uri": URI}}));
+            assert_eq!(symbols[0]["name"], json!(model.name.name));
+        }
+        let items = c.request("textDocument/completion", c.at(0, 0));
+        assert!(items.as_array().is_some_and(|a| a.iter().any(|i| i["label"] == "nominal")));
+
+        let edits = c.try_request("textDocument/formatting", json!({"textDocument": {"uri": URI}, "options": {"tabSize": 4, "insertSpaces": true}}));
+        match leeway_format::format(&edited) {
+            Ok(layout) => assert_eq!(apply_edits(&edited, &edits.expect("edits")), layout, "{what}"),
+            // No edit for a file that does not parse (its diagnostics say why).
+            Err(_) => assert_eq!(edits, Ok(Value::Null), "{what}"),
+        }
+        c.stop();
+    }
+}
+
+/// Every name written in an equation, with its byte offset.
+fn names_in_equations(model: &leeway_grammar::ModelSyntax) -> Vec<(String, usize)> {
+    use leeway_grammar::{Expr, Item};
+    let mut out = Vec::new();
+    for item in &model.items {
+        if let Item::Equation { rhs, .. } = item {
+            let mut stack = vec![rhs];
+            while let Some(e) = stack.pop() {
+                match e {
+                    Expr::Path(p) => out.push((p.base.name.clone(), p.base.span.start)),
+                    Expr::Abs(x, _) | Expr::Neg(x, _) | Expr::Paren(x, _) => stack.push(x),
+                    Expr::Binary { lhs, rhs, .. } => {
+                        stack.push(lhs);
+                        stack.push(rhs);
+                    }
+                    Expr::Number(_) => {}
+                }
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn utf16_columns_after_a_non_ascii_comment() {
+    // The error is on `Q*u*u*u` (order too high), after a comment with a
+    // character outside the BMP on the same line.
+    let text = "model M {\n    state u\n    der u = /* 😀é */ A*u + Q*u*u*u\n}\n";
+    let mut c = Client::start();
+    c.open(text);
+    let d = c.diagnostics(1);
+    let error = d.iter().find(|d| d["severity"] == 1).expect("an error");
+    let byte = text.find("Q*u*u*u").expect("there");
+    // 4 + "der u = " (8) + "/* " (3) + 😀 (2 units) + "é */ " (5) + "A*u + " (6) = 28.
+    assert_eq!(utf16_position(text, byte), (2, 28));
+    assert_eq!(error["range"]["start"], json!({"line": 2, "character": 28}));
+    // A hover at that position lands on `Q`.
+    let h = c.request("textDocument/hover", c.at(2, 28));
+    assert!(h.is_null() || h["contents"]["value"].as_str().unwrap_or("").contains("`Q`"), "{h}");
+    c.stop();
+}
+
+#[test]
+fn hovers_on_a_parameter_a_signal_and_a_medium() {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/models/ship.som")).expect("ship");
+    let mut c = Client::start();
+    c.open(&text);
+    let _ = c.diagnostics(1);
+    let hover_at = |c: &mut Client, needle: &str, nth: usize| {
+        let byte = text.match_indices(needle).nth(nth).expect("in the ship").0;
+        let (l, ch) = utf16_position(&text, byte);
+        c.request("textDocument/hover", c.at(l, ch))["contents"]["value"].as_str().unwrap_or("").to_string()
+    };
+    let x_uu = hover_at(&mut c, "X_uu", 0);
+    assert!(x_uu.contains("**parameter** `X_uu`") && x_uu.contains("- `water.u*|water.u|` in `der u`"), "{x_uu}");
+    assert!(x_uu.contains("nominal value: 0") && x_uu.contains("identified"), "{x_uu}");
+    assert!(x_uu.contains("rho[north,X_uu]") || x_uu.contains("Φρ"), "the nuisance columns of the term:\n{x_uu}");
+    let current = hover_at(&mut c, "current", 1);
+    assert!(current.contains("unmeasured, in the earth frame, components north, east"), "{current}");
+    let tau1 = hover_at(&mut c, "tau1", 1);
+    assert!(tau1.contains("**input** `tau1`") && tau1.contains("input tau1, tau2, tau3"), "{tau1}");
+    let refs = {
+        let byte = text.find("water.u").expect("there");
+        let (l, ch) = utf16_position(&text, byte);
+        let mut p = c.at(l, ch);
+        p["context"] = json!({"includeDeclaration": true});
+        c.request("textDocument/references", p)
+    };
+    let n = text.matches("water").count();
+    assert_eq!(refs.as_array().map(Vec::len), Some(n), "every `water`");
+    c.stop();
+}
