@@ -1,4 +1,6 @@
-//! A scripted client talking to the server in process (`Connection::memory`).
+//! A scripted client talking to the server in process (`Connection::memory`),
+//! shared by the test crates (each uses part of it).
+#![allow(dead_code)]
 
 use leeway_lsp::server::serve;
 use lsp_server::{Connection, Message, Notification, Request, RequestId};
