@@ -11,13 +11,14 @@ pub struct LspArgs {
     pub stdio: bool,
 }
 
-/// Runs the server until the client exits: exit 0 after `shutdown` and
-/// `exit`, 2 when the connection breaks before them.
+/// Runs the server until the client leaves (`shutdown` and `exit`, or its
+/// end of the stream closed): exit 0; 2 when the handshake or the output
+/// fails.
 pub fn run(_args: &LspArgs) -> Status {
     match leeway_lsp::run_stdio() {
         Ok(()) => Status::Success,
         Err(_) => {
-            let message = "the editor's connection closed before `shutdown`";
+            let message = "the connection to the editor failed (the `initialize` handshake or a write)";
             err(&headline(stderr_style(), "error", None, message));
             Status::Error
         }

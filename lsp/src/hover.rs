@@ -38,12 +38,23 @@ pub fn hover(text: &str, analysis: &Analysis, at: usize) -> Option<(String, Span
     span.map(|s| (md, s))
 }
 
-fn line_of(text: &str, span: Span) -> &str {
-    let start = text[..span.start.min(text.len())]
-        .rfind('\n')
-        .map_or(0, |i| i + 1);
-    let end = text[start..].find('\n').map_or(text.len(), |i| start + i);
-    text[start..end].trim()
+/// A declaration as written: its item's text up to the first comment
+/// (pest's span of a declaration ending in an optional part reaches over
+/// the comments after it), with the keyword of a `state` or `input` list.
+fn declaration(text: &str, o: &Occurrence) -> String {
+    let item = text.get(o.item.start..o.item.end).unwrap_or("");
+    let code = item
+        .find("//")
+        .into_iter()
+        .chain(item.find("/*"))
+        .min()
+        .map_or(item, |i| &item[..i])
+        .trim();
+    match o.kind {
+        Kind::State if !code.starts_with("state") => format!("state {code}"),
+        Kind::Input if !code.starts_with("input") => format!("input {code}"),
+        _ => code.to_string(),
+    }
 }
 
 fn name(md: &mut String, text: &str, analysis: &Analysis, ir: Option<&Ir>, o: &Occurrence) {
@@ -54,7 +65,7 @@ fn name(md: &mut String, text: &str, analysis: &Analysis, ir: Option<&Ir>, o: &O
     }
     let decls = analysis.symbols.declarations(&o.name, o.kind);
     for d in &decls {
-        let _ = writeln!(md, "```som\n{}\n```\n", line_of(text, d.span));
+        let _ = writeln!(md, "```som\n{}\n```\n", declaration(text, d));
     }
     let Some(ir) = ir else { return };
     if let Some(column) = ir.data_columns.get(&o.name) {

@@ -8,6 +8,7 @@ mod csv_layouts;
 mod data;
 mod delay;
 mod design;
+mod editor;
 mod estimate;
 mod logs;
 mod output;
