@@ -27,7 +27,12 @@ pub fn run(args: &FmtArgs) -> Status {
             Ok(Ok(source)) => source,
             Ok(Err(refused)) => {
                 let style = stderr_style();
-                err(&grammar::render(&[refused.diagnostic], &file, &refused.text, style));
+                err(&grammar::render(
+                    &[refused.diagnostic],
+                    &file,
+                    &refused.text,
+                    style,
+                ));
                 status = Status::Error;
                 continue;
             }
@@ -41,7 +46,12 @@ pub fn run(args: &FmtArgs) -> Status {
         let formatted = match leeway_format::format(&source) {
             Ok(text) => text,
             Err(diagnostics) => {
-                err(&grammar::render(&diagnostics, &file, &source, stderr_style()));
+                err(&grammar::render(
+                    &diagnostics,
+                    &file,
+                    &source,
+                    stderr_style(),
+                ));
                 let message = format!("`{file}` was not formatted: it does not parse");
                 err(&headline(stderr_style(), "error", None, &message));
                 status = Status::Error;

@@ -18,7 +18,8 @@ pub fn run(_args: &LspArgs) -> Status {
     match leeway_lsp::run_stdio() {
         Ok(()) => Status::Success,
         Err(_) => {
-            let message = "the connection to the editor failed (the `initialize` handshake or a write)";
+            let message =
+                "the connection to the editor failed (the `initialize` handshake or a write)";
             err(&headline(stderr_style(), "error", None, message));
             Status::Error
         }

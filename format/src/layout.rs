@@ -87,7 +87,10 @@ fn trim(source: &str, comments: &[Comment], span: Span) -> Span {
             return span;
         };
         end = span.start + text.trim_end().len();
-        match comments.iter().find(|c| c.span.end == end && c.span.start >= span.start) {
+        match comments
+            .iter()
+            .find(|c| c.span.end == end && c.span.start >= span.start)
+        {
             Some(c) => end = c.span.start,
             None => return Span::new(span.start, end),
         }
@@ -197,7 +200,10 @@ fn list(keyword: &str, names: &[Ident]) -> Run {
 fn block(keyword: &str, span: Span, body: Vec<Seg>, separator: &'static str) -> Run {
     let open = span.start;
     Run {
-        head: seg(format!("{keyword} {{"), Span::new(open, open + keyword.len())),
+        head: seg(
+            format!("{keyword} {{"),
+            Span::new(open, open + keyword.len()),
+        ),
         body,
         join_first: " ",
         join: if separator.is_empty() { " " } else { ", " },

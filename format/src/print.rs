@@ -14,7 +14,9 @@ fn newlines(source: &str, from: usize, to: usize) -> usize {
     if from >= to {
         return 0;
     }
-    source.get(from..to).map_or(0, |gap| gap.matches('\n').count())
+    source
+        .get(from..to)
+        .map_or(0, |gap| gap.matches('\n').count())
 }
 
 /// Each comment goes to the end of the line of code it was written on
@@ -30,7 +32,10 @@ fn place<'c>(
     for c in comments {
         let on = lines.partition_point(|l| l.start <= c.span.start);
         match on.checked_sub(1) {
-            Some(i) if c.span.start < lines[i].end || newlines(source, lines[i].end, c.span.start) == 0 => {
+            Some(i)
+                if c.span.start < lines[i].end
+                    || newlines(source, lines[i].end, c.span.start) == 0 =>
+            {
                 trailing[i].push(c)
             }
             Some(i) => leading[i + 1].push(c),
@@ -80,7 +85,9 @@ pub(crate) fn print(source: &str, lines: &[Line], comments: &[Comment]) -> Strin
             code: format!("{}{}", " ".repeat(line.indent), line.text),
             trailing: trailing[i].iter().map(|c| c.text.clone()).collect(),
         });
-        prev_end = trailing[i].last().map_or(line.end, |c| c.span.end.max(line.end));
+        prev_end = trailing[i]
+            .last()
+            .map_or(line.end, |c| c.span.end.max(line.end));
         // Nothing blank right after the header.
         blank_allowed = i != 0;
     }

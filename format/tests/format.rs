@@ -17,7 +17,9 @@ fn every_model() -> Vec<PathBuf> {
     let mut found = Vec::new();
     let mut stack = vec![root()];
     while let Some(dir) = stack.pop() {
-        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
         for e in entries.flatten() {
             let path = e.path();
             let name = e.file_name().to_string_lossy().to_string();
@@ -66,7 +68,11 @@ fn check_layout(source: &str, what: &str) -> String {
     let once = format(source).unwrap_or_else(|d| panic!("{what}: {d:?}"));
     let twice = format(&once).unwrap_or_else(|d| panic!("{what}, formatted: {d:?}\n{once}"));
     assert_eq!(once, twice, "{what}: formatting twice differs");
-    assert_eq!(compiled(source), compiled(&once), "{what}: the formatted model compiles differently\n{once}");
+    assert_eq!(
+        compiled(source),
+        compiled(&once),
+        "{what}: the formatted model compiles differently\n{once}"
+    );
     once
 }
 
@@ -76,7 +82,9 @@ fn idempotent_and_faithful_on_every_model_of_the_repository() {
     assert!(models.len() > 60, "found only {} models", models.len());
     let mut parsed = 0;
     for path in &models {
-        let Ok(source) = std::fs::read_to_string(path) else { continue };
+        let Ok(source) = std::fs::read_to_string(path) else {
+            continue;
+        };
         if leeway_grammar::parse(&source).0.is_none() {
             // A fixture of a syntax error: formatting refuses it, untouched.
             assert!(format(&source).is_err());
@@ -91,11 +99,19 @@ fn idempotent_and_faithful_on_every_model_of_the_repository() {
 #[test]
 fn the_examples_are_formatted() {
     for dir in ["examples/models", "tests/models"] {
-        for e in std::fs::read_dir(root().join(dir)).expect("the folder exists").flatten() {
+        for e in std::fs::read_dir(root().join(dir))
+            .expect("the folder exists")
+            .flatten()
+        {
             let path = e.path();
             if path.extension().is_some_and(|x| x == "som") {
                 let source = std::fs::read_to_string(&path).expect("readable");
-                assert_eq!(format(&source).ok().as_deref(), Some(source.as_str()), "{}: run `leeway fmt` on it", path.display());
+                assert_eq!(
+                    format(&source).ok().as_deref(),
+                    Some(source.as_str()),
+                    "{}: run `leeway fmt` on it",
+                    path.display()
+                );
             }
         }
     }
@@ -131,8 +147,27 @@ data { psi = \"heading_deg\" in deg , t in kN }
 #[test]
 fn idempotent_on_edited_examples() {
     const PIECES: &[&str] = &[
-        " ", "\n", "// c\n", "/* é */", "+", "-", "*", "|", "(", ")", "x", "X_u", "water.u", ",",
-        "0.5", "{", "}", "=", "der v = ", "nominal { A = 1 }", ";",
+        " ",
+        "\n",
+        "// c\n",
+        "/* é */",
+        "+",
+        "-",
+        "*",
+        "|",
+        "(",
+        ")",
+        "x",
+        "X_u",
+        "water.u",
+        ",",
+        "0.5",
+        "{",
+        "}",
+        "=",
+        "der v = ",
+        "nominal { A = 1 }",
+        ";",
     ];
     let mut rng = ChaCha8Rng::seed_from_u64(51);
     let examples: Vec<String> = every_model()

@@ -6,9 +6,7 @@
 use crate::analysis::Analysis;
 use crate::text::range;
 use leeway_grammar::{Diagnostic, Severity, Span};
-use lsp_types::{
-    DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString, Uri,
-};
+use lsp_types::{DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString, Uri};
 
 /// The code of the verdict's information diagnostic.
 pub const VERDICT: &str = "identifiability";
@@ -52,12 +50,14 @@ pub fn message(d: &Diagnostic) -> String {
     m
 }
 
-fn convert(uri: &Uri, text: &str, d: &Diagnostic, model_name: Option<Span>) -> lsp_types::Diagnostic {
+fn convert(
+    uri: &Uri,
+    text: &str,
+    d: &Diagnostic,
+    model_name: Option<Span>,
+) -> lsp_types::Diagnostic {
     // A finding about the whole model (no label) is shown on its name.
-    let at = d
-        .primary_span()
-        .or(model_name)
-        .unwrap_or_default();
+    let at = d.primary_span().or(model_name).unwrap_or_default();
     let related: Vec<DiagnosticRelatedInformation> = d
         .labels
         .iter()

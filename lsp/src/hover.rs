@@ -112,7 +112,10 @@ fn name(md: &mut String, text: &str, analysis: &Analysis, ir: Option<&Ir>, o: &O
 fn parameter(md: &mut String, analysis: &Analysis, ir: Option<&Ir>, name: &str) {
     let Some(ir) = ir else {
         let uses = analysis.symbols.references(name, Kind::Parameter).len();
-        let _ = writeln!(md, "written {uses} times (the model does not compile: no more is known)");
+        let _ = writeln!(
+            md,
+            "written {uses} times (the model does not compile: no more is known)"
+        );
         return;
     };
     let Some(p) = ir.parameters.iter().position(|q| q.name == name) else {
@@ -139,7 +142,10 @@ fn parameter(md: &mut String, analysis: &Analysis, ir: Option<&Ir>, name: &str) 
     if combinations.is_empty() && ir.report.identifiable {
         let _ = writeln!(md, "identified");
     } else if combinations.is_empty() {
-        let _ = writeln!(md, "θ is not identifiable (see the diagnostic on the model's name)");
+        let _ = writeln!(
+            md,
+            "θ is not identifiable (see the diagnostic on the model's name)"
+        );
     } else {
         for c in combinations {
             let _ = writeln!(md, "not identified alone: {c}\n");

@@ -4,8 +4,8 @@
 //! burst of keystrokes is analysed once, for its last version).
 
 use crate::analysis::Analysis;
-use crate::{diagnostics, hover, text};
 use crate::symbols::Kind;
+use crate::{diagnostics, hover, text};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
@@ -16,19 +16,36 @@ use lsp_types::request::{
     Request as _,
 };
 use lsp_types::{
-    CompletionItem, CompletionItemKind, CompletionResponse, DocumentSymbol,
-    DocumentSymbolResponse, GotoDefinitionResponse, Hover, HoverContents, HoverProviderCapability,
-    Location, MarkupContent, MarkupKind, OneOf, PublishDiagnosticsParams, ServerCapabilities,
-    SymbolKind, TextDocumentPositionParams, TextDocumentSyncCapability, TextDocumentSyncKind,
-    TextEdit, Uri,
+    CompletionItem, CompletionItemKind, CompletionResponse, DocumentSymbol, DocumentSymbolResponse,
+    GotoDefinitionResponse, Hover, HoverContents, HoverProviderCapability, Location, MarkupContent,
+    MarkupKind, OneOf, PublishDiagnosticsParams, ServerCapabilities, SymbolKind,
+    TextDocumentPositionParams, TextDocumentSyncCapability, TextDocumentSyncKind, TextEdit, Uri,
 };
 use std::collections::{BTreeSet, HashMap};
 
 /// The keywords offered by completion.
 const KEYWORDS: &[&str] = &[
-    "model", "step", "state", "input", "heading", "integrates", "axes", "rotation",
-    "disturbance", "unmeasured", "measured", "earth", "body", "relative", "der", "next",
-    "nominal", "data", "delay", "steps", "in",
+    "model",
+    "step",
+    "state",
+    "input",
+    "heading",
+    "integrates",
+    "axes",
+    "rotation",
+    "disturbance",
+    "unmeasured",
+    "measured",
+    "earth",
+    "body",
+    "relative",
+    "der",
+    "next",
+    "nominal",
+    "data",
+    "delay",
+    "steps",
+    "in",
 ];
 
 /// What the server offers, sent in answer to `initialize`.
@@ -50,7 +67,11 @@ pub fn capabilities() -> ServerCapabilities {
     }
 }
 
+/// The open documents by URI (as text: `Uri` caches its parse inside).
+type Docs = HashMap<String, Document>;
+
 struct Document {
+    uri: Uri,
     text: String,
     version: i32,
     analysis: Option<Analysis>,
@@ -58,7 +79,8 @@ struct Document {
 
 impl Document {
     fn analysis(&mut self) -> &Analysis {
-        self.analysis.get_or_insert_with(|| Analysis::of(&self.text))
+        self.analysis
+            .get_or_insert_with(|| Analysis::of(&self.text))
     }
 }
 
@@ -71,7 +93,7 @@ pub struct Disconnected;
 pub fn serve(connection: &Connection) -> Result<(), Disconnected> {
     let caps = serde_json::to_value(capabilities()).map_err(|_| Disconnected)?;
     connection.initialize(caps).map_err(|_| Disconnected)?;
-    let mut docs: HashMap<Uri, Document> = HashMap::new();
+    let mut docs: Docs = HashMap::new();
     let mut dirty: BTreeSet<String> = BTreeSet::new();
     loop {
         let Ok(first) = connection.receiver.recv() else {
@@ -97,13 +119,13 @@ pub fn serve(connection: &Connection) -> Result<(), Disconnected> {
         }
         // The queue is empty: publish what the edits changed.
         for key in std::mem::take(&mut dirty) {
-            let Some((uri, doc)) = docs.iter_mut().find(|(u, _)| u.as_str() == key) else {
+            let Some(doc) = docs.get_mut(&key) else {
                 continue;
             };
             let analysis = doc.analysis.get_or_insert_with(|| Analysis::of(&doc.text));
             let params = PublishDiagnosticsParams {
-                uri: uri.clone(),
-                diagnostics: diagnostics::of(uri, &doc.text, analysis),
+                uri: doc.uri.clone(),
+                diagnostics: diagnostics::of(&doc.uri, &doc.text, analysis),
                 version: Some(doc.version),
             };
             send_notification::<PublishDiagnostics>(connection, params)?;
@@ -122,16 +144,17 @@ fn send_notification<N: lsp_types::notification::Notification>(
         .map_err(|_| Disconnected)
 }
 
-fn notify(docs: &mut HashMap<Uri, Document>, dirty: &mut BTreeSet<String>, n: Notification) {
+fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) {
     match n.method.as_str() {
         DidOpenTextDocument::METHOD => {
-            if let Ok(p) =
-                serde_json::from_value::<lsp_types::DidOpenTextDocumentParams>(n.params)
+            if let Ok(p) = serde_json::from_value::<lsp_types::DidOpenTextDocumentParams>(n.params)
             {
-                dirty.insert(p.text_document.uri.as_str().to_string());
+                let key = p.text_document.uri.as_str().to_string();
+                dirty.insert(key.clone());
                 docs.insert(
-                    p.text_document.uri,
+                    key,
                     Document {
+                        uri: p.text_document.uri,
                         text: p.text_document.text,
                         version: p.text_document.version,
                         analysis: None,
@@ -142,7 +165,7 @@ fn notify(docs: &mut HashMap<Uri, Document>, dirty: &mut BTreeSet<String>, n: No
         DidChangeTextDocument::METHOD => {
             if let Ok(p) =
                 serde_json::from_value::<lsp_types::DidChangeTextDocumentParams>(n.params)
-                && let Some(doc) = docs.get_mut(&p.text_document.uri)
+                && let Some(doc) = docs.get_mut(p.text_document.uri.as_str())
             {
                 for change in p.content_changes {
                     text::apply(&mut doc.text, change.range, &change.text);
@@ -153,10 +176,9 @@ fn notify(docs: &mut HashMap<Uri, Document>, dirty: &mut BTreeSet<String>, n: No
             }
         }
         DidCloseTextDocument::METHOD => {
-            if let Ok(p) =
-                serde_json::from_value::<lsp_types::DidCloseTextDocumentParams>(n.params)
+            if let Ok(p) = serde_json::from_value::<lsp_types::DidCloseTextDocumentParams>(n.params)
             {
-                docs.remove(&p.text_document.uri);
+                docs.remove(p.text_document.uri.as_str());
                 dirty.remove(p.text_document.uri.as_str());
             }
         }
@@ -164,7 +186,7 @@ fn notify(docs: &mut HashMap<Uri, Document>, dirty: &mut BTreeSet<String>, n: No
     }
 }
 
-fn answer(docs: &mut HashMap<Uri, Document>, req: Request) -> Response {
+fn answer(docs: &mut Docs, req: Request) -> Response {
     let id = req.id.clone();
     let result = match req.method.as_str() {
         HoverRequest::METHOD => at_position(docs, req.params, |doc, at, _| {
@@ -192,9 +214,9 @@ fn answer(docs: &mut HashMap<Uri, Document>, req: Request) -> Response {
         Completion::METHOD => with_document(docs, req.params, |doc| {
             serde_json::to_value(CompletionResponse::Array(completion(doc)))
         }),
-        Formatting::METHOD => with_document(docs, req.params, |doc| {
-            serde_json::to_value(format(doc))
-        }),
+        Formatting::METHOD => {
+            with_document(docs, req.params, |doc| serde_json::to_value(format(doc)))
+        }
         _ => {
             return Response::new_err(
                 id,
@@ -216,24 +238,24 @@ fn answer(docs: &mut HashMap<Uri, Document>, req: Request) -> Response {
 
 /// Runs `f` on the document named by `params.textDocument`.
 fn with_document<T>(
-    docs: &mut HashMap<Uri, Document>,
+    docs: &mut Docs,
     params: serde_json::Value,
     f: impl FnOnce(&mut Document) -> T,
 ) -> Option<T> {
     let id: lsp_types::TextDocumentIdentifier =
         serde_json::from_value(params.get("textDocument")?.clone()).ok()?;
-    docs.get_mut(&id.uri).map(f)
+    docs.get_mut(id.uri.as_str()).map(f)
 }
 
 /// Runs `f` on the document and the byte offset of a position request.
 fn at_position<T>(
-    docs: &mut HashMap<Uri, Document>,
+    docs: &mut Docs,
     params: serde_json::Value,
     f: impl FnOnce(&mut Document, usize, &Uri) -> T,
 ) -> Option<T> {
     // References' parameters extend these (`context`): read the common part.
     let p: TextDocumentPositionParams = serde_json::from_value(params).ok()?;
-    let doc = docs.get_mut(&p.text_document.uri)?;
+    let doc = docs.get_mut(p.text_document.uri.as_str())?;
     let at = text::offset(&doc.text, p.position);
     Some(f(doc, at, &p.text_document.uri))
 }
@@ -298,17 +320,21 @@ fn symbols(doc: &mut Document) -> Option<Vec<DocumentSymbol>> {
 
 fn completion(doc: &mut Document) -> Vec<CompletionItem> {
     let a = doc.analysis();
-    let names = a.symbols.names().into_iter().map(|(name, kind)| CompletionItem {
-        label: name,
-        kind: Some(match kind {
-            Kind::Parameter => CompletionItemKind::CONSTANT,
-            Kind::Medium => CompletionItemKind::MODULE,
-            Kind::Relative | Kind::Component => CompletionItemKind::FIELD,
-            _ => CompletionItemKind::VARIABLE,
-        }),
-        detail: Some(kind.word().into()),
-        ..Default::default()
-    });
+    let names = a
+        .symbols
+        .names()
+        .into_iter()
+        .map(|(name, kind)| CompletionItem {
+            label: name,
+            kind: Some(match kind {
+                Kind::Parameter => CompletionItemKind::CONSTANT,
+                Kind::Medium => CompletionItemKind::MODULE,
+                Kind::Relative | Kind::Component => CompletionItemKind::FIELD,
+                _ => CompletionItemKind::VARIABLE,
+            }),
+            detail: Some(kind.word().into()),
+            ..Default::default()
+        });
     let keywords = KEYWORDS.iter().map(|k| CompletionItem {
         label: (*k).into(),
         kind: Some(CompletionItemKind::KEYWORD),

@@ -15,9 +15,38 @@ use std::time::{Duration, Instant};
 use support::{Client, URI, utf16_position};
 
 const PIECES: &[&str] = &[
-    " ", "\n", "// ψ\n", "/* 😀 */", "/*", "*/", "+", "-", "*", "/", "|", "(", ")", "x", "X_u",
-    "water.u", ",", "0.5", "1e-3", "{", "}", "=", "der v = ", "nominal { A = 1 }", ";", "\"",
-    "model", "state", "é", "😀", "\r\n", "\t",
+    " ",
+    "\n",
+    "// ψ\n",
+    "/* 😀 */",
+    "/*",
+    "*/",
+    "+",
+    "-",
+    "*",
+    "/",
+    "|",
+    "(",
+    ")",
+    "x",
+    "X_u",
+    "water.u",
+    ",",
+    "0.5",
+    "1e-3",
+    "{",
+    "}",
+    "=",
+    "der v = ",
+    "nominal { A = 1 }",
+    ";",
+    "\"",
+    "model",
+    "state",
+    "é",
+    "😀",
+    "\r\n",
+    "\t",
 ];
 
 /// The client's copy of an edit, with its own reading of positions: a
@@ -84,7 +113,13 @@ struct Figures {
 fn campaign(seed: u64, edits: usize) -> Figures {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let examples = examples();
-    let mut figures = Figures { edits: 0, requests: 0, slowest: Duration::ZERO, total: Duration::ZERO, unparsed: 0 };
+    let mut figures = Figures {
+        edits: 0,
+        requests: 0,
+        slowest: Duration::ZERO,
+        total: Duration::ZERO,
+        unparsed: 0,
+    };
     let mut c = Client::start();
     let mut text = examples[0].clone();
     c.open(&text);
@@ -123,7 +158,14 @@ fn campaign(seed: u64, edits: usize) -> Figures {
         );
         figures.edits += 1;
         let (l, ch) = position(&mut rng, &text);
-        let method = ["textDocument/hover", "textDocument/definition", "textDocument/completion", "textDocument/formatting", "textDocument/documentSymbol", "textDocument/references"][rng.random_range(0..6)];
+        let method = [
+            "textDocument/hover",
+            "textDocument/definition",
+            "textDocument/completion",
+            "textDocument/formatting",
+            "textDocument/documentSymbol",
+            "textDocument/references",
+        ][rng.random_range(0..6)];
         let mut params = c.at(l, ch);
         params["options"] = json!({"tabSize": 4, "insertSpaces": true});
         params["context"] = json!({"includeDeclaration": true});
@@ -139,9 +181,16 @@ fn campaign(seed: u64, edits: usize) -> Figures {
             match leeway_format::format(&text) {
                 Ok(layout) => {
                     let edits = answer.unwrap_or(Value::Null);
-                    let got = edits.get(0).and_then(|e| e["newText"].as_str()).map_or(text.clone(), str::to_string);
+                    let got = edits
+                        .get(0)
+                        .and_then(|e| e["newText"].as_str())
+                        .map_or(text.clone(), str::to_string);
                     assert_eq!(got, layout, "formatting after edit {n}");
-                    assert_eq!(leeway_format::format(&layout).ok().as_deref(), Some(layout.as_str()), "idempotent on the fuzzed model");
+                    assert_eq!(
+                        leeway_format::format(&layout).ok().as_deref(),
+                        Some(layout.as_str()),
+                        "idempotent on the fuzzed model"
+                    );
                 }
                 Err(_) => figures.unparsed += 1,
             }
@@ -149,10 +198,21 @@ fn campaign(seed: u64, edits: usize) -> Figures {
         if n % 25 == 0 {
             // The server holds the client's text: its diagnostics are check's on it.
             let published = c.diagnostics(version);
-            let codes: Vec<&str> = published.iter().filter_map(|d| d["code"].as_str()).filter(|c| *c != "identifiability").collect();
+            let codes: Vec<&str> = published
+                .iter()
+                .filter_map(|d| d["code"].as_str())
+                .filter(|c| *c != "identifiability")
+                .collect();
             let compiled = leeway_structure::compile(&text, &Default::default());
-            let want: Vec<&str> = compiled.diagnostics.iter().map(|d| d.code.as_str()).collect();
-            assert_eq!(codes, want, "edit {n}: the server's text differs from the client's:\n{text}");
+            let want: Vec<&str> = compiled
+                .diagnostics
+                .iter()
+                .map(|d| d.code.as_str())
+                .collect();
+            assert_eq!(
+                codes, want,
+                "edit {n}: the server's text differs from the client's:\n{text}"
+            );
         }
     }
     c.stop();

@@ -17,10 +17,21 @@ fn generated(n: usize) -> String {
     let states: Vec<String> = (0..n).map(|i| format!("x{i}")).collect();
     let _ = writeln!(s, "    state {}", states.join(", "));
     let _ = writeln!(s, "    input t");
-    let _ = writeln!(s, "    disturbance current unmeasured body({})", states.iter().map(|x| format!("{x}: c{x}")).collect::<Vec<_>>().join(", "));
+    let _ = writeln!(
+        s,
+        "    disturbance current unmeasured body({})",
+        states
+            .iter()
+            .map(|x| format!("{x}: c{x}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     let _ = writeln!(s, "    water = relative(current)");
     for i in 0..n {
-        let _ = writeln!(s, "    der x{i} = A{i}*water.x{i} + B{i}*water.x{i}*|water.x{i}|");
+        let _ = writeln!(
+            s,
+            "    der x{i} = A{i}*water.x{i} + B{i}*water.x{i}*|water.x{i}|"
+        );
         let _ = writeln!(s, "          + C{i}*t");
     }
     s.push_str("}\n");
@@ -56,7 +67,12 @@ fn measure(name: &str, text: &str) {
     let hover = time(&mut c, "textDocument/hover", at.clone(), 20);
     let definition = time(&mut c, "textDocument/definition", at.clone(), 20);
     let completion = time(&mut c, "textDocument/completion", at, 20);
-    let formatting = time(&mut c, "textDocument/formatting", json!({"textDocument": {"uri": URI}, "options": {"tabSize": 4, "insertSpaces": true}}), 20);
+    let formatting = time(
+        &mut c,
+        "textDocument/formatting",
+        json!({"textDocument": {"uri": URI}, "options": {"tabSize": 4, "insertSpaces": true}}),
+        20,
+    );
     println!(
         "{name} ({} lines): open→diagnostics {open:?}, keystroke→diagnostics {keystroke:?}, hover {hover:?}, definition {definition:?}, completion {completion:?}, formatting {formatting:?}",
         text.lines().count()

@@ -5,11 +5,11 @@
 
 mod support;
 
-use support::{Client, URI, utf16_position};
 use leeway_grammar::Severity;
 use leeway_structure::{CompileOptions, compile};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
+use support::{Client, URI, utf16_position};
 
 fn models() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/models");
@@ -47,13 +47,23 @@ fn expected(text: &str) -> Vec<(String, u64, String, Value)> {
                 Severity::Warning => 2,
                 Severity::Note => 3,
             };
-            (d.code.clone(), severity, d.message.clone(), range_of(text, at.start, at.end))
+            (
+                d.code.clone(),
+                severity,
+                d.message.clone(),
+                range_of(text, at.start, at.end),
+            )
         })
         .collect();
     if let (Some(ir), Some(at)) = (&c.ir, name) {
         let verdict = leeway_structure::render::verdict(ir);
         let first = verdict.trim().lines().next().unwrap_or("").to_string();
-        out.push(("identifiability".into(), 3, first, range_of(text, at.start, at.end)));
+        out.push((
+            "identifiability".into(),
+            3,
+            first,
+            range_of(text, at.start, at.end),
+        ));
     }
     out
 }
@@ -94,7 +104,11 @@ fn scripted_session_on_every_example_and_broken_fixture() {
         let text = std::fs::read_to_string(&path).expect("readable");
         let mut c = Client::start();
         c.open(&text);
-        assert_eq!(received(&c.diagnostics(1)), expected(&text), "{what}: on open");
+        assert_eq!(
+            received(&c.diagnostics(1)),
+            expected(&text),
+            "{what}: on open"
+        );
 
         // An edit: a non-ASCII comment line at the top shifts every range by a line.
         let header = "// ψ ≈ 1 😀 (UTF-16: the emoji counts two)\n";
@@ -106,7 +120,11 @@ fn scripted_session_on_every_example_and_broken_fixture() {
                                        "text": header}]}),
         );
         let edited = format!("{header}{text}");
-        assert_eq!(received(&c.diagnostics(2)), expected(&edited), "{what}: after a change");
+        assert_eq!(
+            received(&c.diagnostics(2)),
+            expected(&edited),
+            "{what}: after a change"
+        );
 
         let (model, _) = leeway_grammar::parse(&edited);
         let ir = compile(&edited, &CompileOptions::default()).ir;
@@ -116,7 +134,11 @@ fn scripted_session_on_every_example_and_broken_fixture() {
                 let (l, ch) = utf16_position(&edited, t.span.start);
                 let h = c.request("textDocument/hover", c.at(l, ch));
                 let md = h["contents"]["value"].as_str().unwrap_or("");
-                assert!(md.contains(&format!("**term** `{}`", t.text)), "{what}: hover on `{}`:\n{md}", t.text);
+                assert!(
+                    md.contains(&format!("**term** `{}`", t.text)),
+                    "{what}: hover on `{}`:\n{md}",
+                    t.text
+                );
                 assert!(md.contains("Φ "), "{what}: no Φ column in\n{md}");
             }
         }
@@ -130,21 +152,44 @@ fn scripted_session_on_every_example_and_broken_fixture() {
                 assert!(!spots.is_empty(), "{what}: no definition of `{name}`");
                 for s in spots {
                     let r = &s["range"];
-                    let line = edited.lines().nth(r["start"]["line"].as_u64().unwrap_or(0) as usize).unwrap_or("");
+                    let line = edited
+                        .lines()
+                        .nth(r["start"]["line"].as_u64().unwrap_or(0) as usize)
+                        .unwrap_or("");
                     let col = r["start"]["character"].as_u64().unwrap_or(0) as usize;
-                    let at: String = String::from_utf16_lossy(&line.encode_utf16().skip(col).take(name.encode_utf16().count()).collect::<Vec<_>>());
+                    let at: String = String::from_utf16_lossy(
+                        &line
+                            .encode_utf16()
+                            .skip(col)
+                            .take(name.encode_utf16().count())
+                            .collect::<Vec<_>>(),
+                    );
                     assert_eq!(at, name, "{what}: definition of `{name}`");
                 }
             }
-            let symbols = c.request("textDocument/documentSymbol", json!({"textDocument": {"uri": URI}}));
+            let symbols = c.request(
+                "textDocument/documentSymbol",
+                json!({"textDocument": {"uri": URI}}),
+            );
             assert_eq!(symbols[0]["name"], json!(model.name.name));
         }
         let items = c.request("textDocument/completion", c.at(0, 0));
-        assert!(items.as_array().is_some_and(|a| a.iter().any(|i| i["label"] == "nominal")));
+        assert!(
+            items
+                .as_array()
+                .is_some_and(|a| a.iter().any(|i| i["label"] == "nominal"))
+        );
 
-        let edits = c.try_request("textDocument/formatting", json!({"textDocument": {"uri": URI}, "options": {"tabSize": 4, "insertSpaces": true}}));
+        let edits = c.try_request(
+            "textDocument/formatting",
+            json!({"textDocument": {"uri": URI}, "options": {"tabSize": 4, "insertSpaces": true}}),
+        );
         match leeway_format::format(&edited) {
-            Ok(layout) => assert_eq!(apply_edits(&edited, &edits.expect("edits")), layout, "{what}"),
+            Ok(layout) => assert_eq!(
+                apply_edits(&edited, &edits.expect("edits")),
+                layout,
+                "{what}"
+            ),
             // No edit for a file that does not parse (its diagnostics say why).
             Err(_) => assert_eq!(edits, Ok(Value::Null), "{what}"),
         }
@@ -190,29 +235,57 @@ fn utf16_columns_after_a_non_ascii_comment() {
     assert_eq!(error["range"]["start"], json!({"line": 2, "character": 28}));
     // A hover at that position lands on `Q`.
     let h = c.request("textDocument/hover", c.at(2, 28));
-    assert!(h.is_null() || h["contents"]["value"].as_str().unwrap_or("").contains("`Q`"), "{h}");
+    assert!(
+        h.is_null()
+            || h["contents"]["value"]
+                .as_str()
+                .unwrap_or("")
+                .contains("`Q`"),
+        "{h}"
+    );
     c.stop();
 }
 
 #[test]
 fn hovers_on_a_parameter_a_signal_and_a_medium() {
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/models/ship.som")).expect("ship");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/models/ship.som"),
+    )
+    .expect("ship");
     let mut c = Client::start();
     c.open(&text);
     let _ = c.diagnostics(1);
     let hover_at = |c: &mut Client, needle: &str, nth: usize| {
         let byte = text.match_indices(needle).nth(nth).expect("in the ship").0;
         let (l, ch) = utf16_position(&text, byte);
-        c.request("textDocument/hover", c.at(l, ch))["contents"]["value"].as_str().unwrap_or("").to_string()
+        c.request("textDocument/hover", c.at(l, ch))["contents"]["value"]
+            .as_str()
+            .unwrap_or("")
+            .to_string()
     };
     let x_uu = hover_at(&mut c, "X_uu", 0);
-    assert!(x_uu.contains("**parameter** `X_uu`") && x_uu.contains("- `water.u*|water.u|` in `der u`"), "{x_uu}");
-    assert!(x_uu.contains("nominal value: 0") && x_uu.contains("identified"), "{x_uu}");
-    assert!(x_uu.contains("rho[north,X_uu]") || x_uu.contains("Φρ"), "the nuisance columns of the term:\n{x_uu}");
+    assert!(
+        x_uu.contains("**parameter** `X_uu`") && x_uu.contains("- `water.u*|water.u|` in `der u`"),
+        "{x_uu}"
+    );
+    assert!(
+        x_uu.contains("nominal value: 0") && x_uu.contains("identified"),
+        "{x_uu}"
+    );
+    assert!(
+        x_uu.contains("rho[north,X_uu]") || x_uu.contains("Φρ"),
+        "the nuisance columns of the term:\n{x_uu}"
+    );
     let current = hover_at(&mut c, "current", 1);
-    assert!(current.contains("unmeasured, in the earth frame, components north, east"), "{current}");
+    assert!(
+        current.contains("unmeasured, in the earth frame, components north, east"),
+        "{current}"
+    );
     let tau1 = hover_at(&mut c, "tau1", 1);
-    assert!(tau1.contains("**input** `tau1`") && tau1.contains("input tau1, tau2, tau3"), "{tau1}");
+    assert!(
+        tau1.contains("**input** `tau1`") && tau1.contains("input tau1, tau2, tau3"),
+        "{tau1}"
+    );
     let refs = {
         let byte = text.find("water.u").expect("there");
         let (l, ch) = utf16_position(&text, byte);

@@ -23,13 +23,23 @@ fn fmt_rewrites_checks_and_refuses() {
     let check = leeway(&["fmt", "--check", &messy, &tidy]);
     assert_eq!(check.status.code(), Some(1));
     assert_eq!(String::from_utf8_lossy(&check.stdout), format!("{messy}\n"));
-    assert_eq!(std::fs::read_to_string(&messy).ok().as_deref(), Some(BROKEN), "--check writes nothing");
+    assert_eq!(
+        std::fs::read_to_string(&messy).ok().as_deref(),
+        Some(BROKEN),
+        "--check writes nothing"
+    );
 
     let fmt = leeway(&["fmt", &messy, &bad]);
     assert_eq!(fmt.status.code(), Some(2), "a file that does not parse");
     let stderr = String::from_utf8_lossy(&fmt.stderr);
-    assert!(stderr.contains("bad.som:1:28") && stderr.contains("was not formatted: it does not parse"), "{stderr}");
-    assert_eq!(std::fs::read_to_string(&messy).ok(), std::fs::read_to_string(&tidy).ok());
+    assert!(
+        stderr.contains("bad.som:1:28") && stderr.contains("was not formatted: it does not parse"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&messy).ok(),
+        std::fs::read_to_string(&tidy).ok()
+    );
     assert_eq!(leeway(&["fmt", "--check", &messy]).status.code(), Some(0));
 }
 
@@ -60,7 +70,10 @@ fn neovim_receives_diagnostics_hover_and_format() {
         .output()
         .expect("nvim runs");
     let held = std::fs::read_to_string(&out).unwrap_or_else(|_| {
-        panic!("Neovim wrote nothing: {}", String::from_utf8_lossy(&run.stderr))
+        panic!(
+            "Neovim wrote nothing: {}",
+            String::from_utf8_lossy(&run.stderr)
+        )
     });
     insta::assert_snapshot!(held);
 }

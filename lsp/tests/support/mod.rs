@@ -32,14 +32,21 @@ impl Client {
             published: Vec::new(),
         };
         let caps = c.request("initialize", json!({"capabilities": {}}));
-        assert!(caps["capabilities"]["hoverProvider"].as_bool().unwrap_or(false));
+        assert!(
+            caps["capabilities"]["hoverProvider"]
+                .as_bool()
+                .unwrap_or(false)
+        );
         c.notify("initialized", json!({}));
         c
     }
 
     pub fn notify(&mut self, method: &str, params: Value) {
         let n = Notification::new(method.to_string(), params);
-        self.conn.sender.send(Message::Notification(n)).expect("server alive");
+        self.conn
+            .sender
+            .send(Message::Notification(n))
+            .expect("server alive");
     }
 
     /// Sends a request, returns its result (`Err` with the error's message).
@@ -47,9 +54,17 @@ impl Client {
         self.next_id += 1;
         let id = RequestId::from(self.next_id);
         let req = Request::new(id.clone(), method.to_string(), params);
-        self.conn.sender.send(Message::Request(req)).expect("server alive");
+        self.conn
+            .sender
+            .send(Message::Request(req))
+            .expect("server alive");
         loop {
-            match self.conn.receiver.recv_timeout(PATIENCE).expect("an answer") {
+            match self
+                .conn
+                .receiver
+                .recv_timeout(PATIENCE)
+                .expect("an answer")
+            {
                 Message::Response(r) if r.id == id => {
                     return match r.error {
                         Some(e) => Err(e.message),
@@ -63,7 +78,8 @@ impl Client {
     }
 
     pub fn request(&mut self, method: &str, params: Value) -> Value {
-        self.try_request(method, params).unwrap_or_else(|e| panic!("{method}: {e}"))
+        self.try_request(method, params)
+            .unwrap_or_else(|e| panic!("{method}: {e}"))
     }
 
     /// The diagnostics published for `version` (waits for them).
@@ -77,7 +93,12 @@ impl Client {
                 let p = self.published.remove(i);
                 return p["diagnostics"].as_array().cloned().unwrap_or_default();
             }
-            match self.conn.receiver.recv_timeout(PATIENCE).expect("diagnostics") {
+            match self
+                .conn
+                .receiver
+                .recv_timeout(PATIENCE)
+                .expect("diagnostics")
+            {
                 Message::Notification(n) if n.method == "textDocument/publishDiagnostics" => {
                     self.published.push(n.params)
                 }
@@ -117,5 +138,8 @@ pub fn utf16_position(text: &str, offset: usize) -> (u32, u32) {
     let before = &text[..offset];
     let line = before.matches('\n').count();
     let start = before.rfind('\n').map_or(0, |i| i + 1);
-    (line as u32, text[start..offset].encode_utf16().count() as u32)
+    (
+        line as u32,
+        text[start..offset].encode_utf16().count() as u32,
+    )
 }
