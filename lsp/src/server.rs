@@ -112,7 +112,13 @@ pub fn serve(connection: &Connection) -> Result<(), Disconnected> {
                         .send(Message::Response(response))
                         .map_err(|_| Disconnected)?;
                 }
-                Message::Notification(n) => notify(&mut docs, &mut dirty, n),
+                Message::Notification(n) => {
+                    if let Some(closed) = notify(&mut docs, &mut dirty, n) {
+                        // A closed file's diagnostics leave the editor's list.
+                        let params = PublishDiagnosticsParams::new(closed, Vec::new(), None);
+                        send_notification::<PublishDiagnostics>(connection, params)?;
+                    }
+                }
                 Message::Response(_) => {}
             }
             next = connection.receiver.try_recv().ok();
@@ -144,7 +150,8 @@ fn send_notification<N: lsp_types::notification::Notification>(
         .map_err(|_| Disconnected)
 }
 
-fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) {
+/// Applies a notification; returns the URI of a document it closed.
+fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) -> Option<Uri> {
     match n.method.as_str() {
         DidOpenTextDocument::METHOD => {
             if let Ok(p) = serde_json::from_value::<lsp_types::DidOpenTextDocumentParams>(n.params)
@@ -180,10 +187,12 @@ fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) {
             {
                 docs.remove(p.text_document.uri.as_str());
                 dirty.remove(p.text_document.uri.as_str());
+                return Some(p.text_document.uri);
             }
         }
         _ => {}
     }
+    None
 }
 
 fn answer(docs: &mut Docs, req: Request) -> Response {

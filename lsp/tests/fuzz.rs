@@ -226,7 +226,7 @@ fn survives_random_edits() {
 }
 
 #[test]
-#[ignore = "the campaign for the closing note: cargo test --release -p leeway-lsp --test fuzz -- --ignored --nocapture"]
+#[ignore = "the campaign for the closing note: cargo test -p leeway-lsp --test fuzz -- --ignored --nocapture"]
 fn fuzz_campaign() {
     let mut slowest = Duration::ZERO;
     let (mut edits, mut requests, mut total, mut unparsed) = (0, 0, Duration::ZERO, 0);

@@ -1,6 +1,7 @@
 //! Time per request on the largest example and on a generated 500-line
 //! model (figures for the closing note; no timed assertion):
-//! `cargo test --release -p leeway-lsp --test latency -- --ignored --nocapture`.
+//! `cargo test -p leeway-lsp --test latency -- --ignored --nocapture` (the
+//! test profile: opt-level 1).
 
 mod support;
 

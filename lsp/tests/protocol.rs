@@ -104,11 +104,21 @@ fn scripted_session_on_every_example_and_broken_fixture() {
         let text = std::fs::read_to_string(&path).expect("readable");
         let mut c = Client::start();
         c.open(&text);
-        assert_eq!(
-            received(&c.diagnostics(1)),
-            expected(&text),
-            "{what}: on open"
-        );
+        let published = c.diagnostics(1);
+        assert_eq!(received(&published), expected(&text), "{what}: on open");
+        // Every label but the one the range shows is a related location
+        // (both terms of a conflict, every member of a combination).
+        let compiled = compile(&text, &CompileOptions::default());
+        for (d, p) in compiled.diagnostics.iter().zip(&published) {
+            let at = d.primary_span();
+            let others = d
+                .labels
+                .iter()
+                .filter(|l| !(l.primary && Some(l.span) == at))
+                .count();
+            let related = p["relatedInformation"].as_array().map_or(0, Vec::len);
+            assert_eq!(related, others, "{what}: related locations of `{}`", d.code);
+        }
 
         // An edit: a non-ASCII comment line at the top shifts every range by a line.
         let header = "// ψ ≈ 1 😀 (UTF-16: the emoji counts two)\n";
