@@ -21,17 +21,35 @@ pub fn of(uri: &Uri, text: &str, analysis: &Analysis) -> Vec<lsp_types::Diagnost
         .map(|d| convert(uri, text, d, model_name))
         .collect();
     if let (Some(ir), Some(at)) = (&analysis.compilation.ir, model_name) {
-        let verdict = leeway_structure::render::verdict(ir);
         out.push(lsp_types::Diagnostic {
             range: range(text, at),
             severity: Some(DiagnosticSeverity::INFORMATION),
             code: Some(NumberOrString::String(VERDICT.into())),
             source: Some("leeway".into()),
-            message: verdict.trim().to_string(),
+            message: verdict_message(&leeway_structure::render::verdict(ir)),
             ..Default::default()
         });
     }
     out
+}
+
+/// The report's verdict section as one message: the verdict first (an
+/// editor shows the first line beside the code), the centring it was
+/// analysed under after it, without the section's title.
+pub fn verdict_message(section: &str) -> String {
+    let lines: Vec<&str> = section
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("Identifiability of"))
+        .collect();
+    let (centring, verdict): (Vec<&str>, Vec<&str>) = lines
+        .iter()
+        .partition(|l| l.starts_with("instrument centring"));
+    verdict
+        .into_iter()
+        .chain(centring)
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// The text shown for a diagnostic: its message, the primary label's text,

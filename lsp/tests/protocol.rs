@@ -57,7 +57,17 @@ fn expected(text: &str) -> Vec<(String, u64, String, Value)> {
         .collect();
     if let (Some(ir), Some(at)) = (&c.ir, name) {
         let verdict = leeway_structure::render::verdict(ir);
-        let first = verdict.trim().lines().next().unwrap_or("").to_string();
+        // The verdict itself first: not the section's title, not the centring.
+        let first = verdict
+            .lines()
+            .map(str::trim)
+            .find(|l| {
+                !l.is_empty()
+                    && !l.starts_with("Identifiability of")
+                    && !l.starts_with("instrument centring")
+            })
+            .unwrap_or("")
+            .to_string();
         out.push((
             "identifiability".into(),
             3,
