@@ -1,12 +1,14 @@
 //! The syntax tree → lines of code with the source spans they print, each
 //! declaration broken where its author broke it or where it passes the width.
 
-use crate::WIDTH;
 use crate::comments::{Comment, brace_after};
 use crate::expr;
 use leeway_grammar::{
     BinOp, DataEntry, DelayUnit, EquationKind, Frame, Ident, Item, Measurement, ModelSyntax, Span,
 };
+
+/// The column a continued line is broken before (when a break is allowed there).
+pub const WIDTH: usize = 100;
 
 /// One line of code: what it prints and the source it came from.
 #[derive(Clone, Debug)]

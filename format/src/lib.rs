@@ -31,8 +31,8 @@ mod print;
 
 use leeway_grammar::Diagnostic;
 
-/// The column a continued line is broken before (when a break is allowed there).
-pub const WIDTH: usize = 100;
+#[doc(inline)]
+pub use layout::WIDTH;
 
 /// The canonical layout of `source`, or the syntax error that keeps it from
 /// being formatted (a file that does not parse is left as it is).

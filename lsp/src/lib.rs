@@ -9,12 +9,14 @@
 //! from the IR (a term's regressors and nuisance columns, a parameter's
 //! terms and whether it is identified, a signal's declaration and unit),
 //! definitions and references from the syntax tree, completion, document
-//! symbols, and formatting by leeway-format.
+//! symbols, formatting by leeway-format, and the quick fixes that are
+//! certain (an unused state or input removed).
 //!
 //! A document is analysed at most once per version, and only when the
 //! queue of messages is empty or a request needs it. Positions are the
 //! protocol's: lines and UTF-16 code units ([`text`]).
 
+pub mod actions;
 pub mod analysis;
 pub mod diagnostics;
 pub mod hover;

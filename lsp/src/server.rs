@@ -5,15 +5,15 @@
 
 use crate::analysis::Analysis;
 use crate::symbols::Kind;
-use crate::{diagnostics, hover, text};
+use crate::{actions, diagnostics, hover, text};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
     PublishDiagnostics,
 };
 use lsp_types::request::{
-    Completion, DocumentSymbolRequest, Formatting, GotoDefinition, HoverRequest, References,
-    Request as _,
+    CodeActionRequest, Completion, DocumentSymbolRequest, Formatting, GotoDefinition, HoverRequest,
+    References, Request as _,
 };
 use lsp_types::{
     CompletionItem, CompletionItemKind, CompletionResponse, DocumentSymbol, DocumentSymbolResponse,
@@ -59,6 +59,7 @@ pub fn capabilities() -> ServerCapabilities {
         references_provider: Some(OneOf::Left(true)),
         document_symbol_provider: Some(OneOf::Left(true)),
         document_formatting_provider: Some(OneOf::Left(true)),
+        code_action_provider: Some(lsp_types::CodeActionProviderCapability::Simple(true)),
         completion_provider: Some(lsp_types::CompletionOptions {
             trigger_characters: Some(vec![".".into()]),
             ..Default::default()
@@ -226,6 +227,7 @@ fn answer(docs: &mut Docs, req: Request) -> Response {
         Formatting::METHOD => {
             with_document(docs, req.params, |doc| serde_json::to_value(format(doc)))
         }
+        CodeActionRequest::METHOD => code_actions(docs, req.params),
         _ => {
             return Response::new_err(
                 id,
@@ -350,6 +352,21 @@ fn completion(doc: &mut Document) -> Vec<CompletionItem> {
         ..Default::default()
     });
     names.chain(keywords).collect()
+}
+
+fn code_actions(
+    docs: &mut Docs,
+    params: serde_json::Value,
+) -> Option<serde_json::Result<serde_json::Value>> {
+    let p: lsp_types::CodeActionParams = serde_json::from_value(params).ok()?;
+    let doc = docs.get_mut(p.text_document.uri.as_str())?;
+    let within = leeway_grammar::Span::new(
+        text::offset(&doc.text, p.range.start),
+        text::offset(&doc.text, p.range.end),
+    );
+    let text = doc.text.clone();
+    let found = actions::actions(&p.text_document.uri, &text, doc.analysis(), within);
+    Some(serde_json::to_value(found))
 }
 
 /// The whole document replaced by its canonical layout; nothing when it is

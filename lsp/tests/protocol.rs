@@ -317,3 +317,41 @@ fn hovers_on_a_parameter_a_signal_and_a_medium() {
     assert_eq!(refs.as_array().map(Vec::len), Some(n), "every `water`");
     c.stop();
 }
+
+#[test]
+fn quick_fix_removes_an_unused_input() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples/models/broken/unused-declaration.som");
+    let text = std::fs::read_to_string(path).expect("fixture");
+    let mut c = Client::start();
+    c.open(&text);
+    let d = c.diagnostics(1);
+    let unused = d
+        .iter()
+        .find(|d| d["code"] == "unused-declaration")
+        .expect("the warning");
+    let actions = c.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": URI}, "range": unused["range"],
+               "context": {"diagnostics": [unused]}}),
+    );
+    assert_eq!(actions[0]["title"], "remove the unused `rudder`");
+    let edit = &actions[0]["edit"]["changes"][URI][0];
+    let r = &edit["range"];
+    let line = r["start"]["line"].as_u64().expect("line") as usize;
+    let (a, b) = (
+        r["start"]["character"].as_u64().expect("col") as usize,
+        r["end"]["character"].as_u64().expect("col") as usize,
+    );
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    lines[line].replace_range(a..b, edit["newText"].as_str().expect("text"));
+    assert_eq!(lines[line], "    input tau");
+    let fixed = lines.join("\n");
+    let c2 = compile(&fixed, &CompileOptions::default());
+    assert!(
+        c2.diagnostics
+            .iter()
+            .all(|d| d.code != "unused-declaration")
+    );
+    c.stop();
+}
