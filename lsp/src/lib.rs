@@ -9,7 +9,7 @@
 //! from the IR (a term's regressors and nuisance columns, a parameter's
 //! terms and whether it is identified, a signal's declaration and unit),
 //! definitions and references from the syntax tree, completion, document
-//! symbols, formatting by leeway-format, and the quick fixes that are
+//! symbols, semantic tokens (parameters apart from signals), formatting by leeway-format, and the quick fixes that are
 //! certain (an unused state or input removed).
 //!
 //! A document is analysed at most once per version, and only when the
@@ -23,6 +23,7 @@ pub mod hover;
 pub mod server;
 pub mod symbols;
 pub mod text;
+pub mod tokens;
 
 use lsp_server::Connection;
 

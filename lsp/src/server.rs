@@ -5,7 +5,7 @@
 
 use crate::analysis::Analysis;
 use crate::symbols::Kind;
-use crate::{actions, diagnostics, hover, text};
+use crate::{actions, diagnostics, hover, text, tokens};
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
@@ -13,7 +13,7 @@ use lsp_types::notification::{
 };
 use lsp_types::request::{
     CodeActionRequest, Completion, DocumentSymbolRequest, Formatting, GotoDefinition, HoverRequest,
-    References, Request as _,
+    References, Request as _, SemanticTokensFullRequest,
 };
 use lsp_types::{
     CompletionItem, CompletionItemKind, CompletionResponse, DocumentSymbol, DocumentSymbolResponse,
@@ -60,6 +60,14 @@ pub fn capabilities() -> ServerCapabilities {
         document_symbol_provider: Some(OneOf::Left(true)),
         document_formatting_provider: Some(OneOf::Left(true)),
         code_action_provider: Some(lsp_types::CodeActionProviderCapability::Simple(true)),
+        semantic_tokens_provider: Some(
+            lsp_types::SemanticTokensOptions {
+                legend: tokens::legend(),
+                full: Some(lsp_types::SemanticTokensFullOptions::Bool(true)),
+                ..Default::default()
+            }
+            .into(),
+        ),
         completion_provider: Some(lsp_types::CompletionOptions {
             trigger_characters: Some(vec![".".into()]),
             ..Default::default()
@@ -228,6 +236,14 @@ fn answer(docs: &mut Docs, req: Request) -> Response {
             with_document(docs, req.params, |doc| serde_json::to_value(format(doc)))
         }
         CodeActionRequest::METHOD => code_actions(docs, req.params),
+        SemanticTokensFullRequest::METHOD => with_document(docs, req.params, |doc| {
+            let text = doc.text.clone();
+            let data = tokens::tokens(&text, doc.analysis());
+            serde_json::to_value(lsp_types::SemanticTokens {
+                result_id: None,
+                data,
+            })
+        }),
         _ => {
             return Response::new_err(
                 id,

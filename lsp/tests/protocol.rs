@@ -355,3 +355,36 @@ fn quick_fix_removes_an_unused_input() {
     );
     c.stop();
 }
+
+#[test]
+fn semantic_tokens_tell_parameters_from_signals() {
+    let text = "model M {\n    state u\n    input t\n    der u = X_u*u + B*t // é\n}\n";
+    let mut c = Client::start();
+    c.open(text);
+    let _ = c.diagnostics(1);
+    let got = c.request(
+        "textDocument/semanticTokens/full",
+        json!({"textDocument": {"uri": URI}}),
+    );
+    let data: Vec<u64> = got["data"]
+        .as_array()
+        .expect("data")
+        .iter()
+        .filter_map(Value::as_u64)
+        .collect();
+    // (Δline, Δstart, length, type, modifiers): u, t declared; then on line
+    // 3: u (the equation's state), X_u (parameter), u, B (parameter), t.
+    assert_eq!(
+        data,
+        vec![
+            1, 10, 1, 0, 0, //
+            1, 10, 1, 0, 0, //
+            1, 8, 1, 0, 0, //
+            0, 4, 3, 1, 0, //
+            0, 4, 1, 0, 0, //
+            0, 4, 1, 1, 0, //
+            0, 2, 1, 0, 0,
+        ]
+    );
+    c.stop();
+}
