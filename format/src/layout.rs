@@ -119,7 +119,19 @@ fn lay_out(run: &Run, source: &str, indent: usize, out: &mut Vec<Line>) {
     for (i, seg) in run.body.iter().enumerate() {
         let Some(line) = out.last_mut() else { return };
         let join = if i == 0 { run.join_first } else { run.join };
-        let width = line.indent + line.text.chars().count() + join.len() + seg.text.chars().count();
+        // What may still follow on the line: a list's comma, a block's ` }`.
+        let reserve = if i + 1 < run.body.len() {
+            run.line_end.len()
+        } else if run.tail.is_some() {
+            2
+        } else {
+            0
+        };
+        let width = line.indent
+            + line.text.chars().count()
+            + join.len()
+            + seg.text.chars().count()
+            + reserve;
         if broken(source, prev_end, seg.span.start) || width > WIDTH {
             if i == 0 && run.tail.is_some() {
                 block = true;

@@ -202,3 +202,26 @@ fn idempotent_on_edited_examples() {
     }
     assert!(parsed > 50, "only {parsed} edited models parse");
 }
+
+#[test]
+fn long_lines_are_broken_at_terms_and_entries() {
+    let terms: Vec<String> = (0..12).map(|i| format!("A{i}*water.u*|water.u|")).collect();
+    let states: Vec<String> = (0..30).map(|i| format!("state_{i}")).collect();
+    let source = format!(
+        "model Wide {{\n    state u, {}\n    disturbance current unmeasured body(u: cu)\n    water = relative(current)\n    der u = {}\n    nominal {{ {} }}\n    rotation {{\n        u = [r11]\n    }}\n}}\n",
+        states.join(", "),
+        terms.join(" + "),
+        (0..12)
+            .map(|i| format!("A{i} = -0.{i}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+    );
+    let layout = check_layout(&source, "wide");
+    assert!(
+        layout
+            .lines()
+            .all(|l| l.chars().count() <= leeway_format::WIDTH),
+        "{layout}"
+    );
+    insta::assert_snapshot!(layout);
+}
