@@ -61,18 +61,3 @@ pub fn apply(text: &mut String, range: Option<Range>, new_text: &str) {
         None => *text = new_text.to_string(),
     }
 }
-
-/// The byte offset at `at` and the identifier-like word around it.
-pub fn word_at(text: &str, at: usize) -> Span {
-    let bytes = text.as_bytes();
-    let is_word = |b: u8| b.is_ascii_alphanumeric() || b == b'_';
-    let mut a = at.min(bytes.len());
-    while a > 0 && is_word(bytes[a - 1]) {
-        a -= 1;
-    }
-    let mut b = at.min(bytes.len());
-    while b < bytes.len() && is_word(bytes[b]) {
-        b += 1;
-    }
-    Span::new(a, b)
-}
