@@ -12,8 +12,10 @@
 //! ([`candidates`]) and estimated as `estimate` does.
 
 pub mod candidates;
+pub mod describe;
 pub mod select;
 pub mod subsolve;
 
 pub use candidates::{CandidateError, CandidateModel};
+pub use describe::describe;
 pub use select::{Passes, SelectError, SelectOptions, Selection, Step, exchangeable, select};
