@@ -128,6 +128,7 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
             ..EstimateOptions::default()
         },
         tolerance: args.tolerance,
+        threads: 0,
     };
     let selection = select(&source, &experiments, &validation, &select_options).map_err(|e| {
         let status = if e.code == "estimate-failed" {

@@ -4,6 +4,7 @@
 
 use crate::candidates::{CandidateError, CandidateModel};
 use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub, wald};
+use leeway_estimate::parallel::{in_order, threads_for};
 use leeway_estimate::{Estimate, EstimateError, EstimateOptions, Method, MomentSystem, estimate};
 use leeway_model::experiment::{Experiment, Source};
 use leeway_model::interp::Interpreter;
@@ -23,6 +24,9 @@ pub struct SelectOptions {
     /// A model on the path is within reach of the best held-out criterion
     /// when its criterion is at most `(1 + tolerance)` times the best.
     pub tolerance: f64,
+    /// Threads for the held-out free runs (0: one per core, at most one per
+    /// experiment); the result is the same bits whatever the number.
+    pub threads: usize,
 }
 
 impl Default for SelectOptions {
@@ -33,6 +37,7 @@ impl Default for SelectOptions {
                 ..EstimateOptions::default()
             },
             tolerance: 0.1,
+            threads: 0,
         }
     }
 }
@@ -296,6 +301,7 @@ pub fn select(
         means: &means,
         experiments,
         validation,
+        threads: options.threads,
     };
     let held_out = if !validation.is_empty() {
         "the validation data".to_string()
@@ -449,6 +455,7 @@ struct Context<'a> {
     means: &'a [f64],
     experiments: &'a [Experiment],
     validation: &'a [Experiment],
+    threads: usize,
 }
 
 impl Context<'_> {
@@ -478,30 +485,31 @@ impl Context<'_> {
         theta
     }
 
-    /// The held-out free-run criterion of the sub-model `active`.
+    /// The held-out free-run criterion of the sub-model `active`: the
+    /// experiments' free runs side by side, summed in experiment order.
     fn criterion(&self, active: &BTreeSet<usize>) -> Option<f64> {
         let all: Vec<usize> = (0..self.experiments.len()).collect();
-        let mut total = 0.0;
-        let mut count = 0usize;
-        if !self.validation.is_empty() {
+        let threads = |n: usize| match self.threads {
+            0 => threads_for(n),
+            t => t.min(n).max(1),
+        };
+        let errors: Vec<f64> = if !self.validation.is_empty() {
             let sub = self.solve(active, &all);
             let theta = self.theta(active, &sub);
-            for e in self.validation {
-                total += self.error(&theta, e);
-                count += 1;
-            }
+            let n = self.validation.len();
+            in_order(n, threads(n), |i| self.error(&theta, &self.validation[i]))
         } else if self.experiments.len() >= 2 {
-            for (i, e) in self.experiments.iter().enumerate() {
+            let n = self.experiments.len();
+            in_order(n, threads(n), |i| {
                 let train: Vec<usize> = all.iter().copied().filter(|k| *k != i).collect();
                 let sub = self.solve(active, &train);
                 let theta = self.theta(active, &sub);
-                total += self.error(&theta, e);
-                count += 1;
-            }
+                self.error(&theta, &self.experiments[i])
+            })
         } else {
             return None;
-        }
-        Some(total / count as f64)
+        };
+        Some(errors.iter().sum::<f64>() / errors.len() as f64)
     }
 
     /// `‖y − ŷ‖/‖y − ȳ‖` averaged over the outputs of one free run

@@ -139,3 +139,38 @@ fn recovery_table() {
         println!("| `{n}` | {} | {} % | {} % |", if t { "yes" } else { "no" }, kept_iv[i], kept_ls[i]);
     }
 }
+
+#[test]
+fn selection_is_the_same_bits_on_any_number_of_threads_and_its_model_reads_back() {
+    let m = model();
+    let data = experiments(&m, 7, 3, 1500);
+    let run = |threads| {
+        let mut o = options();
+        o.threads = threads;
+        select(CANDIDATE_SHIP, &data, &[], &o).unwrap_or_else(|e| panic!("{e:?}"))
+    };
+    let (one, three) = (run(1), run(3));
+    let bits = |s: &leeway_select::Selection| {
+        let steps: Vec<(Option<u64>, u64, Option<u64>)> = s
+            .steps
+            .iter()
+            .map(|x| (x.wald.map(f64::to_bits), x.j.to_bits(), x.criterion.map(f64::to_bits)))
+            .collect();
+        (steps, s.kept.clone(), s.estimate.theta.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+    };
+    assert_eq!(bits(&one), bits(&three));
+    // The chosen model: no candidate left, every kept one estimated, and
+    // `estimate` on it gives the selection's estimate.
+    assert!(!one.chosen_source.contains('?'));
+    let c = leeway_structure::compile(&one.chosen_source, &Default::default());
+    let chosen = Interpreter::new(c.ir.expect("the chosen model compiles"));
+    for k in &one.kept {
+        assert!(one.estimate.parameters.contains(k), "{k} kept but not estimated");
+    }
+    for d in &one.dropped {
+        assert!(!one.estimate.parameters.contains(d), "{d} dropped but estimated");
+    }
+    let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
+    let again = estimate(&chosen, &sources, &options().estimate).expect("estimates");
+    assert_eq!(again.theta, one.estimate.theta);
+}
