@@ -103,7 +103,10 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
     if !(args.tolerance >= 0.0 && args.tolerance.is_finite()) {
         return Err(Problem::error(
             "invalid-option",
-            format!("--tolerance {} is not a non-negative fraction", args.tolerance),
+            format!(
+                "--tolerance {} is not a non-negative fraction",
+                args.tolerance
+            ),
         )
         .help("give a fraction such as 0.1")
         .into());
@@ -112,7 +115,8 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
     // problems are the selection's to handle: it drops exchangeable candidates).
     let loaded = load(&args.model, true)?;
     let source = std::fs::read_to_string(&args.model).map_err(|e| {
-        Problem::error("io", format!("cannot read the model: {e}")).at(args.model.display().to_string())
+        Problem::error("io", format!("cannot read the model: {e}"))
+            .at(args.model.display().to_string())
     })?;
     let options = load_options(&loaded.ir, args.step, Some(&args.time))?;
     let (experiments, _) = load_data(&loaded.ir, &args.data, &options)?;
@@ -190,7 +194,10 @@ fn render(s: &Selection, out_file: &str) -> String {
             s.kept.join(", ")
         }
     );
-    let _ = writeln!(t, "written: {out_file} (estimate it with `leeway estimate {out_file} --data ...`)");
+    let _ = writeln!(
+        t,
+        "written: {out_file} (estimate it with `leeway estimate {out_file} --data ...`)"
+    );
     let _ = writeln!(t, "its estimate ({}):", s.estimate.method.name());
     for (i, name) in s.estimate.parameters.iter().enumerate() {
         let _ = writeln!(

@@ -165,7 +165,10 @@ impl CandidateModel {
                 continue;
             }
             let mut text = String::new();
-            for s in summands.iter().filter(|s| !s.parameters.iter().any(dropped)) {
+            for s in summands
+                .iter()
+                .filter(|s| !s.parameters.iter().any(dropped))
+            {
                 let term = if marked {
                     self.source[s.span.start..s.span.end].to_string()
                 } else {

@@ -154,8 +154,18 @@ struct Compiled {
 
 fn compiled(source: &str) -> Result<Compiled, SelectError> {
     let c = compile(source, &CompileOptions::default());
-    let Some(ir) = c.ir.filter(|_| !c.diagnostics.iter().any(|d| d.is_error() && d.code != "unidentifiable-combination")) else {
-        let errors: Vec<_> = c.diagnostics.iter().filter(|d| d.is_error()).take(1).cloned().collect();
+    let Some(ir) = c.ir.filter(|_| {
+        !c.diagnostics
+            .iter()
+            .any(|d| d.is_error() && d.code != "unidentifiable-combination")
+    }) else {
+        let errors: Vec<_> = c
+            .diagnostics
+            .iter()
+            .filter(|d| d.is_error())
+            .take(1)
+            .cloned()
+            .collect();
         let first = grammar::render_short(&errors, "MODEL.som", source);
         let first = first.trim_end();
         return Err(fail(
@@ -166,7 +176,11 @@ fn compiled(source: &str) -> Result<Compiled, SelectError> {
     };
     let (syntax, _) = grammar::parse(source);
     let Some(syntax) = syntax else {
-        return Err(fail("invalid-model", "the candidate model does not parse".into(), "run `leeway check` on it"));
+        return Err(fail(
+            "invalid-model",
+            "the candidate model does not parse".into(),
+            "run `leeway check` on it",
+        ));
     };
     let names: BTreeSet<String> = ir.parameters.iter().map(|p| p.name.clone()).collect();
     let text = CandidateModel::read(source, &syntax, &names)?;
@@ -257,7 +271,12 @@ pub fn select(
         ));
     };
     let kind = est_options.method.predictor();
-    let columns: Vec<ColumnKind> = ir.predictors.get(kind).iter().map(|c| c.kind.clone()).collect();
+    let columns: Vec<ColumnKind> = ir
+        .predictors
+        .get(kind)
+        .iter()
+        .map(|c| c.kind.clone())
+        .collect();
     let param_index = |name: &str| ir.parameters.iter().position(|p| p.name == name);
     let cand_params: Vec<(String, usize)> = model
         .text
@@ -265,7 +284,11 @@ pub fn select(
         .iter()
         .filter_map(|c| param_index(c).map(|p| (c.clone(), p)))
         .collect();
-    let kept_cols: BTreeSet<usize> = system.blocks.iter().flat_map(|b| b.kept.iter().copied()).collect();
+    let kept_cols: BTreeSet<usize> = system
+        .blocks
+        .iter()
+        .flat_map(|b| b.kept.iter().copied())
+        .collect();
     let is_candidate = |p: usize| cand_params.iter().any(|(_, q)| *q == p);
     // Held (not estimated) columns of non-candidates stay at the estimate's value.
     let held: BTreeMap<usize, f64> = full
@@ -311,14 +334,16 @@ pub fn select(
         "none (one experiment and no validation data): J alone decides".to_string()
     };
     let mut free_runs = 0;
-    let mut record = |dropped_now: Option<(&str, &str, Option<(f64, usize)>)>, active: &BTreeSet<usize>, steps: &mut Vec<Step>| {
+    let mut record = |dropped_now: Option<Dropping>,
+                      active: &BTreeSet<usize>,
+                      steps: &mut Vec<Step>| {
         let sub = ctx.solve(active, &all);
         let criterion = ctx.criterion(active);
         if criterion.is_some() {
             free_runs += 1;
         }
         let (name, reason, w) = match dropped_now {
-            Some((n, r, w)) => (Some(n.to_string()), r.to_string(), w),
+            Some(d) => (Some(d.name), d.reason.to_string(), d.wald),
             None => (None, "full model".to_string(), None),
         };
         steps.push(Step {
@@ -359,7 +384,12 @@ pub fn select(
         active.remove(&p);
         let name = ir.parameters[p].name.clone();
         dropped.push(name.clone());
-        record(Some((&name, "wald", Some((stat, df)))), &active, &mut steps);
+        let drop = Dropping {
+            name: name.clone(),
+            reason: "wald",
+            wald: Some((stat, df)),
+        };
+        record(Some(drop), &active, &mut steps);
     }
     // The stopping rule: the model with the lowest J − df·ln N (ties: the
     // smaller); if it free-runs on the held-out data worse than (1 +
@@ -413,6 +443,13 @@ pub fn select(
         chosen_source,
         estimate: chosen_estimate,
     })
+}
+
+/// The candidate a path step drops, why, and its Wald statistic with its df.
+struct Dropping {
+    name: String,
+    reason: &'static str,
+    wald: Option<(f64, usize)>,
 }
 
 fn pre_step(name: &str, reason: &str) -> Step {

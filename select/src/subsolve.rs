@@ -73,7 +73,9 @@ pub fn solve_sub(
                 g -= h.column(j) * *v;
             }
         }
-        let rows: Vec<usize> = (0..m).filter(|j| block.kept.contains(&block.cols[*j])).collect();
+        let rows: Vec<usize> = (0..m)
+            .filter(|j| block.kept.contains(&block.cols[*j]))
+            .collect();
         let cols: Vec<usize> = rows
             .iter()
             .copied()
@@ -117,7 +119,11 @@ fn gmm(
         .iter()
         .map(|i| {
             let v = s[(*i, *i)];
-            if v > 0.0 && v.is_finite() { 1.0 / v.sqrt() } else { 1.0 }
+            if v > 0.0 && v.is_finite() {
+                1.0 / v.sqrt()
+            } else {
+                1.0
+            }
         })
         .collect();
     let ss = DMatrix::from_fn(r, r, |a, b| s[(rows[a], rows[b])] * d[a] * d[b]);
@@ -127,7 +133,11 @@ fn gmm(
     let c: Vec<f64> = (0..k)
         .map(|b| {
             let n = hs.column(b).norm();
-            if n > 0.0 && n.is_finite() { 1.0 / n } else { 1.0 }
+            if n > 0.0 && n.is_finite() {
+                1.0 / n
+            } else {
+                1.0
+            }
         })
         .collect();
     let a = DMatrix::from_fn(r, k, |i, j| hs[(i, j)] * c[j]);
@@ -149,7 +159,11 @@ fn square(h: &DMatrix<f64>, g: &DVector<f64>, cols: &[usize]) -> DVector<f64> {
         .iter()
         .map(|j| {
             let v = h[(*j, *j)].abs();
-            if v > 0.0 && v.is_finite() { 1.0 / v.sqrt() } else { 1.0 }
+            if v > 0.0 && v.is_finite() {
+                1.0 / v.sqrt()
+            } else {
+                1.0
+            }
         })
         .collect();
     let a = DMatrix::from_fn(k, k, |i, j| h[(cols[i], cols[j])] * c[i] * c[j]);
@@ -197,7 +211,11 @@ pub fn wald(est: &SubEstimate, cols: &[usize]) -> Option<(f64, usize)> {
         let d: Vec<f64> = (0..at.len())
             .map(|a| {
                 let v = sub[(a, a)];
-                if v > 0.0 && v.is_finite() { 1.0 / v.sqrt() } else { 0.0 }
+                if v > 0.0 && v.is_finite() {
+                    1.0 / v.sqrt()
+                } else {
+                    0.0
+                }
             })
             .collect();
         let scaled = DMatrix::from_fn(at.len(), at.len(), |a, b| sub[(a, b)] * d[a] * d[b]);
@@ -209,8 +227,8 @@ pub fn wald(est: &SubEstimate, cols: &[usize]) -> Option<(f64, usize)> {
             .filter(|l| l.abs() > 1e-10 * top)
             .count();
         let t = DVector::from_fn(at.len(), |a, _| theta[a] * d[a]);
-        let stat = (t.transpose() * pinv_symmetric(&((&scaled + scaled.transpose()) * 0.5)) * &t)
-            [(0, 0)];
+        let stat =
+            (t.transpose() * pinv_symmetric(&((&scaled + scaled.transpose()) * 0.5)) * &t)[(0, 0)];
         return Some((stat.max(0.0), rank.max(1)));
     }
     None

@@ -307,7 +307,10 @@ fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
         ctx.diags.push(
             Diagnostic::error(
                 "candidate-not-parameter",
-                format!("`?{}` marks a signal, not a parameter, as a candidate", p.text()),
+                format!(
+                    "`?{}` marks a signal, not a parameter, as a candidate",
+                    p.text()
+                ),
             )
             .with_primary(p.span, "a declared signal")
             .with_help("write the `?` before the term's parameter: `?Y_vv*v*|v|`"),

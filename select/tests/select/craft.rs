@@ -60,8 +60,7 @@ pub fn true_candidates() -> Vec<&'static str> {
 pub fn model() -> Interpreter {
     let c = leeway_structure::compile(CANDIDATE_SHIP, &Default::default());
     Interpreter::new(
-        c.ir
-            .unwrap_or_else(|| panic!("the candidate ship compiles: {:?}", c.diagnostics)),
+        c.ir.unwrap_or_else(|| panic!("the candidate ship compiles: {:?}", c.diagnostics)),
     )
 }
 
@@ -69,7 +68,12 @@ pub fn model() -> Interpreter {
 /// correlated over 60 s; wind 3 m/s north and east with 1 m/s gusts
 /// correlated over 10 s, measured with noise.
 pub fn system(model: &Interpreter) -> TrueSystem {
-    let names: Vec<&str> = model.ir().parameters.iter().map(|p| p.name.as_str()).collect();
+    let names: Vec<&str> = model
+        .ir()
+        .parameters
+        .iter()
+        .map(|p| p.name.as_str())
+        .collect();
     let theta = names
         .iter()
         .map(|n| TRUTH.iter().find(|(t, _)| t == n).map_or(0.0, |(_, v)| *v))

@@ -17,8 +17,11 @@ fn options() -> SelectOptions {
     options
 }
 
+/// True positives, false positives, false negatives.
+type Counts = (usize, usize, usize);
+
 /// True positives, false positives, false negatives of a kept set.
-fn score(kept: &[String]) -> (usize, usize, usize) {
+fn score(kept: &[String]) -> Counts {
     let truth: BTreeSet<&str> = true_candidates().into_iter().collect();
     let tp = kept.iter().filter(|k| truth.contains(k.as_str())).count();
     (tp, kept.len() - tp, truth.len() - tp)
@@ -76,7 +79,7 @@ fn least_squares_selection(data: &[Experiment]) -> Vec<String> {
 
 /// Per seed: the IV selection's and the least-squares selection's
 /// (true positives, false positives, false negatives).
-fn compare(seeds: std::ops::Range<u64>) -> Vec<((usize, usize, usize), (usize, usize, usize))> {
+fn compare(seeds: std::ops::Range<u64>) -> Vec<(Counts, Counts)> {
     let m = model();
     seeds
         .map(|seed| {
@@ -88,7 +91,7 @@ fn compare(seeds: std::ops::Range<u64>) -> Vec<((usize, usize, usize), (usize, u
         .collect()
 }
 
-fn precision_recall(rows: &[(usize, usize, usize)]) -> (f64, f64) {
+fn precision_recall(rows: &[Counts]) -> (f64, f64) {
     let (tp, fp, fneg) = rows
         .iter()
         .fold((0, 0, 0), |a, r| (a.0 + r.0, a.1 + r.1, a.2 + r.2));
@@ -136,7 +139,12 @@ fn recovery_table() {
     println!("| --- | --- | --- | --- |");
     for (i, n) in names.iter().enumerate() {
         let t = truth.contains(&n.as_str());
-        println!("| `{n}` | {} | {} % | {} % |", if t { "yes" } else { "no" }, kept_iv[i], kept_ls[i]);
+        println!(
+            "| `{n}` | {} | {} % | {} % |",
+            if t { "yes" } else { "no" },
+            kept_iv[i],
+            kept_ls[i]
+        );
     }
 }
 
@@ -154,9 +162,23 @@ fn selection_is_the_same_bits_on_any_number_of_threads_and_its_model_reads_back(
         let steps: Vec<(Option<u64>, u64, Option<u64>)> = s
             .steps
             .iter()
-            .map(|x| (x.wald.map(f64::to_bits), x.j.to_bits(), x.criterion.map(f64::to_bits)))
+            .map(|x| {
+                (
+                    x.wald.map(f64::to_bits),
+                    x.j.to_bits(),
+                    x.criterion.map(f64::to_bits),
+                )
+            })
             .collect();
-        (steps, s.kept.clone(), s.estimate.theta.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+        (
+            steps,
+            s.kept.clone(),
+            s.estimate
+                .theta
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>(),
+        )
     };
     assert_eq!(bits(&one), bits(&three));
     // The chosen model: no candidate left, every kept one estimated, and
@@ -165,10 +187,16 @@ fn selection_is_the_same_bits_on_any_number_of_threads_and_its_model_reads_back(
     let c = leeway_structure::compile(&one.chosen_source, &Default::default());
     let chosen = Interpreter::new(c.ir.expect("the chosen model compiles"));
     for k in &one.kept {
-        assert!(one.estimate.parameters.contains(k), "{k} kept but not estimated");
+        assert!(
+            one.estimate.parameters.contains(k),
+            "{k} kept but not estimated"
+        );
     }
     for d in &one.dropped {
-        assert!(!one.estimate.parameters.contains(d), "{d} dropped but estimated");
+        assert!(
+            !one.estimate.parameters.contains(d),
+            "{d} dropped but estimated"
+        );
     }
     let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
     let again = estimate(&chosen, &sources, &options().estimate).expect("estimates");

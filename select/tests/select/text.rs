@@ -46,7 +46,9 @@ fn a_candidate_sharing_a_term_with_another_parameter_is_refused_where_written() 
     let ir = c.ir.expect("compiles");
     let names: BTreeSet<String> = ir.parameters.iter().map(|p| p.name.clone()).collect();
     let (syntax, _) = grammar::parse(src);
-    let e = CandidateModel::read(src, &syntax.expect("parses"), &names).unwrap_err();
+    let Err(e) = CandidateModel::read(src, &syntax.expect("parses"), &names) else {
+        panic!("a candidate beside another parameter is refused");
+    };
     assert_eq!(
         e.message,
         "4:13: a term of `u` with candidate `Y` also holds `X` and `Y`: a candidate's term must have no other parameter"
