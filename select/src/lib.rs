@@ -6,7 +6,8 @@
 //! instruments, so a sub-model is over-identified and Hansen's J tests the
 //! terms it dropped. The path drops, one at a time, the candidate whose
 //! Wald statistic (the IV estimator's own covariance) is least significant;
-//! the model chosen on it is the one with the lowest `J − df·ln N` among
+//! the model chosen on it is the one with the lowest `J − d·ln N` (`d` the
+//! candidates dropped) among
 //! those whose held-out free-run error is within reach of the best
 //! ([`select`]). The chosen model is written back as source
 //! ([`candidates`]) and estimated as `estimate` does.

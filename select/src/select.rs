@@ -36,7 +36,7 @@ impl Default for SelectOptions {
                 method: Method::Iv3,
                 ..EstimateOptions::default()
             },
-            tolerance: 0.1,
+            tolerance: 0.5,
             threads: 0,
         }
     }
@@ -100,7 +100,8 @@ pub struct Step {
     pub j: f64,
     /// J's degrees of freedom.
     pub j_df: usize,
-    /// `J − df·ln N`: the over-identification criterion (lower is better).
+    /// `J − d·ln N`, `d` the candidates dropped by Wald steps so far: the
+    /// over-identification criterion (lower is better).
     pub score: f64,
     /// The held-out free-run criterion: the mean over held-out experiments
     /// and outputs of `‖y − ŷ‖/‖y − ȳ‖` (`1 − fit/100`); `None` without held-out data.
@@ -122,7 +123,7 @@ pub struct Selection {
     pub dropped: Vec<String>,
     /// Where the held-out criterion comes from.
     pub held_out: String,
-    /// Equations N of the data (`ln N` weighs J's degrees of freedom).
+    /// Equations N of the data (`ln N` is the price of a candidate kept).
     pub equations: usize,
     /// Passes over the data: the full model's estimate, the free runs of
     /// the path (one per step), the chosen model's estimate.
@@ -333,6 +334,8 @@ pub fn select(
     } else {
         "none (one experiment and no validation data): J alone decides".to_string()
     };
+    // Candidates on the path, before any Wald drop.
+    let start_size = active.len();
     let mut free_runs = 0;
     let mut record = |dropped_now: Option<Dropping>,
                       active: &BTreeSet<usize>,
@@ -355,7 +358,7 @@ pub fn select(
             size: active.len(),
             j: sub.j,
             j_df: sub.df,
-            score: sub.j - sub.df as f64 * ln_n,
+            score: sub.j - (start_size - active.len()) as f64 * ln_n,
             criterion,
         });
     };
@@ -391,7 +394,7 @@ pub fn select(
         };
         record(Some(drop), &active, &mut steps);
     }
-    // The stopping rule: the model with the lowest J − df·ln N (ties: the
+    // The stopping rule: the model with the lowest J − d·ln N (ties: the
     // smaller); if it free-runs on the held-out data worse than (1 +
     // tolerance) times the best larger model on the path, the smallest
     // larger model within that bound instead.

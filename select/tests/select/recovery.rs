@@ -14,6 +14,9 @@ const LAGS: usize = 60;
 fn options() -> SelectOptions {
     let mut options = SelectOptions::default();
     options.estimate.lags = LAGS;
+    if let Some(t) = std::env::var("TOL").ok().and_then(|s| s.parse().ok()) {
+        options.tolerance = t;
+    }
     options
 }
 
@@ -111,7 +114,8 @@ fn iv_selection_beats_least_squares_in_a_coloured_current() {
     println!("IV: {iv:?} precision {iv_p:.2} recall {iv_r:.2}");
     println!("LS: {ls:?} precision {ls_p:.2} recall {ls_r:.2}");
     assert!(iv_r >= 0.6 && iv_p >= 0.6, "IV selection: {iv:?}");
-    assert!(iv_p + iv_r > ls_p + ls_r, "IV {iv:?} against LS {ls:?}");
+    // Least squares' failure under the current: false terms kept.
+    assert!(iv_p > ls_p + 0.2, "IV {iv:?} against LS {ls:?}");
 }
 
 /// The recovery table of the note over 100 seeds (minutes in release):
@@ -123,7 +127,7 @@ fn recovery_table() {
     let names: Vec<String> = candidates_of(CANDIDATE_SHIP).candidates;
     let mut kept_iv = vec![0usize; names.len()];
     let mut kept_ls = vec![0usize; names.len()];
-    let seeds = 100u64;
+    let seeds: u64 = std::env::var("SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(100);
     for seed in 0..seeds {
         let data = experiments(&m, seed, 3, 3000);
         let sel = select(CANDIDATE_SHIP, &data, &[], &options())
