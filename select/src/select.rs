@@ -255,7 +255,8 @@ pub fn select(
     let model = compiled(&source)?;
     for (d, with) in &exchange {
         dropped.push(d.clone());
-        steps.push(pre_step(d, &format!("exchangeable with {with}")));
+        let size = candidates.len() - dropped.len();
+        steps.push(pre_step(d, &format!("exchangeable with {with}"), size));
     }
     let ir = &model.ir;
     let interp = Interpreter::new(ir.clone());
@@ -308,7 +309,8 @@ pub fn select(
             active.insert(*p);
         } else {
             dropped.push(name.clone());
-            steps.push(pre_step(name, "not excited"));
+            let size = candidates.len() - dropped.len();
+            steps.push(pre_step(name, "not excited", size));
         }
     }
     let means = disturbance_means(ir, &full);
@@ -337,31 +339,30 @@ pub fn select(
     // Candidates on the path, before any Wald drop.
     let start_size = active.len();
     let mut free_runs = 0;
-    let mut record = |dropped_now: Option<Dropping>,
-                      active: &BTreeSet<usize>,
-                      steps: &mut Vec<Step>| {
-        let sub = ctx.solve(active, &all);
-        let criterion = ctx.criterion(active);
-        if criterion.is_some() {
-            free_runs += 1;
-        }
-        let (name, reason, w) = match dropped_now {
-            Some(d) => (Some(d.name), d.reason.to_string(), d.wald),
-            None => (None, "full model".to_string(), None),
+    let mut record =
+        |dropped_now: Option<Dropping>, active: &BTreeSet<usize>, steps: &mut Vec<Step>| {
+            let sub = ctx.solve(active, &all);
+            let criterion = ctx.criterion(active);
+            if criterion.is_some() {
+                free_runs += 1;
+            }
+            let (name, reason, w) = match dropped_now {
+                Some(d) => (Some(d.name), d.reason.to_string(), d.wald),
+                None => (None, "full model".to_string(), None),
+            };
+            steps.push(Step {
+                dropped: name,
+                reason,
+                wald: w.map(|w| w.0),
+                wald_df: w.map(|w| w.1),
+                p_value: w.map(|(s, df)| chi2_sf(s, df)),
+                size: active.len(),
+                j: sub.j,
+                j_df: sub.df,
+                score: sub.j - (start_size - active.len()) as f64 * ln_n,
+                criterion,
+            });
         };
-        steps.push(Step {
-            dropped: name,
-            reason,
-            wald: w.map(|w| w.0),
-            wald_df: w.map(|w| w.1),
-            p_value: w.map(|(s, df)| chi2_sf(s, df)),
-            size: active.len(),
-            j: sub.j,
-            j_df: sub.df,
-            score: sub.j - (start_size - active.len()) as f64 * ln_n,
-            criterion,
-        });
-    };
     let first_scored = steps.len();
     record(None, &active, &mut steps);
     while !active.is_empty() {
@@ -455,14 +456,15 @@ struct Dropping {
     wald: Option<(f64, usize)>,
 }
 
-fn pre_step(name: &str, reason: &str) -> Step {
+/// A step before the path: a candidate dropped for its structure or its data.
+fn pre_step(name: &str, reason: &str, size: usize) -> Step {
     Step {
         dropped: Some(name.to_string()),
         reason: reason.to_string(),
         wald: None,
         wald_df: None,
         p_value: None,
-        size: 0,
+        size,
         j: 0.0,
         j_df: 0,
         score: 0.0,

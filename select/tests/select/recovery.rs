@@ -127,7 +127,10 @@ fn recovery_table() {
     let names: Vec<String> = candidates_of(CANDIDATE_SHIP).candidates;
     let mut kept_iv = vec![0usize; names.len()];
     let mut kept_ls = vec![0usize; names.len()];
-    let seeds: u64 = std::env::var("SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(100);
+    let seeds: u64 = std::env::var("SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(100);
     for seed in 0..seeds {
         let data = experiments(&m, seed, 3, 3000);
         let sel = select(CANDIDATE_SHIP, &data, &[], &options())

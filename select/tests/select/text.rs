@@ -54,3 +54,17 @@ fn a_candidate_sharing_a_term_with_another_parameter_is_refused_where_written() 
         "4:13: a term of `u` with candidate `Y` also holds `X` and `Y`: a candidate's term must have no other parameter"
     );
 }
+
+#[test]
+fn check_names_the_candidates_and_the_exchangeable_ones() {
+    // Two candidates for one regressor (`u*|u|` written twice): one can
+    // stand for the other; so can a candidate for a required term.
+    let src = "model M {\n    state u, v\n    input tau\n    der u = X_u*u + ?X_a*u*|u| + ?X_b*|u|*u + X_t*tau + ?X_v*v\n    der v = Y_v*v + Y_u*u + ?Y_w*u\n}\n";
+    let c = leeway_structure::compile(src, &Default::default());
+    let ir = c.ir.expect("compiles");
+    let text = leeway_select::describe(src, &ir).expect("candidates");
+    assert_eq!(
+        text,
+        "candidates: 4 (X_a, X_b, X_v, Y_w)\n  the full candidate set: not-identifiable\n  exchangeable: `X_b` can stand for `X_a` (select keeps `X_a`)\n  exchangeable: `Y_w` can stand for `Y_u` (select keeps `Y_u`)\n"
+    );
+}
