@@ -9,7 +9,7 @@
 //! the model chosen on it is the one with the lowest `J − d·ln N` (`d` the
 //! candidates dropped) among
 //! those whose held-out free-run error is within reach of the best
-//! ([`select`]). The chosen model is written back as source
+//! ([`select()`]). The chosen model is written back as source
 //! ([`candidates`]) and estimated as `estimate` does.
 
 pub mod candidates;
