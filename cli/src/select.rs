@@ -140,9 +140,14 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
         } else {
             Status::Error
         };
-        let mut p = Problem::error(e.code, e.message)
-            .at(args.model.display().to_string())
-            .help(e.hint);
+        let mut p = Problem::error(e.code, e.message).help(e.hint);
+        // The model's problems are located at it; an option's or the data's are not.
+        if matches!(
+            e.code,
+            "invalid-candidates" | "invalid-model" | "no-candidates"
+        ) {
+            p = p.at(args.model.display().to_string());
+        }
         p.status = status;
         Failure::from(p)
     })?;

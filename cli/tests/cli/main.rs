@@ -14,5 +14,6 @@ mod output;
 mod parquet;
 mod readers;
 mod reproduce;
+mod select;
 mod simulate;
 mod words;
