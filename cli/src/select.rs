@@ -212,5 +212,20 @@ fn render(s: &Selection, out_file: &str) -> String {
             number(s.estimate.std_errors[i])
         );
     }
+    if !s.suggestions.is_empty() {
+        let _ = writeln!(
+            t,
+            "it may lack (residual correlation with terms it does not declare):"
+        );
+        for g in &s.suggestions {
+            let _ = writeln!(
+                t,
+                "  {:<12} in the equation of {:<6} {:>7}",
+                g.term,
+                g.equation,
+                format!("{:+.2}", g.correlation)
+            );
+        }
+    }
     t
 }

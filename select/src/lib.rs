@@ -16,7 +16,9 @@ pub mod candidates;
 pub mod describe;
 pub mod select;
 pub mod subsolve;
+pub mod suggest;
 
 pub use candidates::{CandidateError, CandidateModel};
 pub use describe::describe;
 pub use select::{Passes, SelectError, SelectOptions, Selection, Step, exchangeable, select};
+pub use suggest::{Suggestion, missing_terms};

@@ -4,6 +4,7 @@
 
 use crate::candidates::{CandidateError, CandidateModel};
 use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub, wald};
+use crate::suggest::{Suggestion, missing_terms};
 use leeway_estimate::parallel::{in_order, threads_for};
 use leeway_estimate::{Estimate, EstimateError, EstimateOptions, Method, MomentSystem, estimate};
 use leeway_model::experiment::{Experiment, Source};
@@ -133,6 +134,9 @@ pub struct Selection {
     pub chosen_source: String,
     /// The chosen model's estimate, refined as `estimate` refines it.
     pub estimate: Estimate,
+    /// What it may lack: its one-step residuals' strongest correlations
+    /// with regressors it does not declare.
+    pub suggestions: Vec<Suggestion>,
 }
 
 /// Passes over the data.
@@ -431,6 +435,13 @@ pub fn select(
     let mut final_options = options.estimate.clone();
     final_options.nominal = None;
     let chosen_estimate = estimate(&chosen_interp, &sources, &final_options)?;
+    let chosen_means = disturbance_means(&chosen_model.ir, &chosen_estimate);
+    let suggestions = missing_terms(
+        &chosen_interp,
+        &chosen_estimate.theta,
+        &chosen_means,
+        experiments,
+    );
     Ok(Selection {
         candidates,
         passes: Passes {
@@ -446,6 +457,7 @@ pub fn select(
         equations: n_eq,
         chosen_source,
         estimate: chosen_estimate,
+        suggestions,
     })
 }
 

@@ -95,6 +95,11 @@ fn select_keeps_the_true_candidates_and_writes_a_model_estimate_reads() {
         .map(|a| a.iter().filter_map(|v| v.as_str()).collect())
         .unwrap_or_default();
     assert_eq!(kept, ["X_uu", "X_vr", "Y_vv", "Y_ur", "N_uv"]);
+    // Nothing is missing: no suggestion stands out.
+    let strongest = doc["selection"]["suggestions"][0]["correlation"]
+        .as_f64()
+        .unwrap_or(1.0);
+    assert!(strongest.abs() < 0.1, "{strongest}");
     let written = std::fs::read_to_string(&chosen).unwrap_or_default();
     assert_eq!(
         written,
@@ -111,6 +116,21 @@ fn select_keeps_the_true_candidates_and_writes_a_model_estimate_reads() {
     }
     let o = leeway(&est);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // Without the true `u*v` of the yaw equation among the candidates, it is
+    // the first suggestion.
+    let lacking = dir.write("lacking.som", &CANDIDATES.replace(" + ?N_uv*u*v", ""));
+    args[1] = lacking.as_str();
+    let o = leeway(&args);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    let first = &json(&o)["selection"]["suggestions"][0];
+    assert_eq!(
+        (first["equation"].as_str(), first["term"].as_str()),
+        (Some("r"), Some("u*v"))
+    );
+    assert!(
+        first["correlation"].as_f64().unwrap_or(0.0) > 0.3,
+        "{first}"
+    );
 }
 
 #[test]
