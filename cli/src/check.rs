@@ -82,6 +82,9 @@ pub fn run(args: &CheckArgs) -> Status {
                 .map(|d| d.message.as_str())
                 .collect();
             out(&render::render_except(ir, &shown));
+            if let Some(candidates) = leeway_select::describe(&source, ir) {
+                out(&candidates);
+            }
         }
         let style = stderr_style();
         let diagnostics = grammar::render(&compilation.diagnostics, &file, &source, style);

@@ -49,6 +49,7 @@ mod plot;
 mod problem;
 mod reproduce;
 mod residuals;
+mod select;
 mod simulate;
 mod units;
 mod validate;
@@ -70,6 +71,8 @@ enum Command {
     Check(check::CheckArgs),
     /// Estimate θ, the nuisance parameters and the disturbance means from experiments (CSV).
     Estimate(estimate::args::EstimateArgs),
+    /// Choose among a model's candidate terms (`?name`) by IV backward elimination; write the chosen model.
+    Select(select::SelectArgs),
     /// Simulate a model with given parameters on an input file; write the trajectory as CSV.
     Simulate(simulate::SimulateArgs),
     /// Fit of models with given parameters on validation data (like MATLAB's compare); a plot with --plot.
@@ -90,6 +93,7 @@ fn main() -> ExitCode {
     let status = match cli.command {
         Command::Check(args) => check::run(&args),
         Command::Estimate(args) => estimate::run(&args),
+        Command::Select(args) => select::run(&args),
         Command::Simulate(args) => simulate::run(&args),
         Command::Validate(args) => validate::run(&args),
         Command::Design(args) => design::run(&args),

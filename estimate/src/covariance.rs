@@ -14,6 +14,15 @@ use std::collections::BTreeMap;
 /// Covariance entries by (column, column) of the estimated columns.
 pub(super) type ColumnCovariance = BTreeMap<(usize, usize), f64>;
 
+/// What the covariance pass gives: the covariance (none if an instrument
+/// simulation diverged), the free runs if asked, and each experiment's
+/// long-run sum over the concatenated ζ rows (with each block's offset).
+pub(super) struct CovariancePass {
+    pub(super) cov: Option<ColumnCovariance>,
+    pub(super) free_runs: Option<Vec<FreeRunSums>>,
+    pub(super) long_runs: Option<(Vec<DMatrix<f64>>, Vec<usize>)>,
+}
+
 impl Estimator<'_> {
     /// The sandwich covariance of the estimated columns: `Σ_i B_i G_i B_iᵀ`,
     /// `G_i` the long-run sum of `ζ_k = Σ_o z̃_o (ε_o − ε̄_o)` truncated at
@@ -27,7 +36,7 @@ impl Estimator<'_> {
         sol: &[BlockSolution],
         (theta_sim, mu): (&[f64], &[f64]),
         free_run: Option<(Vec<f64>, Vec<f64>)>,
-    ) -> Result<(Option<ColumnCovariance>, Option<Vec<FreeRunSums>>), EstimateError> {
+    ) -> Result<CovariancePass, EstimateError> {
         let n = self.n_cols;
         let values: BTreeMap<usize, f64> = self.all_values(sol).into_iter().collect();
         // ζ rows: the instrument rows of every block, concatenated.
@@ -91,11 +100,15 @@ impl Estimator<'_> {
         let free_runs = runs_free.then_some(free_runs);
         // A diverged instrument simulation anywhere: no covariance.
         let Some(long_runs) = long_runs.into_iter().collect::<Option<Vec<_>>>() else {
-            return Ok((None, free_runs));
+            return Ok(CovariancePass {
+                cov: None,
+                free_runs,
+                long_runs: None,
+            });
         };
         let nk: usize = sol.iter().map(|s| s.kept.len()).sum();
         let mut cov = DMatrix::zeros(nk, nk);
-        for (i, g) in long_runs.into_iter().enumerate() {
+        for (i, g) in long_runs.iter().enumerate() {
             let b_all = experiment_map(sol, &offsets, (nk, total), i);
             cov += &b_all * g * b_all.transpose();
         }
@@ -106,7 +119,11 @@ impl Estimator<'_> {
                 out.insert((*ca, *cb), cov[(a, b)]);
             }
         }
-        Ok((Some(out), free_runs))
+        Ok(CovariancePass {
+            cov: Some(out),
+            free_runs,
+            long_runs: Some((long_runs, offsets)),
+        })
     }
 
     /// Each output's ζ rows: `(row, column, index within its block)`, the

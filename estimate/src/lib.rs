@@ -56,6 +56,7 @@ mod scan;
 mod slots;
 mod solve;
 mod subsample;
+mod system;
 mod walk;
 mod zeta;
 
@@ -66,7 +67,7 @@ pub use method::{Choice, Combine, Initial, Instruments, Method, Named, UnknownNa
 pub use options::{EstimateOptions, Interrupt, MAX_LAGS, MAX_REFINEMENTS, OutOfRange, Start};
 pub use outcome::{
     ColumnEstimate, Diagnostics, DisturbanceMoment, DroppedAtStart, Estimate, EstimateError,
-    InstrumentSimulation, OwnSimulation, StateFit, SubsampleRefinement,
+    InstrumentSimulation, MomentBlock, MomentSystem, OwnSimulation, StateFit, SubsampleRefinement,
 };
 pub use plan::{PlanKey, StructuralPlan};
 pub use protocol::{

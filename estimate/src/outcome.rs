@@ -187,6 +187,39 @@ pub struct Estimate {
     /// begin with these experiments continues ([`crate::Start::from_estimate`]).
     #[serde(skip)]
     pub instrument_simulation: Option<InstrumentSimulation>,
+    /// The reported solve's moment equations and the long-run covariance of
+    /// its moment residuals, per block and experiment (`None` without a
+    /// covariance): what a sub-model's IV estimate is solved from without
+    /// another pass over the data (`leeway select`).
+    #[serde(skip)]
+    pub moment_system: Option<MomentSystem>,
+}
+
+/// The IV moment equations of an estimate, kept for solving sub-models:
+/// per block of outputs, the summed moment sums of each experiment over the
+/// block's predictor columns (the same columns index the instruments' rows
+/// and the regressors' columns).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MomentSystem {
+    /// The blocks, in the estimate's order.
+    pub blocks: Vec<MomentBlock>,
+}
+
+/// One block of a [`MomentSystem`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MomentBlock {
+    /// Predictor columns of the block (indices into the predictor's columns).
+    pub cols: Vec<usize>,
+    /// Columns the estimate kept (estimated); the others it held.
+    pub kept: Vec<usize>,
+    /// Per experiment, `H_i = Σ_k z̃ φᵀ` (`cols × cols`, centred as the
+    /// estimate centred its instruments).
+    pub h: Vec<nalgebra::DMatrix<f64>>,
+    /// Per experiment, `g_i = Σ_k z̃ t`.
+    pub g: Vec<nalgebra::DVector<f64>>,
+    /// Per experiment, the long-run covariance of `ζ_k = z̃_k ε_k` over the
+    /// rows `cols`, at the estimate's residuals.
+    pub long_run: Vec<nalgebra::DMatrix<f64>>,
 }
 
 /// The instrument simulation of a settled refined IV estimate: the θ and

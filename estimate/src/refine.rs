@@ -395,15 +395,20 @@ impl Estimator<'_> {
             .options
             .own_simulation
             .then(|| (theta.clone(), self.mean_vector(&values, &theta)));
-        let (cov, own) = if self.options.covariance {
-            let (cov, runs) = self.covariance(&moments, &sol, (&theta_sim, &mu), free_run)?;
-            (cov, runs.map(|r| self.own_simulation_of(r)).transpose()?)
+        let (cov, own, long_runs) = if self.options.covariance {
+            let pass = self.covariance(&moments, &sol, (&theta_sim, &mu), free_run)?;
+            let own = pass
+                .free_runs
+                .map(|r| self.own_simulation_of(r))
+                .transpose()?;
+            (pass.cov, own, pass.long_runs)
         } else {
             let own = free_run
                 .map(|(theta, means)| self.own_simulation(&theta, &means))
                 .transpose()?;
-            (None, own)
+            (None, own, None)
         };
+        let moment_system = long_runs.and_then(|lr| self.moment_system(&moments, &sol, lr));
         if let Some(problem) = own
             .as_ref()
             .and_then(|o| self.own_simulation_problem(o, stopped))
@@ -434,6 +439,7 @@ impl Estimator<'_> {
             converged,
         )?;
         estimate.diagnostics.own_simulation = own;
+        estimate.moment_system = moment_system;
         // The instruments of a settled refinement, for a warm start that
         // continues them on longer records.
         if refine && converged && !theta_sim.is_empty() {

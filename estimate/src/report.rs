@@ -44,6 +44,7 @@ impl Estimator<'_> {
         let (centring, instruments) = (self.centring_text(), self.instruments_text());
         let equations = self.facts.iter().map(|f| f.len.saturating_sub(2)).sum();
         Ok(Estimate {
+            moment_system: None,
             method: self.options.method,
             parameters: self.ir.parameters.iter().map(|p| p.name.clone()).collect(),
             theta,

@@ -16,7 +16,13 @@ pub(crate) fn text(e: &Expr) -> String {
 fn write(e: &Expr, out: &mut String) {
     match e {
         Expr::Number(n) => out.push_str(&n.text),
-        Expr::Path(p) => out.push_str(&p.text()),
+        Expr::Path(p) => {
+            // A candidate's `?` is not part of `Path::text`.
+            if p.candidate {
+                out.push('?');
+            }
+            out.push_str(&p.text());
+        }
         Expr::Abs(x, _) => {
             out.push('|');
             write(x, out);

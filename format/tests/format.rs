@@ -225,3 +225,19 @@ fn long_lines_are_broken_at_terms_and_entries() {
     );
     insta::assert_snapshot!(layout);
 }
+
+/// A candidate's `?` (`leeway select`) is part of the model: the IR does
+/// not hold it, so the layout is compared as text.
+#[test]
+fn candidates_keep_their_marker() {
+    let source = "model Boat {
+step 0.1
+state u
+input t
+der u = X_u*u+ ?X_uu * u*|u| +X_t*t
+nominal { X_u = -0.1, X_t = 0.01 } }
+";
+    let layout = check_layout(source, "candidates");
+    assert!(layout.contains("?X_uu*u*|u|"), "{layout}");
+    assert_eq!(layout.matches('?').count(), 1, "{layout}");
+}

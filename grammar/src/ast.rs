@@ -218,12 +218,16 @@ pub struct Path {
     pub base: Ident,
     /// The component after the dot.
     pub field: Option<Ident>,
-    /// The whole path.
+    /// Written `?name`: a candidate parameter, kept or dropped by `leeway
+    /// select` (a dropped one is held at 0). The `?` is the first byte of
+    /// [`Path::span`]; the compiler treats the parameter like any other.
+    pub candidate: bool,
+    /// The whole path, the `?` included.
     pub span: Span,
 }
 
 impl Path {
-    /// The path as written: `water.u` or `u`.
+    /// The path as written, without a candidate's `?`: `water.u` or `u`.
     pub fn text(&self) -> String {
         match &self.field {
             Some(f) => format!("{}.{}", self.base.name, f.name),

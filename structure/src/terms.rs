@@ -298,10 +298,26 @@ fn coefficients_fit(v: Vec<Product>, span: Span, ctx: &mut Ctx) -> Option<Vec<Pr
 
 fn resolve_path(p: &Path, ctx: &mut Ctx) -> Option<Atom> {
     let base = ctx.r.symbols.get(&p.base.name).map(|(s, _)| *s);
-    match &p.field {
+    let atom = match &p.field {
         None => resolve_name(p, base, ctx),
         Some(field) => resolve_field(p, field, base, ctx),
+    }?;
+    // `?` marks a term's parameter as a candidate; on a signal it means nothing.
+    if p.candidate && !matches!(atom, Atom::Param(_)) {
+        ctx.diags.push(
+            Diagnostic::error(
+                "candidate-not-parameter",
+                format!(
+                    "`?{}` marks a signal, not a parameter, as a candidate",
+                    p.text()
+                ),
+            )
+            .with_primary(p.span, "a declared signal")
+            .with_help("write the `?` before the term's parameter: `?Y_vv*v*|v|`"),
+        );
+        return None;
     }
+    Some(atom)
 }
 
 /// A name alone: a parameter (undeclared), a state or an input; any other

@@ -15,5 +15,6 @@ mod output;
 mod parquet;
 mod readers;
 mod reproduce;
+mod select;
 mod simulate;
 mod words;

@@ -256,13 +256,19 @@ fn build_expr(p: Pair<Rule>) -> Expr {
         Rule::product => build_product(p, span),
         Rule::number => Expr::Number(number(p)),
         Rule::path => {
-            let mut inner = p.into_inner();
+            let mut inner = p.into_inner().peekable();
+            let candidate = inner.next_if(|q| q.as_rule() == Rule::candidate).is_some();
             let base = inner.next().map(ident).unwrap_or(Ident {
                 name: String::new(),
                 span,
             });
             let field = inner.next().map(ident);
-            Expr::Path(Path { base, field, span })
+            Expr::Path(Path {
+                base,
+                field,
+                candidate,
+                span,
+            })
         }
         Rule::modulus | Rule::paren | Rule::negated => {
             let rule = p.as_rule();

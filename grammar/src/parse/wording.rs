@@ -48,6 +48,7 @@ fn rule_name(rule: &Rule) -> &'static str {
         Rule::modulus => "`|..|`",
         Rule::paren => "`(`",
         Rule::path => "a name",
+        Rule::candidate => "`?` (a candidate parameter)",
         Rule::sign => "`+` or `-`",
         Rule::add_op | Rule::mul_op => "an operator",
         Rule::number => "a number",

@@ -1,0 +1,24 @@
+//! leeway-select: which of a model's candidate terms (`?name`) the data need.
+//!
+//! One IV estimate of the full candidate model keeps its moment sums
+//! ([`leeway_estimate::MomentSystem`]); every sub-model on the path is then
+//! solved from sub-blocks of them ([`subsolve`]), with the full model's
+//! instruments, so a sub-model is over-identified and Hansen's J tests the
+//! terms it dropped. The path drops, one at a time, the candidate whose
+//! Wald statistic (the IV estimator's own covariance) is least significant;
+//! the model chosen on it is the one with the lowest `J − d·ln N` (`d` the
+//! candidates dropped) among
+//! those whose held-out free-run error is within reach of the best
+//! ([`select()`]). The chosen model is written back as source
+//! ([`candidates`]) and estimated as `estimate` does.
+
+pub mod candidates;
+pub mod describe;
+pub mod select;
+pub mod subsolve;
+pub mod suggest;
+
+pub use candidates::{CandidateError, CandidateModel};
+pub use describe::describe;
+pub use select::{Passes, SelectError, SelectOptions, Selection, Step, exchangeable, select};
+pub use suggest::{Suggestion, missing_terms};
