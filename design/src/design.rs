@@ -9,10 +9,10 @@
 
 use crate::error::DesignError;
 use crate::excitation::Excitation;
-use crate::operating::operating_point;
+use crate::operating::{operating_point, other_points};
 use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
-use crate::report::{self, Design, FamilyScore};
+use crate::report::{self, Design, FamilyScore, RunsOption};
 use crate::signs::{held, pointwise_states};
 use crate::trial::{Base, Fitted, Run, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
@@ -130,9 +130,70 @@ pub fn design(
             ));
         }
     }
-    let (fitted, prediction, scores) = chosen;
+    let (mut fitted, mut prediction, mut scores) = chosen;
+    let (mut centring, mut n) = (centring, n);
+    let mut runs_tried = vec![RunsOption::of(
+        bases.len(),
+        centring,
+        n as f64 * c.h,
+        prediction.as_ref(),
+    )];
+    let wanted = options.target.unwrap_or(POORLY);
+    if let Some(worst) = prediction
+        .as_ref()
+        .and_then(Prediction::worst)
+        .filter(|w| w.0 > wanted)
+    {
+        let plan = Alternatives {
+            model,
+            c: &c,
+            noise: &noise,
+            estimate: &estimate,
+            time_scale,
+            seed: options.seed,
+        };
+        let mut best: Option<(
+            Vec<Base>,
+            usize,
+            (Fitted, Option<Prediction>, Vec<FamilyScore>),
+        )> = None;
+        let mut best_worst = worst.0;
+        for (alt_bases, alt_n) in plan.candidates(&bases, centring, choose_one, n) {
+            let alt = plan.try_runs(&alt_bases, alt_n, fitted.family);
+            let option = RunsOption::of(
+                alt_bases.len(),
+                Centring::Pooled,
+                alt_n as f64 * c.h,
+                alt.1.as_ref(),
+            );
+            let alt_worst = option.worst_relative.unwrap_or(f64::INFINITY);
+            runs_tried.push(option);
+            // A clear gain only: each is scored on one realisation.
+            if alt.0.feasible() && alt_worst < 0.8 * best_worst {
+                best_worst = alt_worst;
+                best = Some((alt_bases, alt_n, alt));
+            }
+        }
+        if let Some((alt_bases, alt_n, (f, p, s))) = best {
+            for score in &mut scores {
+                if let Some(new) = s.iter().find(|x| x.family == score.family) {
+                    *score = new.clone();
+                }
+            }
+            bases = alt_bases;
+            n = alt_n;
+            centring = Centring::Pooled;
+            estimate.centring = Some(centring);
+            fitted = f;
+            prediction = p;
+        }
+    }
+    let chosen_runs = (bases.len(), centring);
+    for o in &mut runs_tried {
+        o.chosen = (o.runs, o.centring.as_str()) == (chosen_runs.0, chosen_runs.1.name());
+    }
+    let runs_reason = runs_reason(&runs_tried, wanted);
     let runs = fitted.runs(&bases, n, &c);
-    let mut prediction = prediction;
     if let Some(p) = prediction.as_mut() {
         let setting = Setting {
             conditions: &c,
@@ -168,7 +229,142 @@ pub fn design(
         assumptions,
         validation,
         aggregate: estimate.aggregate,
+        runs_tried,
+        runs_reason,
     }))
+}
+
+/// The worst relative standard error a design is judged by when no
+/// `--target` is given (the report's "poorly determined" threshold).
+const POORLY: f64 = 0.10;
+
+/// What trying other numbers of runs shares.
+struct Alternatives<'a> {
+    model: &'a dyn Model,
+    c: &'a Conditions,
+    noise: &'a Noise,
+    estimate: &'a EstimateOptions,
+    time_scale: usize,
+    seed: u64,
+}
+
+impl Alternatives<'_> {
+    /// Designs of several runs with pooled centring, within the budget of
+    /// the one-run-per-pattern design: when one pattern suffices, the same
+    /// pattern at two and at three operating points (other speeds), the
+    /// budget shared; else the same runs with pooled centring when the
+    /// design centred per experiment. Under per-experiment centring a
+    /// run's mean is annihilated with the medium's, so a drag level at one
+    /// steady speed is confounded with the medium's mean; pooled centring
+    /// over runs at different speeds keeps the difference between them.
+    fn candidates(
+        &self,
+        bases: &[Base],
+        centring: Centring,
+        choose_one: bool,
+        n: usize,
+    ) -> Vec<(Vec<Base>, usize)> {
+        if centring != Centring::Experiment {
+            return Vec::new();
+        }
+        let ir = self.model.ir();
+        let kind = self.estimate.method.predictor();
+        if !choose_one {
+            return vec![(bases.to_vec(), n)];
+        }
+        let Some(first) = bases.first() else {
+            return Vec::new();
+        };
+        if Analysis::with_centring(ir, kind, Centring::Pooled)
+            .required()
+            .is_none()
+        {
+            return Vec::new();
+        }
+        let others = other_points(self.model, self.c, &first.held, &first.operating, 2);
+        (1..=others.len())
+            .filter_map(|more| {
+                let k = more + 1;
+                let each = n / k;
+                (each >= crate::bounds::SAMPLES.0).then(|| {
+                    let mut b = vec![first.clone()];
+                    b.extend(others[..more].iter().map(|op| Base {
+                        operating: op.clone(),
+                        ..first.clone()
+                    }));
+                    (b, each)
+                })
+            })
+            .collect()
+    }
+
+    /// The runs of `bases` at `n` samples each, excited by `family`,
+    /// estimated with pooled centring.
+    fn try_runs(
+        &self,
+        bases: &[Base],
+        n: usize,
+        family: Family,
+    ) -> (Fitted, Option<Prediction>, Vec<FamilyScore>) {
+        let c = Conditions {
+            family: Some(family),
+            ..self.c.clone()
+        };
+        let estimate = EstimateOptions {
+            centring: Some(Centring::Pooled),
+            ..self.estimate.clone()
+        };
+        choose_family(
+            self.model,
+            &c,
+            bases,
+            self.noise,
+            &estimate,
+            (self.time_scale, n),
+            self.seed,
+        )
+    }
+}
+
+/// Why the design has the runs it has.
+fn runs_reason(tried: &[RunsOption], wanted: f64) -> String {
+    let pct = |r: Option<f64>| {
+        r.map_or("-".to_string(), |r| {
+            format!("{} %", leeway_model::number::short_number(100.0 * r))
+        })
+    };
+    let Some(chosen) = tried.iter().find(|o| o.chosen) else {
+        return String::new();
+    };
+    let first = &tried[0];
+    if tried.len() == 1 {
+        return format!(
+            "{} run{} (one per sign pattern needed): every θ within {} at the budget",
+            first.runs,
+            if first.runs == 1 { "" } else { "s" },
+            pct(Some(wanted))
+        );
+    }
+    if chosen.runs == first.runs && chosen.centring == first.centring {
+        return format!(
+            "{} run{} with {} centring: several runs at other speeds with pooled centring did not improve the worst relative error ({}) clearly",
+            first.runs,
+            if first.runs == 1 { "" } else { "s" },
+            first.centring,
+            pct(first.worst_relative)
+        );
+    }
+    format!(
+        "{} runs at different speeds with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} run{} and {} centring falls to {} ({}); one steady speed per run with per-experiment centring leaves a drag level or constant confounded with the medium's mean",
+        chosen.runs,
+        pct(first.worst_relative),
+        first.worst_parameter.as_deref().unwrap_or("-"),
+        first.runs,
+        if first.runs == 1 { "" } else { "s" },
+        first.centring,
+        pct(chosen.worst_relative),
+        chosen.worst_parameter.as_deref().unwrap_or("-"),
+    )
 }
 
 /// Fits every family the plan allows (or its one), scores the feasible

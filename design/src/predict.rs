@@ -68,6 +68,15 @@ impl Prediction {
         })
     }
 
+    /// The largest `σ/|θ|` and its parameter.
+    pub fn worst(&self) -> Option<(f64, String)> {
+        self.relative()
+            .into_iter()
+            .zip(&self.parameters)
+            .filter_map(|(r, name)| r.map(|r| (r, name.clone())))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+    }
+
     /// θ with a nominal value the realisation left without a standard
     /// error (held at nominal: not excited apart from others).
     pub fn undetermined(&self) -> Vec<String> {

@@ -55,6 +55,12 @@ pub struct Design {
     pub noise: BTreeMap<String, f64>,
     /// What the plan did not say and the design assumed.
     pub assumptions: Vec<String>,
+    /// The numbers of runs tried (one per sign pattern; the same pattern
+    /// at other speeds with pooled centring) and their worst predicted
+    /// relative errors, one marked chosen.
+    pub runs_tried: Vec<RunsOption>,
+    /// Why the design has the runs it has.
+    pub runs_reason: String,
     /// The runs' inputs and initial states (for the input files).
     #[serde(skip)]
     pub runs: Vec<Run>,
@@ -132,6 +138,44 @@ impl FamilyScore {
             score: f64::INFINITY,
             status: "failed".into(),
             detail: Some(why),
+        }
+    }
+}
+
+/// A number of runs and a centring the design tried.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunsOption {
+    /// Runs.
+    pub runs: usize,
+    /// The estimate's centring: `experiment`, `pooled`, `none`.
+    pub centring: String,
+    /// Seconds per run.
+    pub seconds: f64,
+    /// The worst `σ/|θ|` at that length, from the estimator's covariance on
+    /// one realisation (`None`: no prediction).
+    pub worst_relative: Option<f64>,
+    /// Its parameter.
+    pub worst_parameter: Option<String>,
+    /// Whether the design uses it.
+    pub chosen: bool,
+}
+
+impl RunsOption {
+    /// The option of `runs` runs with `centring` and its prediction.
+    pub fn of(
+        runs: usize,
+        centring: Centring,
+        seconds: f64,
+        prediction: Option<&Prediction>,
+    ) -> RunsOption {
+        let worst = prediction.and_then(Prediction::worst);
+        RunsOption {
+            runs,
+            centring: centring.name().to_string(),
+            seconds,
+            worst_relative: worst.as_ref().map(|w| w.0),
+            worst_parameter: worst.map(|w| w.1),
+            chosen: false,
         }
     }
 }
@@ -351,6 +395,10 @@ pub struct Parts<'a> {
     pub validation: Option<Run>,
     /// Whether the estimate holds unexcited θ (`--aggregate`).
     pub aggregate: bool,
+    /// The numbers of runs tried.
+    pub runs_tried: Vec<RunsOption>,
+    /// Why the design has its runs.
+    pub runs_reason: String,
 }
 
 /// Puts a design's report together.
@@ -419,6 +467,8 @@ pub fn assemble(p: Parts) -> Design {
         noise,
         assumptions: p.assumptions,
         held: p.bases.iter().map(|b| b.held.clone()).collect(),
+        runs_tried: p.runs_tried,
+        runs_reason: p.runs_reason,
         runs: p.runs,
         nominal: p.nominal,
         records: p.records,

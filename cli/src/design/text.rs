@@ -34,6 +34,31 @@ pub fn render(
     for a in &d.assumptions {
         let _ = writeln!(s, "  assumed: {a}");
     }
+    if !d.runs_reason.is_empty() {
+        let _ = writeln!(s, "  runs: {}", d.runs_reason);
+    }
+    if d.runs_tried.len() > 1 {
+        let tried: Vec<String> = d
+            .runs_tried
+            .iter()
+            .map(|o| {
+                format!(
+                    "{} × {} s, {} centring: {}{}",
+                    o.runs,
+                    num(o.seconds),
+                    o.centring,
+                    o.worst_relative
+                        .map_or("no prediction".to_string(), |w| format!(
+                            "worst {} % ({})",
+                            num(100.0 * w),
+                            o.worst_parameter.as_deref().unwrap_or("-")
+                        )),
+                    if o.chosen { " chosen" } else { "" }
+                )
+            })
+            .collect();
+        let _ = writeln!(s, "  runs tried: {}", tried.join("; "));
+    }
     for (e, run) in d.experiments.iter().enumerate() {
         experiment(&mut s, ir, e, run, d);
     }

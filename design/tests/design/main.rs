@@ -6,5 +6,6 @@ mod common;
 mod examples;
 mod plan_fuzz;
 mod rov;
+mod several;
 mod units;
 mod verification;
