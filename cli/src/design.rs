@@ -7,9 +7,10 @@
 //! With `--out`, per run an input file `simulate` reads (`run-N.csv`, the
 //! nominal trajectory beside the inputs), its margins over time
 //! (`run-N-margins.csv`), `design.json` and the figure (`design.svg`,
-//! `design.png`). Exit 0 for a design that keeps every held sign, 1 when no
-//! plan within the limits can (the report says what falls short and what
-//! would work), 2 on a model, plan, option or file error.
+//! `design.png`). Exit 0 for a design that keeps every held sign (and,
+//! verified, whose models pass the verdict), 1 when no plan within the
+//! limits can or the verified models fall short (the report says what
+//! fails and what would help), 2 on a model, plan, option or file error.
 
 pub mod args;
 mod figure;
@@ -108,7 +109,9 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
             out(&format!("\nwrote {}\n", written.join(", ")));
         }
     }
-    Ok(if design.feasible {
+    // A design whose verified models fall short is not a success.
+    let verified_short = verification.as_ref().is_some_and(|v| !v.verdict.passed);
+    Ok(if design.feasible && !verified_short {
         Status::Success
     } else {
         Status::Unsupported

@@ -339,7 +339,7 @@ fn runs_reason(tried: &[RunsOption], wanted: f64) -> String {
     let first = &tried[0];
     if tried.len() == 1 {
         return format!(
-            "{} run{} (one per sign pattern needed): every θ within {} at the budget",
+            "{} run{} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
             first.runs,
             if first.runs == 1 { "" } else { "s" },
             pct(Some(wanted))

@@ -32,7 +32,38 @@ pub struct Verification {
     pub signs: Vec<SignKept>,
     /// Per method.
     pub methods: Vec<MethodVerification>,
+    /// The true model's fit per state on the held-out run (θ of the plan,
+    /// the plan's mean disturbances): what an estimated model is measured
+    /// against.
+    pub true_fits: Vec<(String, f64)>,
+    /// Whether the designed method's models are what the user needs.
+    pub verdict: Verdict,
 }
+
+/// The outcome judged: the designed method's held-out fit within
+/// [`FIT_POINTS`] of the true model's in every state, and (with at least
+/// [`COVERAGE_TRIALS`] trials) every parameter's ±2σ coverage within
+/// [`COVERAGE`].
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Every criterion met.
+    pub passed: bool,
+    /// What fails, one line each.
+    pub failures: Vec<String>,
+    /// What would help.
+    pub help: Vec<String>,
+}
+
+/// Points of fit an estimated model may lose against the true model's on
+/// the held-out run.
+pub const FIT_POINTS: f64 = 10.0;
+/// The band ±2σ_predicted must cover (a calibrated σ covers 95 %).
+pub const COVERAGE: (f64, f64) = (0.90, 0.98);
+/// Trials below which coverage is reported but not judged: its sampling
+/// error (±2.2 points at 100 trials) would exceed the band.
+pub const COVERAGE_TRIALS: usize = 100;
+/// The share of trials whose model may diverge on the held-out run.
+pub const DIVERGED: f64 = 0.05;
 
 /// How often a held argument kept its side.
 #[derive(Clone, Debug, Serialize)]
@@ -128,6 +159,7 @@ pub struct RunResult {
 pub struct Bench<'a> {
     noise: &'a Noise,
     validation: Experiment,
+    true_fits: Vec<f64>,
     methods: &'static [Method],
     designed: Method,
 }
@@ -137,9 +169,12 @@ impl<'a> Bench<'a> {
     /// (no noise resolved, no validation run or no method).
     pub fn new(model: &dyn Model, design: &'a Design) -> Option<Bench<'a>> {
         let noise = design.noise_used.as_ref()?;
+        let validation = validation_experiment(model, design, noise)?;
+        let true_fits = true_fits(model, design, &validation)?;
         Some(Bench {
             noise,
-            validation: validation_experiment(model, design, noise)?,
+            validation,
+            true_fits,
             methods: &Method::ALL,
             designed: design.method_used?,
         })
@@ -169,9 +204,8 @@ impl<'a> Bench<'a> {
         summarise(
             model,
             design,
-            self.methods,
-            self.designed,
-            results.len(),
+            (self.methods, self.designed),
+            &self.true_fits,
             seed,
             results,
         )
@@ -254,13 +288,29 @@ fn one_run(
     }
 }
 
-/// The validation run: run 1's operating point and excitation family with
-/// another seed, nominal (mean disturbances, no noise).
+/// The held-out run: run 1's operating point and excitation family with
+/// another seed, realised as a trial would log it (the plan's random
+/// disturbances and noise, from its own seed).
 fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> Option<Experiment> {
     let c = design.conditions.as_ref()?;
     let run: &Run = design.validation.as_ref()?;
-    let system = true_system(c, &noise.states, noise.heading, false);
-    Some(simulate(model, &system, run, "validation", 0.0, 0).0)
+    let system = true_system(c, &noise.states, noise.heading, true);
+    let seed = keyed_seed(0, "held-out", 0);
+    Some(simulate(model, &system, run, "validation", 0.0, seed).0)
+}
+
+/// The true model's fit per state on the held-out run: θ of the plan with
+/// the plan's mean disturbances (what no estimate can beat: the rest is
+/// the random disturbance and the noise).
+fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Option<Vec<f64>> {
+    let c = design.conditions.as_ref()?;
+    let sim = leeway_model::simulate::simulate(
+        model,
+        &c.theta,
+        validation,
+        Disturbances::Constant(&c.mean),
+    );
+    Some(fits(validation, &sim))
 }
 
 /// Fits per state of `est` simulated on `validation` with its disturbance
@@ -291,13 +341,13 @@ fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Optio
 fn summarise(
     model: &dyn Model,
     design: &Design,
-    methods: &[Method],
-    designed: Method,
-    runs: usize,
+    (methods, designed): (&[Method], Method),
+    true_fits: &[f64],
     seed: u64,
     results: &[RunResult],
 ) -> Verification {
     let ir = model.ir();
+    let runs = results.len();
     let signs = design
         .held
         .iter()
@@ -318,7 +368,7 @@ fn summarise(
         })
         .collect();
     let predicted = design.predicted.as_ref().map(|p| p.at(design.samples));
-    let methods = methods
+    let methods: Vec<MethodVerification> = methods
         .iter()
         .enumerate()
         .map(|(mi, m)| {
@@ -383,12 +433,148 @@ fn summarise(
             }
         })
         .collect();
+    let true_fits: Vec<(String, f64)> = ir
+        .states
+        .iter()
+        .cloned()
+        .zip(true_fits.iter().copied())
+        .collect();
+    let verdict = judge(design, &methods, &true_fits, runs);
     Verification {
         runs,
         seed,
         samples: design.samples,
         signs,
         methods,
+        true_fits,
+        verdict,
+    }
+}
+
+/// The outcome of the designed method against [`FIT_POINTS`],
+/// [`DIVERGED`] and [`COVERAGE`], with what would help.
+fn judge(
+    design: &Design,
+    methods: &[MethodVerification],
+    true_fits: &[(String, f64)],
+    runs: usize,
+) -> Verdict {
+    let pct = |x: f64| leeway_model::number::short_number(100.0 * x);
+    let mut failures = Vec::new();
+    let mut help = Vec::new();
+    let Some(m) = methods.iter().find(|m| m.designed_for) else {
+        return Verdict {
+            passed: false,
+            failures: vec!["the designed method was not verified".into()],
+            help,
+        };
+    };
+    let estimated = runs - m.failed;
+    if m.failed > 0 {
+        failures.push(format!("{} of {runs} estimates failed", m.failed));
+    }
+    let short: Vec<String> = m
+        .fits
+        .iter()
+        .zip(true_fits)
+        .filter(|((_, f), (_, t))| !(*f >= t - FIT_POINTS))
+        .map(|((name, f), (_, t))| {
+            format!(
+                "{name} {} % against {} %",
+                leeway_model::number::short_number(*f),
+                leeway_model::number::short_number(*t)
+            )
+        })
+        .collect();
+    if !short.is_empty() {
+        failures.push(format!(
+            "held-out fit more than {} points below the true model's: {}",
+            FIT_POINTS,
+            short.join(", ")
+        ));
+    }
+    if m.diverged as f64 > DIVERGED * estimated.max(1) as f64 {
+        failures.push(format!(
+            "{} of {estimated} models diverge on the held-out run (at most {} % may)",
+            m.diverged,
+            pct(DIVERGED)
+        ));
+    }
+    if runs >= COVERAGE_TRIALS {
+        let outside: Vec<String> = m
+            .parameters
+            .iter()
+            .filter_map(|p| p.coverage.map(|c| (p, c)))
+            .filter(|(_, c)| !(COVERAGE.0..=COVERAGE.1).contains(c))
+            .map(|(p, c)| format!("{} {} %", p.name, pct(c)))
+            .collect();
+        if !outside.is_empty() {
+            failures.push(format!(
+                "±2σ coverage outside {}–{} %: {}",
+                pct(COVERAGE.0),
+                pct(COVERAGE.1),
+                outside.join(", ")
+            ));
+            help.push(
+                "coverage below the band: the spread exceeds the predicted σ (more pilot trials, `--pilot`, or a longer run); above it: σ is conservative".into(),
+            );
+        }
+    }
+    if m.unconverged > 0 && !failures.is_empty() {
+        help.push(format!(
+            "{} of {estimated} refinements stopped at an earlier iterate (unsettled): their models are the tails; a longer run or a calmer medium settles them",
+            m.unconverged
+        ));
+    }
+    if !failures.is_empty() {
+        let poor: Vec<&str> = design
+            .prediction
+            .as_ref()
+            .map(|p| {
+                p.poorly_determined
+                    .iter()
+                    .map(|q| q.name.as_str())
+                    .collect()
+            })
+            .unwrap_or_default();
+        if !poor.is_empty() {
+            help.push(format!(
+                "poorly determined at this budget: {} — a longer budget (`--target` gives the run it needs) or wider input ranges",
+                poor.join(", ")
+            ));
+        }
+        let tried: Vec<String> = design
+            .runs_tried
+            .iter()
+            .map(|o| {
+                format!(
+                    "{} run{} with {} centring",
+                    o.runs,
+                    if o.runs == 1 { "" } else { "s" },
+                    o.centring
+                )
+            })
+            .collect();
+        if tried.len() > 1 {
+            help.push(format!(
+                "the design tried {} within this budget",
+                tried.join(", ")
+            ));
+        }
+        if m.fits
+            .iter()
+            .zip(true_fits)
+            .any(|((_, f), (_, t))| *f < t - FIT_POINTS)
+        {
+            help.push(
+                "a held-out fit far below the true model's in a state: its parameters' errors add up along a free run — measure the medium, or runs at more operating points".into(),
+            );
+        }
+    }
+    Verdict {
+        passed: failures.is_empty(),
+        failures,
+        help,
     }
 }
 

@@ -375,6 +375,31 @@ fn verification(s: &mut String, v: &Verification) {
             );
         }
     }
+    let truth: Vec<String> = v.true_fits.iter().map(|(_, f)| num(*f)).collect();
+    let _ = writeln!(s, "  the true model's held-out fit {} %", truth.join("/"));
+    if v.verdict.passed {
+        let _ = writeln!(
+            s,
+            "  verdict: passed (held-out fit within {} points of the true model's in every state{})",
+            num(leeway_design::verify::FIT_POINTS),
+            if v.runs >= leeway_design::verify::COVERAGE_TRIALS {
+                ", ±2σ coverage 90–98 % for every parameter"
+            } else {
+                "; coverage is judged from 100 trials"
+            }
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\nnot a success: the verified models are not what the trial needs"
+        );
+        for f in &v.verdict.failures {
+            let _ = writeln!(s, "  fails: {f}");
+        }
+        for h in &v.verdict.help {
+            let _ = writeln!(s, "  would help: {h}");
+        }
+    }
 }
 
 /// The design beside the engineer's own input, per sample.

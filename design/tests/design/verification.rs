@@ -45,3 +45,27 @@ fn a_verification_is_the_same_at_any_thread_count() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn the_verdict_measures_the_models_against_the_true_one() {
+    // The hovercraft's models simulate the held-out run as well as the
+    // true model does; coverage is not judged below 100 trials.
+    let m = model("examples/models/hovercraft.som");
+    let d = designed(&m, "examples/plans/hovercraft.toml", 1500, 0);
+    let v = verify(&m, &d, 4, 1, &|| ()).expect("verification");
+    assert!(v.verdict.passed, "{:?}", v.verdict);
+    let iv3 = v.methods.iter().find(|m| m.designed_for).expect("iv3");
+    for ((state, fit), (_, truth)) in iv3.fits.iter().zip(&v.true_fits) {
+        assert!(
+            *truth > 80.0 && *fit >= truth - 10.0,
+            "{state}: {fit} vs {truth}"
+        );
+    }
+    // The true model does not fit its own held-out run perfectly: the run
+    // is realised with the plan's random disturbance and noise.
+    assert!(
+        v.true_fits.iter().all(|(_, f)| *f < 99.9),
+        "{:?}",
+        v.true_fits
+    );
+}
