@@ -14,11 +14,11 @@ use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
 use crate::report::{self, Design, FamilyScore, RunsOption};
 use crate::signs::{held, pointwise_states};
-use crate::trial::{Base, Fitted, Run, margins, simulate, start_headings, true_system};
+use crate::trial::{Base, Fitted, Run, draw_theta, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
-use leeway_scenarios::synth::Truth;
+use leeway_scenarios::synth::{TrueSystem, Truth};
 use leeway_structure::identify::{Analysis, Centring, centring_remedies, relevant_signs};
 use leeway_structure::ir::{PredictorKind, SignPattern};
 
@@ -233,6 +233,9 @@ pub fn design(
         runs_reason,
     }))
 }
+
+/// θ drawn from the prior whose nominal runs must keep the signs too.
+const PRIOR_DRAWS: usize = 4;
 
 /// The worst relative standard error a design is judged by when no
 /// `--target` is given (the report's "poorly determined" threshold).
@@ -594,15 +597,30 @@ fn nominal_margins(
     bases: &[Base],
     runs: &[Run],
 ) -> Vec<Vec<f64>> {
-    let system = true_system(c, &[], 0.0, false);
+    // With a prior on θ, the signs must hold for θ drawn from it as well.
+    let systems: Vec<_> = std::iter::once(c.theta.clone())
+        .chain((0..if c.prior > 0.0 { PRIOR_DRAWS } else { 0 }).map(|i| {
+            draw_theta(
+                c,
+                leeway_scenarios::engine::keyed_seed(0, "prior-margins", i),
+            )
+        }))
+        .map(|theta| TrueSystem {
+            theta,
+            ..true_system(c, &[], 0.0, false)
+        })
+        .collect();
     let headings = start_headings(model, c);
     bases
         .iter()
         .zip(runs)
         .map(|(b, run)| {
             let mut worst = vec![f64::INFINITY; b.held.len()];
-            for psi0 in &headings {
-                let (_, truth) = simulate(model, &system, run, "nominal", *psi0, 0);
+            for (system, psi0) in systems
+                .iter()
+                .flat_map(|s| headings.iter().map(move |h| (s, h)))
+            {
+                let (_, truth) = simulate(model, system, run, "nominal", *psi0, 0);
                 if truth.states.iter().flatten().any(|x| !x.is_finite()) {
                     return vec![f64::NEG_INFINITY; b.held.len().max(1)];
                 }

@@ -10,12 +10,13 @@
 use crate::predict::Noise;
 use crate::report::Design;
 use crate::signs::Held;
-use crate::trial::{Run, kept, simulate, true_system};
+use crate::trial::{Run, draw_theta, kept, simulate, true_system};
 use leeway_estimate::{Estimate, EstimateOptions, Method, estimate};
 use leeway_model::experiment::{Experiment, Source};
 use leeway_model::model::Model;
 use leeway_model::simulate::{Disturbances, fits};
 use leeway_scenarios::engine::{campaign, keyed_seed};
+use leeway_scenarios::synth::TrueSystem;
 use leeway_structure::identify::Centring;
 use serde::{Deserialize, Serialize};
 
@@ -148,6 +149,13 @@ pub struct Estimated {
 /// experiment and held argument the fraction kept.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunResult {
+    /// The run's true θ (drawn from the plan's prior; the nominal without one).
+    #[serde(default)]
+    pub truth: Vec<f64>,
+    /// With a prior: the true model's fit per state on the run's own
+    /// held-out run (realised with its θ); without one, the bench's.
+    #[serde(default)]
+    pub true_fits: Option<Vec<f64>>,
     /// Per method, in the order of `Method::ALL`.
     pub estimates: Vec<Outcome>,
     /// Per experiment and held argument, the fraction of samples on its side.
@@ -237,11 +245,41 @@ fn one_run(
 ) -> RunResult {
     let Some(c) = design.conditions.as_ref() else {
         return RunResult {
+            truth: Vec::new(),
+            true_fits: None,
             estimates: Vec::new(),
             kept: Vec::new(),
         };
     };
-    let system = true_system(c, &noise.states, noise.heading, true);
+    let truth = draw_theta(c, keyed_seed(seed, "theta", 0));
+    let system = TrueSystem {
+        theta: truth.clone(),
+        ..true_system(c, &noise.states, noise.heading, true)
+    };
+    // With a prior the held-out run is the run's own, realised with its θ.
+    let own = (c.prior > 0.0)
+        .then(|| design.validation.as_ref())
+        .flatten()
+        .map(|run| {
+            let held_out = simulate(
+                model,
+                &system,
+                run,
+                "validation",
+                0.0,
+                keyed_seed(seed, "held-out", 0),
+            )
+            .0;
+            let sim = leeway_model::simulate::simulate(
+                model,
+                &truth,
+                &held_out,
+                Disturbances::Constant(&c.mean),
+            );
+            let f = fits(&held_out, &sim);
+            (held_out, f)
+        });
+    let validation = own.as_ref().map_or(validation, |(v, _)| v);
     let mut experiments = Vec::new();
     let mut kept_fractions = Vec::new();
     for (e, (run, held)) in design.runs.iter().zip(&design.held).enumerate() {
@@ -283,6 +321,8 @@ fn one_run(
         })
         .collect();
     RunResult {
+        truth,
+        true_fits: own.map(|(_, f)| f),
         estimates,
         kept: kept_fractions,
     }
@@ -374,17 +414,31 @@ fn summarise(
         .map(|(mi, m)| {
             let outcomes: Vec<&Outcome> =
                 results.iter().filter_map(|r| r.estimates.get(mi)).collect();
-            let ok: Vec<&Estimated> = outcomes.iter().filter_map(|o| o.as_ref().ok()).collect();
+            let ok: Vec<(&Estimated, &[f64])> = results
+                .iter()
+                .filter_map(|r| match r.estimates.get(mi) {
+                    Some(Ok(e)) => Some((e, r.truth.as_slice())),
+                    _ => None,
+                })
+                .collect();
             let failure = outcomes.iter().find_map(|o| o.as_ref().err().cloned());
-            let rank_deficient = ok.iter().filter(|e| e.rank_deficient).count();
+            let rank_deficient = ok.iter().filter(|e| e.0.rank_deficient).count();
             let parameters = ir
                 .parameters
                 .iter()
                 .enumerate()
                 .map(|(p, param)| {
-                    let values: Vec<f64> = ok.iter().map(|e| e.theta[p]).collect();
-                    let (mean, std) = mean_std(&values);
                     let truth = design.conditions.as_ref().map_or(f64::NAN, |c| c.theta[p]);
+                    // Each estimate's error against its run's own θ, set
+                    // about the nominal (the same values without a prior).
+                    let values: Vec<f64> = ok
+                        .iter()
+                        .map(|(e, own)| match own.get(p) {
+                            Some(t) if *t != truth => truth + (e.theta[p] - t),
+                            _ => e.theta[p],
+                        })
+                        .collect();
+                    let (mean, std) = mean_std(&values);
                     let sigma = if *m == designed {
                         predicted.as_ref().and_then(|s| s[p])
                     } else {
@@ -397,7 +451,7 @@ fn summarise(
                             .count() as f64
                             / values.len() as f64
                     });
-                    let own: Vec<f64> = ok.iter().filter_map(|e| e.std_errors[p]).collect();
+                    let own: Vec<f64> = ok.iter().filter_map(|e| e.0.std_errors[p]).collect();
                     let reported = (!own.is_empty()).then(|| mean_std(&own).0);
                     ParameterVerification {
                         name: param.name.clone(),
@@ -410,7 +464,7 @@ fn summarise(
                     }
                 })
                 .collect();
-            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.fits.as_ref()).collect();
+            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.fits.as_ref()).collect();
             let fits = ir
                 .states
                 .iter()
@@ -429,15 +483,27 @@ fn summarise(
                 parameters,
                 fits,
                 diverged: ok.len() - fitted.len(),
-                unconverged: ok.iter().filter(|e| !e.converged).count(),
+                unconverged: ok.iter().filter(|e| !e.0.converged).count(),
             }
         })
+        .collect();
+    // With a prior each run has its own true model: their mean fit.
+    let own: Vec<&Vec<f64>> = results
+        .iter()
+        .filter_map(|r| r.true_fits.as_ref())
         .collect();
     let true_fits: Vec<(String, f64)> = ir
         .states
         .iter()
-        .cloned()
-        .zip(true_fits.iter().copied())
+        .enumerate()
+        .map(|(s, name)| {
+            let f = if own.is_empty() {
+                true_fits.get(s).copied().unwrap_or(f64::NAN)
+            } else {
+                mean_std(&own.iter().map(|f| f[s]).collect::<Vec<f64>>()).0
+            };
+            (name.clone(), f)
+        })
         .collect();
     let verdict = judge(design, &methods, &true_fits, runs);
     Verification {

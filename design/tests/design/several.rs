@@ -12,6 +12,8 @@ fn the_survey_boat_is_designed_for_two_speeds_and_pooled_centring() {
     let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
         .expect("the survey boat's plan");
     c.budget = leeway_design::bounds::BudgetRule::Time(900.0);
+    // The nominal θ as the truth: the runs are the subject here.
+    c.prior = 0.0;
     let options = DesignOptions {
         pilot: 0,
         ..Default::default()

@@ -69,3 +69,43 @@ fn the_verdict_measures_the_models_against_the_true_one() {
         v.true_fits
     );
 }
+
+#[test]
+fn with_a_prior_each_trial_has_its_own_true_model() {
+    let m = model("examples/models/hovercraft.som");
+    let mut c =
+        crate::common::conditions(&m, "examples/plans/hovercraft.toml", Some(1000)).expect("plan");
+    c.prior = 0.2;
+    let options = leeway_design::design::DesignOptions {
+        pilot: 0,
+        ..Default::default()
+    };
+    let d = leeway_design::design::design(&m, &c, &options).expect("design");
+    let bench = leeway_design::verify::Bench::new(&m, &d).expect("bench");
+    let runs: Vec<_> = (0..2).map(|r| bench.run(&m, &d, 3, r)).collect();
+    for r in &runs {
+        assert_eq!(r.truth.len(), c.theta.len());
+        // Drawn: no parameter with a nominal value keeps it exactly, and
+        // none is more than 2.5 standard deviations off.
+        for (t, n) in r.truth.iter().zip(&c.theta) {
+            assert!(
+                *n == 0.0 || (t != n && ((t - n) / n).abs() <= 0.5 + 1e-12),
+                "{t} vs {n}"
+            );
+        }
+        assert!(
+            r.true_fits.as_ref().is_some_and(|f| f.len() == 3),
+            "{:?}",
+            r.true_fits
+        );
+    }
+    assert_ne!(runs[0].truth, runs[1].truth);
+    // Without a prior the truth is the nominal θ and the held-out run the
+    // bench's.
+    c.prior = 0.0;
+    let d = leeway_design::design::design(&m, &c, &options).expect("design");
+    let bench = leeway_design::verify::Bench::new(&m, &d).expect("bench");
+    let r = bench.run(&m, &d, 3, 0);
+    assert_eq!(r.truth, c.theta);
+    assert!(r.true_fits.is_none());
+}
