@@ -34,6 +34,16 @@ pub struct PlanFile {
     /// θ's prior uncertainty: each parameter's standard deviation as a
     /// fraction of its nominal value (default 0: the nominal θ is the truth).
     pub prior: Option<f64>,
+    /// The trial area.
+    pub area: Option<Area>,
+}
+
+/// The sea room the skipper gives.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Area {
+    /// Metres from the start a run may go.
+    pub radius: Option<f64>,
 }
 
 /// An actuator's limits.
@@ -167,6 +177,8 @@ pub struct Conditions {
     pub family: Option<Family>,
     /// θ's prior uncertainty, a fraction of each nominal value (0: known).
     pub prior: f64,
+    /// Metres from the start a run's nominal track may go (`None`: no limit given).
+    pub area_radius: Option<f64>,
     /// What the plan did not say and the design assumed, in words.
     pub assumptions: Vec<String>,
 }
@@ -397,6 +409,17 @@ impl PlanFile {
         let (state_noise, heading_noise) = self.noise(ir)?;
         let budget = self.budget(&mut assumptions)?;
         let prior = self.prior(&mut assumptions)?;
+        let area_radius = match self.area.as_ref().and_then(|a| a.radius) {
+            Some(r) if r.is_finite() && r > 0.0 => Some(r),
+            Some(r) => {
+                return Err(DesignError::plan(
+                    format!("area.radius = {r} is not a distance"),
+                    "give the metres from the start the craft may go",
+                )
+                .key("area.radius"));
+            }
+            None => None,
+        };
         let family = match self.excitation.as_deref() {
             None | Some("auto") => None,
             Some(name) => Some(
@@ -426,6 +449,7 @@ impl PlanFile {
             budget,
             family,
             prior,
+            area_radius,
             assumptions,
         })
     }

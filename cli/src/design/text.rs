@@ -72,11 +72,27 @@ pub fn render(
         for p in &d.proposals {
             let _ = writeln!(s, "  {p}");
         }
+    } else if !d.sea_room.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nthe design cannot keep the track inside the trial area:"
+        );
+        for p in &d.proposals {
+            let _ = writeln!(s, "  {p}");
+        }
     }
     if let Some(v) = v {
         verification(&mut s, v);
     } else if args.verify.is_some() && !d.feasible {
-        let _ = writeln!(s, "\nnot verified: the design does not keep its signs");
+        let _ = writeln!(
+            s,
+            "\nnot verified: the design does not keep its {}",
+            if d.shortfalls.is_empty() && !d.sea_room.is_empty() {
+                "track inside the trial area"
+            } else {
+                "signs"
+            }
+        );
     }
     s
 }
@@ -140,6 +156,15 @@ fn experiment(
             s,
             "  heading     turns through {}°",
             num(span.min(99_999.0))
+        );
+    }
+    if let Some(t) = &run.track {
+        let _ = writeln!(
+            s,
+            "  track       at most {} m from the start, ends {} m north, {} m east (nominal, the mean media's drift included)",
+            num(t.farthest.round()),
+            num(t.end[0].round()),
+            num(t.end[1].round())
         );
     }
     if run.full_range {
