@@ -152,11 +152,7 @@ pub fn design(
             time_scale,
             seed: options.seed,
         };
-        let mut best: Option<(
-            Vec<Base>,
-            usize,
-            (Fitted, Option<Prediction>, Vec<FamilyScore>),
-        )> = None;
+        let mut best: Option<Alternative> = None;
         let mut best_worst = worst.0;
         for (alt_bases, alt_n) in plan.candidates(&bases, centring, choose_one, n) {
             let alt = plan.try_runs(&alt_bases, alt_n, fitted.family);
@@ -240,6 +236,13 @@ const PRIOR_DRAWS: usize = 4;
 /// The worst relative standard error a design is judged by when no
 /// `--target` is given (the report's "poorly determined" threshold).
 const POORLY: f64 = 0.10;
+
+/// An alternative's bases, samples per run and fitted design.
+type Alternative = (
+    Vec<Base>,
+    usize,
+    (Fitted, Option<Prediction>, Vec<FamilyScore>),
+);
 
 /// What trying other numbers of runs shares.
 struct Alternatives<'a> {

@@ -301,7 +301,10 @@ pub fn other_points(
         a.iter()
             .zip(b)
             .zip(&span)
-            .map(|((x, y), s)| ((x - y) / s).powi(2))
+            .map(|((x, y), s)| {
+                let d = (x - y) / s;
+                d * d
+            })
             .sum::<f64>()
             .sqrt()
     };

@@ -258,7 +258,7 @@ fn one_run(
     };
     // With a prior the held-out run is the run's own, realised with its θ.
     let own = (c.prior > 0.0)
-        .then(|| design.validation.as_ref())
+        .then_some(design.validation.as_ref())
         .flatten()
         .map(|run| {
             let held_out = simulate(
@@ -543,7 +543,8 @@ fn judge(
         .fits
         .iter()
         .zip(true_fits)
-        .filter(|((_, f), (_, t))| !(*f >= t - FIT_POINTS))
+        // A NaN fit (no model simulated the run) falls short too.
+        .filter(|((_, f), (_, t))| f.is_nan() || *f < t - FIT_POINTS)
         .map(|((name, f), (_, t))| {
             format!(
                 "{name} {} % against {} %",
