@@ -583,7 +583,7 @@ fn judge(
                 outside.join(", ")
             ));
             help.push(
-                "coverage below the band: the spread exceeds the predicted σ (more pilot trials, `--pilot`, or a longer run); above it: σ is conservative".into(),
+                "coverage below the band: the spread exceeds the predicted σ (more pilot trials or a longer run); above it: σ is conservative".into(),
             );
         }
     }
@@ -606,7 +606,7 @@ fn judge(
             .unwrap_or_default();
         if !poor.is_empty() {
             help.push(format!(
-                "poorly determined at this budget: {} — a longer budget (`--target` gives the run it needs) or wider input ranges",
+                "poorly determined at this budget: {} — a longer budget (the predicted curve gives the run it needs) or wider input ranges",
                 poor.join(", ")
             ));
         }

@@ -227,9 +227,19 @@ fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
         "parameter", "nominal", "std error", "relative", "asymptotic"
     );
     for q in &p.parameters {
+        // Where the pilot's spread and the estimator's covariance part by
+        // more than half, say so: the pilot's is the one used.
+        let off = match (q.std_error, q.asymptotic) {
+            (Some(pilot), Some(a))
+                if p.trials > 0 && a > 0.0 && !(0.67..=1.5).contains(&(a / pilot)) =>
+            {
+                format!("  (asymptotic off ×{}: the pilot's used)", num(a / pilot))
+            }
+            _ => String::new(),
+        };
         let _ = writeln!(
             s,
-            "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}",
+            "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}{off}",
             q.name,
             num(q.nominal),
             q.std_error.map_or("held".into(), num),
