@@ -299,7 +299,11 @@ impl DesignFigure<'_> {
             curve.first().map_or(1.0, |c| c.0),
             curve.last().map_or(2.0, |c| c.0),
         );
-        let mut chart = ChartBuilder::on(area)
+        // The legend beside the chart, in as many columns as it needs: it
+        // fits however many parameters the model has.
+        let (w, _) = area.dim_in_pixel();
+        let (area, key) = area.split_horizontally(w.saturating_sub(LEGEND));
+        let mut chart = ChartBuilder::on(&area)
             .caption(
                 "predicted relative standard error of θ against run length",
                 ("sans-serif", 17),
@@ -322,6 +326,7 @@ impl DesignFigure<'_> {
             .bold_line_style(BLACK.mix(0.12))
             .draw()
             .map_err(|e| e.to_string())?;
+        let mut entries: Vec<(String, RGBColor)> = Vec::new();
         for (i, q) in p.parameters.iter().enumerate() {
             let pts: Vec<(f64, f64)> = curve
                 .iter()
@@ -331,14 +336,11 @@ impl DesignFigure<'_> {
             if pts.is_empty() {
                 continue;
             }
-            let colour = COLOURS[i % COLOURS.len()];
+            let colour = colour(i, p.parameters.len());
             chart
                 .draw_series(LineSeries::new(pts, colour.stroke_width(1)))
-                .map_err(|e| e.to_string())?
-                .label(q.name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
-                });
+                .map_err(|e| e.to_string())?;
+            entries.push((q.name.clone(), colour));
         }
         let budget = self.design.seconds;
         chart
@@ -346,16 +348,51 @@ impl DesignFigure<'_> {
                 vec![(budget, lo * 0.8), (budget, hi * 1.25)],
                 BLACK.mix(0.5).stroke_width(1),
             )))
-            .map_err(|e| e.to_string())?
-            .label("budget")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
-        chart
-            .configure_series_labels()
-            .label_font(("sans-serif", 12))
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK.mix(0.2))
-            .draw()
-            .map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())?;
+        entries.push(("budget".into(), RGBColor(128, 128, 128)));
+        legend(&key, &entries)
     }
+}
+
+/// Pixels beside the accuracy chart for its legend.
+const LEGEND: u32 = 220;
+
+/// Line `i` of `n`: leeway's six colours when they suffice, else `n`
+/// hues evenly round the colour wheel, so no two lines share one.
+fn colour(i: usize, n: usize) -> RGBColor {
+    if n <= COLOURS.len() {
+        return COLOURS[i];
+    }
+    let rgb = HSLColor(i as f64 / n as f64, 0.75, 0.42)
+        .to_backend_color()
+        .rgb;
+    RGBColor(rgb.0, rgb.1, rgb.2)
+}
+
+/// A legend of `entries` filling `area` column by column.
+fn legend<DB: DrawingBackend>(
+    area: &Area<'_, DB>,
+    entries: &[(String, RGBColor)],
+) -> Result<(), String> {
+    const LINE: i32 = 16;
+    let (w, h) = area.dim_in_pixel();
+    let rows = ((i32::try_from(h).unwrap_or(i32::MAX) - 2 * LINE) / LINE).max(1) as usize;
+    let columns = entries.len().div_ceil(rows).max(1);
+    let width = i32::try_from(w as usize / columns).unwrap_or(i32::MAX);
+    for (k, (name, colour)) in entries.iter().enumerate() {
+        let x = i32::try_from(k / rows).unwrap_or(0) * width + 4;
+        let y = LINE + i32::try_from(k % rows).unwrap_or(0) * LINE;
+        area.draw(&PathElement::new(
+            vec![(x, y + LINE / 2), (x + 16, y + LINE / 2)],
+            colour.stroke_width(2),
+        ))
+        .map_err(|e| e.to_string())?;
+        area.draw(&Text::new(
+            name.clone(),
+            (x + 20, y + 2),
+            ("sans-serif", 12),
+        ))
+        .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }
