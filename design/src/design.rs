@@ -343,30 +343,48 @@ fn runs_reason(tried: &[RunsOption], wanted: f64) -> String {
         return String::new();
     };
     let first = &tried[0];
+    let runs = |k: usize| format!("{k} run{}", if k == 1 { "" } else { "s" });
     if tried.len() == 1 {
-        return format!(
-            "{} run{} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
-            first.runs,
-            if first.runs == 1 { "" } else { "s" },
-            pct(Some(wanted))
-        );
+        return match first.worst_relative {
+            Some(w) if w <= wanted => format!(
+                "{} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
+                runs(first.runs),
+                pct(Some(wanted))
+            ),
+            Some(_) => format!(
+                "{} with {} centring: no other runs tried (they are tried with per-experiment centring, whose means pooled centring would keep)",
+                runs(first.runs),
+                first.centring
+            ),
+            None => format!("{} (one per sign pattern needed)", runs(first.runs)),
+        };
     }
+    // One pattern suffices when the alternatives add runs; else they are
+    // the same runs with pooled centring.
+    let other_speeds = tried.iter().any(|o| o.runs != first.runs);
     if chosen.runs == first.runs && chosen.centring == first.centring {
         return format!(
-            "{} run{} with {} centring: several runs at other speeds with pooled centring did not improve the worst relative error ({}) clearly",
-            first.runs,
-            if first.runs == 1 { "" } else { "s" },
+            "{} with {} centring: {} with pooled centring did not improve the worst relative error ({}) clearly",
+            runs(first.runs),
             first.centring,
+            if other_speeds {
+                "runs at other speeds"
+            } else {
+                "the same runs"
+            },
             pct(first.worst_relative)
         );
     }
     format!(
-        "{} runs at different speeds with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} run{} and {} centring falls to {} ({}); one steady speed per run with per-experiment centring leaves a drag level or constant confounded with the medium's mean",
-        chosen.runs,
+        "{} with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} and {} centring falls to {} ({}); per-experiment centring annihilates each run's mean with the medium's, leaving a drag level or constant at one steady speed confounded with the medium's mean",
+        if chosen.runs == first.runs {
+            format!("the same {}", runs(chosen.runs))
+        } else {
+            format!("{} at different speeds", runs(chosen.runs))
+        },
         pct(first.worst_relative),
         first.worst_parameter.as_deref().unwrap_or("-"),
-        first.runs,
-        if first.runs == 1 { "" } else { "s" },
+        runs(first.runs),
         first.centring,
         pct(chosen.worst_relative),
         chosen.worst_parameter.as_deref().unwrap_or("-"),
