@@ -34,6 +34,10 @@ pub struct DesignOptions {
     /// Pilot trials calibrating the predicted standard errors (0: the
     /// estimator's asymptotic ones).
     pub pilot: usize,
+    /// The runs to take, as `Design::runs_tried` names them (their number
+    /// and the centring): that option whatever its score (`None`: the
+    /// search chooses). What `--verify` uses to try the others.
+    pub runs: Option<(usize, Centring)>,
 }
 
 impl Default for DesignOptions {
@@ -43,6 +47,7 @@ impl Default for DesignOptions {
             target: None,
             seed: 0,
             pilot: 100,
+            runs: None,
         }
     }
 }
@@ -139,10 +144,12 @@ pub fn design(
         prediction.as_ref(),
     )];
     let wanted = options.target.unwrap_or(POORLY);
+    let forced = options.runs;
+    let baseline = forced == Some((bases.len(), centring));
     if let Some(worst) = prediction
         .as_ref()
         .and_then(Prediction::worst)
-        .filter(|w| w.0 > wanted)
+        .filter(|w| !baseline && (forced.is_some() || w.0 > wanted))
     {
         let plan = Alternatives {
             model,
@@ -165,7 +172,11 @@ pub fn design(
             let alt_worst = option.worst_relative.unwrap_or(f64::INFINITY);
             runs_tried.push(option);
             // A clear gain only: each is scored on one realisation.
-            if alt.0.feasible() && alt_worst < 0.8 * best_worst {
+            let take = match forced {
+                Some(runs) => runs == (alt_bases.len(), Centring::Pooled),
+                None => alt_worst < 0.8 * best_worst,
+            };
+            if alt.0.feasible() && take {
                 best_worst = alt_worst;
                 best = Some((alt_bases, alt_n, alt));
             }

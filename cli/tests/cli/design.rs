@@ -547,4 +547,10 @@ fn a_design_whose_verified_models_fall_short_exits_1_with_what_fails() {
         "{text}"
     );
     assert!(text.contains("would help: "), "{text}");
+    // The other runs the design tried were verified too, and failed.
+    assert!(
+        text.contains("verified the other runs the design tried:\n  1 × 600 s, experiment centring: fails too (")
+            || text.contains("verified the other runs the design tried:\n  2 × 300 s, pooled centring: fails too ("),
+        "{text}"
+    );
 }
