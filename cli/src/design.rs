@@ -7,9 +7,10 @@
 //! With `--out`, per run an input file `simulate` reads (`run-N.csv`, the
 //! nominal trajectory beside the inputs), its margins over time
 //! (`run-N-margins.csv`), `design.json` and the figure (`design.svg`,
-//! `design.png`). Exit 0 for a design that keeps every held sign, 1 when no
-//! plan within the limits can (the report says what falls short and what
-//! would work), 2 on a model, plan, option or file error.
+//! `design.png`). Exit 0 for a design that keeps every held sign (and,
+//! verified, whose models pass the verdict), 1 when no plan within the
+//! limits can or the verified models fall short (the report says what
+//! fails and what would help), 2 on a model, plan, option or file error.
 
 pub mod args;
 mod figure;
@@ -24,7 +25,7 @@ use crate::options::load_options;
 use crate::output::{Status, err, out, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_design::compare::compare;
-use leeway_design::design::{DesignOptions, design};
+use leeway_design::design::{DesignOptions, design as design_fn};
 use leeway_design::document::json_with;
 use leeway_design::error::DesignError;
 use leeway_design::plan::{MAX_PLAN_BYTES, locate, parse};
@@ -34,6 +35,8 @@ use leeway_design::verify::{Verification, verify};
 use leeway_estimate::Method;
 use leeway_model::Interpreter;
 use leeway_model::model::Model;
+use leeway_model::number::short_number as num;
+use leeway_structure::identify::Centring;
 
 /// Runs `leeway design`.
 pub fn run(args: &DesignArgs) -> Status {
@@ -73,16 +76,57 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         target: args.target,
         seed: args.seed,
         pilot: args.pilot,
+        runs: None,
     };
     let pool = pool(args.threads)?;
     let design = pool
-        .install(|| design(&model, &conditions, &options))
+        .install(|| design_fn(&model, &conditions, &options))
         .map_err(located)?;
     let verification = match args.verify {
         Some(m) if design.feasible => {
             pool.install(|| verify_with_progress(&model, &design, m, args.seed))
         }
         _ => None,
+    };
+    // Verified models that fall short: the other runs the design tried are
+    // verified in turn, and the first whose models pass is the design.
+    let mut others = Vec::new();
+    let (design, verification) = match (args.verify, verification) {
+        (Some(m), Some(v)) if !v.verdict.passed => {
+            let mut outcome = (design, v);
+            for (runs, centring) in untried(&outcome.0) {
+                let alt = DesignOptions {
+                    runs: Some((runs, centring)),
+                    ..options.clone()
+                };
+                let Ok(d) = pool.install(|| design_fn(&model, &conditions, &alt)) else {
+                    continue;
+                };
+                let v = d
+                    .feasible
+                    .then(|| pool.install(|| verify_with_progress(&model, &d, m, args.seed)))
+                    .flatten();
+                let what = format!(
+                    "{runs} × {} s, {} centring",
+                    num(d.seconds),
+                    centring.name()
+                );
+                match v {
+                    Some(v) if v.verdict.passed => {
+                        others.push(format!("{what}: passes — the design below"));
+                        outcome = (d, v);
+                        break;
+                    }
+                    Some(v) => others.push(format!(
+                        "{what}: fails too ({})",
+                        v.verdict.failures.first().map_or("", String::as_str)
+                    )),
+                    None => others.push(format!("{what}: does not keep its signs or its area")),
+                }
+            }
+            (outcome.0, Some(outcome.1))
+        }
+        (_, v) => (design, v),
     };
     let comparison = if args.compare.is_empty() {
         None
@@ -98,6 +142,16 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         ));
     } else {
         out(&text::render(&model, &design, verification.as_ref(), args));
+        if !others.is_empty() {
+            out(&format!(
+                "\nverified the other runs the design tried:\n{}\n",
+                others
+                    .iter()
+                    .map(|o| format!("  {o}"))
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            ));
+        }
         if let Some(c) = &comparison {
             out(&text::comparison(c, &args.compare));
         }
@@ -108,11 +162,31 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
             out(&format!("\nwrote {}\n", written.join(", ")));
         }
     }
-    Ok(if design.feasible {
+    // A design whose verified models fall short is not a success.
+    let verified_short = verification.as_ref().is_some_and(|v| !v.verdict.passed);
+    Ok(if design.feasible && !verified_short {
         Status::Success
     } else {
         Status::Unsupported
     })
+}
+
+/// The runs the design tried and did not take, as `DesignOptions::runs`.
+fn untried(design: &Design) -> Vec<(usize, Centring)> {
+    design
+        .runs_tried
+        .iter()
+        .filter(|o| !o.chosen && o.worst_relative.is_some())
+        .filter_map(|o| {
+            let centring = match o.centring.as_str() {
+                "experiment" => Centring::Experiment,
+                "pooled" => Centring::Pooled,
+                "none" => Centring::None,
+                _ => return None,
+            };
+            Some((o.runs, centring))
+        })
+        .collect()
 }
 
 /// The given input files as runs: the first row's states (the run's

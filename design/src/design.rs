@@ -9,16 +9,16 @@
 
 use crate::error::DesignError;
 use crate::excitation::Excitation;
-use crate::operating::operating_point;
+use crate::operating::{operating_point, other_points};
 use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
-use crate::report::{self, Design, FamilyScore};
+use crate::report::{self, Design, FamilyScore, RunsOption};
 use crate::signs::{held, pointwise_states};
-use crate::trial::{Base, Fitted, Run, margins, simulate, start_headings, true_system};
+use crate::trial::{Base, Fitted, Run, draw_theta, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
-use leeway_scenarios::synth::Truth;
+use leeway_scenarios::synth::{TrueSystem, Truth};
 use leeway_structure::identify::{Analysis, Centring, centring_remedies, relevant_signs};
 use leeway_structure::ir::{PredictorKind, SignPattern};
 
@@ -34,6 +34,10 @@ pub struct DesignOptions {
     /// Pilot trials calibrating the predicted standard errors (0: the
     /// estimator's asymptotic ones).
     pub pilot: usize,
+    /// The runs to take, as `Design::runs_tried` names them (their number
+    /// and the centring): that option whatever its score (`None`: the
+    /// search chooses). What `--verify` uses to try the others.
+    pub runs: Option<(usize, Centring)>,
 }
 
 impl Default for DesignOptions {
@@ -43,6 +47,7 @@ impl Default for DesignOptions {
             target: None,
             seed: 0,
             pilot: 100,
+            runs: None,
         }
     }
 }
@@ -130,9 +135,72 @@ pub fn design(
             ));
         }
     }
-    let (fitted, prediction, scores) = chosen;
+    let (mut fitted, mut prediction, mut scores) = chosen;
+    let (mut centring, mut n) = (centring, n);
+    let mut runs_tried = vec![RunsOption::of(
+        bases.len(),
+        centring,
+        n as f64 * c.h,
+        prediction.as_ref(),
+    )];
+    let wanted = options.target.unwrap_or(POORLY);
+    let forced = options.runs;
+    let baseline = forced == Some((bases.len(), centring));
+    if let Some(worst) = prediction
+        .as_ref()
+        .and_then(Prediction::worst)
+        .filter(|w| !baseline && (forced.is_some() || w.0 > wanted))
+    {
+        let plan = Alternatives {
+            model,
+            c: &c,
+            noise: &noise,
+            estimate: &estimate,
+            time_scale,
+            seed: options.seed,
+        };
+        let mut best: Option<Alternative> = None;
+        let mut best_worst = worst.0;
+        for (alt_bases, alt_n) in plan.candidates(&bases, centring, choose_one, n) {
+            let alt = plan.try_runs(&alt_bases, alt_n, fitted.family);
+            let option = RunsOption::of(
+                alt_bases.len(),
+                Centring::Pooled,
+                alt_n as f64 * c.h,
+                alt.1.as_ref(),
+            );
+            let alt_worst = option.worst_relative.unwrap_or(f64::INFINITY);
+            runs_tried.push(option);
+            // A clear gain only: each is scored on one realisation.
+            let take = match forced {
+                Some(runs) => runs == (alt_bases.len(), Centring::Pooled),
+                None => alt_worst < 0.8 * best_worst,
+            };
+            if alt.0.feasible() && take {
+                best_worst = alt_worst;
+                best = Some((alt_bases, alt_n, alt));
+            }
+        }
+        if let Some((alt_bases, alt_n, (f, p, s))) = best {
+            for score in &mut scores {
+                if let Some(new) = s.iter().find(|x| x.family == score.family) {
+                    *score = new.clone();
+                }
+            }
+            bases = alt_bases;
+            n = alt_n;
+            centring = Centring::Pooled;
+            estimate.centring = Some(centring);
+            fitted = f;
+            prediction = p;
+        }
+    }
+    let chosen_runs = (bases.len(), centring);
+    for o in &mut runs_tried {
+        o.chosen = (o.runs, o.centring.as_str()) == (chosen_runs.0, chosen_runs.1.name());
+    }
+    let runs_reason = runs_reason(&runs_tried, wanted);
     let runs = fitted.runs(&bases, n, &c);
-    let mut prediction = prediction;
     if let Some(p) = prediction.as_mut() {
         let setting = Setting {
             conditions: &c,
@@ -168,7 +236,170 @@ pub fn design(
         assumptions,
         validation,
         aggregate: estimate.aggregate,
+        runs_tried,
+        runs_reason,
     }))
+}
+
+/// θ drawn from the prior whose nominal runs must keep the signs too.
+const PRIOR_DRAWS: usize = 4;
+
+/// The worst relative standard error a design is judged by when no
+/// `--target` is given (the report's "poorly determined" threshold).
+const POORLY: f64 = 0.10;
+
+/// An alternative's bases, samples per run and fitted design.
+type Alternative = (
+    Vec<Base>,
+    usize,
+    (Fitted, Option<Prediction>, Vec<FamilyScore>),
+);
+
+/// What trying other numbers of runs shares.
+struct Alternatives<'a> {
+    model: &'a dyn Model,
+    c: &'a Conditions,
+    noise: &'a Noise,
+    estimate: &'a EstimateOptions,
+    time_scale: usize,
+    seed: u64,
+}
+
+impl Alternatives<'_> {
+    /// Designs of several runs with pooled centring, within the budget of
+    /// the one-run-per-pattern design: when one pattern suffices, the same
+    /// pattern at two and at three operating points (other speeds), the
+    /// budget shared; else the same runs with pooled centring when the
+    /// design centred per experiment. Under per-experiment centring a
+    /// run's mean is annihilated with the medium's, so a drag level at one
+    /// steady speed is confounded with the medium's mean; pooled centring
+    /// over runs at different speeds keeps the difference between them.
+    fn candidates(
+        &self,
+        bases: &[Base],
+        centring: Centring,
+        choose_one: bool,
+        n: usize,
+    ) -> Vec<(Vec<Base>, usize)> {
+        if centring != Centring::Experiment {
+            return Vec::new();
+        }
+        let ir = self.model.ir();
+        let kind = self.estimate.method.predictor();
+        if !choose_one {
+            return vec![(bases.to_vec(), n)];
+        }
+        let Some(first) = bases.first() else {
+            return Vec::new();
+        };
+        if Analysis::with_centring(ir, kind, Centring::Pooled)
+            .required()
+            .is_none()
+        {
+            return Vec::new();
+        }
+        let others = other_points(self.model, self.c, &first.held, &first.operating, 2);
+        (1..=others.len())
+            .filter_map(|more| {
+                let k = more + 1;
+                let each = n / k;
+                (each >= crate::bounds::SAMPLES.0).then(|| {
+                    let mut b = vec![first.clone()];
+                    b.extend(others[..more].iter().map(|op| Base {
+                        operating: op.clone(),
+                        ..first.clone()
+                    }));
+                    (b, each)
+                })
+            })
+            .collect()
+    }
+
+    /// The runs of `bases` at `n` samples each, excited by `family`,
+    /// estimated with pooled centring.
+    fn try_runs(
+        &self,
+        bases: &[Base],
+        n: usize,
+        family: Family,
+    ) -> (Fitted, Option<Prediction>, Vec<FamilyScore>) {
+        let c = Conditions {
+            family: Some(family),
+            ..self.c.clone()
+        };
+        let estimate = EstimateOptions {
+            centring: Some(Centring::Pooled),
+            ..self.estimate.clone()
+        };
+        choose_family(
+            self.model,
+            &c,
+            bases,
+            self.noise,
+            &estimate,
+            (self.time_scale, n),
+            self.seed,
+        )
+    }
+}
+
+/// Why the design has the runs it has.
+fn runs_reason(tried: &[RunsOption], wanted: f64) -> String {
+    let pct = |r: Option<f64>| {
+        r.map_or("-".to_string(), |r| {
+            format!("{} %", leeway_model::number::short_number(100.0 * r))
+        })
+    };
+    let Some(chosen) = tried.iter().find(|o| o.chosen) else {
+        return String::new();
+    };
+    let first = &tried[0];
+    let runs = |k: usize| format!("{k} run{}", if k == 1 { "" } else { "s" });
+    if tried.len() == 1 {
+        return match first.worst_relative {
+            Some(w) if w <= wanted => format!(
+                "{} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
+                runs(first.runs),
+                pct(Some(wanted))
+            ),
+            Some(_) => format!(
+                "{} with {} centring: no other runs tried (they are tried with per-experiment centring, whose means pooled centring would keep)",
+                runs(first.runs),
+                first.centring
+            ),
+            None => format!("{} (one per sign pattern needed)", runs(first.runs)),
+        };
+    }
+    // One pattern suffices when the alternatives add runs; else they are
+    // the same runs with pooled centring.
+    let other_speeds = tried.iter().any(|o| o.runs != first.runs);
+    if chosen.runs == first.runs && chosen.centring == first.centring {
+        return format!(
+            "{} with {} centring: {} with pooled centring did not improve the worst relative error ({}) clearly",
+            runs(first.runs),
+            first.centring,
+            if other_speeds {
+                "runs at other speeds"
+            } else {
+                "the same runs"
+            },
+            pct(first.worst_relative)
+        );
+    }
+    format!(
+        "{} with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} and {} centring falls to {} ({}); per-experiment centring annihilates each run's mean with the medium's, leaving a drag level or constant at one steady speed confounded with the medium's mean",
+        if chosen.runs == first.runs {
+            format!("the same {}", runs(chosen.runs))
+        } else {
+            format!("{} at different speeds", runs(chosen.runs))
+        },
+        pct(first.worst_relative),
+        first.worst_parameter.as_deref().unwrap_or("-"),
+        runs(first.runs),
+        first.centring,
+        pct(chosen.worst_relative),
+        chosen.worst_parameter.as_deref().unwrap_or("-"),
+    )
 }
 
 /// Fits every family the plan allows (or its one), scores the feasible
@@ -398,15 +629,30 @@ fn nominal_margins(
     bases: &[Base],
     runs: &[Run],
 ) -> Vec<Vec<f64>> {
-    let system = true_system(c, &[], 0.0, false);
+    // With a prior on θ, the signs must hold for θ drawn from it as well.
+    let systems: Vec<_> = std::iter::once(c.theta.clone())
+        .chain((0..if c.prior > 0.0 { PRIOR_DRAWS } else { 0 }).map(|i| {
+            draw_theta(
+                c,
+                leeway_scenarios::engine::keyed_seed(0, "prior-margins", i),
+            )
+        }))
+        .map(|theta| TrueSystem {
+            theta,
+            ..true_system(c, &[], 0.0, false)
+        })
+        .collect();
     let headings = start_headings(model, c);
     bases
         .iter()
         .zip(runs)
         .map(|(b, run)| {
             let mut worst = vec![f64::INFINITY; b.held.len()];
-            for psi0 in &headings {
-                let (_, truth) = simulate(model, &system, run, "nominal", *psi0, 0);
+            for (system, psi0) in systems
+                .iter()
+                .flat_map(|s| headings.iter().map(move |h| (s, h)))
+            {
+                let (_, truth) = simulate(model, system, run, "nominal", *psi0, 0);
                 if truth.states.iter().flatten().any(|x| !x.is_finite()) {
                     return vec![f64::NEG_INFINITY; b.held.len().max(1)];
                 }

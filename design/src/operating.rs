@@ -255,3 +255,84 @@ fn grid_points(bounds: &[(f64, f64)]) -> Vec<Vec<f64>> {
     }
     points
 }
+
+/// Operating points for further runs of the same pattern at other speeds:
+/// among the grid's offsets (the middle of the ranges first) whose steady
+/// margin is at least half the first point's, greedily the one whose steady
+/// state is farthest from those chosen (states normalised by their span
+/// over the grid). Runs at several operating points separate a drag level
+/// from the medium's mean, which one steady point leaves confounded under
+/// per-experiment centring. Fewer than `more` when the grid has no other
+/// distinct point.
+pub fn other_points(
+    model: &dyn Model,
+    c: &Conditions,
+    held: &[Held],
+    first: &OperatingPoint,
+    more: usize,
+) -> Vec<OperatingPoint> {
+    let reserve = if first.full_range { 0.0 } else { 0.2 };
+    let bounds: Vec<(f64, f64)> = c
+        .limits
+        .iter()
+        .map(|l: &Limits| (l.low + reserve * l.span(), l.high - reserve * l.span()))
+        .collect();
+    let floor = 0.5 * first.min_margin();
+    let grid: Vec<Candidate> = grid_points(&bounds)
+        .into_iter()
+        .filter_map(|o| candidate(model, c, held, o))
+        .filter(|cand| {
+            let m = cand.margins.iter().copied().fold(f64::INFINITY, f64::min);
+            m > 0.0 && (m >= floor || !floor.is_finite())
+        })
+        .collect();
+    let states = first.steady.states.len();
+    let span: Vec<f64> = (0..states)
+        .map(|s| {
+            let (lo, hi) = grid
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), c| {
+                    (l.min(c.steady.states[s]), h.max(c.steady.states[s]))
+                });
+            (hi - lo).max(f64::MIN_POSITIVE)
+        })
+        .collect();
+    let distance = |a: &[f64], b: &[f64]| -> f64 {
+        a.iter()
+            .zip(b)
+            .zip(&span)
+            .map(|((x, y), s)| {
+                let d = (x - y) / s;
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    };
+    let mut chosen: Vec<Vec<f64>> = vec![first.steady.states.clone()];
+    let mut out = Vec::new();
+    for _ in 0..more {
+        let best = grid
+            .iter()
+            .map(|cand| {
+                let d = chosen
+                    .iter()
+                    .map(|x| distance(&cand.steady.states, x))
+                    .fold(f64::INFINITY, f64::min);
+                (d, cand)
+            })
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        // A point within a tenth of the spans of one already chosen is the
+        // same operating point.
+        let Some((_, cand)) = best.filter(|(d, _)| *d > 0.1) else {
+            break;
+        };
+        chosen.push(cand.steady.states.clone());
+        out.push(OperatingPoint {
+            offsets: cand.offsets.clone(),
+            steady: cand.steady.clone(),
+            margins: cand.margins.clone(),
+            full_range: first.full_range,
+        });
+    }
+    out
+}

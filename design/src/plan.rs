@@ -31,6 +31,19 @@ pub struct PlanFile {
     pub budget: Option<Budget>,
     /// The excitation family (`auto`, the default, chooses by predicted information).
     pub excitation: Option<String>,
+    /// θ's prior uncertainty: each parameter's standard deviation as a
+    /// fraction of its nominal value (default 0: the nominal θ is the truth).
+    pub prior: Option<f64>,
+    /// The trial area.
+    pub area: Option<Area>,
+}
+
+/// The sea room the skipper gives.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Area {
+    /// Metres from the start a run may go.
+    pub radius: Option<f64>,
 }
 
 /// An actuator's limits.
@@ -162,6 +175,10 @@ pub struct Conditions {
     pub budget: BudgetRule,
     /// A family the plan insists on.
     pub family: Option<Family>,
+    /// θ's prior uncertainty, a fraction of each nominal value (0: known).
+    pub prior: f64,
+    /// Metres from the start a run's nominal track may go (`None`: no limit given).
+    pub area_radius: Option<f64>,
     /// What the plan did not say and the design assumed, in words.
     pub assumptions: Vec<String>,
 }
@@ -171,6 +188,10 @@ pub use crate::bounds::BudgetRule;
 /// The most bytes of a plan file: 1 MiB, as a model's source. The front
 /// ends read no more of a file (a pipe, `/dev/zero`) than this and a byte.
 pub const MAX_PLAN_BYTES: u64 = 1 << 20;
+
+/// The largest prior uncertainty a plan may give: at 2.5 standard
+/// deviations a parameter keeps its sign below 0.4.
+pub const MAX_PRIOR: f64 = 0.35;
 
 /// The default time per experiment when the plan gives no budget, s.
 pub const DEFAULT_SECONDS: f64 = 600.0;
@@ -387,6 +408,18 @@ impl PlanFile {
         let media = self.media(ir, &mut assumptions)?;
         let (state_noise, heading_noise) = self.noise(ir)?;
         let budget = self.budget(&mut assumptions)?;
+        let prior = self.prior(&mut assumptions)?;
+        let area_radius = match self.area.as_ref().and_then(|a| a.radius) {
+            Some(r) if r.is_finite() && r > 0.0 => Some(r),
+            Some(r) => {
+                return Err(DesignError::plan(
+                    format!("area.radius = {r} is not a distance"),
+                    "give the metres from the start the craft may go",
+                )
+                .key("area.radius"));
+            }
+            None => None,
+        };
         let family = match self.excitation.as_deref() {
             None | Some("auto") => None,
             Some(name) => Some(
@@ -415,8 +448,28 @@ impl PlanFile {
             heading_noise,
             budget,
             family,
+            prior,
+            area_radius,
             assumptions,
         })
+    }
+
+    /// θ's prior uncertainty: 0 to [`MAX_PRIOR`] of each nominal value.
+    fn prior(&self, assumptions: &mut Vec<String>) -> Result<f64, DesignError> {
+        match self.prior {
+            None => {
+                assumptions.push(
+                    "θ known: the nominal θ is taken as the truth (the plan gives no `prior`)".into(),
+                );
+                Ok(0.0)
+            }
+            Some(p) if p.is_finite() && (0.0..=MAX_PRIOR).contains(&p) => Ok(p),
+            Some(p) => Err(DesignError::plan(
+                format!("prior = {p} is not a fraction from 0 to {MAX_PRIOR}"),
+                "give θ's uncertainty as a fraction of each nominal value (0.3 for ±30 %); beyond a third a parameter's sign is in doubt and no margin can be designed for it",
+            )
+            .key("prior")),
+        }
     }
 
     fn theta(&self, ir: &Ir) -> Result<Vec<f64>, DesignError> {

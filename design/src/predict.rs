@@ -5,7 +5,7 @@
 //! as `1/√N`.
 
 use crate::plan::Conditions;
-use crate::trial::{Run, simulate, true_system};
+use crate::trial::{Run, draw_theta, simulate, true_system};
 use leeway_estimate::{EstimateOptions, estimate};
 use leeway_model::experiment::Experiment;
 use leeway_model::experiment::Source;
@@ -66,6 +66,15 @@ impl Prediction {
         (worst > 0.0 && target > 0.0).then(|| {
             crate::bounds::needed(self.samples as f64 * (worst / target) * (worst / target))
         })
+    }
+
+    /// The largest `σ/|θ|` and its parameter.
+    pub fn worst(&self) -> Option<(f64, String)> {
+        self.relative()
+            .into_iter()
+            .zip(&self.parameters)
+            .filter_map(|(r, name)| r.map(|r| (r, name.clone())))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
     }
 
     /// θ with a nominal value the realisation left without a standard
@@ -216,12 +225,20 @@ pub fn calibrate(
         own_simulation: false,
         ..options.clone()
     };
+    // Each trial's θ drawn from the plan's prior (the nominal when it is
+    // 0): its error is taken against its own truth.
     let outcomes: Vec<Option<(Vec<f64>, Vec<f64>)>> = campaign(trials, &|| (), &|t| {
         let trial = keyed_seed(seed, "pilot", t);
+        let truth = draw_theta(c, keyed_seed(trial, "theta", 0));
+        let system = TrueSystem {
+            theta: truth.clone(),
+            ..system.clone()
+        };
         let experiments = realise(model, &system, runs, trial);
         let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
         let est = estimate(model, &sources, &options).ok()?;
-        Some((est.theta, est.disturbances.iter().map(|d| d.mean).collect()))
+        let errors = est.theta.iter().zip(&truth).map(|(e, t)| e - t).collect();
+        Some((errors, est.disturbances.iter().map(|d| d.mean).collect()))
     });
     let ok: Vec<&(Vec<f64>, Vec<f64>)> = outcomes.iter().flatten().collect();
     if ok.len() * 2 < trials.max(1) {
@@ -231,7 +248,7 @@ pub fn calibrate(
     prediction.std_errors = (0..prediction.theta.len())
         .map(|p| {
             prediction.asymptotic[p]?;
-            Some(rms(&mut ok.iter().map(|(t, _)| t[p] - c.theta[p])))
+            Some(rms(&mut ok.iter().map(|(errors, _)| errors[p])))
         })
         .collect();
     for (i, d) in prediction.disturbances.iter_mut().enumerate() {

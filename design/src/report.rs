@@ -51,10 +51,18 @@ pub struct Design {
     pub shortfalls: Vec<Shortfall>,
     /// What would work instead, when something falls short.
     pub proposals: Vec<String>,
+    /// Runs whose nominal track leaves the plan's trial area, in words.
+    pub sea_room: Vec<String>,
     /// Measurement noise used, per state and heading.
     pub noise: BTreeMap<String, f64>,
     /// What the plan did not say and the design assumed.
     pub assumptions: Vec<String>,
+    /// The numbers of runs tried (one per sign pattern; the same pattern
+    /// at other speeds with pooled centring) and their worst predicted
+    /// relative errors, one marked chosen.
+    pub runs_tried: Vec<RunsOption>,
+    /// Why the design has the runs it has.
+    pub runs_reason: String,
     /// The runs' inputs and initial states (for the input files).
     #[serde(skip)]
     pub runs: Vec<Run>,
@@ -136,6 +144,44 @@ impl FamilyScore {
     }
 }
 
+/// A number of runs and a centring the design tried.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunsOption {
+    /// Runs.
+    pub runs: usize,
+    /// The estimate's centring: `experiment`, `pooled`, `none`.
+    pub centring: String,
+    /// Seconds per run.
+    pub seconds: f64,
+    /// The worst `σ/|θ|` at that length, from the estimator's covariance on
+    /// one realisation (`None`: no prediction).
+    pub worst_relative: Option<f64>,
+    /// Its parameter.
+    pub worst_parameter: Option<String>,
+    /// Whether the design uses it.
+    pub chosen: bool,
+}
+
+impl RunsOption {
+    /// The option of `runs` runs with `centring` and its prediction.
+    pub fn of(
+        runs: usize,
+        centring: Centring,
+        seconds: f64,
+        prediction: Option<&Prediction>,
+    ) -> RunsOption {
+        let worst = prediction.and_then(Prediction::worst);
+        RunsOption {
+            runs,
+            centring: centring.name().to_string(),
+            seconds,
+            worst_relative: worst.as_ref().map(|w| w.0),
+            worst_parameter: worst.map(|w| w.1),
+            chosen: false,
+        }
+    }
+}
+
 /// One input of a run, in the unit the model's data use for it (the run
 /// files' unit).
 #[derive(Clone, Debug, Serialize)]
@@ -192,6 +238,46 @@ pub struct PlannedRun {
     pub heading_span_deg: Option<f64>,
     /// Whether the offsets had to use the whole ranges (little room left to excite).
     pub full_range: bool,
+    /// Where the nominal run goes over ground (planar craft).
+    pub track: Option<Track>,
+}
+
+/// A run's nominal track over ground from heading 0, the mean media's
+/// drift included: the craft's velocity over ground rotated to the earth
+/// frame and integrated.
+#[derive(Clone, Debug, Serialize)]
+pub struct Track {
+    /// The farthest it goes from the start, m.
+    pub farthest: f64,
+    /// Where it ends: north, east of the start, m.
+    pub end: [f64; 2],
+    /// Positions north, east, m, every sample (for the figure).
+    #[serde(skip)]
+    pub positions: Vec<[f64; 2]>,
+}
+
+/// The nominal track of `truth` (`None` for a craft without a planar heading).
+pub fn track(ir: &Ir, truth: &Truth, h: f64) -> Option<Track> {
+    let leeway_structure::ir::Rotation::Planar { axes, .. } = &ir.rotation else {
+        return None;
+    };
+    let (u, v) = (truth.states.get(axes[0])?, truth.states.get(axes[1])?);
+    let mut p = [0.0, 0.0];
+    let mut positions = Vec::with_capacity(u.len() + 1);
+    positions.push(p);
+    let mut farthest: f64 = 0.0;
+    for ((u, v), psi) in u.iter().zip(v).zip(&truth.heading) {
+        let (s, c) = psi.sin_cos();
+        p[0] += h * (u * c - v * s);
+        p[1] += h * (u * s + v * c);
+        farthest = farthest.max(p[0].hypot(p[1]));
+        positions.push(p);
+    }
+    Some(Track {
+        farthest,
+        end: p,
+        positions,
+    })
 }
 
 /// One θ's predicted accuracy.
@@ -351,6 +437,10 @@ pub struct Parts<'a> {
     pub validation: Option<Run>,
     /// Whether the estimate holds unexcited θ (`--aggregate`).
     pub aggregate: bool,
+    /// The numbers of runs tried.
+    pub runs_tried: Vec<RunsOption>,
+    /// Why the design has its runs.
+    pub runs_reason: String,
 }
 
 /// Puts a design's report together.
@@ -359,11 +449,11 @@ pub fn assemble(p: Parts) -> Design {
     let c = p.conditions;
     let n = p.runs.first().map_or(0, |r| r.inputs.len());
     let kind = p.method.predictor();
-    let experiments = p
+    let experiments: Vec<PlannedRun> = p
         .bases
         .iter()
         .enumerate()
-        .map(|(e, b)| planned_run(p.model, b, &p.fitted, e, &p.nominal[e], kind))
+        .map(|(e, b)| planned_run(p.model, b, &p.fitted, (e, c.h), &p.nominal[e], kind))
         .collect();
     let shortfalls: Vec<Shortfall> = p
         .bases
@@ -381,7 +471,31 @@ pub fn assemble(p: Parts) -> Design {
                 })
         })
         .collect();
-    let proposals = proposals(ir, &shortfalls, p.bases);
+    let mut proposals = proposals(ir, &shortfalls, p.bases);
+    // The trial area: a run whose nominal track leaves it is not a plan.
+    let sea_room: Vec<String> = c.area_radius.map_or(Vec::new(), |radius| {
+        experiments
+            .iter()
+            .enumerate()
+            .filter_map(|(e, r): (usize, &PlannedRun)| {
+                let t = r.track.as_ref()?;
+                (t.farthest > radius).then(|| {
+                    format!(
+                        "run {} goes {} m from its start, beyond the area's {} m",
+                        e + 1,
+                        leeway_model::number::short_number(t.farthest.round()),
+                        leeway_model::number::short_number(radius)
+                    )
+                })
+            })
+            .collect()
+    });
+    if !sea_room.is_empty() {
+        proposals.push(format!(
+            "the track leaves the trial area ({}): a larger area, a shorter budget per run (more runs), or a calmer current",
+            sea_room.join("; ")
+        ));
+    }
     let mut families = p.families;
     for f in &mut families {
         if f.family == p.fitted.family && f.status == "scored" && p.prediction.is_some() {
@@ -402,7 +516,8 @@ pub fn assemble(p: Parts) -> Design {
         method: p.method.name().to_string(),
         centring: p.centring.name().to_string(),
         aggregate: p.aggregate,
-        feasible: shortfalls.is_empty() && p.prediction.is_some(),
+        feasible: shortfalls.is_empty() && sea_room.is_empty() && p.prediction.is_some(),
+        sea_room,
         step: c.h,
         samples: n,
         seconds: n as f64 * c.h,
@@ -419,6 +534,8 @@ pub fn assemble(p: Parts) -> Design {
         noise,
         assumptions: p.assumptions,
         held: p.bases.iter().map(|b| b.held.clone()).collect(),
+        runs_tried: p.runs_tried,
+        runs_reason: p.runs_reason,
         runs: p.runs,
         nominal: p.nominal,
         records: p.records,
@@ -435,7 +552,7 @@ fn planned_run(
     model: &dyn Model,
     b: &Base,
     f: &Fitted,
-    e: usize,
+    (e, h): (usize, f64),
     truth: &Truth,
     kind: PredictorKind,
 ) -> PlannedRun {
@@ -497,6 +614,7 @@ fn planned_run(
         (hi - lo).to_degrees()
     });
     PlannedRun {
+        track: track(ir, truth, h),
         pattern: pattern_text(ir, &b.pattern, kind),
         inputs,
         steady,

@@ -98,6 +98,20 @@ pub fn true_system(c: &Conditions, noise: &[f64], heading_noise: f64, noisy: boo
     }
 }
 
+/// θ drawn from the plan's prior: each parameter times `1 + prior·z`, `z`
+/// standard normal clipped at ±2.5, from `seed`; the nominal θ itself
+/// when the prior is 0 (no draw).
+pub fn draw_theta(c: &Conditions, seed: u64) -> Vec<f64> {
+    if c.prior == 0.0 {
+        return c.theta.clone();
+    }
+    let mut draws = leeway_scenarios::synth::Draws::new(seed);
+    c.theta
+        .iter()
+        .map(|t| t * (1.0 + c.prior * draws.normal().clamp(-2.5, 2.5)))
+        .collect()
+}
+
 /// Simulates `run` on `system` from heading `psi0`: the recorded
 /// experiment and the truth behind it.
 pub fn simulate(

@@ -10,12 +10,13 @@
 use crate::predict::Noise;
 use crate::report::Design;
 use crate::signs::Held;
-use crate::trial::{Run, kept, simulate, true_system};
+use crate::trial::{Run, draw_theta, kept, simulate, true_system};
 use leeway_estimate::{Estimate, EstimateOptions, Method, estimate};
 use leeway_model::experiment::{Experiment, Source};
 use leeway_model::model::Model;
 use leeway_model::simulate::{Disturbances, fits};
 use leeway_scenarios::engine::{campaign, keyed_seed};
+use leeway_scenarios::synth::TrueSystem;
 use leeway_structure::identify::Centring;
 use serde::{Deserialize, Serialize};
 
@@ -32,7 +33,38 @@ pub struct Verification {
     pub signs: Vec<SignKept>,
     /// Per method.
     pub methods: Vec<MethodVerification>,
+    /// The true model's fit per state on the held-out run (θ of the plan,
+    /// the plan's mean disturbances): what an estimated model is measured
+    /// against.
+    pub true_fits: Vec<(String, f64)>,
+    /// Whether the designed method's models are what the user needs.
+    pub verdict: Verdict,
 }
+
+/// The outcome judged: the designed method's held-out fit within
+/// [`FIT_POINTS`] of the true model's in every state, and (with at least
+/// [`COVERAGE_TRIALS`] trials) every parameter's ±2σ coverage within
+/// [`COVERAGE`].
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Every criterion met.
+    pub passed: bool,
+    /// What fails, one line each.
+    pub failures: Vec<String>,
+    /// What would help.
+    pub help: Vec<String>,
+}
+
+/// Points of fit an estimated model may lose against the true model's on
+/// the held-out run.
+pub const FIT_POINTS: f64 = 10.0;
+/// The band ±2σ_predicted must cover (a calibrated σ covers 95 %).
+pub const COVERAGE: (f64, f64) = (0.90, 0.98);
+/// Trials below which coverage is reported but not judged: its sampling
+/// error (±2.2 points at 100 trials) would exceed the band.
+pub const COVERAGE_TRIALS: usize = 100;
+/// The share of trials whose model may diverge on the held-out run.
+pub const DIVERGED: f64 = 0.05;
 
 /// How often a held argument kept its side.
 #[derive(Clone, Debug, Serialize)]
@@ -117,6 +149,13 @@ pub struct Estimated {
 /// experiment and held argument the fraction kept.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct RunResult {
+    /// The run's true θ (drawn from the plan's prior; the nominal without one).
+    #[serde(default)]
+    pub truth: Vec<f64>,
+    /// With a prior: the true model's fit per state on the run's own
+    /// held-out run (realised with its θ); without one, the bench's.
+    #[serde(default)]
+    pub true_fits: Option<Vec<f64>>,
     /// Per method, in the order of `Method::ALL`.
     pub estimates: Vec<Outcome>,
     /// Per experiment and held argument, the fraction of samples on its side.
@@ -128,6 +167,7 @@ pub struct RunResult {
 pub struct Bench<'a> {
     noise: &'a Noise,
     validation: Experiment,
+    true_fits: Vec<f64>,
     methods: &'static [Method],
     designed: Method,
 }
@@ -137,9 +177,12 @@ impl<'a> Bench<'a> {
     /// (no noise resolved, no validation run or no method).
     pub fn new(model: &dyn Model, design: &'a Design) -> Option<Bench<'a>> {
         let noise = design.noise_used.as_ref()?;
+        let validation = validation_experiment(model, design, noise)?;
+        let true_fits = true_fits(model, design, &validation)?;
         Some(Bench {
             noise,
-            validation: validation_experiment(model, design, noise)?,
+            validation,
+            true_fits,
             methods: &Method::ALL,
             designed: design.method_used?,
         })
@@ -169,9 +212,8 @@ impl<'a> Bench<'a> {
         summarise(
             model,
             design,
-            self.methods,
-            self.designed,
-            results.len(),
+            (self.methods, self.designed),
+            &self.true_fits,
             seed,
             results,
         )
@@ -203,11 +245,41 @@ fn one_run(
 ) -> RunResult {
     let Some(c) = design.conditions.as_ref() else {
         return RunResult {
+            truth: Vec::new(),
+            true_fits: None,
             estimates: Vec::new(),
             kept: Vec::new(),
         };
     };
-    let system = true_system(c, &noise.states, noise.heading, true);
+    let truth = draw_theta(c, keyed_seed(seed, "theta", 0));
+    let system = TrueSystem {
+        theta: truth.clone(),
+        ..true_system(c, &noise.states, noise.heading, true)
+    };
+    // With a prior the held-out run is the run's own, realised with its θ.
+    let own = (c.prior > 0.0)
+        .then_some(design.validation.as_ref())
+        .flatten()
+        .map(|run| {
+            let held_out = simulate(
+                model,
+                &system,
+                run,
+                "validation",
+                0.0,
+                keyed_seed(seed, "held-out", 0),
+            )
+            .0;
+            let sim = leeway_model::simulate::simulate(
+                model,
+                &truth,
+                &held_out,
+                Disturbances::Constant(&c.mean),
+            );
+            let f = fits(&held_out, &sim);
+            (held_out, f)
+        });
+    let validation = own.as_ref().map_or(validation, |(v, _)| v);
     let mut experiments = Vec::new();
     let mut kept_fractions = Vec::new();
     for (e, (run, held)) in design.runs.iter().zip(&design.held).enumerate() {
@@ -249,18 +321,36 @@ fn one_run(
         })
         .collect();
     RunResult {
+        truth,
+        true_fits: own.map(|(_, f)| f),
         estimates,
         kept: kept_fractions,
     }
 }
 
-/// The validation run: run 1's operating point and excitation family with
-/// another seed, nominal (mean disturbances, no noise).
+/// The held-out run: run 1's operating point and excitation family with
+/// another seed, realised as a trial would log it (the plan's random
+/// disturbances and noise, from its own seed).
 fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> Option<Experiment> {
     let c = design.conditions.as_ref()?;
     let run: &Run = design.validation.as_ref()?;
-    let system = true_system(c, &noise.states, noise.heading, false);
-    Some(simulate(model, &system, run, "validation", 0.0, 0).0)
+    let system = true_system(c, &noise.states, noise.heading, true);
+    let seed = keyed_seed(0, "held-out", 0);
+    Some(simulate(model, &system, run, "validation", 0.0, seed).0)
+}
+
+/// The true model's fit per state on the held-out run: θ of the plan with
+/// the plan's mean disturbances (what no estimate can beat: the rest is
+/// the random disturbance and the noise).
+fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Option<Vec<f64>> {
+    let c = design.conditions.as_ref()?;
+    let sim = leeway_model::simulate::simulate(
+        model,
+        &c.theta,
+        validation,
+        Disturbances::Constant(&c.mean),
+    );
+    Some(fits(validation, &sim))
 }
 
 /// Fits per state of `est` simulated on `validation` with its disturbance
@@ -291,13 +381,13 @@ fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Optio
 fn summarise(
     model: &dyn Model,
     design: &Design,
-    methods: &[Method],
-    designed: Method,
-    runs: usize,
+    (methods, designed): (&[Method], Method),
+    true_fits: &[f64],
     seed: u64,
     results: &[RunResult],
 ) -> Verification {
     let ir = model.ir();
+    let runs = results.len();
     let signs = design
         .held
         .iter()
@@ -318,23 +408,37 @@ fn summarise(
         })
         .collect();
     let predicted = design.predicted.as_ref().map(|p| p.at(design.samples));
-    let methods = methods
+    let methods: Vec<MethodVerification> = methods
         .iter()
         .enumerate()
         .map(|(mi, m)| {
             let outcomes: Vec<&Outcome> =
                 results.iter().filter_map(|r| r.estimates.get(mi)).collect();
-            let ok: Vec<&Estimated> = outcomes.iter().filter_map(|o| o.as_ref().ok()).collect();
+            let ok: Vec<(&Estimated, &[f64])> = results
+                .iter()
+                .filter_map(|r| match r.estimates.get(mi) {
+                    Some(Ok(e)) => Some((e, r.truth.as_slice())),
+                    _ => None,
+                })
+                .collect();
             let failure = outcomes.iter().find_map(|o| o.as_ref().err().cloned());
-            let rank_deficient = ok.iter().filter(|e| e.rank_deficient).count();
+            let rank_deficient = ok.iter().filter(|e| e.0.rank_deficient).count();
             let parameters = ir
                 .parameters
                 .iter()
                 .enumerate()
                 .map(|(p, param)| {
-                    let values: Vec<f64> = ok.iter().map(|e| e.theta[p]).collect();
-                    let (mean, std) = mean_std(&values);
                     let truth = design.conditions.as_ref().map_or(f64::NAN, |c| c.theta[p]);
+                    // Each estimate's error against its run's own θ, set
+                    // about the nominal (the same values without a prior).
+                    let values: Vec<f64> = ok
+                        .iter()
+                        .map(|(e, own)| match own.get(p) {
+                            Some(t) if *t != truth => truth + (e.theta[p] - t),
+                            _ => e.theta[p],
+                        })
+                        .collect();
+                    let (mean, std) = mean_std(&values);
                     let sigma = if *m == designed {
                         predicted.as_ref().and_then(|s| s[p])
                     } else {
@@ -347,7 +451,7 @@ fn summarise(
                             .count() as f64
                             / values.len() as f64
                     });
-                    let own: Vec<f64> = ok.iter().filter_map(|e| e.std_errors[p]).collect();
+                    let own: Vec<f64> = ok.iter().filter_map(|e| e.0.std_errors[p]).collect();
                     let reported = (!own.is_empty()).then(|| mean_std(&own).0);
                     ParameterVerification {
                         name: param.name.clone(),
@@ -360,7 +464,7 @@ fn summarise(
                     }
                 })
                 .collect();
-            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.fits.as_ref()).collect();
+            let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.fits.as_ref()).collect();
             let fits = ir
                 .states
                 .iter()
@@ -379,16 +483,165 @@ fn summarise(
                 parameters,
                 fits,
                 diverged: ok.len() - fitted.len(),
-                unconverged: ok.iter().filter(|e| !e.converged).count(),
+                unconverged: ok.iter().filter(|e| !e.0.converged).count(),
             }
         })
         .collect();
+    // With a prior each run has its own true model: their mean fit.
+    let own: Vec<&Vec<f64>> = results
+        .iter()
+        .filter_map(|r| r.true_fits.as_ref())
+        .collect();
+    let true_fits: Vec<(String, f64)> = ir
+        .states
+        .iter()
+        .enumerate()
+        .map(|(s, name)| {
+            let f = if own.is_empty() {
+                true_fits.get(s).copied().unwrap_or(f64::NAN)
+            } else {
+                mean_std(&own.iter().map(|f| f[s]).collect::<Vec<f64>>()).0
+            };
+            (name.clone(), f)
+        })
+        .collect();
+    let verdict = judge(design, &methods, &true_fits, runs);
     Verification {
         runs,
         seed,
         samples: design.samples,
         signs,
         methods,
+        true_fits,
+        verdict,
+    }
+}
+
+/// The outcome of the designed method against [`FIT_POINTS`],
+/// [`DIVERGED`] and [`COVERAGE`], with what would help.
+fn judge(
+    design: &Design,
+    methods: &[MethodVerification],
+    true_fits: &[(String, f64)],
+    runs: usize,
+) -> Verdict {
+    let pct = |x: f64| leeway_model::number::short_number(100.0 * x);
+    let mut failures = Vec::new();
+    let mut help = Vec::new();
+    let Some(m) = methods.iter().find(|m| m.designed_for) else {
+        return Verdict {
+            passed: false,
+            failures: vec!["the designed method was not verified".into()],
+            help,
+        };
+    };
+    let estimated = runs - m.failed;
+    if m.failed > 0 {
+        failures.push(format!("{} of {runs} estimates failed", m.failed));
+    }
+    let short: Vec<String> = m
+        .fits
+        .iter()
+        .zip(true_fits)
+        // A NaN fit (no model simulated the run) falls short too.
+        .filter(|((_, f), (_, t))| f.is_nan() || *f < t - FIT_POINTS)
+        .map(|((name, f), (_, t))| {
+            format!(
+                "{name} {} % against {} %",
+                leeway_model::number::short_number(*f),
+                leeway_model::number::short_number(*t)
+            )
+        })
+        .collect();
+    if !short.is_empty() {
+        failures.push(format!(
+            "held-out fit more than {} points below the true model's: {}",
+            FIT_POINTS,
+            short.join(", ")
+        ));
+    }
+    if m.diverged as f64 > DIVERGED * estimated.max(1) as f64 {
+        failures.push(format!(
+            "{} of {estimated} models diverge on the held-out run (at most {} % may)",
+            m.diverged,
+            pct(DIVERGED)
+        ));
+    }
+    if runs >= COVERAGE_TRIALS {
+        let outside: Vec<String> = m
+            .parameters
+            .iter()
+            .filter_map(|p| p.coverage.map(|c| (p, c)))
+            .filter(|(_, c)| !(COVERAGE.0..=COVERAGE.1).contains(c))
+            .map(|(p, c)| format!("{} {} %", p.name, pct(c)))
+            .collect();
+        if !outside.is_empty() {
+            failures.push(format!(
+                "±2σ coverage outside {}–{} %: {}",
+                pct(COVERAGE.0),
+                pct(COVERAGE.1),
+                outside.join(", ")
+            ));
+            help.push(
+                "coverage below the band: the spread exceeds the predicted σ (more pilot trials or a longer run); above it: σ is conservative".into(),
+            );
+        }
+    }
+    if m.unconverged > 0 && !failures.is_empty() {
+        help.push(format!(
+            "{} of {estimated} refinements stopped at an earlier iterate (unsettled): their models are the tails; a longer run or a calmer medium settles them",
+            m.unconverged
+        ));
+    }
+    if !failures.is_empty() {
+        let poor: Vec<&str> = design
+            .prediction
+            .as_ref()
+            .map(|p| {
+                p.poorly_determined
+                    .iter()
+                    .map(|q| q.name.as_str())
+                    .collect()
+            })
+            .unwrap_or_default();
+        if !poor.is_empty() {
+            help.push(format!(
+                "poorly determined at this budget: {} — a longer budget (the predicted curve gives the run it needs) or wider input ranges",
+                poor.join(", ")
+            ));
+        }
+        let tried: Vec<String> = design
+            .runs_tried
+            .iter()
+            .map(|o| {
+                format!(
+                    "{} run{} with {} centring",
+                    o.runs,
+                    if o.runs == 1 { "" } else { "s" },
+                    o.centring
+                )
+            })
+            .collect();
+        if tried.len() > 1 {
+            help.push(format!(
+                "the design tried {} within this budget",
+                tried.join(", ")
+            ));
+        }
+        if m.fits
+            .iter()
+            .zip(true_fits)
+            .any(|((_, f), (_, t))| *f < t - FIT_POINTS)
+        {
+            help.push(
+                "a held-out fit far below the true model's in a state: its parameters' errors add up along a free run — measure the medium, or runs at more operating points".into(),
+            );
+        }
+    }
+    Verdict {
+        passed: failures.is_empty(),
+        failures,
+        help,
     }
 }
 

@@ -69,6 +69,7 @@ impl DesignArgs {
             target: self.target,
             seed: self.seed,
             pilot: self.pilot,
+            runs: None,
         })
     }
 }

@@ -1,6 +1,7 @@
 //! The design's figure: per run (a column each) the planned inputs (as a
 //! share of their ranges), the nominal states, and each held sign argument
-//! with its band shaded; below, the predicted relative standard errors of
+//! with its band shaded, and the nominal track over ground with the
+//! trial area; below, the predicted relative standard errors of
 //! θ against run length (log–log), the budget marked.
 
 use crate::plot::{Figure, MODEL_COLOURS, decimate_to, save as save_figure, styled_mesh};
@@ -17,6 +18,8 @@ const COLOURS: [RGBColor; 6] = MODEL_COLOURS;
 /// Runs drawn (a design rarely needs more).
 const MAX_RUNS: usize = 4;
 const ROW: u32 = 240;
+/// Seconds of excitation an input panel shows.
+const WINDOW: f64 = 120.0;
 
 struct DesignFigure<'a> {
     model: &'a Interpreter,
@@ -31,17 +34,18 @@ pub fn save(path: &Path, model: &Interpreter, design: &Design) -> Result<(), Str
 impl Figure for DesignFigure<'_> {
     fn size(&self) -> (u32, u32) {
         let runs = self.design.runs.len().clamp(1, MAX_RUNS) as u32;
-        (520 * runs.max(2), 4 * ROW)
+        (520 * runs.max(2), 5 * ROW)
     }
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
         root.fill(&WHITE).map_err(|e| e.to_string())?;
-        let (top, bottom) = root.split_vertically(3 * ROW);
+        let (top, bottom) = root.split_vertically(4 * ROW);
         let runs = self.design.runs.len().clamp(1, MAX_RUNS);
-        let columns = top.split_evenly((3, runs));
+        let columns = top.split_evenly((4, runs));
         for (e, _) in self.design.runs.iter().enumerate().take(runs) {
             self.inputs(&columns[e], e)?;
             self.states(&columns[runs + e], e)?;
             self.margins(&columns[2 * runs + e], e)?;
+            self.track(&columns[3 * runs + e], e)?;
         }
         self.accuracy(&bottom)
     }
@@ -119,31 +123,100 @@ impl DesignFigure<'_> {
             .map_err(|e| e.to_string())
     }
 
+    /// The inputs over a window a person can read (the first
+    /// [`WINDOW`] s), each labelled with its whole-run mean and spread.
     fn inputs<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
         let ir = self.model.ir();
         let c = self.design.conditions.as_ref().ok_or("no conditions")?;
         let run = &self.design.runs[e];
+        let n = run.inputs.len();
+        let shown = n.min(((WINDOW / self.design.step).ceil() as usize).max(2));
         let series: Vec<(String, Vec<f64>)> = ir
             .inputs
             .iter()
             .enumerate()
             .map(|(i, name)| {
                 let l = c.limits[i];
+                let all: Vec<f64> = run
+                    .inputs
+                    .iter()
+                    .map(|u| 100.0 * (u[i] - l.low) / l.span())
+                    .collect();
+                let mean = all.iter().sum::<f64>() / all.len().max(1) as f64;
+                let sd = (all.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>()
+                    / all.len().max(1) as f64)
+                    .sqrt();
                 (
-                    name.clone(),
-                    run.inputs
-                        .iter()
-                        .map(|u| 100.0 * (u[i] - l.low) / l.span())
-                        .collect(),
+                    format!("{name}: mean {mean:.0} %, sd {sd:.0} %"),
+                    all[..shown].to_vec(),
                 )
             })
             .collect();
         let title = format!(
-            "run {} {}: inputs",
+            "run {} {}: inputs, first {} s of {} s",
             e + 1,
-            self.design.experiments[e].pattern
+            self.design.experiments[e].pattern,
+            (shown as f64 * self.design.step).round(),
+            (n as f64 * self.design.step).round()
         );
         self.lines(area, &title, "% of range", &series, None)
+    }
+
+    /// The run's nominal track over ground (north up, east right), the
+    /// mean current's drift included, and the trial area when the plan
+    /// gives one.
+    fn track<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
+        let Some(t) = self.design.experiments[e].track.as_ref() else {
+            return Ok(());
+        };
+        let radius = self.design.conditions.as_ref().and_then(|c| c.area_radius);
+        let reach = radius.unwrap_or(0.0).max(t.farthest).max(1.0) * 1.1;
+        let (w, h) = area.dim_in_pixel();
+        let wide = reach
+            * (f64::from(w.saturating_sub(66)) / f64::from(h.saturating_sub(76).max(1))).max(1.0);
+        let step = (t.positions.len() / 1500).max(1);
+        let pts: Vec<(f64, f64)> = t
+            .positions
+            .iter()
+            .step_by(step)
+            .map(|p| (p[1], p[0]))
+            .collect();
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!(
+                    "run {}: nominal track, ends {:.0} m from the start",
+                    e + 1,
+                    t.end[0].hypot(t.end[1])
+                ),
+                ("sans-serif", 17),
+            )
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(58)
+            // Metres alike on both axes: the plot area is wider than tall.
+            .build_cartesian_2d(-wide..wide, -reach..reach)
+            .map_err(|e| e.to_string())?;
+        styled_mesh(&mut chart, "east (m)", "north (m)")
+            .draw()
+            .map_err(|e| e.to_string())?;
+        if let Some(r) = radius {
+            let circle: Vec<(f64, f64)> = (0..=120)
+                .map(|k| {
+                    let a = f64::from(k) * std::f64::consts::TAU / 120.0;
+                    (r * a.sin(), r * a.cos())
+                })
+                .collect();
+            chart
+                .draw_series(LineSeries::new(circle, BLACK.mix(0.5).stroke_width(2)))
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .draw_series(LineSeries::new(pts, COLOURS[1].stroke_width(1)))
+            .map_err(|e| e.to_string())?;
+        chart
+            .draw_series(std::iter::once(Circle::new((0.0, 0.0), 4, BLACK.filled())))
+            .map_err(|e| e.to_string())?;
+        Ok(())
     }
 
     fn states<DB: DrawingBackend>(&self, area: &Area<'_, DB>, e: usize) -> Result<(), String> {
@@ -226,7 +299,11 @@ impl DesignFigure<'_> {
             curve.first().map_or(1.0, |c| c.0),
             curve.last().map_or(2.0, |c| c.0),
         );
-        let mut chart = ChartBuilder::on(area)
+        // The legend beside the chart, in as many columns as it needs: it
+        // fits however many parameters the model has.
+        let (w, _) = area.dim_in_pixel();
+        let (area, key) = area.split_horizontally(w.saturating_sub(LEGEND));
+        let mut chart = ChartBuilder::on(&area)
             .caption(
                 "predicted relative standard error of θ against run length",
                 ("sans-serif", 17),
@@ -249,6 +326,7 @@ impl DesignFigure<'_> {
             .bold_line_style(BLACK.mix(0.12))
             .draw()
             .map_err(|e| e.to_string())?;
+        let mut entries: Vec<(String, RGBColor)> = Vec::new();
         for (i, q) in p.parameters.iter().enumerate() {
             let pts: Vec<(f64, f64)> = curve
                 .iter()
@@ -258,14 +336,11 @@ impl DesignFigure<'_> {
             if pts.is_empty() {
                 continue;
             }
-            let colour = COLOURS[i % COLOURS.len()];
+            let colour = colour(i, p.parameters.len());
             chart
                 .draw_series(LineSeries::new(pts, colour.stroke_width(1)))
-                .map_err(|e| e.to_string())?
-                .label(q.name.clone())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
-                });
+                .map_err(|e| e.to_string())?;
+            entries.push((q.name.clone(), colour));
         }
         let budget = self.design.seconds;
         chart
@@ -273,16 +348,51 @@ impl DesignFigure<'_> {
                 vec![(budget, lo * 0.8), (budget, hi * 1.25)],
                 BLACK.mix(0.5).stroke_width(1),
             )))
-            .map_err(|e| e.to_string())?
-            .label("budget")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
-        chart
-            .configure_series_labels()
-            .label_font(("sans-serif", 12))
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK.mix(0.2))
-            .draw()
-            .map_err(|e| e.to_string())
+            .map_err(|e| e.to_string())?;
+        entries.push(("budget".into(), RGBColor(128, 128, 128)));
+        legend(&key, &entries)
     }
+}
+
+/// Pixels beside the accuracy chart for its legend.
+const LEGEND: u32 = 220;
+
+/// Line `i` of `n`: leeway's six colours when they suffice, else `n`
+/// hues evenly round the colour wheel, so no two lines share one.
+fn colour(i: usize, n: usize) -> RGBColor {
+    if n <= COLOURS.len() {
+        return COLOURS[i];
+    }
+    let rgb = HSLColor(i as f64 / n as f64, 0.75, 0.42)
+        .to_backend_color()
+        .rgb;
+    RGBColor(rgb.0, rgb.1, rgb.2)
+}
+
+/// A legend of `entries` filling `area` column by column.
+fn legend<DB: DrawingBackend>(
+    area: &Area<'_, DB>,
+    entries: &[(String, RGBColor)],
+) -> Result<(), String> {
+    const LINE: i32 = 16;
+    let (w, h) = area.dim_in_pixel();
+    let rows = ((i32::try_from(h).unwrap_or(i32::MAX) - 2 * LINE) / LINE).max(1) as usize;
+    let columns = entries.len().div_ceil(rows).max(1);
+    let width = i32::try_from(w as usize / columns).unwrap_or(i32::MAX);
+    for (k, (name, colour)) in entries.iter().enumerate() {
+        let x = i32::try_from(k / rows).unwrap_or(0) * width + 4;
+        let y = LINE + i32::try_from(k % rows).unwrap_or(0) * LINE;
+        area.draw(&PathElement::new(
+            vec![(x, y + LINE / 2), (x + 16, y + LINE / 2)],
+            colour.stroke_width(2),
+        ))
+        .map_err(|e| e.to_string())?;
+        area.draw(&Text::new(
+            name.clone(),
+            (x + 20, y + 2),
+            ("sans-serif", 12),
+        ))
+        .map_err(|e| e.to_string())?;
+    }
+    Ok(())
 }

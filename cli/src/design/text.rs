@@ -34,6 +34,31 @@ pub fn render(
     for a in &d.assumptions {
         let _ = writeln!(s, "  assumed: {a}");
     }
+    if !d.runs_reason.is_empty() {
+        let _ = writeln!(s, "  runs: {}", d.runs_reason);
+    }
+    if d.runs_tried.len() > 1 {
+        let tried: Vec<String> = d
+            .runs_tried
+            .iter()
+            .map(|o| {
+                format!(
+                    "{} × {} s, {} centring: {}{}",
+                    o.runs,
+                    num(o.seconds),
+                    o.centring,
+                    o.worst_relative
+                        .map_or("no prediction".to_string(), |w| format!(
+                            "worst {} % ({})",
+                            num(100.0 * w),
+                            o.worst_parameter.as_deref().unwrap_or("-")
+                        )),
+                    if o.chosen { " chosen" } else { "" }
+                )
+            })
+            .collect();
+        let _ = writeln!(s, "  runs tried: {}", tried.join("; "));
+    }
     for (e, run) in d.experiments.iter().enumerate() {
         experiment(&mut s, ir, e, run, d);
     }
@@ -47,11 +72,27 @@ pub fn render(
         for p in &d.proposals {
             let _ = writeln!(s, "  {p}");
         }
+    } else if !d.sea_room.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nthe design cannot keep the track inside the trial area:"
+        );
+        for p in &d.proposals {
+            let _ = writeln!(s, "  {p}");
+        }
     }
     if let Some(v) = v {
         verification(&mut s, v);
     } else if args.verify.is_some() && !d.feasible {
-        let _ = writeln!(s, "\nnot verified: the design does not keep its signs");
+        let _ = writeln!(
+            s,
+            "\nnot verified: the design does not keep its {}",
+            if d.shortfalls.is_empty() && !d.sea_room.is_empty() {
+                "track inside the trial area"
+            } else {
+                "signs"
+            }
+        );
     }
     s
 }
@@ -117,6 +158,15 @@ fn experiment(
             num(span.min(99_999.0))
         );
     }
+    if let Some(t) = &run.track {
+        let _ = writeln!(
+            s,
+            "  track       at most {} m from the start, ends {} m north, {} m east (nominal, the mean media's drift included)",
+            num(t.farthest.round()),
+            num(t.end[0].round()),
+            num(t.end[1].round())
+        );
+    }
     if run.full_range {
         let _ = writeln!(
             s,
@@ -177,9 +227,19 @@ fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
         "parameter", "nominal", "std error", "relative", "asymptotic"
     );
     for q in &p.parameters {
+        // Where the pilot's spread and the estimator's covariance part by
+        // more than half, say so: the pilot's is the one used.
+        let off = match (q.std_error, q.asymptotic) {
+            (Some(pilot), Some(a))
+                if p.trials > 0 && a > 0.0 && !(0.67..=1.5).contains(&(a / pilot)) =>
+            {
+                format!("  (asymptotic off ×{}: the pilot's used)", num(a / pilot))
+            }
+            _ => String::new(),
+        };
         let _ = writeln!(
             s,
-            "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}",
+            "  {:width$}  {:>10}  {:>10}  {:>8}  {:>10}{off}",
             q.name,
             num(q.nominal),
             q.std_error.map_or("held".into(), num),
@@ -348,6 +408,31 @@ fn verification(s: &mut String, v: &Verification) {
                 q.coverage
                     .map_or("-".into(), |c| format!("{} %", num(100.0 * c)))
             );
+        }
+    }
+    let truth: Vec<String> = v.true_fits.iter().map(|(_, f)| num(*f)).collect();
+    let _ = writeln!(s, "  the true model's held-out fit {} %", truth.join("/"));
+    if v.verdict.passed {
+        let _ = writeln!(
+            s,
+            "  verdict: passed (held-out fit within {} points of the true model's in every state{})",
+            num(leeway_design::verify::FIT_POINTS),
+            if v.runs >= leeway_design::verify::COVERAGE_TRIALS {
+                ", ±2σ coverage 90–98 % for every parameter"
+            } else {
+                "; coverage is judged from 100 trials"
+            }
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "\nnot a success: the verified models are not what the trial needs"
+        );
+        for f in &v.verdict.failures {
+            let _ = writeln!(s, "  fails: {f}");
+        }
+        for h in &v.verdict.help {
+            let _ = writeln!(s, "  would help: {h}");
         }
     }
 }

@@ -516,3 +516,41 @@ fn compare_errors_name_compare() {
     assert!(err.contains("--compare"), "{err}");
     assert!(!err.contains("--input"), "{err}");
 }
+
+#[test]
+fn a_design_whose_verified_models_fall_short_exits_1_with_what_fails() {
+    // The survey boat of issue 47 on 10 minutes at sea: its signs hold, but
+    // the models its trials yield cannot simulate the held-out run.
+    let dir = Scratch::new("design-short");
+    let text = std::fs::read_to_string(root().join("design/tests/fixtures/survey_boat.toml"))
+        .expect("plan");
+    let plan = dir.write("boat.toml", &text.replace("time = 1800", "time = 600"));
+    let o = leeway(&[
+        "design",
+        "design/tests/fixtures/survey_boat.som",
+        "--plan",
+        &plan,
+        "--pilot",
+        "0",
+        "--verify",
+        "4",
+    ]);
+    no_panic(&o);
+    let text = stdout(&o);
+    assert_eq!(code(&o), 1, "{text}");
+    assert!(
+        text.contains("not a success: the verified models are not what the trial needs"),
+        "{text}"
+    );
+    assert!(
+        text.contains("fails: held-out fit more than 10 points below the true model's: u "),
+        "{text}"
+    );
+    assert!(text.contains("would help: "), "{text}");
+    // The other runs the design tried were verified too, and failed.
+    assert!(
+        text.contains("verified the other runs the design tried:\n  1 × 600 s, experiment centring: fails too (")
+            || text.contains("verified the other runs the design tried:\n  2 × 300 s, pooled centring: fails too ("),
+        "{text}"
+    );
+}

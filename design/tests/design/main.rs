@@ -6,5 +6,7 @@ mod common;
 mod examples;
 mod plan_fuzz;
 mod rov;
+mod sea_room;
+mod several;
 mod units;
 mod verification;

@@ -84,3 +84,29 @@ fn an_angle_beyond_half_a_turn_names_the_likely_slip() {
         .expect_err("a speed");
     assert!(e.message.contains("is not an angle"), "{e:?}");
 }
+
+#[test]
+fn a_prior_beyond_a_third_is_refused_at_its_line() {
+    let text = "prior = 0.6\n[inputs.tau]\nrange = [0, 400]\n[inputs.delta]\nrange = [-35, 35]\n";
+    let model = boat();
+    let e = parse(text, false)
+        .and_then(|p| p.conditions(model.ir()))
+        .map(|_| ())
+        .map_err(|e| locate(e, text, false))
+        .expect_err("prior 0.6");
+    assert_eq!(e.key.as_deref(), Some("prior"), "{e:?}");
+    assert_eq!((e.line, e.column), (Some(1), Some(9)), "{e:?}");
+    assert!(e.message.contains("not a fraction from 0 to 0.35"), "{e:?}");
+    let c = parse(
+        "prior = 0.3\n[inputs.tau]\nrange = [0, 400]\n[inputs.delta]\nrange = [-35, 35]\n",
+        false,
+    )
+    .and_then(|p| p.conditions(model.ir()))
+    .expect("prior 0.3");
+    assert_eq!(c.prior, 0.3);
+    assert!(
+        !c.assumptions.iter().any(|a| a.contains("θ known")),
+        "{:?}",
+        c.assumptions
+    );
+}
