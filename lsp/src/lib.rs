@@ -20,6 +20,7 @@ pub mod actions;
 pub mod analysis;
 pub mod diagnostics;
 pub mod hover;
+pub mod last;
 pub mod server;
 pub mod symbols;
 pub mod text;

@@ -550,3 +550,50 @@ fn refactor_lists_a_parameter_without_nominal_value() {
     assert_eq!(warnings(&found[1].2), warnings(BOAT));
     c.stop();
 }
+
+#[test]
+fn hover_and_definition_answer_from_the_last_version_that_parsed() {
+    let mut c = Client::start();
+    c.open(BOAT);
+    let _ = c.diagnostics(1);
+    // A `+` left hanging at the end of `der v`: the text no longer parses.
+    let broken = BOAT.replace("    der v = Y_v*water.v\n", "    der v = Y_v*water.v +\n");
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": URI, "version": 2},
+               "contentChanges": [{"text": broken}]}),
+    );
+    let d = c.diagnostics(2);
+    assert!(d.iter().any(|d| d["code"] == "syntax"), "{d:?}");
+    let pos = |at: usize| {
+        let (l, ch) = utf16_position(&broken, at);
+        c_at(l, ch)
+    };
+    // Before the edit (same place) and after it (shifted by two bytes).
+    for name in ["X_u*", "N_r*"] {
+        let at = broken.find(name).expect("name");
+        let h = c.request("textDocument/hover", pos(at + 1));
+        let md = h["contents"]["value"].as_str().expect("a hover");
+        assert!(md.starts_with("*(as of the last version that parsed)*"), "{md}");
+        assert!(md.contains(&name[..3]), "{md}");
+        assert_eq!(h["range"], range_of(&broken, at, at + 3));
+    }
+    // The `v` the edit touches: no answer from the old version.
+    let v = broken.find("water.v +").expect("edit") + "water.".len();
+    assert_eq!(c.request("textDocument/hover", pos(v)), Value::Null);
+    // Definition and references of `water`, written before and after the edit.
+    let uses: Vec<usize> = broken.match_indices("water").map(|(i, _)| i).collect();
+    let defined = c.request("textDocument/definition", pos(uses[2] + 1));
+    assert_eq!(defined[0]["range"], range_of(&broken, uses[0], uses[0] + 5));
+    let mut p = pos(uses[1]);
+    p["context"] = json!({"includeDeclaration": true});
+    let refs = c.request("textDocument/references", p);
+    let ranges: Vec<&Value> = refs.as_array().expect("refs").iter().map(|l| &l["range"]).collect();
+    let want: Vec<Value> = uses.iter().map(|&i| range_of(&broken, i, i + 5)).collect();
+    assert_eq!(ranges, want.iter().collect::<Vec<_>>());
+    c.stop();
+}
+
+fn c_at(line: u32, character: u32) -> Value {
+    json!({"textDocument": {"uri": URI}, "position": {"line": line, "character": character}})
+}
