@@ -203,7 +203,10 @@ fn nominal_actions(
     };
     offer(
         &[here.name.as_str()],
-        format!("list `{}` in `nominal {{ }}` (0, its value unlisted)", here.name),
+        format!(
+            "list `{}` in `nominal {{ }}` (0, its value unlisted)",
+            here.name
+        ),
     );
     if unlisted.len() > 1 {
         offer(
@@ -232,7 +235,10 @@ fn nominal_insertion(text: &str, model: &ModelSyntax, names: &[&str]) -> Option<
     });
     if let Some((written, span)) = block {
         return Some(match written.last() {
-            Some((_, value)) => edit_of(Span::new(value.span.end, value.span.end), &format!(", {entries}")),
+            Some((_, value)) => edit_of(
+                Span::new(value.span.end, value.span.end),
+                &format!(", {entries}"),
+            ),
             None => {
                 let brace = span.start + text[span.start..span.end].find('{')? + 1;
                 edit_of(Span::new(brace, brace), &format!(" {entries}"))

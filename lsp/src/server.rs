@@ -4,8 +4,8 @@
 //! burst of keystrokes is analysed once, for its last version).
 
 use crate::analysis::Analysis;
-use crate::symbols::Kind;
 use crate::last::{LastParsed, Unchanged};
+use crate::symbols::Kind;
 use crate::{actions, diagnostics, hover, text, tokens};
 use leeway_grammar::Span;
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
@@ -300,7 +300,10 @@ fn hover_at(doc: &mut Document, at: usize) -> Option<Hover> {
         Some((last, unchanged)) => {
             let (md, old) = hover::hover(&last.text, &last.analysis, unchanged.to_old(at)?)?;
             let span = unchanged.to_new(old)?;
-            (format!("*(as of the last version that parsed)*\n\n{md}"), span)
+            (
+                format!("*(as of the last version that parsed)*\n\n{md}"),
+                span,
+            )
         }
     };
     Some(Hover {

@@ -167,10 +167,16 @@ fn campaign(seed: u64, edits: usize) -> Figures {
             "textDocument/formatting",
             "textDocument/documentSymbol",
             "textDocument/references",
-        ][rng.random_range(0..6)];
+            "textDocument/codeAction",
+        ][rng.random_range(0..7)];
         let mut params = c.at(l, ch);
+        params["range"] =
+            json!({"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch}});
+        params["context"] = json!({"diagnostics": []});
         params["options"] = json!({"tabSize": 4, "insertSpaces": true});
-        params["context"] = json!({"includeDeclaration": true});
+        if method == "textDocument/references" {
+            params["context"] = json!({"includeDeclaration": true});
+        }
         let t = Instant::now();
         let answer = c.try_request(method, params);
         let took = t.elapsed();

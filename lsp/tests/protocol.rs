@@ -457,7 +457,10 @@ fn quick_fixes_remove_an_unused_relative_velocity_then_its_medium() {
     let d = c.diagnostics(1);
     let unused = |d: &[Value], what: &str| {
         d.iter()
-            .find(|d| d["code"] == "unused-declaration" && d["message"].as_str().unwrap().contains(what))
+            .find(|d| {
+                d["code"] == "unused-declaration"
+                    && d["message"].as_str().expect("message").contains(what)
+            })
             .unwrap_or_else(|| panic!("{what}: {d:?}"))["range"]
             .clone()
     };
@@ -469,10 +472,17 @@ fn quick_fixes_remove_an_unused_relative_velocity_then_its_medium() {
     assert_eq!(found[0].0, "remove the unused `air`");
     assert_eq!(found[0].1, "quickfix");
     let without_air = &found[0].2;
-    assert_eq!(*without_air, BOAT.replace("    air = relative(wind)  // not used yet\n", ""));
+    assert_eq!(
+        *without_air,
+        BOAT.replace("    air = relative(wind)  // not used yet\n", "")
+    );
     let w = warnings(without_air);
     assert!(!w.iter().any(|m| m.contains("`air`")), "{w:?}");
-    assert!(w.iter().any(|m| m == "disturbance `wind` has no relative velocity"), "{w:?}");
+    assert!(
+        w.iter()
+            .any(|m| m == "disturbance `wind` has no relative velocity"),
+        "{w:?}"
+    );
 
     // The medium no relative velocity sees now, removed in turn.
     c.notify(
@@ -499,7 +509,10 @@ fn quick_fixes_remove_an_unused_relative_velocity_then_its_medium() {
 
 #[test]
 fn refactor_lists_a_parameter_without_nominal_value() {
-    let with_block = BOAT.replace("    der r = N_r*r\n", "    der r = N_r*r\n    nominal { X_u = -0.2 }\n");
+    let with_block = BOAT.replace(
+        "    der r = N_r*r\n",
+        "    der r = N_r*r\n    nominal { X_u = -0.2 }\n",
+    );
     let mut c = Client::start();
     c.open(&with_block);
     let _ = c.diagnostics(1);
@@ -509,7 +522,10 @@ fn refactor_lists_a_parameter_without_nominal_value() {
     };
     // A signal, and a parameter already listed: nothing.
     assert_eq!(actions_at(&mut c, &with_block, at(&with_block, "*tau")), []);
-    assert_eq!(actions_at(&mut c, &with_block, at(&with_block, " X_u*")), []);
+    assert_eq!(
+        actions_at(&mut c, &with_block, at(&with_block, " X_u*")),
+        []
+    );
     let found = actions_at(&mut c, &with_block, at(&with_block, " Y_v*"));
     let titles: Vec<&str> = found.iter().map(|f| f.0.as_str()).collect();
     assert_eq!(
@@ -520,8 +536,16 @@ fn refactor_lists_a_parameter_without_nominal_value() {
         ]
     );
     assert!(found.iter().all(|f| f.1 == "refactor.rewrite"));
-    assert!(found[0].2.contains("    nominal { X_u = -0.2, Y_v = 0 }\n"), "{}", found[0].2);
-    assert!(found[1].2.contains("    nominal { X_u = -0.2, X_tau = 0, Y_v = 0, N_r = 0 }\n"));
+    assert!(
+        found[0].2.contains("    nominal { X_u = -0.2, Y_v = 0 }\n"),
+        "{}",
+        found[0].2
+    );
+    assert!(
+        found[1]
+            .2
+            .contains("    nominal { X_u = -0.2, X_tau = 0, Y_v = 0, N_r = 0 }\n")
+    );
     for (_, _, edited) in &found {
         // Same model, same warnings; the parameter now has its entry.
         assert_eq!(warnings(edited), warnings(&with_block));
@@ -545,7 +569,10 @@ fn refactor_lists_a_parameter_without_nominal_value() {
     assert_eq!(found.len(), 2, "{found:?}");
     assert_eq!(
         found[0].2,
-        BOAT.replace("    der r = N_r*r\n", "    der r = N_r*r\n    nominal { N_r = 0 }\n")
+        BOAT.replace(
+            "    der r = N_r*r\n",
+            "    der r = N_r*r\n    nominal { N_r = 0 }\n"
+        )
     );
     assert_eq!(warnings(&found[1].2), warnings(BOAT));
     c.stop();
@@ -574,7 +601,10 @@ fn hover_and_definition_answer_from_the_last_version_that_parsed() {
         let at = broken.find(name).expect("name");
         let h = c.request("textDocument/hover", pos(at + 1));
         let md = h["contents"]["value"].as_str().expect("a hover");
-        assert!(md.starts_with("*(as of the last version that parsed)*"), "{md}");
+        assert!(
+            md.starts_with("*(as of the last version that parsed)*"),
+            "{md}"
+        );
         assert!(md.contains(&name[..3]), "{md}");
         assert_eq!(h["range"], range_of(&broken, at, at + 3));
     }
@@ -588,7 +618,12 @@ fn hover_and_definition_answer_from_the_last_version_that_parsed() {
     let mut p = pos(uses[1]);
     p["context"] = json!({"includeDeclaration": true});
     let refs = c.request("textDocument/references", p);
-    let ranges: Vec<&Value> = refs.as_array().expect("refs").iter().map(|l| &l["range"]).collect();
+    let ranges: Vec<&Value> = refs
+        .as_array()
+        .expect("refs")
+        .iter()
+        .map(|l| &l["range"])
+        .collect();
     let want: Vec<Value> = uses.iter().map(|&i| range_of(&broken, i, i + 5)).collect();
     assert_eq!(ranges, want.iter().collect::<Vec<_>>());
     c.stop();
