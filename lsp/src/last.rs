@@ -64,7 +64,8 @@ impl Unchanged {
     /// side of it are unchanged.
     pub fn to_new(&self, span: Span) -> Option<Span> {
         let old_tail = self.old_len - self.suffix;
-        if span.end < self.prefix {
+        let identical = self.prefix == self.old_len && self.old_len == self.new_len;
+        if identical || span.end < self.prefix {
             Some(span)
         } else if span.start > old_tail {
             let shift = |x: usize| x + self.new_len - self.old_len;
@@ -72,5 +73,43 @@ impl Unchanged {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_before_and_after_an_edit_map_and_names_touching_it_do_not() {
+        let old = "der v = Y_v*water.v\nder r = N_r*r\n";
+        let new = "der v = Y_v*water.v +\nder r = N_r*r\n";
+        let u = Unchanged::of(old, new);
+        let y_v = Span::new(8, 11);
+        assert_eq!(u.to_new(y_v), Some(y_v));
+        let n_r = Span::new(
+            old.find("N_r").unwrap_or(0),
+            old.find("N_r").unwrap_or(0) + 3,
+        );
+        assert_eq!(u.to_new(n_r), Some(Span::new(n_r.start + 2, n_r.end + 2)));
+        assert_eq!(u.to_old(new.find("N_r").unwrap_or(0)), Some(n_r.start));
+        // `v` of `water.v` ends where the edit starts: it may have grown.
+        assert_eq!(u.to_new(Span::new(18, 19)), None);
+        assert_eq!(u.to_old(19), None);
+    }
+
+    #[test]
+    fn edits_at_either_end_and_no_edit() {
+        let same = Unchanged::of("ab cd", "ab cd");
+        assert_eq!(same.to_new(Span::new(3, 5)), Some(Span::new(3, 5)));
+        let front = Unchanged::of("ab cd", "x ab cd");
+        assert_eq!(front.to_new(Span::new(0, 2)), None);
+        assert_eq!(front.to_new(Span::new(3, 5)), Some(Span::new(5, 7)));
+        let back = Unchanged::of("ab cd", "ab c");
+        assert_eq!(back.to_new(Span::new(0, 2)), Some(Span::new(0, 2)));
+        assert_eq!(back.to_new(Span::new(3, 5)), None);
+        let emptied = Unchanged::of("ab", "");
+        assert_eq!(emptied.to_new(Span::new(0, 2)), None);
+        assert_eq!(emptied.to_old(0), Some(2));
     }
 }
