@@ -9,8 +9,11 @@
 //! from the IR (a term's regressors and nuisance columns, a parameter's
 //! terms and whether it is identified, a signal's declaration and unit),
 //! definitions and references from the syntax tree, completion, document
-//! symbols, semantic tokens (parameters apart from signals), formatting by leeway-format, and the quick fixes that are
-//! certain (an unused state or input removed).
+//! symbols, semantic tokens (parameters apart from signals), formatting by
+//! leeway-format, and the code actions that are certain (an unused input,
+//! relative velocity or medium removed; a parameter listed in `nominal`).
+//! While a text does not parse, hover, definition and references answer
+//! from the last version that parsed where the text is unchanged ([`last`]).
 //!
 //! A document is analysed at most once per version, and only when the
 //! queue of messages is empty or a request needs it. Positions are the
@@ -20,6 +23,7 @@ pub mod actions;
 pub mod analysis;
 pub mod diagnostics;
 pub mod hover;
+pub mod last;
 pub mod server;
 pub mod symbols;
 pub mod text;

@@ -4,8 +4,10 @@
 //! burst of keystrokes is analysed once, for its last version).
 
 use crate::analysis::Analysis;
+use crate::last::{LastParsed, Unchanged};
 use crate::symbols::Kind;
 use crate::{actions, diagnostics, hover, text, tokens};
+use leeway_grammar::Span;
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
@@ -84,6 +86,8 @@ struct Document {
     text: String,
     version: i32,
     analysis: Option<Analysis>,
+    /// The last analysed version that parsed, while the text does not.
+    last_parsed: Option<LastParsed>,
 }
 
 impl Document {
@@ -174,6 +178,7 @@ fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) -> Opt
                         text: p.text_document.text,
                         version: p.text_document.version,
                         analysis: None,
+                        last_parsed: None,
                     },
                 );
             }
@@ -183,6 +188,14 @@ fn notify(docs: &mut Docs, dirty: &mut BTreeSet<String>, n: Notification) -> Opt
                 serde_json::from_value::<lsp_types::DidChangeTextDocumentParams>(n.params)
                 && let Some(doc) = docs.get_mut(p.text_document.uri.as_str())
             {
+                if let Some(analysis) = doc.analysis.take()
+                    && analysis.model.is_some()
+                {
+                    doc.last_parsed = Some(LastParsed {
+                        text: doc.text.clone(),
+                        analysis,
+                    });
+                }
                 for change in p.content_changes {
                     text::apply(&mut doc.text, change.range, &change.text);
                 }
@@ -208,16 +221,7 @@ fn answer(docs: &mut Docs, req: Request) -> Response {
     let id = req.id.clone();
     let result = match req.method.as_str() {
         HoverRequest::METHOD => at_position(docs, req.params, |doc, at, _| {
-            let text = doc.text.clone();
-            let a = doc.analysis();
-            let hover = hover::hover(&text, a, at).map(|(md, span)| Hover {
-                contents: HoverContents::Markup(MarkupContent {
-                    kind: MarkupKind::Markdown,
-                    value: md,
-                }),
-                range: Some(text::range(&text, span)),
-            });
-            serde_json::to_value(hover)
+            serde_json::to_value(hover_at(doc, at))
         }),
         GotoDefinition::METHOD => at_position(docs, req.params, |doc, at, uri| {
             let locations = locate(doc, uri, at, true);
@@ -287,10 +291,50 @@ fn at_position<T>(
     Some(f(doc, at, &p.text_document.uri))
 }
 
+/// The hover at byte `at`; from the last version that parsed when the
+/// text does not parse (marked so), where the name is unchanged.
+fn hover_at(doc: &mut Document, at: usize) -> Option<Hover> {
+    let text = doc.text.clone();
+    let (md, span) = match stale(doc) {
+        None => hover::hover(&text, doc.analysis(), at)?,
+        Some((last, unchanged)) => {
+            let (md, old) = hover::hover(&last.text, &last.analysis, unchanged.to_old(at)?)?;
+            let span = unchanged.to_new(old)?;
+            (
+                format!("*(as of the last version that parsed)*\n\n{md}"),
+                span,
+            )
+        }
+    };
+    Some(Hover {
+        contents: HoverContents::Markup(MarkupContent {
+            kind: MarkupKind::Markdown,
+            value: md,
+        }),
+        range: Some(text::range(&text, span)),
+    })
+}
+
+/// The last version that parsed and how it maps onto the text, when the
+/// text does not parse.
+fn stale(doc: &mut Document) -> Option<(&LastParsed, Unchanged)> {
+    if doc.analysis().model.is_some() {
+        return None;
+    }
+    let last = doc.last_parsed.as_ref()?;
+    let unchanged = Unchanged::of(&last.text, &doc.text);
+    Some((last, unchanged))
+}
+
 fn locate(doc: &mut Document, uri: &Uri, at: usize, definition: bool) -> Option<Vec<Location>> {
     let text = doc.text.clone();
-    let a = doc.analysis();
+    let (a, at, map) = match stale(doc) {
+        Some((last, unchanged)) => (&last.analysis, unchanged.to_old(at)?, Some(unchanged)),
+        None => (doc.analysis(), at, None),
+    };
+    let new_span = |s: Span| map.map_or(Some(s), |m| m.to_new(s));
     let o = a.symbols.at(at)?;
+    new_span(o.span)?;
     let found = if definition {
         a.symbols.declarations(&o.name, o.kind)
     } else {
@@ -299,7 +343,8 @@ fn locate(doc: &mut Document, uri: &Uri, at: usize, definition: bool) -> Option<
     Some(
         found
             .into_iter()
-            .map(|o| Location::new(uri.clone(), text::range(&text, o.span)))
+            .filter_map(|o| new_span(o.span))
+            .map(|s| Location::new(uri.clone(), text::range(&text, s)))
             .collect(),
     )
 }

@@ -10,6 +10,7 @@ mod support;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde_json::{Value, json};
+use std::collections::BTreeSet;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use support::{Client, URI, utf16_position};
@@ -109,6 +110,9 @@ struct Figures {
     total: Duration,
     unparsed: usize,
     formatted: usize,
+    /// Definitions and references found on a text that does not parse
+    /// (answered from the last version that parsed).
+    stale_found: usize,
 }
 
 fn campaign(seed: u64, edits: usize) -> Figures {
@@ -121,6 +125,7 @@ fn campaign(seed: u64, edits: usize) -> Figures {
         total: Duration::ZERO,
         unparsed: 0,
         formatted: 0,
+        stale_found: 0,
     };
     let mut c = Client::start();
     let mut text = examples[0].clone();
@@ -167,10 +172,16 @@ fn campaign(seed: u64, edits: usize) -> Figures {
             "textDocument/formatting",
             "textDocument/documentSymbol",
             "textDocument/references",
-        ][rng.random_range(0..6)];
+            "textDocument/codeAction",
+        ][rng.random_range(0..7)];
         let mut params = c.at(l, ch);
+        params["range"] =
+            json!({"start": {"line": l, "character": ch}, "end": {"line": l, "character": ch}});
+        params["context"] = json!({"diagnostics": []});
         params["options"] = json!({"tabSize": 4, "insertSpaces": true});
-        params["context"] = json!({"includeDeclaration": true});
+        if method == "textDocument/references" {
+            params["context"] = json!({"includeDeclaration": true});
+        }
         let t = Instant::now();
         let answer = c.try_request(method, params);
         let took = t.elapsed();
@@ -182,7 +193,7 @@ fn campaign(seed: u64, edits: usize) -> Figures {
         if method == "textDocument/formatting" {
             match leeway_format::format(&text) {
                 Ok(layout) => {
-                    let edits = answer.unwrap_or(Value::Null);
+                    let edits = answer.clone().unwrap_or(Value::Null);
                     let got = edits
                         .get(0)
                         .and_then(|e| e["newText"].as_str())
@@ -197,6 +208,32 @@ fn campaign(seed: u64, edits: usize) -> Figures {
                 }
                 Err(_) => figures.unparsed += 1,
             }
+        }
+        if method == "textDocument/definition" || method == "textDocument/references" {
+            // Every location holds the same name, in this text (also when
+            // the answer comes from the last version that parsed).
+            let at = |p: &Value| {
+                let n = |k: &str| p[k].as_u64().map_or(0, |x| x as u32);
+                offset(&text, n("line"), n("character"))
+            };
+            let names: BTreeSet<&str> = answer
+                .as_ref()
+                .ok()
+                .and_then(Value::as_array)
+                .into_iter()
+                .flatten()
+                .map(|l| &text[at(&l["range"]["start"])..at(&l["range"]["end"])])
+                .collect();
+            assert!(names.len() <= 1, "{method} after edit {n}: {names:?}");
+            if !names.is_empty() && leeway_grammar::parse(&text).0.is_none() {
+                figures.stale_found += 1;
+            }
+            assert!(
+                names
+                    .iter()
+                    .all(|s| !s.is_empty() && s.chars().all(|c| c.is_alphanumeric() || c == '_')),
+                "{method} after edit {n}: {names:?}"
+            );
         }
         if n % 25 == 0 {
             // The server holds the client's text: its diagnostics are check's on it.
@@ -233,7 +270,7 @@ fn survives_random_edits() {
 fn fuzz_campaign() {
     let mut slowest = Duration::ZERO;
     let (mut edits, mut requests, mut total) = (0, 0, Duration::ZERO);
-    let (mut unparsed, mut formatted) = (0, 0);
+    let (mut unparsed, mut formatted, mut stale) = (0, 0, 0);
     for seed in 0..20 {
         let f = campaign(seed, 2_000);
         slowest = slowest.max(f.slowest);
@@ -242,9 +279,10 @@ fn fuzz_campaign() {
         total += f.total;
         unparsed += f.unparsed;
         formatted += f.formatted;
+        stale += f.stale_found;
     }
     println!(
-        "{edits} edits, {requests} requests, mean answer {:?}, slowest {slowest:?}, formatted (to a fixed point) {formatted} edited models, refused {unparsed} that do not parse",
+        "{edits} edits, {requests} requests, mean answer {:?}, slowest {slowest:?}, formatted (to a fixed point) {formatted} edited models, refused {unparsed} that do not parse; {stale} definitions/references found from the last version that parsed",
         total / requests as u32
     );
 }

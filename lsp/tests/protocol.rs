@@ -388,3 +388,247 @@ fn semantic_tokens_tell_parameters_from_signals() {
     );
     c.stop();
 }
+
+/// `text` with one of the server's text edits applied (UTF-16 positions).
+fn apply_edit(text: &str, edit: &Value) -> String {
+    let at = |p: &Value| {
+        let p: lsp_types::Position = serde_json::from_value(p.clone()).expect("position");
+        leeway_lsp::text::offset(text, p)
+    };
+    let (start, end) = (at(&edit["range"]["start"]), at(&edit["range"]["end"]));
+    let mut out = text.to_string();
+    out.replace_range(start..end, edit["newText"].as_str().expect("text"));
+    out
+}
+
+/// The code actions for a range, as (title, kind, the edited text).
+fn actions_at(c: &mut Client, text: &str, range: Value) -> Vec<(String, String, String)> {
+    let found = c.request(
+        "textDocument/codeAction",
+        json!({"textDocument": {"uri": URI}, "range": range, "context": {"diagnostics": []}}),
+    );
+    found
+        .as_array()
+        .expect("actions")
+        .iter()
+        .map(|a| {
+            let edits = a["edit"]["changes"][URI].as_array().expect("edits");
+            assert_eq!(edits.len(), 1);
+            (
+                a["title"].as_str().expect("title").to_string(),
+                a["kind"].as_str().expect("kind").to_string(),
+                apply_edit(text, &edits[0]),
+            )
+        })
+        .collect()
+}
+
+fn warnings(text: &str) -> Vec<String> {
+    let c = compile(text, &CompileOptions::default());
+    assert!(c.ir.is_some(), "{:?}", c.diagnostics);
+    assert!(!c.diagnostics.iter().any(|d| d.severity == Severity::Error));
+    c.diagnostics
+        .iter()
+        .filter(|d| d.severity == Severity::Warning)
+        .map(|d| d.message.clone())
+        .collect()
+}
+
+const BOAT: &str = "model Boat {
+    state u, v, r
+    input tau, rudder
+    delay rudder 1 steps
+    heading psi integrates r
+    disturbance current unmeasured earth(north, east)
+    disturbance wind measured earth(wind_n, wind_e)  // the anemometer
+    water = relative(current)
+    air = relative(wind)  // not used yet
+
+    der u = X_u*water.u + X_tau*tau
+    der v = Y_v*water.v
+    der r = N_r*r
+}
+";
+
+#[test]
+fn quick_fixes_remove_an_unused_relative_velocity_then_its_medium() {
+    let mut c = Client::start();
+    c.open(BOAT);
+    let d = c.diagnostics(1);
+    let unused = |d: &[Value], what: &str| {
+        d.iter()
+            .find(|d| {
+                d["code"] == "unused-declaration"
+                    && d["message"].as_str().expect("message").contains(what)
+            })
+            .unwrap_or_else(|| panic!("{what}: {d:?}"))["range"]
+            .clone()
+    };
+    // `rudder` is still named by its `delay`: removing it alone would be an
+    // error, so no fix is offered.
+    assert_eq!(actions_at(&mut c, BOAT, unused(&d, "`rudder`")), []);
+    let found = actions_at(&mut c, BOAT, unused(&d, "`air`"));
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].0, "remove the unused `air`");
+    assert_eq!(found[0].1, "quickfix");
+    let without_air = &found[0].2;
+    assert_eq!(
+        *without_air,
+        BOAT.replace("    air = relative(wind)  // not used yet\n", "")
+    );
+    let w = warnings(without_air);
+    assert!(!w.iter().any(|m| m.contains("`air`")), "{w:?}");
+    assert!(
+        w.iter()
+            .any(|m| m == "disturbance `wind` has no relative velocity"),
+        "{w:?}"
+    );
+
+    // The medium no relative velocity sees now, removed in turn.
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": URI, "version": 2},
+               "contentChanges": [{"text": without_air}]}),
+    );
+    let d = c.diagnostics(2);
+    let found = actions_at(&mut c, without_air, unused(&d, "`wind`"));
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].0, "remove the unused `wind`");
+    let fixed = &found[0].2;
+    assert_eq!(
+        *fixed,
+        without_air.replace(
+            "    disturbance wind measured earth(wind_n, wind_e)  // the anemometer\n",
+            ""
+        )
+    );
+    let w = warnings(fixed);
+    assert_eq!(w, ["input `rudder` appears in no equation"]);
+    c.stop();
+}
+
+#[test]
+fn refactor_lists_a_parameter_without_nominal_value() {
+    let with_block = BOAT.replace(
+        "    der r = N_r*r\n",
+        "    der r = N_r*r\n    nominal { X_u = -0.2 }\n",
+    );
+    let mut c = Client::start();
+    c.open(&with_block);
+    let _ = c.diagnostics(1);
+    let at = |text: &str, name: &str| {
+        let start = text.find(name).expect("name") + 1;
+        range_of(text, start, start)
+    };
+    // A signal, and a parameter already listed: nothing.
+    assert_eq!(actions_at(&mut c, &with_block, at(&with_block, "*tau")), []);
+    assert_eq!(
+        actions_at(&mut c, &with_block, at(&with_block, " X_u*")),
+        []
+    );
+    let found = actions_at(&mut c, &with_block, at(&with_block, " Y_v*"));
+    let titles: Vec<&str> = found.iter().map(|f| f.0.as_str()).collect();
+    assert_eq!(
+        titles,
+        [
+            "list `Y_v` in `nominal { }` (0, its value unlisted)",
+            "list the 3 parameters without a nominal value in `nominal { }` (0)"
+        ]
+    );
+    assert!(found.iter().all(|f| f.1 == "refactor.rewrite"));
+    assert!(
+        found[0].2.contains("    nominal { X_u = -0.2, Y_v = 0 }\n"),
+        "{}",
+        found[0].2
+    );
+    assert!(
+        found[1]
+            .2
+            .contains("    nominal { X_u = -0.2, X_tau = 0, Y_v = 0, N_r = 0 }\n")
+    );
+    for (_, _, edited) in &found {
+        // Same model, same warnings; the parameter now has its entry.
+        assert_eq!(warnings(edited), warnings(&with_block));
+        let ir = compile(edited, &CompileOptions::default()).ir.expect("ir");
+        let y_v = ir.parameters.iter().find(|p| p.name == "Y_v").expect("Y_v");
+        assert_eq!(y_v.nominal, 0.0);
+        let (model, _) = leeway_grammar::parse(edited);
+        let listed = model.expect("parses").items.iter().any(|i| {
+            matches!(i, leeway_grammar::Item::Nominal { entries, .. }
+                if entries.iter().any(|(n, _)| n.name == "Y_v"))
+        });
+        assert!(listed);
+    }
+    c.stop();
+
+    // Without a block: a new one, indented as the declarations above.
+    let mut c = Client::start();
+    c.open(BOAT);
+    let _ = c.diagnostics(1);
+    let found = actions_at(&mut c, BOAT, at(BOAT, " N_r*"));
+    assert_eq!(found.len(), 2, "{found:?}");
+    assert_eq!(
+        found[0].2,
+        BOAT.replace(
+            "    der r = N_r*r\n",
+            "    der r = N_r*r\n    nominal { N_r = 0 }\n"
+        )
+    );
+    assert_eq!(warnings(&found[1].2), warnings(BOAT));
+    c.stop();
+}
+
+#[test]
+fn hover_and_definition_answer_from_the_last_version_that_parsed() {
+    let mut c = Client::start();
+    c.open(BOAT);
+    let _ = c.diagnostics(1);
+    // A `+` left hanging at the end of `der v`: the text no longer parses.
+    let broken = BOAT.replace("    der v = Y_v*water.v\n", "    der v = Y_v*water.v +\n");
+    c.notify(
+        "textDocument/didChange",
+        json!({"textDocument": {"uri": URI, "version": 2},
+               "contentChanges": [{"text": broken}]}),
+    );
+    let d = c.diagnostics(2);
+    assert!(d.iter().any(|d| d["code"] == "syntax"), "{d:?}");
+    let pos = |at: usize| {
+        let (l, ch) = utf16_position(&broken, at);
+        c_at(l, ch)
+    };
+    // Before the edit (same place) and after it (shifted by two bytes).
+    for name in ["X_u*", "N_r*"] {
+        let at = broken.find(name).expect("name");
+        let h = c.request("textDocument/hover", pos(at + 1));
+        let md = h["contents"]["value"].as_str().expect("a hover");
+        assert!(
+            md.starts_with("*(as of the last version that parsed)*"),
+            "{md}"
+        );
+        assert!(md.contains(&name[..3]), "{md}");
+        assert_eq!(h["range"], range_of(&broken, at, at + 3));
+    }
+    // The `v` the edit touches: no answer from the old version.
+    let v = broken.find("water.v +").expect("edit") + "water.".len();
+    assert_eq!(c.request("textDocument/hover", pos(v)), Value::Null);
+    // Definition and references of `water`, written before and after the edit.
+    let uses: Vec<usize> = broken.match_indices("water").map(|(i, _)| i).collect();
+    let defined = c.request("textDocument/definition", pos(uses[2] + 1));
+    assert_eq!(defined[0]["range"], range_of(&broken, uses[0], uses[0] + 5));
+    let mut p = pos(uses[1]);
+    p["context"] = json!({"includeDeclaration": true});
+    let refs = c.request("textDocument/references", p);
+    let ranges: Vec<&Value> = refs
+        .as_array()
+        .expect("refs")
+        .iter()
+        .map(|l| &l["range"])
+        .collect();
+    let want: Vec<Value> = uses.iter().map(|&i| range_of(&broken, i, i + 5)).collect();
+    assert_eq!(ranges, want.iter().collect::<Vec<_>>());
+    c.stop();
+}
+
+fn c_at(line: u32, character: u32) -> Value {
+    json!({"textDocument": {"uri": URI}, "position": {"line": line, "character": character}})
+}
