@@ -147,6 +147,18 @@ impl Failure {
         }))
     }
 
+    /// A failure of the estimator's shape raised as `class`, at `location`.
+    pub fn classed(class: &'static str, e: &EstimateError, location: Option<String>) -> Failure {
+        Failure(Box::new(Details {
+            class,
+            code: e.code.to_string(),
+            message: e.message.clone(),
+            hint: Some(e.hint.clone()),
+            location,
+            report: None,
+        }))
+    }
+
     /// A design that cannot be made: `class` is `PlanError` (the plan
     /// file, located), `Unidentifiable` or `DesignError`.
     pub fn design(

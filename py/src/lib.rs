@@ -35,6 +35,7 @@ mod logs;
 mod model;
 mod options;
 mod residuals;
+mod select;
 mod simulate;
 mod study;
 
@@ -45,6 +46,7 @@ use pyo3::prelude::*;
 fn _leeway(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::Model>()?;
     m.add_function(wrap_pyfunction!(estimate::estimate_json, m)?)?;
+    m.add_function(wrap_pyfunction!(select::select_json, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_columns, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::validate_fits, m)?)?;
     m.add_function(wrap_pyfunction!(residuals::residual_analysis, m)?)?;

@@ -73,6 +73,11 @@ impl Model {
         }
     }
 
+    /// Model text compiled as `Model.from_str` compiles it (no aggregate).
+    pub(crate) fn compile_source(source: String, file: String) -> Result<Model, Failure> {
+        Model::compile(source, file, false)
+    }
+
     fn compile(source: String, file: String, aggregate: bool) -> Result<Model, Failure> {
         let compilation = compile(&source, &options(aggregate, None));
         let Some(ir) = compilation.ir.clone() else {

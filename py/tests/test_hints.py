@@ -19,7 +19,7 @@ from leeway._hints import KEYWORDS, python_spelling
 
 ROOT = Path(__file__).resolve().parents[2]
 # The crates whose messages reach Python (the CLI's own crate does not).
-CRATES = ["structure", "model", "data", "estimate", "report", "design", "py"]
+CRATES = ["structure", "model", "data", "estimate", "report", "design", "select", "py"]
 
 
 def test_every_flag_the_libraries_name_is_mapped() -> None:

@@ -9,6 +9,7 @@ instrumental variables from pandas DataFrames.
 >>> est.conf_int()                                           # doctest: +SKIP
 >>> leeway.simulate(model, est, inputs)                      # doctest: +SKIP
 >>> leeway.validate(model, {"iv3": est}, held_out)           # doctest: +SKIP
+>>> model.select(df).kept                                    # doctest: +SKIP
 >>> leeway.residuals(model, est, held_out).tests             # doctest: +SKIP
 >>> leeway.design(model, "plan.toml", verify=100).prediction # doctest: +SKIP
 >>> log = leeway.read_log(model, "ferry.toml")               # doctest: +SKIP
@@ -28,6 +29,7 @@ from ._design import Design, Verification, design
 from ._leeway import __version__
 from ._logs import Log, read_log
 from ._residuals import ResidualAnalysis, predict, residuals
+from ._select import Selection
 from ._summary import Summary
 from .errors import (
     DataError,
@@ -49,6 +51,7 @@ __all__ = [
     "Estimate",
     "Summary",
     "ResidualAnalysis",
+    "Selection",
     "Design",
     "Verification",
     "Log",

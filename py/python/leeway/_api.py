@@ -10,7 +10,7 @@ import os
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, TypeVar, Union
+from typing import TYPE_CHECKING, Any, TypeVar, Union
 
 import numpy as np
 import pandas as pd
@@ -19,6 +19,9 @@ from . import _leeway, _summary
 from ._data import Data, Frame, _handover
 from ._hints import python_spelling
 from .errors import EstimateError, LeewayError, LeewayWarning, ModelError, OptionError
+
+if TYPE_CHECKING:
+    from ._select import Selection
 
 T = TypeVar("T")
 
@@ -137,6 +140,35 @@ class Model:
             )
         )
         return Check._from_document(document)
+
+    def select(
+        self,
+        data: Data,
+        validate: Data | None = None,
+        *,
+        method: str = "iv3",
+        lags: int = 1,
+        tolerance: float = 0.5,
+        step: float | None = None,
+        time_tolerance: float = 0.05,
+        resample: float | None = None,
+    ) -> Selection:
+        """Which of the model's candidate terms (parameters written
+        ``?name``) the data need, as ``leeway select`` chooses them (the
+        options are its flags; docs/selection.md). ``data`` are the
+        estimation data as ``leeway.estimate`` takes them; ``validate``
+        held-out data for the free-run criterion (default: each experiment
+        held out in turn). ``lags`` should span the disturbances'
+        correlation time in samples. Returns the path, the chosen model
+        (``source``, ``model()``, ``write(path)``) and its ``estimate``; the
+        chosen estimate's warnings are issued as ``LeewayWarning``, errors
+        raise the classes of ``leeway.errors``."""
+        from ._select import select  # _select imports this module
+
+        return select(
+            self, data, validate, method=method, lags=lags, tolerance=tolerance,
+            step=step, time_tolerance=time_tolerance, resample=resample,
+        )
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (_model_from_source, (self.source, self.file, self.aggregate))

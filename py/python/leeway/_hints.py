@@ -29,6 +29,8 @@ KEYWORDS: dict[str, tuple[str, str]] = {
     "--step": ("step", "number"),
     "--time-tolerance": ("time_tolerance", "number"),
     "--lags": ("lags", "number"),
+    "--tolerance": ("tolerance", "number"),
+    "--validate": ("validate", "name"),
     "--max-refinements": ("max_refinements", "number"),
     "--refine-subsample": ("refine_subsample", "number"),
     "--nominal": ("nominal", "mapping"),
@@ -64,10 +66,11 @@ COMMANDS = {
     "estimate": "leeway.estimate",
     "simulate": "leeway.simulate",
     "validate": "leeway.validate",
+    "select": "Model.select",
 }
 
 _FLAG = re.compile(
-    r"(?:leeway (?P<command>check|estimate|simulate|validate) )?"
+    r"(?:leeway (?P<command>check|estimate|simulate|validate|select) )?"
     r"(?P<flag>--[a-z][a-z0-9-]*)"
     r"(?: (?P<value>[A-Za-z0-9_.+-]+|\{[^}]*\}))?"
 )

@@ -14,6 +14,7 @@ __all__ = [
     "Model",
     "Dataset",
     "estimate_json",
+    "select_json",
     "estimate_mapped",
     "simulate_columns",
     "validate_fits",
@@ -63,6 +64,13 @@ def estimate_json(
     frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
     options: dict[str, Any],
 ) -> str: ...
+
+def select_json(
+    model: Model,
+    frames: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
+    validate: list[tuple[str, list[tuple[str, npt.NDArray[np.float64]]], tuple[npt.NDArray[np.int64], list[str]] | None]],
+    args: dict[str, Any],
+) -> tuple[str, str, str]: ...
 
 @final
 class Dataset:

@@ -8,6 +8,8 @@ function returns the matplotlib ``Figure`` (``fig.savefig("out.png")``).
 - :func:`residuals`: the residuals' autocorrelation and their
   cross-correlation with each input, with the 99 % band (MATLAB's
   ``resid``).
+- :func:`selection`: a structure selection's criteria against model size
+  (``Model.select``).
 """
 
 from __future__ import annotations
@@ -20,8 +22,9 @@ import pandas as pd
 from ._api import Disturbances, Model, Thetas, _thetas, simulate, validate
 from ._data import Data, _frames, _to_pandas
 from ._residuals import ResidualAnalysis
+from ._select import Selection
 
-__all__ = ["compare", "residuals"]
+__all__ = ["compare", "residuals", "selection"]
 
 
 def _pyplot() -> Any:
@@ -136,5 +139,45 @@ def residuals(analysis: ResidualAnalysis) -> Any:
             ax.set_title(title, fontsize="small")
             ax.set_xlabel("lag")
     fig.suptitle(f"Simulation errors: N={analysis.samples}, 99 % band ±{analysis.band:.3f} for a white error")
+    fig.tight_layout()
+    return fig
+
+
+def selection(result: Selection) -> Any:
+    """The criteria of ``Model.select`` against model size (candidates
+    kept) along the path: above, Hansen's J and the score ``J − d·ln N``
+    the stopping rule minimises (symmetric log scale: J spans orders of
+    magnitude once a true term is dropped); below, the held-out free-run
+    criterion ``1 − fit/100`` (when there are held-out data). The chosen
+    model is circled; each point is labelled with the candidate dropped to
+    reach it. Returns the ``Figure``."""
+    plt = _pyplot()
+    steps = result.steps
+    size = steps["size"].to_numpy()
+    has_criterion = bool(steps["criterion"].notna().any())
+    fig, axes = plt.subplots(2 if has_criterion else 1, 1, sharex=True, squeeze=False, figsize=(8, 6 if has_criterion else 3.5))
+    top = axes[0, 0]
+    top.plot(size, steps["j"].to_numpy(), marker="o", label="J")
+    top.plot(size, steps["score"].to_numpy(), marker="s", label="J − d·ln N")
+    top.set_yscale("symlog", linthresh=10)
+    top.set_ylabel("over-identification")
+    panels = [(top, steps["score"].to_numpy())]
+    if has_criterion:
+        bottom = axes[1, 0]
+        bottom.plot(size, steps["criterion"].to_numpy(dtype=float), marker="o", color="tab:green", label="held-out 1 − fit/100")
+        bottom.set_ylabel("held-out criterion")
+        panels.append((bottom, steps["criterion"].to_numpy(dtype=float)))
+    for ax, values in panels:
+        chosen = result.chosen
+        ax.plot([size[chosen]], [values[chosen]], marker="o", markersize=14, fillstyle="none", color="tab:red",
+                linestyle="none", label=f"chosen: {len(result.kept)} candidates")
+        for k, dropped in enumerate(steps["dropped"]):
+            if isinstance(dropped, str):
+                ax.annotate(f"−{dropped}", (size[k], values[k]), textcoords="offset points", xytext=(3, 4), fontsize="x-small")
+        ax.legend(loc="best", fontsize="small")
+        ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("candidates kept")
+    axes[-1, 0].invert_xaxis()
+    fig.suptitle(f"Structure selection: {len(result.kept)} of {len(result.candidates)} candidates kept (step {result.chosen})")
     fig.tight_layout()
     return fig
