@@ -35,7 +35,10 @@ fn select_options(args: &SelectArgs) -> Result<SelectOptions, Failure> {
     }
     if !(args.tolerance >= 0.0 && args.tolerance.is_finite()) {
         return Err(Failure::option(
-            format!("tolerance={} is not a non-negative fraction", args.tolerance),
+            format!(
+                "tolerance={} is not a non-negative fraction",
+                args.tolerance
+            ),
             Some("give a fraction such as 0.1".into()),
         ));
     }
@@ -111,10 +114,7 @@ pub(crate) fn select_json(
         let document = serde_json::to_string(&selection)
             .map_err(|e| Failure::option(format!("cannot serialise the selection: {e}"), None))?;
         let chosen = Model::compile_source(selection.chosen_source.clone(), model.file.clone())?;
-        let sources: Vec<&dyn Source> = experiments
-            .iter()
-            .map(|e| e as &dyn Source)
-            .collect();
+        let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
         let checks = leeway_report::checks::data_checks(&chosen.ir, &sources);
         let mut warnings = chosen.warnings.clone();
         warnings.extend(selection.estimate.warnings.iter().cloned());
