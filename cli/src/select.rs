@@ -1,9 +1,11 @@
 //! `leeway select MODEL.som --data RUN.csv... --out CHOSEN.som [--validate
-//! VAL.csv]... [--json]`: which of the model's candidate terms (`?name`) the
+//! VAL.csv]... [--plot FIGURE.png] [--json]`: which of the model's candidate terms (`?name`) the
 //! data need. Prints the path (each step's dropped term, its Wald
 //! statistic, J and the held-out criterion) and writes the chosen model,
 //! ready for `leeway estimate`. Exit 0 on success, 2 on any model, data or
 //! option error, 1 when the estimate cannot be made from these data.
+
+mod figure;
 
 use crate::data::load_data;
 use crate::model::load;
@@ -50,6 +52,10 @@ pub struct SelectArgs {
     /// Time stamps: jitter tolerance and resampling.
     #[command(flatten)]
     pub time: TimeArgs,
+    /// Draw the criteria against model size (J and the score above, the held-out criterion
+    /// below) into this file: PNG for a `.png` name, SVG otherwise.
+    #[arg(long, value_name = "FIGURE.png")]
+    pub plot: Option<PathBuf>,
     /// Print one JSON document on stdout instead of text.
     #[arg(long)]
     pub json: bool,
@@ -155,6 +161,10 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
         Problem::error("io", format!("cannot write the chosen model: {e}"))
             .at(args.out.display().to_string())
     })?;
+    if let Some(path) = &args.plot {
+        figure::draw(path, &selection)
+            .map_err(|e| Problem::error("io", format!("cannot draw `{}`: {e}", path.display())))?;
+    }
     Ok(selection)
 }
 

@@ -81,14 +81,23 @@ fn select_keeps_the_true_candidates_and_writes_a_model_estimate_reads() {
         runs.push(run);
     }
     let chosen = dir.path("chosen.som").display().to_string();
+    let figure = dir.path("selection.png");
+    let figure_arg = figure.display().to_string();
     let mut args = vec!["select", model.as_str()];
     for r in &runs {
         args.extend(["--data", r.as_str()]);
     }
-    args.extend(["--out", chosen.as_str(), "--json"]);
+    args.extend(["--out", chosen.as_str(), "--plot", &figure_arg, "--json"]);
     let o = leeway(&args);
     no_panic(&o);
     assert_eq!(code(&o), 0, "{}", stderr(&o));
+    // The figure of the criteria against model size is a PNG.
+    let png = std::fs::read(&figure).unwrap_or_default();
+    assert!(
+        png.starts_with(b"\x89PNG\r\n\x1a\n") && png.len() > 10_000,
+        "{}",
+        png.len()
+    );
     let doc = json(&o);
     let kept: Vec<&str> = doc["selection"]["kept"]
         .as_array()
