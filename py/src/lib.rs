@@ -7,7 +7,9 @@
 //! validate` call (`simulate.rs`), answering with columns and fits, and
 //! analyses one-step residuals as `leeway validate --resid` does
 //! (`residuals.rs`); it designs trials as `leeway design` does, answering
-//! with its JSON document (`design.rs`). The Python half turns
+//! with its JSON document (`design.rs`); it selects a candidate model's
+//! terms as `leeway select` does, answering with its JSON (`select.rs`).
+//! The Python half turns
 //! those documents into dataclasses and DataFrames and raises the exception
 //! classes of `leeway.errors`, so the error hierarchy lives in one place.
 //!
