@@ -56,22 +56,28 @@ fn select_options(args: &SelectArgs) -> Result<SelectOptions, Failure> {
 /// problems are `ModelError`s located at its file, a refused option an
 /// `OptionError`, the estimator's failures by their code.
 fn failure(e: SelectError, file: &str) -> Failure {
+    // The estimator's own code is the message's `[code]` prefix.
+    let inner = e
+        .message
+        .strip_prefix('[')
+        .and_then(|m| m.split_once(']'))
+        .map_or(e.code, |(c, _)| c);
     let class = match e.code {
         "invalid-candidates" | "invalid-model" | "no-candidates" => "ModelError",
         "invalid-option" => "OptionError",
-        // The estimator's own code is the message's `[code]` prefix.
-        _ => class_of(
-            e.message
-                .strip_prefix('[')
-                .and_then(|m| m.split_once(']'))
-                .map_or(e.code, |(c, _)| c),
-        ),
+        _ => class_of(inner),
+    };
+    // Ctrl-C keeps its code: it is raised as `KeyboardInterrupt`.
+    let code = if inner == "interrupted" {
+        "interrupted"
+    } else {
+        e.code
     };
     let located = class == "ModelError";
     Failure::classed(
         class,
         &EstimateError {
-            code: e.code,
+            code,
             message: e.message,
             hint: e.hint,
         },
