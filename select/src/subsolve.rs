@@ -11,6 +11,7 @@
 //! truly zero. For the full model (square) it is the estimate's own solve.
 
 use leeway_estimate::MomentSystem;
+use leeway_model::correlation::chi_squared_tail;
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 use std::collections::BTreeMap;
 
@@ -234,82 +235,12 @@ pub fn wald(est: &SubEstimate, cols: &[usize]) -> Option<(f64, usize)> {
     None
 }
 
-/// `P(χ²_df > x)`: the regularised upper incomplete gamma `Q(df/2, x/2)`.
+/// `P(χ²_df > x)` (1 for a statistic of 0 or no degrees of freedom).
 pub fn chi2_sf(x: f64, df: usize) -> f64 {
     if x <= 0.0 || df == 0 {
         return 1.0;
     }
-    let (a, x) = (df as f64 / 2.0, x / 2.0);
-    if x < a + 1.0 {
-        1.0 - lower_series(a, x)
-    } else {
-        upper_fraction(a, x)
-    }
-}
-
-fn ln_gamma(x: f64) -> f64 {
-    // Lanczos (g = 7, n = 9).
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    let x = x - 1.0;
-    let t = x + 7.5;
-    let mut s = C[0];
-    for (i, c) in C.iter().enumerate().skip(1) {
-        s += c / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + s.ln()
-}
-
-fn lower_series(a: f64, x: f64) -> f64 {
-    let mut term = 1.0 / a;
-    let mut sum = term;
-    let mut n = a;
-    for _ in 0..1000 {
-        n += 1.0;
-        term *= x / n;
-        sum += term;
-        if term.abs() < sum.abs() * 1e-16 {
-            break;
-        }
-    }
-    (sum.ln() - x + a * x.ln() - ln_gamma(a)).exp()
-}
-
-fn upper_fraction(a: f64, x: f64) -> f64 {
-    // Lentz's continued fraction.
-    let tiny = 1e-300;
-    let mut b = x + 1.0 - a;
-    let mut c = 1.0 / tiny;
-    let mut d = 1.0 / b;
-    let mut h = d;
-    for i in 1..1000 {
-        let an = -(i as f64) * (i as f64 - a);
-        b += 2.0;
-        d = an * d + b;
-        if d.abs() < tiny {
-            d = tiny;
-        }
-        c = b + an / c;
-        if c.abs() < tiny {
-            c = tiny;
-        }
-        d = 1.0 / d;
-        let delta = d * c;
-        h *= delta;
-        if (delta - 1.0).abs() < 1e-16 {
-            break;
-        }
-    }
-    (-x + a * x.ln() - ln_gamma(a)).exp() * h
+    chi_squared_tail(x, df)
 }
 
 #[cfg(test)]
