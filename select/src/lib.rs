@@ -19,6 +19,6 @@ pub mod subsolve;
 pub mod suggest;
 
 pub use candidates::{CandidateError, CandidateModel};
-pub use describe::describe;
+pub use describe::{CandidateSummary, Exchangeable, describe, summary};
 pub use select::{Passes, SelectError, SelectOptions, Selection, Step, exchangeable, select};
 pub use suggest::{Suggestion, missing_terms};

@@ -4,4 +4,5 @@
 
 mod craft;
 mod recovery;
+mod tanker;
 mod text;
