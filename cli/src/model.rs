@@ -42,6 +42,11 @@ pub fn load(path: &Path, aggregate: bool) -> Result<Loaded, Failure> {
             .into());
         }
     };
+    compiled(file, source, aggregate)
+}
+
+/// Compiles a model's text read from `file` (the name its diagnostics carry).
+pub fn compiled(file: String, source: String, aggregate: bool) -> Result<Loaded, Failure> {
     let compilation = compile(
         &source,
         &CompileOptions {

@@ -8,12 +8,16 @@
 mod figure;
 
 use crate::data::load_data;
-use crate::model::load;
+use crate::model::{compiled, load};
 use crate::options::{TimeArgs, choices, load_options};
-use crate::output::{Status, err, out, print_json, stderr_style};
+use crate::output::{Status, err, headline, out, print_json, stderr_style, warning_text};
 use crate::problem::{Failure, JsonError, Problem};
 use leeway_estimate::{EstimateOptions, MAX_LAGS, Method};
 use leeway_model::Experiment;
+use leeway_model::Source;
+use leeway_model::warning::Warning;
+use leeway_report::checks::{data_checks, heading_alerts, unit_alerts_from_peaks};
+use leeway_report::feedback::closed_loop_alerts;
 use leeway_model::number::short_number;
 use leeway_select::{SelectOptions, Selection, select};
 use serde::Serialize;
@@ -79,7 +83,7 @@ pub fn run(args: &SelectArgs) -> Status {
     };
     if args.json {
         let (selection, errors) = match &result {
-            Ok(s) => (Some(s), Vec::new()),
+            Ok((s, _)) => (Some(s), Vec::new()),
             Err(f) => (None, f.json()),
         };
         print_json(&Report {
@@ -89,15 +93,27 @@ pub fn run(args: &SelectArgs) -> Status {
             errors,
         });
     } else {
+        let style = stderr_style();
         match &result {
-            Ok(s) => out(&render(s, &args.out.display().to_string())),
-            Err(f) => err(&f.render(stderr_style(), "selected")),
+            Ok((s, warnings)) => {
+                out(&render(s, &args.out.display().to_string()));
+                // The chosen estimate's warnings and notes, as `estimate` words them.
+                for w in warnings {
+                    err(&warning_text(style, w, false));
+                }
+                for n in &s.estimate.notes {
+                    err(&headline(style, "note", None, n));
+                }
+            }
+            Err(f) => err(&f.render(style, "selected")),
         }
     }
     status
 }
 
-fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
+/// The selection and the chosen estimate's warnings: the chosen model's,
+/// the data checks' and the estimator's, in `estimate`'s order.
+fn execute(args: &SelectArgs) -> Result<(Selection, Vec<Warning>), Failure> {
     if !(1..=MAX_LAGS).contains(&args.lags) {
         return Err(Problem::error(
             "invalid-option",
@@ -165,7 +181,35 @@ fn execute(args: &SelectArgs) -> Result<Selection, Failure> {
         figure::draw(path, &selection)
             .map_err(|e| Problem::error("io", format!("cannot draw `{}`: {e}", path.display())))?;
     }
-    Ok(selection)
+    let warnings = chosen_warnings(args, &selection, &experiments)?;
+    Ok((selection, warnings))
+}
+
+/// What `leeway estimate CHOSEN.som` on the same data warns of: the chosen
+/// model's compiler warnings (located in the written file), the data
+/// checks on its terms, the estimator's warnings.
+fn chosen_warnings(
+    args: &SelectArgs,
+    selection: &Selection,
+    experiments: &[Experiment],
+) -> Result<Vec<Warning>, Failure> {
+    let chosen = compiled(
+        args.out.display().to_string(),
+        selection.chosen_source.clone(),
+        false,
+    )?;
+    let mut warnings: Vec<Warning> = chosen
+        .warnings
+        .into_iter()
+        .map(|w| Warning::plain("model", w))
+        .collect();
+    let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
+    let checks = data_checks(&chosen.ir, &sources);
+    warnings.extend(unit_alerts_from_peaks(&chosen.ir, &checks.input_peaks));
+    warnings.extend(heading_alerts(&chosen.ir, &checks.heading_gains));
+    warnings.extend(closed_loop_alerts(&checks.closed_loop));
+    warnings.extend(selection.estimate.warning_summaries.iter().cloned());
+    Ok(warnings)
 }
 
 fn number(v: Option<f64>) -> String {

@@ -8,6 +8,7 @@ use leeway_structure::ir::{
     ColumnKind, Ir, PredictorKind, Report, Separation as IrSeparation, SignPattern,
 };
 use leeway_structure::render::{column_text, written_terms};
+use leeway_select::CandidateSummary;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -57,6 +58,9 @@ pub struct CheckReport {
     separations: Vec<Separation>,
     /// With `--aggregate`: what each kept parameter estimates.
     aggregates: Vec<Aggregate>,
+    /// A candidate model's candidates (`?name`), the full set's verdict and
+    /// the exchangeable candidates; null without candidates.
+    candidates: Option<CandidateSummary>,
     /// Diagnostics by severity.
     errors: Vec<JsonDiagnostic>,
     warnings: Vec<JsonDiagnostic>,
@@ -325,6 +329,7 @@ fn full_report(file: &str, source: &str, c: &Compilation, aggregate: bool) -> Ch
                 absorbed: names(ir, &a.absorbed),
             })
             .collect(),
+        candidates: leeway_select::summary(source, ir),
         errors,
         warnings,
         notes,
@@ -467,6 +472,7 @@ fn empty(model: Option<String>, file: &str, aggregate: bool) -> CheckReport {
         unidentifiable: Vec::new(),
         separations: Vec::new(),
         aggregates: Vec::new(),
+        candidates: None,
         errors: Vec::new(),
         warnings: Vec::new(),
         notes: Vec::new(),

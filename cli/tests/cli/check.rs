@@ -627,3 +627,51 @@ fn large_models_get_exact_verdicts_and_short_reports() {
         &out[..200]
     );
 }
+
+/// A candidate model: `check --json` carries the lines the text prints —
+/// the candidates, the full set's verdict and the exchangeable candidates
+/// (two candidates for one regressor, a candidate duplicating a required
+/// term); a model without candidates has `candidates: null`.
+#[test]
+fn json_carries_the_candidates_and_the_exchangeable_ones() {
+    let dir = crate::common::Scratch::new("check-candidates");
+    let src = "model M {\n    state u, v\n    input tau\n    der u = X_u*u + ?X_a*u*|u| + ?X_b*|u|*u + X_t*tau + ?X_v*v\n    der v = Y_v*v + Y_u*u + ?Y_w*u\n}\n";
+    let model = dir.write("cand.som", src);
+    let o = leeway(&["check", "--json", &model]);
+    no_panic(&o);
+    let v = json(&o);
+    assert_contract(&v);
+    assert_eq!(
+        v["candidates"],
+        serde_json::json!({
+            "candidates": ["X_a", "X_b", "X_v", "Y_w"],
+            "full_set": "not-identifiable",
+            "exchangeable": [
+                {"candidate": "X_b", "stands_for": "X_a"},
+                {"candidate": "Y_w", "stands_for": "Y_u"}
+            ],
+            "refused": null
+        })
+    );
+    assert_eq!(v["candidates"]["full_set"], v["verdict"]);
+    let text = stdout(&leeway(&["check", &model]));
+    assert!(
+        text.contains("candidates: 4 (X_a, X_b, X_v, Y_w)\n  the full candidate set: not-identifiable\n  exchangeable: `X_b` can stand for `X_a` (select keeps `X_a`)\n  exchangeable: `Y_w` can stand for `Y_u` (select keeps `Y_u`)\n"),
+        "{text}"
+    );
+    // A candidate beside another parameter in one term: refused, said in both.
+    let shared = dir.write(
+        "shared.som",
+        "model M {\n    state u\n    input t\n    der u = (X + ?Y)*u + Z*t\n}\n",
+    );
+    let v = json(&leeway(&["check", "--json", &shared]));
+    assert_eq!(v["candidates"]["candidates"], serde_json::json!([]));
+    let refused = v["candidates"]["refused"].as_str().unwrap_or_default();
+    assert!(
+        refused.starts_with("4:13: a term of `u` with candidate `Y` also holds `X` and `Y`"),
+        "{refused}"
+    );
+    assert!(stdout(&leeway(&["check", &shared])).contains(&format!("candidates: {refused}\n")));
+    let v = json(&leeway(&["check", "--json", "examples/models/rov.som"]));
+    assert!(v["candidates"].is_null(), "{}", v["candidates"]);
+}

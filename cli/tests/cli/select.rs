@@ -175,3 +175,64 @@ fn select_refuses_least_squares_and_a_model_without_candidates() {
     );
     assert!(!dir.path("chosen.som").exists());
 }
+
+/// The text output: after the path, the chosen estimate's warnings and
+/// notes on standard error, word for word what `leeway estimate` prints for
+/// the written model on the same data — here the chosen model's compiler
+/// warning (a false candidate was the only term of input `tau_z`, located in
+/// the written file) and the estimator's notes.
+#[test]
+fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
+    let dir = Scratch::new("select-warnings");
+    let source = CANDIDATES
+        .replace("input tau_x, tau_y, tau_n", "input tau_x, tau_y, tau_n, tau_z")
+        .replace(" + ?N_ty*tau_y", " + ?N_ty*tau_y + ?N_tz*tau_z");
+    let model = dir.write("cand.som", &source);
+    let truth = dir.write("truth.json", &TRUTH.replace('}', ", \"N_tz\": 0.0}"));
+    let mut data = Vec::new();
+    for k in 0..3u64 {
+        // A fourth input column, never in the truth: another run's tau_y.
+        let levels: Vec<String> = input(k + 10)
+            .lines()
+            .map(|l| l.split(',').nth(2).unwrap_or("0").to_string())
+            .collect();
+        let mut text = String::new();
+        for (i, l) in input(k).lines().enumerate() {
+            let z = if i == 0 { "tau_z" } else { levels[i].as_str() };
+            text.push_str(&format!("{l},{z}\n"));
+        }
+        let inp = dir.write(&format!("in{k}.csv"), &text);
+        let run = dir.path(&format!("run{k}.csv")).display().to_string();
+        let seed = k.to_string();
+        let o = leeway(&[
+            "simulate", &model, "--params", &truth, "--input", &inp, "--out", &run, "--noise",
+            "u=0.01,v=0.01,r=0.002", "--seed", &seed,
+        ]);
+        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        data.extend(["--data".to_string(), run]);
+    }
+    let chosen = dir.path("chosen.som").display().to_string();
+    let mut args = vec!["select", model.as_str()];
+    args.extend(data.iter().map(String::as_str));
+    args.extend(["--out", chosen.as_str()]);
+    let selected = leeway(&args);
+    no_panic(&selected);
+    assert_eq!(code(&selected), 0, "{}", stderr(&selected));
+    assert!(!std::fs::read_to_string(&chosen).unwrap_or_default().contains("N_tz"));
+    let mut est = vec!["estimate", chosen.as_str()];
+    est.extend(data.iter().map(String::as_str));
+    let estimated = leeway(&est);
+    assert_eq!(code(&estimated), 0, "{}", stderr(&estimated));
+    let text = stderr(&selected);
+    assert_eq!(text, stderr(&estimated));
+    assert!(
+        text.starts_with(&format!(
+            "warning: {chosen}:4:32: warning[unused-declaration]: input `tau_z` appears in no equation\n"
+        )),
+        "{text}"
+    );
+    assert!(
+        text.contains("\nnote: iv1, iv2 and iv3 give this same estimate on this model"),
+        "{text}"
+    );
+}
