@@ -103,10 +103,18 @@ fn bench(c: &mut Criterion) {
         median(&times)
     };
     let t_estimate = timed("estimate/iv3", &mut || {
-        black_box(estimate(&model, &sources, &estimate_options).map(|e| e.theta).ok());
+        black_box(
+            estimate(&model, &sources, &estimate_options)
+                .map(|e| e.theta)
+                .ok(),
+        );
     });
     let t_select = timed("select/iv3", &mut || {
-        black_box(select(CANDIDATE_TANKER, &data, &[], &select_options).map(|s| s.kept).ok());
+        black_box(
+            select(CANDIDATE_TANKER, &data, &[], &select_options)
+                .map(|s| s.kept)
+                .ok(),
+        );
     });
     group.finish();
     let p = &selection.passes;

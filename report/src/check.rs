@@ -1,6 +1,7 @@
 //! The JSON document of `leeway check --json`: a contract scripts rely on
 //! (docs/json.md). Fields may be added; none is renamed or removed.
 
+use leeway_select::CandidateSummary;
 use leeway_structure::Compilation;
 use leeway_structure::grammar::{self, Diagnostic, Severity};
 use leeway_structure::identify::{relevant_signs, shown_signs};
@@ -8,7 +9,6 @@ use leeway_structure::ir::{
     ColumnKind, Ir, PredictorKind, Report, Separation as IrSeparation, SignPattern,
 };
 use leeway_structure::render::{column_text, written_terms};
-use leeway_select::CandidateSummary;
 use serde::Serialize;
 use std::collections::BTreeMap;
 

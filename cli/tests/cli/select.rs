@@ -185,7 +185,10 @@ fn select_refuses_least_squares_and_a_model_without_candidates() {
 fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
     let dir = Scratch::new("select-warnings");
     let source = CANDIDATES
-        .replace("input tau_x, tau_y, tau_n", "input tau_x, tau_y, tau_n, tau_z")
+        .replace(
+            "input tau_x, tau_y, tau_n",
+            "input tau_x, tau_y, tau_n, tau_z",
+        )
         .replace(" + ?N_ty*tau_y", " + ?N_ty*tau_y + ?N_tz*tau_z");
     let model = dir.write("cand.som", &source);
     let truth = dir.write("truth.json", &TRUTH.replace('}', ", \"N_tz\": 0.0}"));
@@ -205,8 +208,18 @@ fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
         let run = dir.path(&format!("run{k}.csv")).display().to_string();
         let seed = k.to_string();
         let o = leeway(&[
-            "simulate", &model, "--params", &truth, "--input", &inp, "--out", &run, "--noise",
-            "u=0.01,v=0.01,r=0.002", "--seed", &seed,
+            "simulate",
+            &model,
+            "--params",
+            &truth,
+            "--input",
+            &inp,
+            "--out",
+            &run,
+            "--noise",
+            "u=0.01,v=0.01,r=0.002",
+            "--seed",
+            &seed,
         ]);
         assert_eq!(code(&o), 0, "{}", stderr(&o));
         data.extend(["--data".to_string(), run]);
@@ -218,7 +231,11 @@ fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
     let selected = leeway(&args);
     no_panic(&selected);
     assert_eq!(code(&selected), 0, "{}", stderr(&selected));
-    assert!(!std::fs::read_to_string(&chosen).unwrap_or_default().contains("N_tz"));
+    assert!(
+        !std::fs::read_to_string(&chosen)
+            .unwrap_or_default()
+            .contains("N_tz")
+    );
     let mut est = vec!["estimate", chosen.as_str()];
     est.extend(data.iter().map(String::as_str));
     let estimated = leeway(&est);
