@@ -71,6 +71,8 @@ struct Report<'a> {
     file: String,
     out: String,
     selection: Option<&'a Selection>,
+    /// The chosen estimate's warnings in full, as `estimate --json`'s `warnings`.
+    warnings: Vec<String>,
     errors: Vec<JsonError>,
 }
 
@@ -82,14 +84,19 @@ pub fn run(args: &SelectArgs) -> Status {
         Err(f) => f.status(),
     };
     if args.json {
-        let (selection, errors) = match &result {
-            Ok((s, _)) => (Some(s), Vec::new()),
-            Err(f) => (None, f.json()),
+        let (selection, warnings, errors) = match &result {
+            Ok((s, w)) => (
+                Some(s),
+                w.iter().map(|w| w.detail.clone()).collect(),
+                Vec::new(),
+            ),
+            Err(f) => (None, Vec::new(), f.json()),
         };
         print_json(&Report {
             file: args.model.display().to_string(),
             out: args.out.display().to_string(),
             selection,
+            warnings,
             errors,
         });
     } else {

@@ -252,4 +252,16 @@ fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
         text.contains("\nnote: iv1, iv2 and iv3 give this same estimate on this model"),
         "{text}"
     );
+    // `--json`: the same warnings in full, as `estimate --json` lists them.
+    args.push("--json");
+    let doc = json(&leeway(&args));
+    est.push("--json");
+    assert_eq!(doc["warnings"], json(&leeway(&est))["warnings"]);
+    assert!(
+        doc["warnings"][0]
+            .as_str()
+            .is_some_and(|w| w.contains("input `tau_z` appears in no equation")),
+        "{}",
+        doc["warnings"]
+    );
 }
