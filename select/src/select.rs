@@ -3,7 +3,7 @@
 //! candidate model's moment sums, and the stopping rule (docs/selection.md).
 
 use crate::candidates::{CandidateError, CandidateModel};
-use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub, wald};
+use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub};
 use crate::suggest::{Suggestion, missing_terms};
 use leeway_estimate::parallel::{in_order, threads_for};
 use leeway_estimate::{Estimate, EstimateError, EstimateOptions, Method, MomentSystem, estimate};
@@ -37,7 +37,7 @@ impl Default for SelectOptions {
                 method: Method::Iv3,
                 ..EstimateOptions::default()
             },
-            tolerance: 0.5,
+            tolerance: 1.0,
             threads: 0,
         }
     }
@@ -85,13 +85,17 @@ fn fail(code: &'static str, message: String, hint: &str) -> SelectError {
 /// One step of the path: the model after dropping one candidate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Step {
-    /// The candidate dropped at this step (`None`: the full model).
+    /// The candidate dropped at this step (`None`: the full model), or
+    /// added back (reason `added back`).
     pub dropped: Option<String>,
-    /// Why: `wald` (the least significant), `exchangeable with X`, `not excited`.
+    /// Why: `wald` (the least significant on the path), `added back` or
+    /// `dropped back` (the refinement of the path's best model),
+    /// `exchangeable with X`, `not excited`.
     pub reason: String,
-    /// Its Wald statistic in the model before the drop.
+    /// Its Wald statistic in distance-metric form: the change of J when it
+    /// is dropped (or added), its θ and nuisance columns together.
     pub wald: Option<f64>,
-    /// The statistic's degrees of freedom (its θ and nuisance columns).
+    /// The statistic's degrees of freedom (the columns it brings).
     pub wald_df: Option<usize>,
     /// `P(χ² > wald)`.
     pub p_value: Option<f64>,
@@ -371,58 +375,119 @@ pub fn select(
     record(None, &active, &mut steps);
     while !active.is_empty() {
         let sub = ctx.solve(&active, &all);
-        // The least significant candidate: the largest p-value, ties to the later declared.
-        let mut worst: Option<(usize, f64, f64, usize)> = None;
+        // The candidate whose removal raises J least: its distance-metric
+        // statistic, the Wald statistic of its θ and nuisance columns
+        // together (ties to the later declared).
+        let mut least: Option<(usize, f64, usize)> = None;
         for p in &active {
-            // θ_p = 0 alone: its nuisance columns (E[v]·θ_p, ...) vanish with it.
-            let cols: Vec<usize> = (0..columns.len())
-                .filter(|c| columns[*c] == ColumnKind::Theta { parameter: *p })
-                .collect();
-            let (stat, df) = wald(&sub, &cols).unwrap_or((0.0, 1));
-            let pv = chi2_sf(stat, df);
-            let better = match worst {
-                None => true,
-                Some((_, wp, ws, _)) => pv > wp || (pv == wp && stat <= ws),
-            };
-            if better {
-                worst = Some((*p, pv, stat, df));
+            let mut without = active.clone();
+            without.remove(p);
+            let w = ctx.solve(&without, &all);
+            let rise = (w.j - sub.j).max(0.0);
+            if least.is_none_or(|(_, r, _)| rise <= r) {
+                least = Some((*p, rise, w.df.saturating_sub(sub.df).max(1)));
             }
         }
-        let Some((p, _, stat, df)) = worst else { break };
+        let Some((p, rise, df)) = least else { break };
         active.remove(&p);
         let name = ir.parameters[p].name.clone();
         dropped.push(name.clone());
         let drop = Dropping {
             name: name.clone(),
             reason: "wald",
-            wald: Some((stat, df)),
+            wald: Some((rise, df)),
         };
         record(Some(drop), &active, &mut steps);
     }
-    // The stopping rule: the model with the lowest J − d·ln N (ties: the
-    // smaller); if it free-runs on the held-out data worse than (1 +
-    // tolerance) times the best larger model on the path, the smallest
-    // larger model within that bound instead.
+    // The stopping rule. The model on the path with the lowest
+    // J − d·ln N (ties: the smaller), refined by single additions and
+    // removals of the path's candidates while the score falls. If its free
+    // run on the held-out data is worse than (1 + tolerance) times the best
+    // model on the path up to it, the smallest path model within that
+    // bound instead.
+    let path_end = steps.len();
     let scored = &steps[first_scored..];
-    let by_score = scored
+    let by_score = first_scored
+        + scored
+            .iter()
+            .enumerate()
+            .fold(None::<(usize, f64)>, |acc, (k, s)| match acc {
+                Some((_, sc)) if sc < s.score => acc,
+                _ => Some((k, s.score)),
+            })
+            .map_or(0, |(k, _)| k);
+    let path_set: BTreeSet<usize> = cand_params
         .iter()
-        .enumerate()
-        .fold(None::<(usize, f64)>, |acc, (k, s)| match acc {
-            Some((_, sc)) if sc < s.score => acc,
-            _ => Some((k, s.score)),
-        })
-        .map_or(0, |(k, _)| k);
-    let bound = scored[..=by_score]
+        .filter(|(n, _)| !dropped[..first_scored].contains(n))
+        .map(|(_, p)| *p)
+        .collect();
+    let mut set: BTreeSet<usize> = cand_params
         .iter()
+        .filter(|(n, _)| !dropped[..by_score].contains(n))
+        .map(|(_, p)| *p)
+        .collect();
+    let score = |s: &BTreeSet<usize>| ctx.solve(s, &all).j - (start_size - s.len()) as f64 * ln_n;
+    let mut now = score(&set);
+    loop {
+        // The move that lowers the score most (ties: the first declared).
+        let mut best: Option<(f64, usize, BTreeSet<usize>)> = None;
+        for (_, p) in cand_params.iter().filter(|(_, p)| path_set.contains(p)) {
+            let mut next = set.clone();
+            if !next.remove(p) {
+                next.insert(*p);
+            }
+            let sc = score(&next);
+            if sc < now && best.as_ref().is_none_or(|(b, _, _)| sc < *b) {
+                best = Some((sc, *p, next));
+            }
+        }
+        let Some((sc, p, next)) = best else { break };
+        let before = ctx.solve(&set, &all);
+        let after = ctx.solve(&next, &all);
+        let added = next.len() > set.len();
+        let change = (after.j - before.j).abs();
+        let df = after.df.abs_diff(before.df).max(1);
+        now = sc;
+        set = next;
+        let drop = Dropping {
+            name: ir.parameters[p].name.clone(),
+            reason: if added { "added back" } else { "dropped back" },
+            wald: Some((change, df)),
+        };
+        record(Some(drop), &set, &mut steps);
+    }
+    let refined = steps.len() - 1;
+    let bound = steps[first_scored..=by_score]
+        .iter()
+        .chain(&steps[path_end..])
         .filter_map(|s| s.criterion)
         .fold(f64::INFINITY, f64::min)
         * (1.0 + options.tolerance);
-    let chosen = first_scored
-        + (0..=by_score)
-            .rev()
-            .find(|k| scored[*k].criterion.is_none_or(|c| c <= bound))
-            .unwrap_or(0);
-    let dropped_final: Vec<String> = dropped[..chosen].to_vec();
+    let within = |k: usize| steps[k].criterion.is_none_or(|c| c <= bound);
+    let chosen = if refined > by_score && refined >= path_end {
+        if within(refined) { Some(refined) } else { None }
+    } else {
+        None
+    }
+    .or_else(|| (first_scored..=by_score).rev().find(|k| within(*k)))
+    .unwrap_or(first_scored);
+    let chosen_set: BTreeSet<usize> = if chosen == refined && refined >= path_end {
+        set
+    } else {
+        cand_params
+            .iter()
+            .filter(|(n, _)| !dropped[..chosen.min(path_end - 1)].contains(n))
+            .map(|(_, p)| *p)
+            .collect()
+    };
+    let is_dropped = |name: &String| {
+        cand_params
+            .iter()
+            .find(|(n, _)| n == name)
+            .is_none_or(|(_, p)| !chosen_set.contains(p))
+    };
+    // In the order dropped: the pre-steps, then the path's.
+    let dropped_final: Vec<String> = dropped.iter().filter(|d| is_dropped(d)).cloned().collect();
     let kept: Vec<String> = candidates
         .iter()
         .filter(|c| !dropped_final.contains(c))
