@@ -6,11 +6,13 @@ use crate::candidates::{CandidateError, CandidateModel};
 use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub};
 use crate::suggest::{Suggestion, missing_terms};
 use leeway_estimate::parallel::{in_order, threads_for};
-use leeway_estimate::{Estimate, EstimateError, EstimateOptions, Method, MomentSystem, estimate};
+use leeway_estimate::{
+    Estimate, EstimateError, EstimateOptions, Method, MomentSystem, Start, estimate,
+};
 use leeway_model::experiment::{Experiment, Source};
 use leeway_model::interp::Interpreter;
 use leeway_model::simulate::Disturbances;
-use leeway_model::simulate::simulate;
+use leeway_model::validation::validate;
 use leeway_structure::grammar;
 use leeway_structure::ir::{ColumnKind, Ir};
 use leeway_structure::{CompileOptions, compile};
@@ -143,7 +145,7 @@ pub struct Selection {
     pub suggestions: Vec<Suggestion>,
 }
 
-/// Passes over the data.
+/// Passes over the data, over both rounds of the selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct Passes {
     /// Refinements of the full candidate model's estimate (each one pass, plus
@@ -266,12 +268,93 @@ pub fn select(
         let size = candidates.len() - dropped.len();
         steps.push(pre_step(d, &format!("exchangeable with {with}"), size));
     }
+    let first = run(
+        &model,
+        &candidates,
+        &steps,
+        &dropped,
+        experiments,
+        validation,
+        options,
+        None,
+    )?;
+    // Again on instruments simulated by the first choice's estimate: the
+    // full candidate model's own simulation, with every false candidate's
+    // noise in its θ, makes weaker instruments (and a poorer long-run
+    // covariance) than a model near the truth.
+    let ir = &model.ir;
+    let theta: Vec<f64> = ir
+        .parameters
+        .iter()
+        .map(|p| first.estimate.get(&p.name).unwrap_or(0.0))
+        .collect();
+    let means = ir
+        .components
+        .iter()
+        .map(|c| {
+            first
+                .estimate
+                .disturbances
+                .iter()
+                .find(|d| {
+                    d.component == c.name && ir.disturbances[c.disturbance].name == d.disturbance
+                })
+                .map_or(0.0, |d| d.mean)
+        })
+        .collect();
+    let start = Start {
+        theta,
+        means,
+        instruments: None,
+    };
+    let second = run(
+        &model,
+        &candidates,
+        &steps,
+        &dropped,
+        experiments,
+        validation,
+        options,
+        Some(start),
+    );
+    // A second round that cannot be made (its instrument simulation
+    // diverges) leaves the first round's choice.
+    let Ok(mut second) = second else {
+        return Ok(first);
+    };
+    second.passes.full_estimate_refinements += first.passes.full_estimate_refinements;
+    second.passes.free_runs += first.passes.free_runs;
+    second.passes.chosen_estimate_refinements += first.passes.chosen_estimate_refinements;
+    Ok(second)
+}
+
+/// The path and the choice from one estimate of the full candidate model
+/// (its instruments simulated from `start` when given, else refined from
+/// the nominal model).
+#[allow(clippy::too_many_arguments)]
+fn run(
+    model: &Compiled,
+    candidates: &[String],
+    steps: &[Step],
+    dropped: &[String],
+    experiments: &[Experiment],
+    validation: &[Experiment],
+    options: &SelectOptions,
+    start: Option<Start>,
+) -> Result<Selection, SelectError> {
+    let mut steps = steps.to_vec();
+    let mut dropped = dropped.to_vec();
+    let candidates = candidates.to_vec();
     let ir = &model.ir;
     let interp = Interpreter::new(ir.clone());
     let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
     let mut est_options = options.estimate.clone();
     est_options.covariance = true;
     est_options.nominal = None;
+    if let Some(start) = start {
+        est_options.start = Some(start);
+        est_options.max_refinements = 0;
+    }
     let full = estimate(&interp, &sources, &est_options)?;
     let Some(system) = full.moment_system.clone() else {
         return Err(fail(
@@ -604,33 +687,6 @@ impl Context<'_> {
         theta
     }
 
-    /// The unmeasured disturbance means of a sub-model: from its own ρ
-    /// columns (`ρ = E[v_j]·θ_p`), by least squares over the parameters
-    /// of each component (`E[v_j] = Σ ρ θ_p / Σ θ_p²`, paper Corollary 1);
-    /// the full estimate's where it has none.
-    fn means_of(&self, sub: &SubEstimate, theta: &[f64]) -> Vec<f64> {
-        let mut means = self.means.to_vec();
-        if std::env::var("OWN_MEANS").is_err() {
-            return means;
-        }
-        let mut sums = vec![(0.0f64, 0.0f64); means.len()];
-        for (c, v) in &sub.values {
-            if let ColumnKind::Rho { component, parameter } = self.columns[*c] {
-                let t = theta[parameter];
-                if let Some(s) = sums.get_mut(component) {
-                    s.0 += v * t;
-                    s.1 += t * t;
-                }
-            }
-        }
-        for (m, (num, den)) in means.iter_mut().zip(sums) {
-            if den > 0.0 && (num / den).is_finite() {
-                *m = num / den;
-            }
-        }
-        means
-    }
-
     /// The held-out free-run criterion of the sub-model `active`: the
     /// experiments' free runs side by side, summed in experiment order.
     fn criterion(&self, active: &BTreeSet<usize>) -> Option<f64> {
@@ -642,17 +698,15 @@ impl Context<'_> {
         let errors: Vec<f64> = if !self.validation.is_empty() {
             let sub = self.solve(active, &all);
             let theta = self.theta(active, &sub);
-            let means = self.means_of(&sub, &theta);
             let n = self.validation.len();
-            in_order(n, threads(n), |i| self.error(&theta, &means, &self.validation[i]))
+            in_order(n, threads(n), |i| self.error(&theta, &self.validation[i]))
         } else if self.experiments.len() >= 2 {
             let n = self.experiments.len();
             in_order(n, threads(n), |i| {
                 let train: Vec<usize> = all.iter().copied().filter(|k| *k != i).collect();
                 let sub = self.solve(active, &train);
                 let theta = self.theta(active, &sub);
-                let means = self.means_of(&sub, &theta);
-                self.error(&theta, &means, &self.experiments[i])
+                self.error(&theta, &self.experiments[i])
             })
         } else {
             return None;
@@ -660,43 +714,18 @@ impl Context<'_> {
         Some(errors.iter().sum::<f64>() / errors.len() as f64)
     }
 
-    /// `‖y − ŷ‖/‖y − ȳ‖` averaged over the states, `ŷ` the free run
-    /// restarted from the measured state every `horizon` samples (the whole
-    /// experiment at once when 0); infinite when a run diverges.
-    fn error(&self, theta: &[f64], means: &[f64], e: &Experiment) -> f64 {
-        let horizon = std::env::var("HORIZON").ok().and_then(|s| s.parse().ok()).unwrap_or(0usize);
-        let n = e.len();
-        let span = if horizon == 0 { n.max(1) } else { horizon };
-        let n_states = e.states.len();
-        let mut sse = vec![0.0f64; n_states];
-        let mut start = 0;
-        while start + 1 < n {
-            let end = (start + span).min(n);
-            let seg = e.slice(start..end);
-            let run = simulate(self.interp, theta, &seg, Disturbances::Constant(means));
-            if run.diverged {
-                return f64::INFINITY;
-            }
-            for (o, s) in sse.iter_mut().enumerate() {
-                let y = &seg.states[o];
-                let sim = &run.states[o];
-                let off = y.len() - sim.len();
-                *s += sim.iter().zip(&y[off..]).map(|(a, b)| (a - b) * (a - b)).sum::<f64>();
-            }
-            start = end;
-        }
-        let mut total = 0.0;
-        let mut count = 0;
-        for (o, s) in sse.iter().enumerate() {
-            let y = &e.states[o];
-            let mean = y.iter().sum::<f64>() / y.len().max(1) as f64;
-            let sst: f64 = y.iter().map(|v| (v - mean) * (v - mean)).sum();
-            if sst > 0.0 {
-                total += (s / sst).sqrt();
-                count += 1;
-            }
+    /// `‖y − ŷ‖/‖y − ȳ‖` averaged over the outputs of one free run
+    /// (infinite when it diverges).
+    fn error(&self, theta: &[f64], e: &Experiment) -> f64 {
+        let v = validate(self.interp, theta, e, Disturbances::Constant(self.means));
+        if v.diverged() {
+            return f64::INFINITY;
         }
         // The states only: the integrated heading drifts with any error in r.
-        if count == 0 { f64::INFINITY } else { total / count as f64 }
+        let fits: Vec<f64> = v.fits.iter().flatten().copied().collect();
+        if fits.is_empty() {
+            return f64::INFINITY;
+        }
+        fits.iter().map(|f| 1.0 - f / 100.0).sum::<f64>() / fits.len() as f64
     }
 }

@@ -169,11 +169,13 @@ fn iv_selection_beats_least_squares_in_a_coloured_current() {
         pr.push((p, r));
     }
     let (iv_p, iv_r) = pr[0];
-    assert!(iv_r >= 0.6 && iv_p >= 0.6, "IV selection: {pr:?}");
+    // Seeds 1–2 keep 6 of the 8 true candidates each (the wind's linear
+    // drag, which only the gusts identify, is the term lost) and no false one.
+    assert!(iv_r >= 0.7 && iv_p >= 0.9, "IV selection: {pr:?}");
     // Least squares' failure under the current: false terms kept, by every
     // least-squares selection.
     for (k, (p, _)) in pr.iter().enumerate().skip(1) {
-        assert!(iv_p > p + 0.2, "IV against {}: {pr:?}", METHODS[k]);
+        assert!(iv_p > p + 0.4, "IV against {}: {pr:?}", METHODS[k]);
     }
 }
 
@@ -317,32 +319,4 @@ fn selection_is_the_same_bits_on_any_number_of_threads_and_its_model_reads_back(
     let sources: Vec<&dyn Source> = data.iter().map(|e| e as &dyn Source).collect();
     let again = estimate(&chosen, &sources, &options().estimate).expect("estimates");
     assert_eq!(again.theta, one.estimate.theta);
-}
-
-#[test]
-#[ignore]
-fn probe_true_free_run() {
-    let m = model();
-    let sys = crate::craft::system(&m);
-    let data = experiments(&m, 1, 3, 3000);
-    let sel = select(CANDIDATE_SHIP, &data, &[], &options()).expect("selects");
-    let c = leeway_structure::compile(&sel.chosen_source, &Default::default());
-    let chosen = Interpreter::new(c.ir.expect("compiles"));
-    let mu: Vec<f64> = sel.estimate.disturbances.iter().map(|d| d.mean).collect();
-    println!("chosen means {:?} theta {:?}", mu, sel.estimate.parameters.iter().zip(&sel.estimate.theta).collect::<Vec<_>>());
-    let mut means4 = vec![0.2, 0.2, 3.0, 3.0];
-    means4[0] = mu[0];
-    means4[1] = mu[1];
-    for e in &data {
-        let v = leeway_model::validation::validate(&chosen, &sel.estimate.theta, e, leeway_model::simulate::Disturbances::Constant(&means4));
-        println!("chosen refined: {:?}", v.fits);
-    }
-    for means in [[0.2, 0.2, 3.0, 3.0], [0.0, 0.0, 3.0, 3.0], [0.3, 0.1, 3.0, 3.0]] {
-        for e in &data {
-            let v = leeway_model::validation::validate(&m, &sys.theta, e, leeway_model::simulate::Disturbances::Constant(&means));
-            let seg = e.slice(0..300);
-            let w = leeway_model::validation::validate(&m, &sys.theta, &seg, leeway_model::simulate::Disturbances::Constant(&means));
-            println!("{means:?} {:?} first300 {:?}", v.fits, w.fits);
-        }
-    }
 }
