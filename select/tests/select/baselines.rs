@@ -231,11 +231,21 @@ impl Equation {
     }
 }
 
-/// STLSQ's thresholds tried: 10^(−3 + k/4), k = 0..=12 (0.001 to 1).
+/// STLSQ's thresholds tried: 10^(−3 + k/4), k = 0..=12 (0.001 to 1, four
+/// per decade; the mantissas written out, as `powf` differs across libms).
 pub fn thresholds() -> Vec<f64> {
-    (0..=12)
-        .map(|k| 10f64.powf(-3.0 + k as f64 / 4.0))
-        .collect()
+    let mantissas = [
+        1.0,
+        1.778_279_410_038_923,
+        3.162_277_660_168_379_5,
+        5.623_413_251_903_491,
+    ];
+    let mut out: Vec<f64> = [1e-3, 1e-2, 1e-1]
+        .iter()
+        .flat_map(|d| mantissas.iter().map(move |m| d * m))
+        .collect();
+    out.push(1.0);
+    out
 }
 
 impl Normal {
