@@ -107,7 +107,7 @@ pub struct Step {
     pub j: f64,
     /// J's degrees of freedom.
     pub j_df: usize,
-    /// `J − d·ln N`, `d` the candidates dropped by Wald steps so far: the
+    /// `J − d·ln N`, `d` the path's candidates not in the model: the
     /// over-identification criterion (lower is better).
     pub score: f64,
     /// The held-out free-run criterion: the mean over held-out experiments
