@@ -48,7 +48,7 @@ pub struct SelectArgs {
     #[arg(long, default_value_t = 1)]
     pub lags: usize,
     /// A model is within reach of the best held-out criterion within this fraction.
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 1.0)]
     pub tolerance: f64,
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = crate::options::positive)]

@@ -5,10 +5,11 @@
 //! solved from sub-blocks of them ([`subsolve`]), with the full model's
 //! instruments, so a sub-model is over-identified and Hansen's J tests the
 //! terms it dropped. The path drops, one at a time, the candidate whose
-//! Wald statistic (the IV estimator's own covariance) is least significant;
-//! the model chosen on it is the one with the lowest `J − d·ln N` (`d` the
-//! candidates dropped) among
-//! those whose held-out free-run error is within reach of the best
+//! removal raises J least (its Wald statistic in distance-metric form); the
+//! path's model with the lowest `J − d·ln N` (`d` the candidates dropped),
+//! refined by single additions and removals, is chosen unless its held-out
+//! free-run error is out of reach of the best; all of it twice, the second
+//! time on instruments simulated by the first choice
 //! ([`select()`]). The chosen model is written back as source
 //! ([`candidates`]) and estimated as `estimate` does.
 

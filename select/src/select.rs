@@ -3,10 +3,12 @@
 //! candidate model's moment sums, and the stopping rule (docs/selection.md).
 
 use crate::candidates::{CandidateError, CandidateModel};
-use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub, wald};
+use crate::subsolve::{Solve, SubEstimate, chi2_sf, solve_sub};
 use crate::suggest::{Suggestion, missing_terms};
 use leeway_estimate::parallel::{in_order, threads_for};
-use leeway_estimate::{Estimate, EstimateError, EstimateOptions, Method, MomentSystem, estimate};
+use leeway_estimate::{
+    Estimate, EstimateError, EstimateOptions, Method, MomentSystem, Start, estimate,
+};
 use leeway_model::experiment::{Experiment, Source};
 use leeway_model::interp::Interpreter;
 use leeway_model::simulate::Disturbances;
@@ -37,7 +39,7 @@ impl Default for SelectOptions {
                 method: Method::Iv3,
                 ..EstimateOptions::default()
             },
-            tolerance: 0.5,
+            tolerance: 1.0,
             threads: 0,
         }
     }
@@ -85,13 +87,17 @@ fn fail(code: &'static str, message: String, hint: &str) -> SelectError {
 /// One step of the path: the model after dropping one candidate.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Step {
-    /// The candidate dropped at this step (`None`: the full model).
+    /// The candidate dropped at this step (`None`: the full model), or
+    /// added back (reason `added back`).
     pub dropped: Option<String>,
-    /// Why: `wald` (the least significant), `exchangeable with X`, `not excited`.
+    /// Why: `wald` (the least significant on the path), `added back` or
+    /// `dropped back` (the refinement of the path's best model),
+    /// `exchangeable with X`, `not excited`.
     pub reason: String,
-    /// Its Wald statistic in the model before the drop.
+    /// Its Wald statistic in distance-metric form: the change of J when it
+    /// is dropped (or added), its θ and nuisance columns together.
     pub wald: Option<f64>,
-    /// The statistic's degrees of freedom (its θ and nuisance columns).
+    /// The statistic's degrees of freedom (the columns it brings).
     pub wald_df: Option<usize>,
     /// `P(χ² > wald)`.
     pub p_value: Option<f64>,
@@ -101,7 +107,7 @@ pub struct Step {
     pub j: f64,
     /// J's degrees of freedom.
     pub j_df: usize,
-    /// `J − d·ln N`, `d` the candidates dropped by Wald steps so far: the
+    /// `J − d·ln N`, `d` the path's candidates not in the model: the
     /// over-identification criterion (lower is better).
     pub score: f64,
     /// The held-out free-run criterion: the mean over held-out experiments
@@ -139,7 +145,7 @@ pub struct Selection {
     pub suggestions: Vec<Suggestion>,
 }
 
-/// Passes over the data.
+/// Passes over the data, over both rounds of the selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct Passes {
     /// Refinements of the full candidate model's estimate (each one pass, plus
@@ -262,12 +268,93 @@ pub fn select(
         let size = candidates.len() - dropped.len();
         steps.push(pre_step(d, &format!("exchangeable with {with}"), size));
     }
+    let first = run(
+        &model,
+        &candidates,
+        &steps,
+        &dropped,
+        experiments,
+        validation,
+        options,
+        None,
+    )?;
+    // Again on instruments simulated by the first choice's estimate: the
+    // full candidate model's own simulation, with every false candidate's
+    // noise in its θ, makes weaker instruments (and a poorer long-run
+    // covariance) than a model near the truth.
+    let ir = &model.ir;
+    let theta: Vec<f64> = ir
+        .parameters
+        .iter()
+        .map(|p| first.estimate.get(&p.name).unwrap_or(0.0))
+        .collect();
+    let means = ir
+        .components
+        .iter()
+        .map(|c| {
+            first
+                .estimate
+                .disturbances
+                .iter()
+                .find(|d| {
+                    d.component == c.name && ir.disturbances[c.disturbance].name == d.disturbance
+                })
+                .map_or(0.0, |d| d.mean)
+        })
+        .collect();
+    let start = Start {
+        theta,
+        means,
+        instruments: None,
+    };
+    let second = run(
+        &model,
+        &candidates,
+        &steps,
+        &dropped,
+        experiments,
+        validation,
+        options,
+        Some(start),
+    );
+    // A second round that cannot be made (its instrument simulation
+    // diverges) leaves the first round's choice.
+    let Ok(mut second) = second else {
+        return Ok(first);
+    };
+    second.passes.full_estimate_refinements += first.passes.full_estimate_refinements;
+    second.passes.free_runs += first.passes.free_runs;
+    second.passes.chosen_estimate_refinements += first.passes.chosen_estimate_refinements;
+    Ok(second)
+}
+
+/// The path and the choice from one estimate of the full candidate model
+/// (its instruments simulated from `start` when given, else refined from
+/// the nominal model).
+#[allow(clippy::too_many_arguments)]
+fn run(
+    model: &Compiled,
+    candidates: &[String],
+    steps: &[Step],
+    dropped: &[String],
+    experiments: &[Experiment],
+    validation: &[Experiment],
+    options: &SelectOptions,
+    start: Option<Start>,
+) -> Result<Selection, SelectError> {
+    let mut steps = steps.to_vec();
+    let mut dropped = dropped.to_vec();
+    let candidates = candidates.to_vec();
     let ir = &model.ir;
     let interp = Interpreter::new(ir.clone());
     let sources: Vec<&dyn Source> = experiments.iter().map(|e| e as &dyn Source).collect();
     let mut est_options = options.estimate.clone();
     est_options.covariance = true;
     est_options.nominal = None;
+    if let Some(start) = start {
+        est_options.start = Some(start);
+        est_options.max_refinements = 0;
+    }
     let full = estimate(&interp, &sources, &est_options)?;
     let Some(system) = full.moment_system.clone() else {
         return Err(fail(
@@ -371,58 +458,119 @@ pub fn select(
     record(None, &active, &mut steps);
     while !active.is_empty() {
         let sub = ctx.solve(&active, &all);
-        // The least significant candidate: the largest p-value, ties to the later declared.
-        let mut worst: Option<(usize, f64, f64, usize)> = None;
+        // The candidate whose removal raises J least: its distance-metric
+        // statistic, the Wald statistic of its θ and nuisance columns
+        // together (ties to the later declared).
+        let mut least: Option<(usize, f64, usize)> = None;
         for p in &active {
-            // θ_p = 0 alone: its nuisance columns (E[v]·θ_p, ...) vanish with it.
-            let cols: Vec<usize> = (0..columns.len())
-                .filter(|c| columns[*c] == ColumnKind::Theta { parameter: *p })
-                .collect();
-            let (stat, df) = wald(&sub, &cols).unwrap_or((0.0, 1));
-            let pv = chi2_sf(stat, df);
-            let better = match worst {
-                None => true,
-                Some((_, wp, ws, _)) => pv > wp || (pv == wp && stat <= ws),
-            };
-            if better {
-                worst = Some((*p, pv, stat, df));
+            let mut without = active.clone();
+            without.remove(p);
+            let w = ctx.solve(&without, &all);
+            let rise = (w.j - sub.j).max(0.0);
+            if least.is_none_or(|(_, r, _)| rise <= r) {
+                least = Some((*p, rise, w.df.saturating_sub(sub.df).max(1)));
             }
         }
-        let Some((p, _, stat, df)) = worst else { break };
+        let Some((p, rise, df)) = least else { break };
         active.remove(&p);
         let name = ir.parameters[p].name.clone();
         dropped.push(name.clone());
         let drop = Dropping {
             name: name.clone(),
             reason: "wald",
-            wald: Some((stat, df)),
+            wald: Some((rise, df)),
         };
         record(Some(drop), &active, &mut steps);
     }
-    // The stopping rule: the model with the lowest J − d·ln N (ties: the
-    // smaller); if it free-runs on the held-out data worse than (1 +
-    // tolerance) times the best larger model on the path, the smallest
-    // larger model within that bound instead.
+    // The stopping rule. The model on the path with the lowest
+    // J − d·ln N (ties: the smaller), refined by single additions and
+    // removals of the path's candidates while the score falls. If its free
+    // run on the held-out data is worse than (1 + tolerance) times the best
+    // model on the path up to it, the smallest path model within that
+    // bound instead.
+    let path_end = steps.len();
     let scored = &steps[first_scored..];
-    let by_score = scored
+    let by_score = first_scored
+        + scored
+            .iter()
+            .enumerate()
+            .fold(None::<(usize, f64)>, |acc, (k, s)| match acc {
+                Some((_, sc)) if sc < s.score => acc,
+                _ => Some((k, s.score)),
+            })
+            .map_or(0, |(k, _)| k);
+    let path_set: BTreeSet<usize> = cand_params
         .iter()
-        .enumerate()
-        .fold(None::<(usize, f64)>, |acc, (k, s)| match acc {
-            Some((_, sc)) if sc < s.score => acc,
-            _ => Some((k, s.score)),
-        })
-        .map_or(0, |(k, _)| k);
-    let bound = scored[..=by_score]
+        .filter(|(n, _)| !dropped[..first_scored].contains(n))
+        .map(|(_, p)| *p)
+        .collect();
+    let mut set: BTreeSet<usize> = cand_params
         .iter()
+        .filter(|(n, _)| !dropped[..by_score].contains(n))
+        .map(|(_, p)| *p)
+        .collect();
+    let score = |s: &BTreeSet<usize>| ctx.solve(s, &all).j - (start_size - s.len()) as f64 * ln_n;
+    let mut now = score(&set);
+    loop {
+        // The move that lowers the score most (ties: the first declared).
+        let mut best: Option<(f64, usize, BTreeSet<usize>)> = None;
+        for (_, p) in cand_params.iter().filter(|(_, p)| path_set.contains(p)) {
+            let mut next = set.clone();
+            if !next.remove(p) {
+                next.insert(*p);
+            }
+            let sc = score(&next);
+            if sc < now && best.as_ref().is_none_or(|(b, _, _)| sc < *b) {
+                best = Some((sc, *p, next));
+            }
+        }
+        let Some((sc, p, next)) = best else { break };
+        let before = ctx.solve(&set, &all);
+        let after = ctx.solve(&next, &all);
+        let added = next.len() > set.len();
+        let change = (after.j - before.j).abs();
+        let df = after.df.abs_diff(before.df).max(1);
+        now = sc;
+        set = next;
+        let drop = Dropping {
+            name: ir.parameters[p].name.clone(),
+            reason: if added { "added back" } else { "dropped back" },
+            wald: Some((change, df)),
+        };
+        record(Some(drop), &set, &mut steps);
+    }
+    let refined = steps.len() - 1;
+    let bound = steps[first_scored..=by_score]
+        .iter()
+        .chain(&steps[path_end..])
         .filter_map(|s| s.criterion)
         .fold(f64::INFINITY, f64::min)
         * (1.0 + options.tolerance);
-    let chosen = first_scored
-        + (0..=by_score)
-            .rev()
-            .find(|k| scored[*k].criterion.is_none_or(|c| c <= bound))
-            .unwrap_or(0);
-    let dropped_final: Vec<String> = dropped[..chosen].to_vec();
+    let within = |k: usize| steps[k].criterion.is_none_or(|c| c <= bound);
+    let chosen = if refined > by_score && refined >= path_end {
+        if within(refined) { Some(refined) } else { None }
+    } else {
+        None
+    }
+    .or_else(|| (first_scored..=by_score).rev().find(|k| within(*k)))
+    .unwrap_or(first_scored);
+    let chosen_set: BTreeSet<usize> = if chosen == refined && refined >= path_end {
+        set
+    } else {
+        cand_params
+            .iter()
+            .filter(|(n, _)| !dropped[..chosen.min(path_end - 1)].contains(n))
+            .map(|(_, p)| *p)
+            .collect()
+    };
+    let is_dropped = |name: &String| {
+        cand_params
+            .iter()
+            .find(|(n, _)| n == name)
+            .is_none_or(|(_, p)| !chosen_set.contains(p))
+    };
+    // In the order dropped: the pre-steps, then the path's.
+    let dropped_final: Vec<String> = dropped.iter().filter(|d| is_dropped(d)).cloned().collect();
     let kept: Vec<String> = candidates
         .iter()
         .filter(|c| !dropped_final.contains(c))

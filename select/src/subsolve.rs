@@ -195,46 +195,6 @@ pub(crate) fn pinv_symmetric(a: &DMatrix<f64>) -> DMatrix<f64> {
     out
 }
 
-/// The Wald statistic of columns `cols` being zero and its degrees of
-/// freedom (the rank of their covariance), from a sub-estimate.
-pub fn wald(est: &SubEstimate, cols: &[usize]) -> Option<(f64, usize)> {
-    for (names, cov) in &est.covariance {
-        let at: Vec<usize> = cols
-            .iter()
-            .filter_map(|c| names.iter().position(|n| n == c))
-            .collect();
-        if at.is_empty() {
-            continue;
-        }
-        let sub = DMatrix::from_fn(at.len(), at.len(), |a, b| cov[(at[a], at[b])]);
-        let theta = DVector::from_fn(at.len(), |a, _| est.values[&names[at[a]]]);
-        // Equilibrate before the pseudo-inverse: nuisance and θ columns differ in scale.
-        let d: Vec<f64> = (0..at.len())
-            .map(|a| {
-                let v = sub[(a, a)];
-                if v > 0.0 && v.is_finite() {
-                    1.0 / v.sqrt()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let scaled = DMatrix::from_fn(at.len(), at.len(), |a, b| sub[(a, b)] * d[a] * d[b]);
-        let e = SymmetricEigen::new((&scaled + scaled.transpose()) * 0.5);
-        let top = e.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let rank = e
-            .eigenvalues
-            .iter()
-            .filter(|l| l.abs() > 1e-10 * top)
-            .count();
-        let t = DVector::from_fn(at.len(), |a, _| theta[a] * d[a]);
-        let stat =
-            (t.transpose() * pinv_symmetric(&((&scaled + scaled.transpose()) * 0.5)) * &t)[(0, 0)];
-        return Some((stat.max(0.0), rank.max(1)));
-    }
-    None
-}
-
 /// `P(χ²_df > x)` (1 for a statistic of 0 or no degrees of freedom).
 pub fn chi2_sf(x: f64, df: usize) -> f64 {
     if x <= 0.0 || df == 0 {

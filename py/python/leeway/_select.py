@@ -86,7 +86,7 @@ def select(
     *,
     method: str = "iv3",
     lags: int = 1,
-    tolerance: float = 0.5,
+    tolerance: float = 1.0,
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,

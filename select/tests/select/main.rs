@@ -2,6 +2,7 @@
 //! true structure among candidates on a simulated ship in a coloured current
 //! and a measured wind, beside a least-squares selection on the same data.
 
+mod baselines;
 mod craft;
 mod recovery;
 mod tanker;
