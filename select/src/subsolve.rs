@@ -82,7 +82,10 @@ pub fn solve_sub(
             .copied()
             .filter(|j| active(block.cols[*j]))
             .collect();
-        if cols.is_empty() {
+        // A block with every column dropped still has its moment
+        // conditions: they count in J (at θ = 0), else an empty equation
+        // would look like a perfect fit.
+        if cols.is_empty() && !matches!(how, Solve::Gmm) {
             continue;
         }
         let names: Vec<usize> = cols.iter().map(|j| block.cols[*j]).collect();
@@ -98,7 +101,7 @@ pub fn solve_sub(
         for (c, v) in names.iter().zip(values.iter()) {
             out.values.insert(*c, *v);
         }
-        if let Some(cov) = cov {
+        if let Some(cov) = cov.filter(|_| !names.is_empty()) {
             out.covariance.push((names, cov));
         }
     }
@@ -205,7 +208,35 @@ pub fn chi2_sf(x: f64, df: usize) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::chi2_sf;
+    use super::{chi2_sf, solve_sub, Solve};
+    use leeway_estimate::{MomentBlock, MomentSystem};
+    use nalgebra::{DMatrix, DVector};
+    use std::collections::BTreeMap;
+
+    /// A block whose columns are all dropped keeps its moment conditions in
+    /// J (at θ = 0): `gᵀ S⁻¹ g` over its instruments, with as many degrees
+    /// of freedom. Before, the block was skipped and the empty model's J
+    /// was 0 — the best score on the path.
+    #[test]
+    fn a_block_with_every_column_dropped_counts_in_j() {
+        let system = MomentSystem {
+            blocks: vec![MomentBlock {
+                cols: vec![0, 1],
+                kept: vec![0, 1],
+                h: vec![DMatrix::from_row_slice(2, 2, &[2.0, 0.0, 0.0, 1.0])],
+                g: vec![DVector::from_row_slice(&[4.0, 3.0])],
+                long_run: vec![DMatrix::from_row_slice(2, 2, &[4.0, 0.0, 0.0, 1.0])],
+            }],
+        };
+        let none = solve_sub(&system, &|_| false, &BTreeMap::new(), &[0], Solve::Gmm);
+        // g = (4, 3), S = diag(4, 1): J = 16/4 + 9/1 = 13.
+        assert!((none.j - 13.0).abs() < 1e-9, "J {}", none.j);
+        assert_eq!(none.df, 2);
+        assert!(none.values.is_empty() && none.covariance.is_empty());
+        let full = solve_sub(&system, &|_| true, &BTreeMap::new(), &[0], Solve::Gmm);
+        assert!(full.j.abs() < 1e-9 && full.df == 0);
+        assert!((full.values[&0] - 2.0).abs() < 1e-9 && (full.values[&1] - 3.0).abs() < 1e-9);
+    }
 
     #[test]
     fn chi_square_tail_matches_tables() {

@@ -100,9 +100,9 @@ fn print(selection: &Selection, chosen: [f64; 3], hand: [f64; 3]) {
 /// user's choice on four short runs, a candidate model of 40 terms and a
 /// true system richer than any of them), the selected model free-runs on
 /// the six held-out runs at least as well as the hand-written one in every
-/// output (92.3 / 97.2 / 95.7 against 88.7 / 95.7 / 95.4). With the default
-/// tolerance 0.5 it does not (79.6 / 89.7 / 90.9, 9 terms kept): see
-/// `tanker_tolerance_sweep` and the note of #50.
+/// output (92.3 / 97.2 / 95.7 against 88.7 / 95.7 / 95.4). With tolerance
+/// 0.5 it does not (83.0 / 92.3 / 90.8, 10 terms kept), nor with the default
+/// 1: see `tanker_tolerance_sweep` and the note of #50.
 #[test]
 fn the_selected_tanker_validates_at_least_as_well_as_the_hand_written_one() {
     let options = SelectOptions {
@@ -134,7 +134,7 @@ fn tanker_tolerance_sweep() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1);
-    for tolerance in [0.0, 0.05, 0.1, 0.2, 0.3, 0.5] {
+    for tolerance in [0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0] {
         let mut options = SelectOptions {
             tolerance,
             ..SelectOptions::default()
