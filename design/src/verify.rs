@@ -39,6 +39,46 @@ pub struct Verification {
     pub true_fits: Vec<(String, f64)>,
     /// Whether the designed method's models are what the user needs.
     pub verdict: Verdict,
+    /// With the other runs the design tried verified after a failing
+    /// verdict ([`crate::verified`]): each option verified, in order, the
+    /// design's first (empty when only the design was verified).
+    pub runs_verified: Vec<RunsVerified>,
+}
+
+/// One runs option of a design, verified.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunsVerified {
+    /// Runs.
+    pub runs: usize,
+    /// The estimate's centring: `experiment`, `pooled`, `none`.
+    pub centring: String,
+    /// Seconds per run.
+    pub seconds: f64,
+    /// Whether its verified models passed the verdict (`None`: not
+    /// verified, the design did not keep its signs or its area).
+    pub passed: Option<bool>,
+    /// What failed, one line each.
+    pub failures: Vec<String>,
+    /// Whether it is the design reported.
+    pub taken: bool,
+}
+
+impl RunsVerified {
+    /// The runs of `design` with their verification.
+    pub fn of(design: &Design, v: Option<&Verification>) -> RunsVerified {
+        let chosen = design.runs_tried.iter().find(|o| o.chosen);
+        RunsVerified {
+            runs: chosen.map_or(design.runs.len(), |o| o.runs),
+            centring: chosen.map_or_else(
+                || design.centring_used.map_or("-", |c| c.name()).to_string(),
+                |o| o.centring.clone(),
+            ),
+            seconds: design.seconds,
+            passed: v.map(|v| v.verdict.passed),
+            failures: v.map_or(Vec::new(), |v| v.verdict.failures.clone()),
+            taken: false,
+        }
+    }
 }
 
 /// The outcome judged: the designed method's held-out fit within
@@ -63,6 +103,53 @@ pub const COVERAGE: (f64, f64) = (0.90, 0.98);
 /// Trials below which coverage is reported but not judged: its sampling
 /// error (±2.2 points at 100 trials) would exceed the band.
 pub const COVERAGE_TRIALS: usize = 100;
+/// The chance, were the true coverage at the band's nearer edge, below
+/// which a measured coverage fails ([`coverage_outside`]).
+pub const COVERAGE_TEST: f64 = 0.05;
+
+/// Whether a coverage measured on `n` trials lies outside [`COVERAGE`]
+/// beyond its sampling error: as few covered (or as many) would happen
+/// with a chance below [`COVERAGE_TEST`] were the true coverage at the
+/// band's nearer edge (a one-sided binomial test). At 100 trials: below
+/// 85 % fails; no count above the band does (100 of 100 happens 13 % of
+/// the time at 98 %).
+pub fn coverage_outside(coverage: f64, n: usize) -> bool {
+    let (low, high) = covered_limits(n);
+    coverage < low - 1e-12 || coverage > high + 1e-12
+}
+
+/// The smallest and largest coverage on `n` trials that pass
+/// [`coverage_outside`].
+pub fn covered_limits(n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    // Smallest k with P(X ≤ k | p = low) ≥ the test's level.
+    let low = (0..=n)
+        .find(|k| binomial_cdf(*k, n, COVERAGE.0) >= COVERAGE_TEST)
+        .unwrap_or(0);
+    // Largest k with P(X ≥ k | p = high) ≥ the level.
+    let high = (0..=n)
+        .rev()
+        .find(|k| *k == 0 || 1.0 - binomial_cdf(k - 1, n, COVERAGE.1) >= COVERAGE_TEST)
+        .unwrap_or(n);
+    (low as f64 / n as f64, high as f64 / n as f64)
+}
+
+/// P(X ≤ k) for X binomial with `n` trials of chance `p` (0 < p < 1),
+/// summed in logs.
+fn binomial_cdf(k: usize, n: usize, p: f64) -> f64 {
+    let (lp, lq) = (p.ln(), (1.0 - p).ln());
+    let mut ln_choose = 0.0;
+    let mut sum = 0.0;
+    for i in 0..=k.min(n) {
+        if i > 0 {
+            ln_choose += ((n - i + 1) as f64).ln() - (i as f64).ln();
+        }
+        sum += (ln_choose + i as f64 * lp + (n - i) as f64 * lq).exp();
+    }
+    sum.min(1.0)
+}
 /// The share of trials whose model may diverge on the held-out run.
 pub const DIVERGED: f64 = 0.05;
 
@@ -514,6 +601,7 @@ fn summarise(
         methods,
         true_fits,
         verdict,
+        runs_verified: Vec::new(),
     }
 }
 
@@ -568,18 +656,24 @@ fn judge(
         ));
     }
     if runs >= COVERAGE_TRIALS {
+        // Outside the band beyond the sampling error of the trials: the
+        // count covered is improbable (one-sided binomial, < 5 %) were the
+        // true coverage at the band's nearer edge.
         let outside: Vec<String> = m
             .parameters
             .iter()
             .filter_map(|p| p.coverage.map(|c| (p, c)))
-            .filter(|(_, c)| !(COVERAGE.0..=COVERAGE.1).contains(c))
+            .filter(|(_, c)| coverage_outside(*c, estimated))
             .map(|(p, c)| format!("{} {} %", p.name, pct(c)))
             .collect();
         if !outside.is_empty() {
+            let n = estimated;
             failures.push(format!(
-                "±2σ coverage outside {}–{} %: {}",
+                "±2σ coverage outside {}–{} % beyond the sampling error of {n} trials (below {} % or above {} %): {}",
                 pct(COVERAGE.0),
                 pct(COVERAGE.1),
+                pct(covered_limits(n).0),
+                pct(covered_limits(n).1),
                 outside.join(", ")
             ));
             help.push(
@@ -681,4 +775,25 @@ fn centring_for(design: &Design, method: Method) -> Option<Centring> {
     (Some(method) == design.method_used)
         .then_some(design.centring_used)
         .flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{binomial_cdf, covered_limits};
+
+    #[test]
+    fn the_binomial_tail_sums_to_one_and_matches_a_hand_count() {
+        assert!((binomial_cdf(100, 100, 0.9) - 1.0).abs() < 1e-12);
+        // P(X ≤ 1 | 3, 0.5) = (1 + 3)/8.
+        assert!((binomial_cdf(1, 3, 0.5) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn coverage_at_100_trials_fails_below_85_and_never_above() {
+        // P(X ≤ 84 | 100, 0.9) = 0.040 < 5 % ≤ P(X ≤ 85) = 0.073.
+        assert_eq!(covered_limits(100), (0.85, 1.0));
+        // 1000 trials narrow the band's allowance to about a point.
+        let (low, high) = covered_limits(1000);
+        assert!((0.88..0.89).contains(&low) && (0.985..0.99).contains(&high));
+    }
 }

@@ -418,7 +418,7 @@ fn verification(s: &mut String, v: &Verification) {
             "  verdict: passed (held-out fit within {} points of the true model's in every state{})",
             num(leeway_design::verify::FIT_POINTS),
             if v.runs >= leeway_design::verify::COVERAGE_TRIALS {
-                ", ±2σ coverage 90–98 % for every parameter"
+                ", ±2σ coverage 90–98 % for every parameter within the sampling error of the trials"
             } else {
                 "; coverage is judged from 100 trials"
             }
@@ -433,6 +433,22 @@ fn verification(s: &mut String, v: &Verification) {
         }
         for h in &v.verdict.help {
             let _ = writeln!(s, "  would help: {h}");
+        }
+    }
+    if v.runs_verified.len() > 1 {
+        let _ = writeln!(s, "\nverified the runs the design tried, in turn:");
+        for r in &v.runs_verified {
+            let what = format!("{} × {} s, {} centring", r.runs, num(r.seconds), r.centring);
+            let outcome = match r.passed {
+                Some(true) => "passes".to_string(),
+                Some(false) => format!(
+                    "fails ({})",
+                    r.failures.first().map_or("", String::as_str)
+                ),
+                None => "does not keep its signs or its area".to_string(),
+            };
+            let taken = if r.taken { " — the design above" } else { "" };
+            let _ = writeln!(s, "  {what}: {outcome}{taken}");
         }
     }
 }
