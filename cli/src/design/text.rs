@@ -204,7 +204,10 @@ fn families(s: &mut String, d: &Design) {
 
 fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
     let source = if p.trials > 0 {
-        format!("root-mean-square error of {} simulated trials", p.trials)
+        format!(
+            "half the 95th percentile of |error| of {} simulated trials",
+            p.trials
+        )
     } else {
         "the estimator's asymptotic covariance".to_string()
     };
