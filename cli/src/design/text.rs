@@ -444,10 +444,7 @@ fn verification(s: &mut String, v: &Verification) {
             let what = format!("{} × {} s, {} centring", r.runs, num(r.seconds), r.centring);
             let outcome = match r.passed {
                 Some(true) => "passes".to_string(),
-                Some(false) => format!(
-                    "fails ({})",
-                    r.failures.first().map_or("", String::as_str)
-                ),
+                Some(false) => format!("fails ({})", r.failures.first().map_or("", String::as_str)),
                 None => "does not keep its signs or its area".to_string(),
             };
             let taken = if r.taken { " — the design above" } else { "" };

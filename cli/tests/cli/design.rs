@@ -557,7 +557,10 @@ fn a_design_whose_verified_models_fall_short_exits_1_with_what_fails() {
     assert!(lines.len() >= 2, "{text}");
     assert!(lines.iter().all(|l| l.contains(": fails (")), "{text}");
     assert_eq!(
-        lines.iter().filter(|l| l.ends_with("— the design above")).count(),
+        lines
+            .iter()
+            .filter(|l| l.ends_with("— the design above"))
+            .count(),
         1,
         "{text}"
     );

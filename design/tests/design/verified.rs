@@ -31,9 +31,16 @@ fn a_failing_verdict_verifies_the_other_runs_the_design_tried() {
     assert!(!v.verdict.passed, "{:?}", v.verdict);
     // Every option the search scored was verified, the search's first.
     assert_eq!(v.runs_verified.len(), tried, "{:?}", v.runs_verified);
-    let chosen = searched.runs_tried.iter().find(|o| o.chosen).expect("chosen");
+    let chosen = searched
+        .runs_tried
+        .iter()
+        .find(|o| o.chosen)
+        .expect("chosen");
     let first = &v.runs_verified[0];
-    assert_eq!((first.runs, first.centring.as_str()), (chosen.runs, chosen.centring.as_str()));
+    assert_eq!(
+        (first.runs, first.centring.as_str()),
+        (chosen.runs, chosen.centring.as_str())
+    );
     for r in &v.runs_verified {
         assert_eq!(r.passed, Some(false), "{r:?}");
         assert!(!r.failures.is_empty(), "{r:?}");
@@ -47,7 +54,9 @@ fn a_failing_verdict_verifies_the_other_runs_the_design_tried() {
     let doc: serde_json::Value =
         serde_json::from_str(&leeway_design::document::json(&out.design, Some(&v))).expect("json");
     assert_eq!(
-        doc["verification"]["runs_verified"].as_array().map(Vec::len),
+        doc["verification"]["runs_verified"]
+            .as_array()
+            .map(Vec::len),
         Some(tried)
     );
 }
