@@ -37,6 +37,12 @@ pub struct Verification {
     /// the plan's mean disturbances): what an estimated model is measured
     /// against.
     pub true_fits: Vec<(String, f64)>,
+    /// The seconds of the held-out run's first part ([`EARLY`] of it)
+    /// whose fits are measured as well: how the fit falls with the length
+    /// of the free run.
+    pub early_seconds: f64,
+    /// The true model's fit per state over that first part.
+    pub true_early_fits: Vec<(String, f64)>,
     /// Whether the designed method's models are what the user needs.
     pub verdict: Verdict,
     /// With the other runs the design tried verified after a failing
@@ -152,6 +158,9 @@ fn binomial_cdf(k: usize, n: usize, p: f64) -> f64 {
 }
 /// The share of trials whose model may diverge on the held-out run.
 pub const DIVERGED: f64 = 0.05;
+/// The share of the held-out run, from its start, over which the fits are
+/// also measured.
+pub const EARLY: f64 = 0.1;
 
 /// How often a held argument kept its side.
 #[derive(Clone, Debug, Serialize)]
@@ -183,6 +192,8 @@ pub struct MethodVerification {
     pub parameters: Vec<ParameterVerification>,
     /// Mean validation fit per state (%), over runs whose model did not diverge.
     pub fits: Vec<(String, f64)>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    pub early_fits: Vec<(String, f64)>,
     /// Runs whose model diverged on the validation run.
     pub diverged: usize,
     /// Runs whose refinement did not settle (the runaway guard stopped it
@@ -230,6 +241,9 @@ pub struct Estimated {
     pub converged: bool,
     /// Validation fits per state (`None`: the model diverged).
     pub fits: Option<Vec<f64>>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    #[serde(default)]
+    pub early_fits: Option<Vec<f64>>,
 }
 
 /// One run's results: per method the estimate (or its error), per
@@ -243,6 +257,9 @@ pub struct RunResult {
     /// held-out run (realised with its θ); without one, the bench's.
     #[serde(default)]
     pub true_fits: Option<Vec<f64>>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    #[serde(default)]
+    pub true_early_fits: Option<Vec<f64>>,
     /// Per method, in the order of `Method::ALL`.
     pub estimates: Vec<Outcome>,
     /// Per experiment and held argument, the fraction of samples on its side.
@@ -254,7 +271,7 @@ pub struct RunResult {
 pub struct Bench<'a> {
     noise: &'a Noise,
     validation: Experiment,
-    true_fits: Vec<f64>,
+    true_fits: (Vec<f64>, Vec<f64>),
     methods: &'static [Method],
     designed: Method,
 }
@@ -300,7 +317,7 @@ impl<'a> Bench<'a> {
             model,
             design,
             (self.methods, self.designed),
-            &self.true_fits,
+            (&self.true_fits.0, &self.true_fits.1),
             seed,
             results,
         )
@@ -334,6 +351,7 @@ fn one_run(
         return RunResult {
             truth: Vec::new(),
             true_fits: None,
+            true_early_fits: None,
             estimates: Vec::new(),
             kept: Vec::new(),
         };
@@ -363,7 +381,7 @@ fn one_run(
                 &held_out,
                 Disturbances::Constant(&c.mean),
             );
-            let f = fits(&held_out, &sim);
+            let f = window_fits(&held_out, &sim);
             (held_out, f)
         });
     let validation = own.as_ref().map_or(validation, |(v, _)| v);
@@ -397,19 +415,21 @@ fn one_run(
             };
             let est = estimate(model, &sources, &options)
                 .map_err(|e| format!("{}: {}", e.code, e.message))?;
-            let fits = validate(model, &est, validation);
+            let (fits, early_fits) = validate(model, &est, validation).unzip();
             Ok(Estimated {
                 rank_deficient: deficient(&est, &held_by_design(design)),
                 converged: est.diagnostics.converged,
                 theta: est.theta,
                 std_errors: est.std_errors,
                 fits,
+                early_fits,
             })
         })
         .collect();
     RunResult {
         truth,
-        true_fits: own.map(|(_, f)| f),
+        true_fits: own.as_ref().map(|(_, f)| f.0.clone()),
+        true_early_fits: own.map(|(_, f)| f.1),
         estimates,
         kept: kept_fractions,
     }
@@ -429,7 +449,11 @@ fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> O
 /// The true model's fit per state on the held-out run: θ of the plan with
 /// the plan's mean disturbances (what no estimate can beat: the rest is
 /// the random disturbance and the noise).
-fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Option<Vec<f64>> {
+fn true_fits(
+    model: &dyn Model,
+    design: &Design,
+    validation: &Experiment,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let c = design.conditions.as_ref()?;
     let sim = leeway_model::simulate::simulate(
         model,
@@ -437,12 +461,40 @@ fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Opt
         validation,
         Disturbances::Constant(&c.mean),
     );
-    Some(fits(validation, &sim))
+    Some(window_fits(validation, &sim))
+}
+
+/// Fits per state over the whole run and over its first [`EARLY`].
+fn window_fits(
+    data: &Experiment,
+    sim: &leeway_model::simulate::Trajectory,
+) -> (Vec<f64>, Vec<f64>) {
+    let whole = fits(data, sim);
+    let early = data
+        .states
+        .iter()
+        .zip(&sim.states)
+        .map(|(y, s)| {
+            let n = y.len().min(s.len());
+            let k = early_samples(n);
+            leeway_model::simulate::fit(&y[..k], &s[..k])
+        })
+        .collect();
+    (whole, early)
+}
+
+/// Samples in the first [`EARLY`] of `n` (at least 2, at most `n`).
+fn early_samples(n: usize) -> usize {
+    ((EARLY * n as f64).round() as usize).clamp(2.min(n), n)
 }
 
 /// Fits per state of `est` simulated on `validation` with its disturbance
 /// means held; `None` when it diverged.
-fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Option<Vec<f64>> {
+fn validate(
+    model: &dyn Model,
+    est: &Estimate,
+    validation: &Experiment,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let ir = model.ir();
     let means: Vec<f64> = ir
         .components
@@ -461,15 +513,15 @@ fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Optio
         validation,
         Disturbances::Constant(&means),
     );
-    let f = fits(validation, &sim);
-    (!sim.diverged && f.iter().all(|v| v.is_finite())).then_some(f)
+    let f = window_fits(validation, &sim);
+    (!sim.diverged && f.0.iter().all(|v| v.is_finite())).then_some(f)
 }
 
 fn summarise(
     model: &dyn Model,
     design: &Design,
     (methods, designed): (&[Method], Method),
-    true_fits: &[f64],
+    (true_fits, true_early): (&[f64], &[f64]),
     seed: u64,
     results: &[RunResult],
 ) -> Verification {
@@ -552,15 +604,9 @@ fn summarise(
                 })
                 .collect();
             let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.fits.as_ref()).collect();
-            let fits = ir
-                .states
-                .iter()
-                .enumerate()
-                .map(|(s, name)| {
-                    let v: Vec<f64> = fitted.iter().map(|f| f[s]).collect();
-                    (name.clone(), mean_std(&v).0)
-                })
-                .collect();
+            let early: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.early_fits.as_ref()).collect();
+            let fits = per_state(ir, &fitted);
+            let early_fits = per_state(ir, &early);
             MethodVerification {
                 method: m.name().to_string(),
                 designed_for: *m == designed,
@@ -569,30 +615,45 @@ fn summarise(
                 rank_deficient,
                 parameters,
                 fits,
+                early_fits,
                 diverged: ok.len() - fitted.len(),
                 unconverged: ok.iter().filter(|e| !e.0.converged).count(),
             }
         })
         .collect();
     // With a prior each run has its own true model: their mean fit.
-    let own: Vec<&Vec<f64>> = results
-        .iter()
-        .filter_map(|r| r.true_fits.as_ref())
-        .collect();
-    let true_fits: Vec<(String, f64)> = ir
-        .states
-        .iter()
-        .enumerate()
-        .map(|(s, name)| {
-            let f = if own.is_empty() {
-                true_fits.get(s).copied().unwrap_or(f64::NAN)
-            } else {
-                mean_std(&own.iter().map(|f| f[s]).collect::<Vec<f64>>()).0
-            };
-            (name.clone(), f)
-        })
-        .collect();
-    let verdict = judge(design, &methods, &true_fits, runs);
+    let truths = |own: Vec<&Vec<f64>>, bench: &[f64]| -> Vec<(String, f64)> {
+        if own.is_empty() {
+            ir.states
+                .iter()
+                .enumerate()
+                .map(|(s, name)| (name.clone(), bench.get(s).copied().unwrap_or(f64::NAN)))
+                .collect()
+        } else {
+            per_state(ir, &own)
+        }
+    };
+    let true_fits = truths(
+        results
+            .iter()
+            .filter_map(|r| r.true_fits.as_ref())
+            .collect(),
+        true_fits,
+    );
+    let true_early_fits = truths(
+        results
+            .iter()
+            .filter_map(|r| r.true_early_fits.as_ref())
+            .collect(),
+        true_early,
+    );
+    let early_seconds = design.step * early_samples(design.samples) as f64;
+    let verdict = judge(
+        design,
+        &methods,
+        (&true_fits, &true_early_fits, early_seconds),
+        runs,
+    );
     Verification {
         runs,
         seed,
@@ -600,6 +661,8 @@ fn summarise(
         signs,
         methods,
         true_fits,
+        early_seconds,
+        true_early_fits,
         verdict,
         runs_verified: Vec::new(),
     }
@@ -610,7 +673,7 @@ fn summarise(
 fn judge(
     design: &Design,
     methods: &[MethodVerification],
-    true_fits: &[(String, f64)],
+    (true_fits, true_early, early_seconds): (&[(String, f64)], &[(String, f64)], f64),
     runs: usize,
 ) -> Verdict {
     let pct = |x: f64| leeway_model::number::short_number(100.0 * x);
@@ -727,9 +790,18 @@ fn judge(
             .zip(true_fits)
             .any(|((_, f), (_, t))| *f < t - FIT_POINTS)
         {
-            help.push(
-                "a held-out fit far below the true model's in a state: its parameters' errors add up along a free run — measure the medium, or runs at more operating points".into(),
-            );
+            let pair = |f: &[(String, f64)]| {
+                f.iter()
+                    .map(|(_, x)| leeway_model::number::short_number(*x))
+                    .collect::<Vec<_>>()
+                    .join("/")
+            };
+            help.push(format!(
+                "a held-out fit far below the true model's: over the held-out run's first {} s the models fit {} % (the true model {} %) — the errors add up along the free run (a small error in a rate integrates into the heading, and an earth-fixed medium's direction with it): measure the medium, or runs at more operating points",
+                leeway_model::number::short_number(early_seconds),
+                pair(&m.early_fits),
+                pair(true_early)
+            ));
         }
     }
     Verdict {
@@ -761,6 +833,18 @@ fn deficient(e: &Estimate, held_by_design: &[String]) -> bool {
                     .iter()
                     .any(|u| u.starts_with(&format!("{name} ")))
         })
+}
+
+/// Per state, the mean over runs of their fits.
+fn per_state(ir: &leeway_structure::ir::Ir, fits: &[&Vec<f64>]) -> Vec<(String, f64)> {
+    ir.states
+        .iter()
+        .enumerate()
+        .map(|(s, name)| {
+            let v: Vec<f64> = fits.iter().filter_map(|f| f.get(s).copied()).collect();
+            (name.clone(), mean_std(&v).0)
+        })
+        .collect()
 }
 
 /// Mean and standard deviation (n − 1) of the finite values: the study's.

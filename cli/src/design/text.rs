@@ -415,6 +415,18 @@ fn verification(s: &mut String, v: &Verification) {
     }
     let truth: Vec<String> = v.true_fits.iter().map(|(_, f)| num(*f)).collect();
     let _ = writeln!(s, "  the true model's held-out fit {} %", truth.join("/"));
+    if let Some(m) = v.methods.iter().find(|m| m.designed_for) {
+        let join =
+            |f: &[(String, f64)]| f.iter().map(|(_, x)| num(*x)).collect::<Vec<_>>().join("/");
+        let _ = writeln!(
+            s,
+            "  over the held-out run's first {} s: {} {} %, the true model {} %",
+            num(v.early_seconds),
+            m.method,
+            join(&m.early_fits),
+            join(&v.true_early_fits)
+        );
+    }
     if v.verdict.passed {
         let _ = writeln!(
             s,
