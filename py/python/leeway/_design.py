@@ -52,7 +52,9 @@ class Verification:
     argument, the fraction of samples on its side (``mean`` over runs,
     ``min``). ``document["verdict"]``: whether the designed method's
     models pass (held-out fit within 10 points of the true model's,
-    ``document["true_fits"]``; coverage 90–98 % from 100 trials, within
+    ``document["true_fits"]``; ``document["true_early_fits"]`` and each
+    method's ``early_fits``: the same over the held-out run's first tenth,
+    ``document["early_seconds"]`` long; coverage 90–98 % from 100 trials, within
     their sampling error), what fails and what would help — ``leeway
     design`` exits 1 when not. ``document["runs_verified"]``: when the
     design's verdict failed, every runs option the design tried, verified
