@@ -673,7 +673,7 @@ fn summarise(
 fn judge(
     design: &Design,
     methods: &[MethodVerification],
-    (true_fits, true_early, early_seconds): (&[(String, f64)], &[(String, f64)], f64),
+    (true_fits, true_early, early_seconds): (&[StateFit], &[StateFit], f64),
     runs: usize,
 ) -> Verdict {
     let pct = |x: f64| leeway_model::number::short_number(100.0 * x);
@@ -834,6 +834,9 @@ fn deficient(e: &Estimate, held_by_design: &[String]) -> bool {
                     .any(|u| u.starts_with(&format!("{name} ")))
         })
 }
+
+/// A state's name and a fit (%).
+type StateFit = (String, f64);
 
 /// Per state, the mean over runs of their fits.
 fn per_state(ir: &leeway_structure::ir::Ir, fits: &[&Vec<f64>]) -> Vec<(String, f64)> {
