@@ -25,18 +25,15 @@ use crate::options::load_options;
 use crate::output::{Status, err, out, stderr_style};
 use crate::problem::{Failure, Problem};
 use leeway_design::compare::compare;
-use leeway_design::design::{DesignOptions, design as design_fn};
+use leeway_design::design::DesignOptions;
 use leeway_design::document::json_with;
 use leeway_design::error::DesignError;
 use leeway_design::plan::{MAX_PLAN_BYTES, locate, parse};
-use leeway_design::report::Design;
 use leeway_design::trial::Run;
-use leeway_design::verify::{Verification, verify};
+use leeway_design::verified::design_verified;
 use leeway_estimate::Method;
 use leeway_model::Interpreter;
 use leeway_model::model::Model;
-use leeway_model::number::short_number as num;
-use leeway_structure::identify::Centring;
 
 /// Runs `leeway design`.
 pub fn run(args: &DesignArgs) -> Status {
@@ -79,55 +76,16 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         runs: None,
     };
     let pool = pool(args.threads)?;
-    let design = pool
-        .install(|| design_fn(&model, &conditions, &options))
+    // Verified models that fall short: the design verifies the other runs
+    // it tried in turn, and the first whose models pass is the design.
+    let verified = pool
+        .install(|| {
+            with_progress(args.verify, |progress| {
+                design_verified(&model, &conditions, &options, args.verify, progress)
+            })
+        })
         .map_err(located)?;
-    let verification = match args.verify {
-        Some(m) if design.feasible => {
-            pool.install(|| verify_with_progress(&model, &design, m, args.seed))
-        }
-        _ => None,
-    };
-    // Verified models that fall short: the other runs the design tried are
-    // verified in turn, and the first whose models pass is the design.
-    let mut others = Vec::new();
-    let (design, verification) = match (args.verify, verification) {
-        (Some(m), Some(v)) if !v.verdict.passed => {
-            let mut outcome = (design, v);
-            for (runs, centring) in untried(&outcome.0) {
-                let alt = DesignOptions {
-                    runs: Some((runs, centring)),
-                    ..options.clone()
-                };
-                let Ok(d) = pool.install(|| design_fn(&model, &conditions, &alt)) else {
-                    continue;
-                };
-                let v = d
-                    .feasible
-                    .then(|| pool.install(|| verify_with_progress(&model, &d, m, args.seed)))
-                    .flatten();
-                let what = format!(
-                    "{runs} × {} s, {} centring",
-                    num(d.seconds),
-                    centring.name()
-                );
-                match v {
-                    Some(v) if v.verdict.passed => {
-                        others.push(format!("{what}: passes — the design below"));
-                        outcome = (d, v);
-                        break;
-                    }
-                    Some(v) => others.push(format!(
-                        "{what}: fails too ({})",
-                        v.verdict.failures.first().map_or("", String::as_str)
-                    )),
-                    None => others.push(format!("{what}: does not keep its signs or its area")),
-                }
-            }
-            (outcome.0, Some(outcome.1))
-        }
-        (_, v) => (design, v),
-    };
+    let (design, verification) = (verified.design, verified.verification);
     let comparison = if args.compare.is_empty() {
         None
     } else {
@@ -142,16 +100,6 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
         ));
     } else {
         out(&text::render(&model, &design, verification.as_ref(), args));
-        if !others.is_empty() {
-            out(&format!(
-                "\nverified the other runs the design tried:\n{}\n",
-                others
-                    .iter()
-                    .map(|o| format!("  {o}"))
-                    .collect::<Vec<_>>()
-                    .join("\n")
-            ));
-        }
         if let Some(c) = &comparison {
             out(&text::comparison(c, &args.compare));
         }
@@ -169,24 +117,6 @@ fn execute(args: &DesignArgs) -> Result<Status, Failure> {
     } else {
         Status::Unsupported
     })
-}
-
-/// The runs the design tried and did not take, as `DesignOptions::runs`.
-fn untried(design: &Design) -> Vec<(usize, Centring)> {
-    design
-        .runs_tried
-        .iter()
-        .filter(|o| !o.chosen && o.worst_relative.is_some())
-        .filter_map(|o| {
-            let centring = match o.centring.as_str() {
-                "experiment" => Centring::Experiment,
-                "pooled" => Centring::Pooled,
-                "none" => Centring::None,
-                _ => return None,
-            };
-            Some((o.runs, centring))
-        })
-        .collect()
 }
 
 /// The given input files as runs: the first row's states (the run's
@@ -218,28 +148,30 @@ fn given_runs(
         .collect()
 }
 
-fn verify_with_progress(
-    model: &Interpreter,
-    design: &Design,
-    runs: usize,
-    seed: u64,
-) -> Option<Verification> {
+/// Runs `f` with a progress bar on a terminal counting the verification's
+/// trials (`runs` per runs option verified: the bar grows when the design
+/// verifies another).
+fn with_progress<T>(runs: Option<usize>, f: impl FnOnce(&(dyn Fn() + Sync)) -> T) -> T {
     use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
     use std::io::IsTerminal;
-    let bar = if std::io::stderr().is_terminal() {
-        ProgressBar::with_draw_target(Some(runs as u64), ProgressDrawTarget::stderr())
-    } else {
-        ProgressBar::hidden()
+    let Some(runs) = runs.filter(|_| std::io::stderr().is_terminal()) else {
+        return f(&|| ());
     };
+    let bar = ProgressBar::with_draw_target(Some(runs as u64), ProgressDrawTarget::stderr());
     if let Ok(style) = ProgressStyle::with_template(
         "{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} trials (eta {eta})",
     ) {
         bar.set_style(style);
     }
     bar.set_message("leeway design --verify");
-    let v = verify(model, design, runs, seed, &|| bar.inc(1));
+    let out = f(&|| {
+        if bar.position() >= bar.length().unwrap_or(0) {
+            bar.inc_length(runs as u64);
+        }
+        bar.inc(1);
+    });
     bar.finish_and_clear();
-    v
+    out
 }
 
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Failure> {

@@ -6,7 +6,8 @@
 //! ([`excitation`]) — predicts the standard errors of θ against run length
 //! ([`predict`]), reports it ([`report`]) and checks it by Monte Carlo
 //! ([`verify`], on the study engine of `leeway_scenarios::engine`; run by
-//! run on a cluster with [`distributed`]).
+//! run on a cluster with [`distributed`]); judged by that check, the other
+//! runs it tried are verified in turn ([`verified`]).
 //!
 //! Seeded throughout: the same plan and seed give the same design and the
 //! same verification, whatever the thread count.
@@ -25,4 +26,5 @@ pub mod report;
 pub mod signs;
 pub mod steady;
 pub mod trial;
+pub mod verified;
 pub mod verify;

@@ -23,8 +23,8 @@ pub struct Prediction {
     /// θ designed for.
     pub theta: Vec<f64>,
     /// θ's predicted standard errors at `samples` (`None`: held or not
-    /// determined): the root-mean-square error over the pilot trials when
-    /// they ran, else the estimator's asymptotic ones.
+    /// determined): half the 95th percentile of |error| over the pilot
+    /// trials when they ran, else the estimator's asymptotic ones.
     pub std_errors: Vec<Option<f64>>,
     /// The estimator's own asymptotic standard errors on one realisation.
     pub asymptotic: Vec<Option<f64>>,
@@ -200,8 +200,8 @@ fn plan_mean(model: &dyn Model, c: &Conditions, medium: &str, component: &str) -
         .map_or(f64::NAN, |i| c.mean[i])
 }
 
-/// Replaces the asymptotic standard errors by the (trimmed) root-mean-square
-/// error of `trials` pilot realisations of the design (seeded, on the study
+/// Replaces the asymptotic standard errors by the spread of the errors of
+/// `trials` pilot realisations ([`interval_sigma`]) of the design (seeded, on the study
 /// engine): the estimator's own covariance can be off by a factor when the
 /// residuals are correlated beyond its lags or dominated by measurement
 /// noise, and a design is judged by the spread the trial will see. Keeps
@@ -244,7 +244,7 @@ pub fn calibrate(
     if ok.len() * 2 < trials.max(1) {
         return;
     }
-    let rms = |errors: &mut dyn Iterator<Item = f64>| trimmed_rms(errors.collect());
+    let rms = |errors: &mut dyn Iterator<Item = f64>| interval_sigma(errors.collect());
     prediction.std_errors = (0..prediction.theta.len())
         .map(|p| {
             prediction.asymptotic[p]?;
@@ -261,29 +261,26 @@ pub fn calibrate(
     prediction.trials = ok.len();
 }
 
-/// The root-mean-square of the errors within four robust standard
-/// deviations (`1.4826·median|e|`) of zero: the spread of the bulk, which
-/// ±2σ intervals are about, without the rare trial whose refinement ran
-/// away inflating it.
-fn trimmed_rms(mut errors: Vec<f64>) -> f64 {
-    if errors.is_empty() {
+/// Half the 95th percentile of |error| (linearly interpolated): the σ
+/// whose ±2σ interval covers 95 % of the pilot's errors whatever the
+/// shape of their distribution. A Gaussian spread gives its standard
+/// deviation (1.96/2 of it); a heavy tail (a refinement that did not
+/// settle) widens it, where a root-mean-square of the bulk would leave the
+/// interval covering less than it says.
+fn interval_sigma(errors: Vec<f64>) -> f64 {
+    let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
+    if abs.is_empty() {
         return f64::NAN;
     }
-    let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
     abs.sort_by(f64::total_cmp);
-    let m = abs.len() / 2;
-    let median = if abs.len() % 2 == 1 {
-        abs[m]
-    } else {
-        0.5 * (abs[m - 1] + abs[m])
-    };
-    let limit = 4.0 * 1.4826 * median;
-    if limit > 0.0 {
-        errors.retain(|e| e.abs() <= limit);
-    }
-    let n = errors.len().max(1) as f64;
-    (errors.iter().map(|e| e * e).sum::<f64>() / n).sqrt()
+    let at = COVERED * (abs.len() - 1) as f64;
+    let (lo, frac) = (at.floor() as usize, at - at.floor());
+    let hi = (lo + 1).min(abs.len() - 1);
+    0.5 * (abs[lo] + frac * (abs[hi] - abs[lo]))
 }
+
+/// The share of the pilot's errors a ±2σ interval covers.
+const COVERED: f64 = 0.95;
 
 /// An estimate's failure in a line: its code and, for a rank deficiency,
 /// the parameters not separately excited (not the combinations).

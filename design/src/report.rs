@@ -340,8 +340,8 @@ pub struct PoorlyDetermined {
 pub struct PredictionReport {
     /// Samples per experiment the standard errors were evaluated at.
     pub evaluated_at: usize,
-    /// Pilot trials behind the standard errors (their root-mean-square
-    /// error); 0 when they are the estimator's asymptotic ones.
+    /// Pilot trials behind the standard errors (half the 95th percentile
+    /// of their |error|); 0 when they are the estimator's asymptotic ones.
     pub trials: usize,
     /// At the budget's run length.
     pub parameters: Vec<ParameterPrediction>,

@@ -37,8 +37,54 @@ pub struct Verification {
     /// the plan's mean disturbances): what an estimated model is measured
     /// against.
     pub true_fits: Vec<(String, f64)>,
+    /// The seconds of the held-out run's first part ([`EARLY`] of it)
+    /// whose fits are measured as well: how the fit falls with the length
+    /// of the free run.
+    pub early_seconds: f64,
+    /// The true model's fit per state over that first part.
+    pub true_early_fits: Vec<(String, f64)>,
     /// Whether the designed method's models are what the user needs.
     pub verdict: Verdict,
+    /// With the other runs the design tried verified after a failing
+    /// verdict ([`crate::verified`]): each option verified, in order, the
+    /// design's first (empty when only the design was verified).
+    pub runs_verified: Vec<RunsVerified>,
+}
+
+/// One runs option of a design, verified.
+#[derive(Clone, Debug, Serialize)]
+pub struct RunsVerified {
+    /// Runs.
+    pub runs: usize,
+    /// The estimate's centring: `experiment`, `pooled`, `none`.
+    pub centring: String,
+    /// Seconds per run.
+    pub seconds: f64,
+    /// Whether its verified models passed the verdict (`None`: not
+    /// verified, the design did not keep its signs or its area).
+    pub passed: Option<bool>,
+    /// What failed, one line each.
+    pub failures: Vec<String>,
+    /// Whether it is the design reported.
+    pub taken: bool,
+}
+
+impl RunsVerified {
+    /// The runs of `design` with their verification.
+    pub fn of(design: &Design, v: Option<&Verification>) -> RunsVerified {
+        let chosen = design.runs_tried.iter().find(|o| o.chosen);
+        RunsVerified {
+            runs: chosen.map_or(design.runs.len(), |o| o.runs),
+            centring: chosen.map_or_else(
+                || design.centring_used.map_or("-", |c| c.name()).to_string(),
+                |o| o.centring.clone(),
+            ),
+            seconds: design.seconds,
+            passed: v.map(|v| v.verdict.passed),
+            failures: v.map_or(Vec::new(), |v| v.verdict.failures.clone()),
+            taken: false,
+        }
+    }
 }
 
 /// The outcome judged: the designed method's held-out fit within
@@ -63,8 +109,58 @@ pub const COVERAGE: (f64, f64) = (0.90, 0.98);
 /// Trials below which coverage is reported but not judged: its sampling
 /// error (±2.2 points at 100 trials) would exceed the band.
 pub const COVERAGE_TRIALS: usize = 100;
+/// The chance, were the true coverage at the band's nearer edge, below
+/// which a measured coverage fails ([`coverage_outside`]).
+pub const COVERAGE_TEST: f64 = 0.05;
+
+/// Whether a coverage measured on `n` trials lies outside [`COVERAGE`]
+/// beyond its sampling error: as few covered (or as many) would happen
+/// with a chance below [`COVERAGE_TEST`] were the true coverage at the
+/// band's nearer edge (a one-sided binomial test). At 100 trials: below
+/// 85 % fails; no count above the band does (100 of 100 happens 13 % of
+/// the time at 98 %).
+pub fn coverage_outside(coverage: f64, n: usize) -> bool {
+    let (low, high) = covered_limits(n);
+    coverage < low - 1e-12 || coverage > high + 1e-12
+}
+
+/// The smallest and largest coverage on `n` trials that pass
+/// [`coverage_outside`].
+pub fn covered_limits(n: usize) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 1.0);
+    }
+    // Smallest k with P(X ≤ k | p = low) ≥ the test's level.
+    let low = (0..=n)
+        .find(|k| binomial_cdf(*k, n, COVERAGE.0) >= COVERAGE_TEST)
+        .unwrap_or(0);
+    // Largest k with P(X ≥ k | p = high) ≥ the level.
+    let high = (0..=n)
+        .rev()
+        .find(|k| *k == 0 || 1.0 - binomial_cdf(k - 1, n, COVERAGE.1) >= COVERAGE_TEST)
+        .unwrap_or(n);
+    (low as f64 / n as f64, high as f64 / n as f64)
+}
+
+/// P(X ≤ k) for X binomial with `n` trials of chance `p` (0 < p < 1),
+/// summed in logs.
+fn binomial_cdf(k: usize, n: usize, p: f64) -> f64 {
+    let (lp, lq) = (p.ln(), (1.0 - p).ln());
+    let mut ln_choose = 0.0;
+    let mut sum = 0.0;
+    for i in 0..=k.min(n) {
+        if i > 0 {
+            ln_choose += ((n - i + 1) as f64).ln() - (i as f64).ln();
+        }
+        sum += (ln_choose + i as f64 * lp + (n - i) as f64 * lq).exp();
+    }
+    sum.min(1.0)
+}
 /// The share of trials whose model may diverge on the held-out run.
 pub const DIVERGED: f64 = 0.05;
+/// The share of the held-out run, from its start, over which the fits are
+/// also measured.
+pub const EARLY: f64 = 0.1;
 
 /// How often a held argument kept its side.
 #[derive(Clone, Debug, Serialize)]
@@ -96,6 +192,8 @@ pub struct MethodVerification {
     pub parameters: Vec<ParameterVerification>,
     /// Mean validation fit per state (%), over runs whose model did not diverge.
     pub fits: Vec<(String, f64)>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    pub early_fits: Vec<(String, f64)>,
     /// Runs whose model diverged on the validation run.
     pub diverged: usize,
     /// Runs whose refinement did not settle (the runaway guard stopped it
@@ -143,6 +241,9 @@ pub struct Estimated {
     pub converged: bool,
     /// Validation fits per state (`None`: the model diverged).
     pub fits: Option<Vec<f64>>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    #[serde(default)]
+    pub early_fits: Option<Vec<f64>>,
 }
 
 /// One run's results: per method the estimate (or its error), per
@@ -156,6 +257,9 @@ pub struct RunResult {
     /// held-out run (realised with its θ); without one, the bench's.
     #[serde(default)]
     pub true_fits: Option<Vec<f64>>,
+    /// The same over the held-out run's first part ([`EARLY`]).
+    #[serde(default)]
+    pub true_early_fits: Option<Vec<f64>>,
     /// Per method, in the order of `Method::ALL`.
     pub estimates: Vec<Outcome>,
     /// Per experiment and held argument, the fraction of samples on its side.
@@ -167,7 +271,7 @@ pub struct RunResult {
 pub struct Bench<'a> {
     noise: &'a Noise,
     validation: Experiment,
-    true_fits: Vec<f64>,
+    true_fits: (Vec<f64>, Vec<f64>),
     methods: &'static [Method],
     designed: Method,
 }
@@ -213,7 +317,7 @@ impl<'a> Bench<'a> {
             model,
             design,
             (self.methods, self.designed),
-            &self.true_fits,
+            (&self.true_fits.0, &self.true_fits.1),
             seed,
             results,
         )
@@ -247,6 +351,7 @@ fn one_run(
         return RunResult {
             truth: Vec::new(),
             true_fits: None,
+            true_early_fits: None,
             estimates: Vec::new(),
             kept: Vec::new(),
         };
@@ -276,7 +381,7 @@ fn one_run(
                 &held_out,
                 Disturbances::Constant(&c.mean),
             );
-            let f = fits(&held_out, &sim);
+            let f = window_fits(&held_out, &sim);
             (held_out, f)
         });
     let validation = own.as_ref().map_or(validation, |(v, _)| v);
@@ -310,19 +415,21 @@ fn one_run(
             };
             let est = estimate(model, &sources, &options)
                 .map_err(|e| format!("{}: {}", e.code, e.message))?;
-            let fits = validate(model, &est, validation);
+            let (fits, early_fits) = validate(model, &est, validation).unzip();
             Ok(Estimated {
                 rank_deficient: deficient(&est, &held_by_design(design)),
                 converged: est.diagnostics.converged,
                 theta: est.theta,
                 std_errors: est.std_errors,
                 fits,
+                early_fits,
             })
         })
         .collect();
     RunResult {
         truth,
-        true_fits: own.map(|(_, f)| f),
+        true_fits: own.as_ref().map(|(_, f)| f.0.clone()),
+        true_early_fits: own.map(|(_, f)| f.1),
         estimates,
         kept: kept_fractions,
     }
@@ -342,7 +449,11 @@ fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> O
 /// The true model's fit per state on the held-out run: θ of the plan with
 /// the plan's mean disturbances (what no estimate can beat: the rest is
 /// the random disturbance and the noise).
-fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Option<Vec<f64>> {
+fn true_fits(
+    model: &dyn Model,
+    design: &Design,
+    validation: &Experiment,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let c = design.conditions.as_ref()?;
     let sim = leeway_model::simulate::simulate(
         model,
@@ -350,12 +461,40 @@ fn true_fits(model: &dyn Model, design: &Design, validation: &Experiment) -> Opt
         validation,
         Disturbances::Constant(&c.mean),
     );
-    Some(fits(validation, &sim))
+    Some(window_fits(validation, &sim))
+}
+
+/// Fits per state over the whole run and over its first [`EARLY`].
+fn window_fits(
+    data: &Experiment,
+    sim: &leeway_model::simulate::Trajectory,
+) -> (Vec<f64>, Vec<f64>) {
+    let whole = fits(data, sim);
+    let early = data
+        .states
+        .iter()
+        .zip(&sim.states)
+        .map(|(y, s)| {
+            let n = y.len().min(s.len());
+            let k = early_samples(n);
+            leeway_model::simulate::fit(&y[..k], &s[..k])
+        })
+        .collect();
+    (whole, early)
+}
+
+/// Samples in the first [`EARLY`] of `n` (at least 2, at most `n`).
+fn early_samples(n: usize) -> usize {
+    ((EARLY * n as f64).round() as usize).clamp(2.min(n), n)
 }
 
 /// Fits per state of `est` simulated on `validation` with its disturbance
 /// means held; `None` when it diverged.
-fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Option<Vec<f64>> {
+fn validate(
+    model: &dyn Model,
+    est: &Estimate,
+    validation: &Experiment,
+) -> Option<(Vec<f64>, Vec<f64>)> {
     let ir = model.ir();
     let means: Vec<f64> = ir
         .components
@@ -374,15 +513,15 @@ fn validate(model: &dyn Model, est: &Estimate, validation: &Experiment) -> Optio
         validation,
         Disturbances::Constant(&means),
     );
-    let f = fits(validation, &sim);
-    (!sim.diverged && f.iter().all(|v| v.is_finite())).then_some(f)
+    let f = window_fits(validation, &sim);
+    (!sim.diverged && f.0.iter().all(|v| v.is_finite())).then_some(f)
 }
 
 fn summarise(
     model: &dyn Model,
     design: &Design,
     (methods, designed): (&[Method], Method),
-    true_fits: &[f64],
+    (true_fits, true_early): (&[f64], &[f64]),
     seed: u64,
     results: &[RunResult],
 ) -> Verification {
@@ -465,15 +604,9 @@ fn summarise(
                 })
                 .collect();
             let fitted: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.fits.as_ref()).collect();
-            let fits = ir
-                .states
-                .iter()
-                .enumerate()
-                .map(|(s, name)| {
-                    let v: Vec<f64> = fitted.iter().map(|f| f[s]).collect();
-                    (name.clone(), mean_std(&v).0)
-                })
-                .collect();
+            let early: Vec<&Vec<f64>> = ok.iter().filter_map(|e| e.0.early_fits.as_ref()).collect();
+            let fits = per_state(ir, &fitted);
+            let early_fits = per_state(ir, &early);
             MethodVerification {
                 method: m.name().to_string(),
                 designed_for: *m == designed,
@@ -482,30 +615,45 @@ fn summarise(
                 rank_deficient,
                 parameters,
                 fits,
+                early_fits,
                 diverged: ok.len() - fitted.len(),
                 unconverged: ok.iter().filter(|e| !e.0.converged).count(),
             }
         })
         .collect();
     // With a prior each run has its own true model: their mean fit.
-    let own: Vec<&Vec<f64>> = results
-        .iter()
-        .filter_map(|r| r.true_fits.as_ref())
-        .collect();
-    let true_fits: Vec<(String, f64)> = ir
-        .states
-        .iter()
-        .enumerate()
-        .map(|(s, name)| {
-            let f = if own.is_empty() {
-                true_fits.get(s).copied().unwrap_or(f64::NAN)
-            } else {
-                mean_std(&own.iter().map(|f| f[s]).collect::<Vec<f64>>()).0
-            };
-            (name.clone(), f)
-        })
-        .collect();
-    let verdict = judge(design, &methods, &true_fits, runs);
+    let truths = |own: Vec<&Vec<f64>>, bench: &[f64]| -> Vec<(String, f64)> {
+        if own.is_empty() {
+            ir.states
+                .iter()
+                .enumerate()
+                .map(|(s, name)| (name.clone(), bench.get(s).copied().unwrap_or(f64::NAN)))
+                .collect()
+        } else {
+            per_state(ir, &own)
+        }
+    };
+    let true_fits = truths(
+        results
+            .iter()
+            .filter_map(|r| r.true_fits.as_ref())
+            .collect(),
+        true_fits,
+    );
+    let true_early_fits = truths(
+        results
+            .iter()
+            .filter_map(|r| r.true_early_fits.as_ref())
+            .collect(),
+        true_early,
+    );
+    let early_seconds = design.step * early_samples(design.samples) as f64;
+    let verdict = judge(
+        design,
+        &methods,
+        (&true_fits, &true_early_fits, early_seconds),
+        runs,
+    );
     Verification {
         runs,
         seed,
@@ -513,7 +661,10 @@ fn summarise(
         signs,
         methods,
         true_fits,
+        early_seconds,
+        true_early_fits,
         verdict,
+        runs_verified: Vec::new(),
     }
 }
 
@@ -522,7 +673,7 @@ fn summarise(
 fn judge(
     design: &Design,
     methods: &[MethodVerification],
-    true_fits: &[(String, f64)],
+    (true_fits, true_early, early_seconds): (&[StateFit], &[StateFit], f64),
     runs: usize,
 ) -> Verdict {
     let pct = |x: f64| leeway_model::number::short_number(100.0 * x);
@@ -568,18 +719,24 @@ fn judge(
         ));
     }
     if runs >= COVERAGE_TRIALS {
+        // Outside the band beyond the sampling error of the trials: the
+        // count covered is improbable (one-sided binomial, < 5 %) were the
+        // true coverage at the band's nearer edge.
         let outside: Vec<String> = m
             .parameters
             .iter()
             .filter_map(|p| p.coverage.map(|c| (p, c)))
-            .filter(|(_, c)| !(COVERAGE.0..=COVERAGE.1).contains(c))
+            .filter(|(_, c)| coverage_outside(*c, estimated))
             .map(|(p, c)| format!("{} {} %", p.name, pct(c)))
             .collect();
         if !outside.is_empty() {
+            let n = estimated;
             failures.push(format!(
-                "±2σ coverage outside {}–{} %: {}",
+                "±2σ coverage outside {}–{} % beyond the sampling error of {n} trials (below {} % or above {} %): {}",
                 pct(COVERAGE.0),
                 pct(COVERAGE.1),
+                pct(covered_limits(n).0),
+                pct(covered_limits(n).1),
                 outside.join(", ")
             ));
             help.push(
@@ -633,9 +790,18 @@ fn judge(
             .zip(true_fits)
             .any(|((_, f), (_, t))| *f < t - FIT_POINTS)
         {
-            help.push(
-                "a held-out fit far below the true model's in a state: its parameters' errors add up along a free run — measure the medium, or runs at more operating points".into(),
-            );
+            let pair = |f: &[(String, f64)]| {
+                f.iter()
+                    .map(|(_, x)| leeway_model::number::short_number(*x))
+                    .collect::<Vec<_>>()
+                    .join("/")
+            };
+            help.push(format!(
+                "a held-out fit far below the true model's: over the held-out run's first {} s the models fit {} % (the true model {} %) — the errors add up along the free run (a small error in a rate integrates into the heading, and an earth-fixed medium's direction with it): measure the medium, or runs at more operating points",
+                leeway_model::number::short_number(early_seconds),
+                pair(&m.early_fits),
+                pair(true_early)
+            ));
         }
     }
     Verdict {
@@ -669,6 +835,21 @@ fn deficient(e: &Estimate, held_by_design: &[String]) -> bool {
         })
 }
 
+/// A state's name and a fit (%).
+type StateFit = (String, f64);
+
+/// Per state, the mean over runs of their fits.
+fn per_state(ir: &leeway_structure::ir::Ir, fits: &[&Vec<f64>]) -> Vec<(String, f64)> {
+    ir.states
+        .iter()
+        .enumerate()
+        .map(|(s, name)| {
+            let v: Vec<f64> = fits.iter().filter_map(|f| f.get(s).copied()).collect();
+            (name.clone(), mean_std(&v).0)
+        })
+        .collect()
+}
+
 /// Mean and standard deviation (n − 1) of the finite values: the study's.
 fn mean_std(v: &[f64]) -> (f64, f64) {
     let (mean, std, _) = leeway_scenarios::study::mean_std(v.iter().copied());
@@ -681,4 +862,25 @@ fn centring_for(design: &Design, method: Method) -> Option<Centring> {
     (Some(method) == design.method_used)
         .then_some(design.centring_used)
         .flatten()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{binomial_cdf, covered_limits};
+
+    #[test]
+    fn the_binomial_tail_sums_to_one_and_matches_a_hand_count() {
+        assert!((binomial_cdf(100, 100, 0.9) - 1.0).abs() < 1e-12);
+        // P(X ≤ 1 | 3, 0.5) = (1 + 3)/8.
+        assert!((binomial_cdf(1, 3, 0.5) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn coverage_at_100_trials_fails_below_85_and_never_above() {
+        // P(X ≤ 84 | 100, 0.9) = 0.040 < 5 % ≤ P(X ≤ 85) = 0.073.
+        assert_eq!(covered_limits(100), (0.85, 1.0));
+        // 1000 trials narrow the band's allowance to about a point.
+        let (low, high) = covered_limits(1000);
+        assert!((0.88..0.89).contains(&low) && (0.985..0.99).contains(&high));
+    }
 }

@@ -13,12 +13,13 @@ use crate::model::Model;
 use crate::options::choice;
 use leeway_data::write;
 use leeway_design::bounds::{PILOT, TRIALS, pilot};
-use leeway_design::design::{DesignOptions, design};
+use leeway_design::design::DesignOptions;
 use leeway_design::distributed::{summarise, trial, verifiable};
 use leeway_design::document::json;
 use leeway_design::plan::{locate, parse};
 use leeway_design::report::Design;
-use leeway_design::verify::verify;
+use leeway_design::verified::design_verified;
+use leeway_design::verify::Verification;
 use leeway_estimate::Method;
 use leeway_model::Interpreter;
 use leeway_model::model::Model as _;
@@ -34,6 +35,9 @@ pub struct DesignArgs {
     target: Option<f64>,
     seed: u64,
     pilot: usize,
+    /// Monte Carlo trials verifying the design, and the other runs it
+    /// tried when its verdict fails (`None`: not verified here).
+    verify: Option<usize>,
 }
 
 /// The CLI's bounds (`leeway_design::bounds`), checked here too so that a
@@ -92,12 +96,15 @@ fn failure(e: &leeway_design::error::DesignError, plan: &str, located: bool) -> 
     Failure::design(class, e.code, &e.message, &e.hint, location)
 }
 
-/// One design: the model it was made for, the design and its seed.
+/// One design: the model it was made for, the design, its seed and, when
+/// made with `verify`, its verification (the design then the first of the
+/// runs it tried whose verified models pass, as the CLI's).
 #[pyclass(module = "leeway._leeway", frozen)]
 pub struct Designed {
     interpreter: Interpreter,
     design: Design,
     seed: u64,
+    verification: Option<Verification>,
 }
 
 #[pymethods]
@@ -116,21 +123,23 @@ impl Designed {
         located: bool,
         options: DesignArgs,
     ) -> PyResult<Designed> {
+        let trials = checked_runs(options.verify)?;
         let options = options.options()?;
         let ir = model.ir.clone();
         let made = py.detach(|| {
             let interpreter = Interpreter::new(ir);
             let conditions = parse(plan, json)?.conditions(interpreter.ir())?;
-            let design = design(&interpreter, &conditions, &options)?;
-            Ok((interpreter, design))
+            let verified = design_verified(&interpreter, &conditions, &options, trials, &|| ())?;
+            Ok((interpreter, verified))
         });
         // A plan error at its value's line and column, as the CLI's.
-        let (interpreter, design) =
+        let (interpreter, verified) =
             made.map_err(|e| failure(&locate(e, plan, json), plan_name, located))?;
         Ok(Designed {
             interpreter,
-            design,
+            design: verified.design,
             seed: options.seed,
+            verification: verified.verification,
         })
     }
 
@@ -158,18 +167,10 @@ impl Designed {
         verifiable(&self.interpreter, &self.design)
     }
 
-    /// The JSON document of `leeway design --json`, verified by `verify`
-    /// Monte Carlo runs when given and the design is feasible (as the CLI
-    /// does). The GIL is released while it verifies.
-    #[pyo3(signature = (verify_runs=None))]
-    fn document(&self, py: Python<'_>, verify_runs: Option<usize>) -> PyResult<String> {
-        let runs = checked_runs(verify_runs)?;
-        Ok(py.detach(|| {
-            let verification = runs
-                .filter(|_| self.design.feasible)
-                .and_then(|m| verify(&self.interpreter, &self.design, m, self.seed, &|| ()));
-            json(&self.design, verification.as_ref())
-        }))
+    /// The JSON document of `leeway design --json [--verify M]`: with the
+    /// verification the design was made with, if any (`make`'s `verify`).
+    fn document(&self) -> String {
+        json(&self.design, self.verification.as_ref())
     }
 
     /// Run `index` (from 0) of the design's verification, as bytes. The

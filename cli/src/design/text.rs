@@ -204,7 +204,10 @@ fn families(s: &mut String, d: &Design) {
 
 fn prediction(s: &mut String, d: &Design, p: &PredictionReport) {
     let source = if p.trials > 0 {
-        format!("root-mean-square error of {} simulated trials", p.trials)
+        format!(
+            "half the 95th percentile of |error| of {} simulated trials",
+            p.trials
+        )
     } else {
         "the estimator's asymptotic covariance".to_string()
     };
@@ -412,13 +415,25 @@ fn verification(s: &mut String, v: &Verification) {
     }
     let truth: Vec<String> = v.true_fits.iter().map(|(_, f)| num(*f)).collect();
     let _ = writeln!(s, "  the true model's held-out fit {} %", truth.join("/"));
+    if let Some(m) = v.methods.iter().find(|m| m.designed_for) {
+        let join =
+            |f: &[(String, f64)]| f.iter().map(|(_, x)| num(*x)).collect::<Vec<_>>().join("/");
+        let _ = writeln!(
+            s,
+            "  over the held-out run's first {} s: {} {} %, the true model {} %",
+            num(v.early_seconds),
+            m.method,
+            join(&m.early_fits),
+            join(&v.true_early_fits)
+        );
+    }
     if v.verdict.passed {
         let _ = writeln!(
             s,
             "  verdict: passed (held-out fit within {} points of the true model's in every state{})",
             num(leeway_design::verify::FIT_POINTS),
             if v.runs >= leeway_design::verify::COVERAGE_TRIALS {
-                ", ±2σ coverage 90–98 % for every parameter"
+                ", ±2σ coverage 90–98 % for every parameter within the sampling error of the trials"
             } else {
                 "; coverage is judged from 100 trials"
             }
@@ -433,6 +448,19 @@ fn verification(s: &mut String, v: &Verification) {
         }
         for h in &v.verdict.help {
             let _ = writeln!(s, "  would help: {h}");
+        }
+    }
+    if v.runs_verified.len() > 1 {
+        let _ = writeln!(s, "\nverified the runs the design tried, in turn:");
+        for r in &v.runs_verified {
+            let what = format!("{} × {} s, {} centring", r.runs, num(r.seconds), r.centring);
+            let outcome = match r.passed {
+                Some(true) => "passes".to_string(),
+                Some(false) => format!("fails ({})", r.failures.first().map_or("", String::as_str)),
+                None => "does not keep its signs or its area".to_string(),
+            };
+            let taken = if r.taken { " — the design above" } else { "" };
+            let _ = writeln!(s, "  {what}: {outcome}{taken}");
         }
     }
 }

@@ -10,3 +10,4 @@ mod sea_room;
 mod several;
 mod units;
 mod verification;
+mod verified;

@@ -52,8 +52,14 @@ class Verification:
     argument, the fraction of samples on its side (``mean`` over runs,
     ``min``). ``document["verdict"]``: whether the designed method's
     models pass (held-out fit within 10 points of the true model's,
-    ``document["true_fits"]``; coverage 90–98 % from 100 trials), what
-    fails and what would help — ``leeway design`` exits 1 when not."""
+    ``document["true_fits"]``; ``document["true_early_fits"]`` and each
+    method's ``early_fits``: the same over the held-out run's first tenth,
+    ``document["early_seconds"]`` long; coverage 90–98 % from 100 trials, within
+    their sampling error), what fails and what would help — ``leeway
+    design`` exits 1 when not. ``document["runs_verified"]``: when the
+    design's verdict failed, every runs option the design tried, verified
+    in turn (``passed``, ``failures``, ``taken``): the design is the first
+    that passes, else the search's own."""
 
     runs: int
     seed: int
@@ -327,6 +333,7 @@ def _options(target: Any, seed: Any, pilot: Any, method: Any) -> dict[str, Any]:
         "target": _precision(target),
         "seed": _integer("seed", seed, 0, (1 << 64) - 1),
         "pilot": _integer("pilot", pilot, 0, MAX_PILOT),
+        "verify": None,
     }
 
 
@@ -379,6 +386,6 @@ def design(
     keep every held sign is not an error: ``feasible`` is false and
     ``proposals`` say what would work."""
     options = _options(target, seed, pilot, method)
-    runs = _runs("verify", verify, optional=True)
+    options["verify"] = _runs("verify", verify, optional=True)
     core = _designed(model, _plan(plan), options)
-    return _design(core, _native(core.document, runs))
+    return _design(core, core.document())

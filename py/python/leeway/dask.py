@@ -688,7 +688,10 @@ def verify_design(
     trial; each worker makes the design once from the model, the plan and
     the options, as the driver does, rather than receive it). Returns the
     same ``Design`` as ``leeway.design(model, plan, verify=runs, …)``, its
-    verification bit for bit. A design that does not keep every held sign
+    verification bit for bit, when the design's verdict passes; when it
+    fails, the design is returned with its failing verification — the
+    other runs the design tried are verified in turn by
+    :func:`leeway.design` only. A design that does not keep every held sign
     is returned unverified (``verification`` is ``None``), as locally. A
     cluster left with no worker for ``no_workers_timeout`` seconds raises
     ``EstimateError`` (``worker-lost``), as in :func:`estimate`."""
@@ -700,7 +703,7 @@ def verify_design(
     plan_text = _design._plan(plan)
     core = _design._designed(model, plan_text, options)
     if not core.verifiable:
-        return _design._design(core, _native(core.document, None))
+        return _design._design(core, _native(core.document))
     trials = _mapped(
         client,
         "verification",
