@@ -208,7 +208,7 @@ pub fn chi2_sf(x: f64, df: usize) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{chi2_sf, solve_sub, Solve};
+    use super::{Solve, chi2_sf, solve_sub};
     use leeway_estimate::{MomentBlock, MomentSystem};
     use nalgebra::{DMatrix, DVector};
     use std::collections::BTreeMap;
