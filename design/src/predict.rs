@@ -201,7 +201,7 @@ fn plan_mean(model: &dyn Model, c: &Conditions, medium: &str, component: &str) -
 }
 
 /// Replaces the asymptotic standard errors by the spread of the errors of
-/// `trials` pilot realisations ([`interval_sigma`]) of the design (seeded, on the study
+/// `trials` pilot realisations (`interval_sigma`) of the design (seeded, on the study
 /// engine): the estimator's own covariance can be off by a factor when the
 /// residuals are correlated beyond its lags or dominated by measurement
 /// noise, and a design is judged by the spread the trial will see. Keeps

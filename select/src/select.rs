@@ -17,6 +17,7 @@ use leeway_structure::grammar;
 use leeway_structure::ir::{ColumnKind, Ir};
 use leeway_structure::{CompileOptions, compile};
 use serde::Serialize;
+use std::cell::Cell;
 use std::collections::{BTreeMap, BTreeSet};
 
 /// Options of a selection.
@@ -148,10 +149,14 @@ pub struct Selection {
 /// Passes over the data, over both rounds of the selection.
 #[derive(Clone, Debug, Serialize)]
 pub struct Passes {
+    /// Rounds made: each one estimate of the full candidate model and one
+    /// of its chosen model.
+    pub rounds: usize,
     /// Refinements of the full candidate model's estimate (each one pass, plus
     /// its covariance pass).
     pub full_estimate_refinements: usize,
-    /// Free-run simulations of the held-out data, one per step.
+    /// Free-run simulations of the held-out data: one per step of the
+    /// reported path, and those the first round's stopping rule read.
     pub free_runs: usize,
     /// Refinements of the chosen model's estimate.
     pub chosen_estimate_refinements: usize,
@@ -268,6 +273,8 @@ pub fn select(
         let size = candidates.len() - dropped.len();
         steps.push(pre_step(d, &format!("exchangeable with {with}"), size));
     }
+    // The first round only leads to the second: its free runs are made
+    // where its stopping rule reads them, and it suggests nothing.
     let first = run(
         &model,
         &candidates,
@@ -277,6 +284,7 @@ pub fn select(
         validation,
         options,
         None,
+        Round::First,
     )?;
     // Again on instruments simulated by the first choice's estimate: the
     // full candidate model's own simulation, with every false candidate's
@@ -316,16 +324,38 @@ pub fn select(
         validation,
         options,
         Some(start),
+        Round::Last,
     );
     // A second round that cannot be made (its instrument simulation
-    // diverges) leaves the first round's choice.
+    // diverges) leaves the first round's choice, its path in full.
     let Ok(mut second) = second else {
-        return Ok(first);
+        return run(
+            &model,
+            &candidates,
+            &steps,
+            &dropped,
+            experiments,
+            validation,
+            options,
+            None,
+            Round::Last,
+        );
     };
+    second.passes.rounds += first.passes.rounds;
     second.passes.full_estimate_refinements += first.passes.full_estimate_refinements;
     second.passes.free_runs += first.passes.free_runs;
     second.passes.chosen_estimate_refinements += first.passes.chosen_estimate_refinements;
     Ok(second)
+}
+
+/// Which round of the selection a path is.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Round {
+    /// Leads to the next round only: no suggestions, and held-out
+    /// criteria only where its stopping rule reads them.
+    First,
+    /// The round reported.
+    Last,
 }
 
 /// The path and the choice from one estimate of the full candidate model
@@ -341,6 +371,7 @@ fn run(
     validation: &[Experiment],
     options: &SelectOptions,
     start: Option<Start>,
+    round: Round,
 ) -> Result<Selection, SelectError> {
     let mut steps = steps.to_vec();
     let mut dropped = dropped.to_vec();
@@ -429,14 +460,25 @@ fn run(
     };
     // Candidates on the path, before any Wald drop.
     let start_size = active.len();
-    let mut free_runs = 0;
-    let mut record =
+    let free_runs = Cell::new(0);
+    let criterion_of = |active: &BTreeSet<usize>| {
+        let criterion = ctx.criterion(active);
+        if criterion.is_some() {
+            free_runs.set(free_runs.get() + 1);
+        }
+        criterion
+    };
+    // The last round measures every step's held-out criterion as it goes;
+    // the first only those its stopping rule reads, once the path is done.
+    let measuring = Cell::new(round == Round::Last);
+    let record =
         |dropped_now: Option<Dropping>, active: &BTreeSet<usize>, steps: &mut Vec<Step>| {
             let sub = ctx.solve(active, &all);
-            let criterion = ctx.criterion(active);
-            if criterion.is_some() {
-                free_runs += 1;
-            }
+            let criterion = if measuring.get() {
+                criterion_of(active)
+            } else {
+                None
+            };
             let (name, reason, w) = match dropped_now {
                 Some(d) => (Some(d.name), d.reason.to_string(), d.wald),
                 None => (None, "full model".to_string(), None),
@@ -504,11 +546,25 @@ fn run(
         .filter(|(n, _)| !dropped[..first_scored].contains(n))
         .map(|(_, p)| *p)
         .collect();
-    let mut set: BTreeSet<usize> = cand_params
-        .iter()
-        .filter(|(n, _)| !dropped[..by_score].contains(n))
-        .map(|(_, p)| *p)
-        .collect();
+    let path_model = |k: usize| -> BTreeSet<usize> {
+        cand_params
+            .iter()
+            .filter(|(n, _)| !dropped[..k].contains(n))
+            .map(|(_, p)| *p)
+            .collect()
+    };
+    if !measuring.get() {
+        for (k, step) in steps
+            .iter_mut()
+            .enumerate()
+            .take(by_score + 1)
+            .skip(first_scored)
+        {
+            step.criterion = criterion_of(&path_model(k));
+        }
+        measuring.set(true);
+    }
+    let mut set: BTreeSet<usize> = path_model(by_score);
     let score = |s: &BTreeSet<usize>| ctx.solve(s, &all).j - (start_size - s.len()) as f64 * ln_n;
     let mut now = score(&set);
     loop {
@@ -557,11 +613,7 @@ fn run(
     let chosen_set: BTreeSet<usize> = if chosen == refined && refined >= path_end {
         set
     } else {
-        cand_params
-            .iter()
-            .filter(|(n, _)| !dropped[..chosen.min(path_end - 1)].contains(n))
-            .map(|(_, p)| *p)
-            .collect()
+        path_model(chosen.min(path_end - 1))
     };
     let is_dropped = |name: &String| {
         cand_params
@@ -584,17 +636,21 @@ fn run(
     final_options.nominal = None;
     let chosen_estimate = estimate(&chosen_interp, &sources, &final_options)?;
     let chosen_means = disturbance_means(&chosen_model.ir, &chosen_estimate);
-    let suggestions = missing_terms(
-        &chosen_interp,
-        &chosen_estimate.theta,
-        &chosen_means,
-        experiments,
-    );
+    let suggestions = match round {
+        Round::First => Vec::new(),
+        Round::Last => missing_terms(
+            &chosen_interp,
+            &chosen_estimate.theta,
+            &chosen_means,
+            experiments,
+        ),
+    };
     Ok(Selection {
         candidates,
         passes: Passes {
+            rounds: 1,
             full_estimate_refinements: full.diagnostics.refinements,
-            free_runs,
+            free_runs: free_runs.get(),
             chosen_estimate_refinements: chosen_estimate.diagnostics.refinements,
         },
         steps,
