@@ -47,8 +47,9 @@ pub struct SelectArgs {
     /// correlation time of the disturbances, in samples.
     #[arg(long, default_value_t = 1)]
     pub lags: usize,
-    /// A model is within reach of the best held-out criterion within this fraction.
-    #[arg(long, default_value_t = 1.0)]
+    /// A model is within reach of the best held-out criterion c* when its own is at most
+    /// c*·(1 + TOLERANCE·c*).
+    #[arg(long, default_value_t = 0.5)]
     pub tolerance: f64,
     /// Sample time for data without a time column when the model declares no `step`.
     #[arg(long, value_name = "H", value_parser = crate::options::positive)]
@@ -133,7 +134,7 @@ fn execute(args: &SelectArgs) -> Result<(Selection, Vec<Warning>), Failure> {
         return Err(Problem::error(
             "invalid-option",
             format!(
-                "--tolerance {} is not a non-negative fraction",
+                "--tolerance {} is not a non-negative number",
                 args.tolerance
             ),
         )

@@ -35,10 +35,7 @@ fn select_options(args: &SelectArgs) -> Result<SelectOptions, Failure> {
     }
     if !(args.tolerance >= 0.0 && args.tolerance.is_finite()) {
         return Err(Failure::option(
-            format!(
-                "tolerance={} is not a non-negative fraction",
-                args.tolerance
-            ),
+            format!("tolerance={} is not a non-negative number", args.tolerance),
             Some("give a fraction such as 0.1".into()),
         ));
     }

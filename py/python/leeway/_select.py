@@ -86,7 +86,7 @@ def select(
     *,
     method: str = "iv3",
     lags: int = 1,
-    tolerance: float = 1.0,
+    tolerance: float = 0.5,
     step: float | None = None,
     time_tolerance: float = 0.05,
     resample: float | None = None,
@@ -95,7 +95,7 @@ def select(
     args = {
         "method": _text("method", method),
         "lags": _integer("lags", lags, 1, _MAX_LAGS),
-        "tolerance": _number("tolerance", tolerance, hint="give a fraction such as 0.1"),
+        "tolerance": _number("tolerance", tolerance, hint="give a non-negative number such as 0.5"),
         "step": _seconds("step", step),
         "time_tolerance": _seconds("time_tolerance", time_tolerance, optional=False),
         "resample": _seconds("resample", resample),

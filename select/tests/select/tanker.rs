@@ -96,19 +96,16 @@ fn print(selection: &Selection, chosen: [f64; 3], hand: [f64; 3]) {
     }
 }
 
-/// With `--tolerance 0.1` (docs/selection.md's example of a fraction; a
-/// user's choice on four short runs, a candidate model of 40 terms and a
-/// true system richer than any of them), the selected model free-runs on
-/// the six held-out runs at least as well as the hand-written one in every
-/// output (92.3 / 97.2 / 95.7 against 88.7 / 95.7 / 95.4). With tolerance
-/// 0.5 it does not (83.0 / 92.3 / 90.8, 10 terms kept), nor with the default
-/// 1: see `tanker_tolerance_sweep` and the note of #50.
+/// With the default options, the selected model free-runs on the six
+/// held-out runs at least as well as the hand-written one in every output
+/// (13 of 40 kept: 92.3 / 97.2 / 95.7 against 88.7 / 95.7 / 95.4). The
+/// held-out criterion is sharp here (the best model's is 0.14), so the
+/// guard's slack is small: with a slack of a fixed 50 % of the best (last
+/// rule, 10 kept) the selection fell short (83.0 / 92.3 / 90.8). See
+/// `tanker_tolerance_sweep` and the note of #50.
 #[test]
 fn the_selected_tanker_validates_at_least_as_well_as_the_hand_written_one() {
-    let options = SelectOptions {
-        tolerance: 0.1,
-        ..SelectOptions::default()
-    };
+    let options = SelectOptions::default();
     let (selection, chosen, hand) = compare(&options);
     print(&selection, chosen, hand);
     assert_eq!(selection.candidates.len(), 40);
@@ -134,7 +131,7 @@ fn tanker_tolerance_sweep() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1);
-    for tolerance in [0.0, 0.05, 0.1, 0.2, 0.3, 0.5, 1.0] {
+    for tolerance in [0.0, 0.25, 0.5, 1.0, 2.0, 4.0] {
         let mut options = SelectOptions {
             tolerance,
             ..SelectOptions::default()
@@ -151,7 +148,7 @@ fn tanker_tolerance_sweep() {
             hand[1],
             hand[2]
         );
-        if tolerance == 0.5 {
+        if tolerance == SelectOptions::default().tolerance {
             print(&selection, chosen, hand);
         }
     }
