@@ -275,63 +275,8 @@ pub fn select(
         let size = candidates.len() - dropped.len();
         steps.push(pre_step(d, &format!("exchangeable with {with}"), size));
     }
-    // The first round only leads to the second: its free runs are made
-    // where its stopping rule reads them, and it suggests nothing.
-    let first = run(
-        &model,
-        &candidates,
-        &steps,
-        &dropped,
-        experiments,
-        validation,
-        options,
-        None,
-        Round::First,
-    )?;
-    // Again on instruments simulated by the first choice's estimate: the
-    // full candidate model's own simulation, with every false candidate's
-    // noise in its θ, makes weaker instruments (and a poorer long-run
-    // covariance) than a model near the truth.
-    let ir = &model.ir;
-    let theta: Vec<f64> = ir
-        .parameters
-        .iter()
-        .map(|p| first.estimate.get(&p.name).unwrap_or(0.0))
-        .collect();
-    let means = ir
-        .components
-        .iter()
-        .map(|c| {
-            first
-                .estimate
-                .disturbances
-                .iter()
-                .find(|d| {
-                    d.component == c.name && ir.disturbances[c.disturbance].name == d.disturbance
-                })
-                .map_or(0.0, |d| d.mean)
-        })
-        .collect();
-    let start = Start {
-        theta,
-        means,
-        instruments: None,
-    };
-    let second = run(
-        &model,
-        &candidates,
-        &steps,
-        &dropped,
-        experiments,
-        validation,
-        options,
-        Some(start),
-        Round::Last,
-    );
-    // A second round that cannot be made (its instrument simulation
-    // diverges) leaves the first round's choice, its path in full.
-    let Ok(mut second) = second else {
-        return run(
+    let round = |start: Option<Start>, round: Round| {
+        run(
             &model,
             &candidates,
             &steps,
@@ -339,9 +284,31 @@ pub fn select(
             experiments,
             validation,
             options,
-            None,
-            Round::Last,
-        );
+            start,
+            round,
+        )
+    };
+    // The first round only leads to the second: its free runs are made
+    // where its stopping rule reads them, and it suggests nothing.
+    let first = round(None, Round::First)?;
+    // Again on instruments simulated by the first choice's estimate: the
+    // full candidate model's own simulation, with every false candidate's
+    // noise in its θ, makes weaker instruments (and a poorer long-run
+    // covariance) than a model near the truth.
+    let ir = &model.ir;
+    let start = Start {
+        theta: ir
+            .parameters
+            .iter()
+            .map(|p| first.estimate.get(&p.name).unwrap_or(0.0))
+            .collect(),
+        means: disturbance_means(ir, &first.estimate),
+        instruments: None,
+    };
+    // A second round that cannot be made (its instrument simulation
+    // diverges) leaves the first round's choice, its path in full.
+    let Ok(mut second) = round(Some(start), Round::Last) else {
+        return round(None, Round::Last);
     };
     second.passes.rounds += first.passes.rounds;
     second.passes.full_estimate_refinements += first.passes.full_estimate_refinements;
