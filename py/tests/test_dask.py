@@ -257,3 +257,29 @@ def test_the_distributed_study_gives_reproduces_figures(
             for key, value in summary.items():
                 assert json.dumps(value) == json.dumps(reproduced[key]), (case, name, key)
     assert json.dumps(ours["claims"], sort_keys=True) == json.dumps(theirs["claims"], sort_keys=True)
+
+
+def test_the_openings_are_shared_out_by_bytes_per_thread(tmp_path: Path) -> None:
+    # Regression (CI, stop 55): Dask placed every quick opening task on one
+    # worker, and each later pass followed the openings: one worker ran the
+    # whole estimate. The openings now suggest a worker each, the largest
+    # file first to the least loaded worker by bytes per thread.
+    sizes = {"a": 4000, "b": 1000, "c": 3000, "d": 2000}
+    paths = []
+    for name, n in sizes.items():
+        (tmp_path / name).write_bytes(b"x" * n)
+        paths.append(str(tmp_path / name))
+
+    class Threads:
+        def __init__(self, threads: dict[str, int]) -> None:
+            self.threads = threads
+
+        def nthreads(self, callback_timeout: float) -> dict[str, int]:
+            return self.threads
+
+    places = leeway.dask._places(Threads({"w1": 1, "w2": 1}), paths)
+    assert places == ["w1", "w1", "w2", "w2"], places  # 5000 bytes each
+    # A worker of two threads takes twice the bytes.
+    places = leeway.dask._places(Threads({"w1": 2, "w2": 1}), [*paths, str(tmp_path / "gone")])
+    assert places == ["w1", "w1", "w2", "w1", "w2"], places  # 7000 bytes and 3001
+    assert leeway.dask._places(Threads({}), paths) == [None] * 4

@@ -362,6 +362,44 @@ def _wait(client: Any, futures: list[Any], timeout: float | None, workers: _Work
         workers.check()
 
 
+def _submitted(client: Any, f: Callable[..., Answer], args: tuple[list[Any], ...], places: list[str | None] | None) -> list[Any]:
+    if places is None:
+        return list(client.map(f, *args, pure=False, retries=2))
+    return [
+        client.submit(f, *task, pure=False, retries=2, workers=None if at is None else [at], allow_other_workers=True)
+        for at, task in zip(places, zip(*args))
+    ]
+
+
+def _places(client: Any, paths: list[str]) -> list[str | None]:
+    """A worker for each file's opening, sharing the bytes out by threads
+    (the largest file first, to the least loaded worker). Later passes run
+    where a file was opened, so Dask's own placement of these quick tasks
+    by load alone could leave a worker with every file and the others
+    idle for the whole estimate. A file the driver cannot see counts as
+    one byte: the files are then shared out by count."""
+    try:
+        threads = {w: max(int(k), 1) for w, k in client.nthreads(callback_timeout=30).items()}
+    except (OSError, TimeoutError, asyncio.TimeoutError):  # the pass's own wait reports a lost scheduler
+        threads = {}
+    if not threads:
+        return [None] * len(paths)
+
+    def size(path: str) -> int:
+        try:
+            return max(os.path.getsize(path), 1)
+        except OSError:
+            return 1
+
+    load = dict.fromkeys(sorted(threads), 0)
+    places: list[str | None] = [None] * len(paths)
+    for i in sorted(range(len(paths)), key=lambda i: (-size(paths[i]), i)):
+        at = min(load, key=lambda w: ((load[w] + size(paths[i])) / threads[w], w))
+        load[at] += size(paths[i])
+        places[i] = at
+    return places
+
+
 def _mapped(
     client: Any,
     what: str,
@@ -370,6 +408,7 @@ def _mapped(
     no_workers: float | None,
     *args: list[Any],
     keep: list[Any] | None = None,
+    places: list[str | None] | None = None,
 ) -> list[Any]:
     """``f`` mapped over ``args`` on the cluster (each task retried twice by
     Dask), waited for at most ``timeout`` seconds; a lost worker or
@@ -379,14 +418,16 @@ def _mapped(
     failed for want of a worker, ends the pass at once in ``worker-lost``.
     A task's ``LeewayError`` is raised as it is. ``keep`` receives the
     futures of the attempt that answered: their results stay on the
-    workers that made them while it holds them."""
+    workers that made them while it holds them. ``places`` suggests a
+    worker for each task (Dask may run it elsewhere, as when that worker
+    is gone)."""
     lost, no_worker = _lost_types(), _no_worker_types()
     workers = _Workers(client, what, no_workers)
     last: BaseException | None = None
     for _ in range(2):
         futures: list[Any] = []
         try:
-            futures = client.map(f, *args, pure=False, retries=2)
+            futures = _submitted(client, f, args, places)
             start = time.monotonic()
             _wait(client, futures, timeout, workers)
             left = None if timeout is None else max(1.0, timeout - (time.monotonic() - start))
@@ -543,7 +584,10 @@ def estimate(
     # that worker is lost, Dask opens the file again on another.
     openings: list[Any] = []
     try:
-        opened = _mapped(client, "open", _open, timeout, no_workers, models, paths, settings, tokens, keep=openings)
+        opened = _mapped(
+            client, "open", _open, timeout, no_workers, models, paths, settings, tokens,
+            keep=openings, places=_places(client, paths),
+        )
         identities = [identity for _, _, identity in opened]
         offsets = []
         total = 0
