@@ -149,3 +149,16 @@ def test_the_selection_figure_is_written(ferry: tuple[Path, list[Path]], tmp_pat
     out = tmp_path / "selection.png"
     fig.savefig(out)
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_check_reports_the_candidates_as_the_cli(tmp_path: Path) -> None:
+    path = tmp_path / "cand.som"
+    path.write_text(CANDIDATES)
+    check = leeway.Model.load(path).check()
+    cli = json.loads(run_leeway("check", str(path), "--json").stdout)
+    assert check.candidates == cli["candidates"]
+    assert check.candidates is not None
+    assert check.candidates["candidates"] == ["X_uu", "X_vr", "X_r", "Y_vv", "Y_ur", "Y_tn", "N_rr", "N_uv", "N_ty"]
+    plain = tmp_path / "plain.som"
+    plain.write_text(CANDIDATES.replace("?", ""))
+    assert leeway.Model.load(plain).check().candidates is None

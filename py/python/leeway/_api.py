@@ -212,6 +212,12 @@ class Check:
     nuisance: dict[str, Any]
     """The nuisance reduction: ``before``, ``after``, ``kept``, ``dropped``, ``regressors``."""
     aggregates: tuple[dict[str, Any], ...]
+    candidates: dict[str, Any] | None
+    """A candidate model's candidates (``?name``): ``candidates`` in
+    declaration order, ``full_set`` the verdict on the full set,
+    ``exchangeable`` [{``candidate``, ``stands_for``}] (``select`` keeps
+    ``stands_for``), ``refused`` why ``select`` refuses them, or ``None``;
+    ``None`` for a model without candidates (docs/selection.md)."""
     warnings: tuple[str, ...]
     notes: tuple[str, ...]
     document: dict[str, Any]
@@ -247,6 +253,7 @@ class Check:
             combinations=combinations,
             nuisance=d["nuisance"],
             aggregates=tuple(d["aggregates"]),
+            candidates=d.get("candidates"),
             warnings=tuple(python_spelling(w["message"]) for w in d["warnings"]),
             notes=tuple(python_spelling(n["message"]) for n in d["notes"]),
             document=d,
