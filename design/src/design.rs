@@ -12,7 +12,7 @@ use crate::excitation::Excitation;
 use crate::operating::{operating_point, other_points};
 use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
-use crate::report::{self, Design, FamilyScore, RunsOption};
+use crate::report::{self, Design, DifferBy, FamilyScore, RunsOption};
 use crate::signs::{held, pointwise_states};
 use crate::trial::{Base, Fitted, Run, draw_theta, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
@@ -34,10 +34,10 @@ pub struct DesignOptions {
     /// Pilot trials calibrating the predicted standard errors (0: the
     /// estimator's asymptotic ones).
     pub pilot: usize,
-    /// The runs to take, as `Design::runs_tried` names them (their number
-    /// and the centring): that option whatever its score (`None`: the
-    /// search chooses). What `--verify` uses to try the others.
-    pub runs: Option<(usize, Centring)>,
+    /// The runs to take, as `Design::runs_tried` names them (their number,
+    /// the centring, what sets them apart): that option whatever its score
+    /// (`None`: the search chooses). What `--verify` uses to try the others.
+    pub runs: Option<(usize, Centring, DifferBy)>,
 }
 
 impl Default for DesignOptions {
@@ -73,7 +73,7 @@ pub fn design(
     // is allocated for it.
     let n = c.budget.samples(runs_needed, c.h)?;
     let pointwise = pointwise_states(ir, kind);
-    let mut bases = bases(model, c, kind, &patterns, &pointwise, choose_one)?;
+    let (mut bases, mut partners) = bases(model, c, kind, &patterns, &pointwise, choose_one)?;
     let time_scale = bases
         .iter()
         .map(|b| b.operating.steady.time_constant)
@@ -96,7 +96,7 @@ pub fn design(
         heading_noise: Some(noise.heading),
         ..c.clone()
     };
-    for b in &mut bases {
+    for b in bases.iter_mut().chain(&mut partners) {
         b.held = held(ir, kind, &b.pattern, &c);
     }
     let mut estimate = EstimateOptions {
@@ -137,15 +137,20 @@ pub fn design(
     }
     let (mut fitted, mut prediction, mut scores) = chosen;
     let (mut centring, mut n) = (centring, n);
+    let mut differ = if bases.len() == 1 {
+        DifferBy::Nothing
+    } else {
+        DifferBy::SignPattern
+    };
     let mut runs_tried = vec![RunsOption::of(
-        bases.len(),
+        (bases.len(), differ),
         centring,
         n as f64 * c.h,
         prediction.as_ref(),
     )];
     let wanted = options.target.unwrap_or(POORLY);
     let forced = options.runs;
-    let baseline = forced == Some((bases.len(), centring));
+    let baseline = forced == Some((bases.len(), centring, differ));
     if let Some(worst) = prediction
         .as_ref()
         .and_then(Prediction::worst)
@@ -161,10 +166,12 @@ pub fn design(
         };
         let mut best: Option<Alternative> = None;
         let mut best_worst = worst.0;
-        for (alt_bases, alt_n) in plan.candidates(&bases, centring, choose_one, n) {
+        for (alt_bases, alt_n, alt_differ) in
+            plan.candidates(&bases, &partners, centring, choose_one, n)
+        {
             let alt = plan.try_runs(&alt_bases, alt_n, fitted.family);
             let option = RunsOption::of(
-                alt_bases.len(),
+                (alt_bases.len(), alt_differ),
                 Centring::Pooled,
                 alt_n as f64 * c.h,
                 alt.1.as_ref(),
@@ -173,15 +180,15 @@ pub fn design(
             runs_tried.push(option);
             // A clear gain only: each is scored on one realisation.
             let take = match forced {
-                Some(runs) => runs == (alt_bases.len(), Centring::Pooled),
+                Some(runs) => runs == (alt_bases.len(), Centring::Pooled, alt_differ),
                 None => alt_worst < 0.8 * best_worst,
             };
             if alt.0.feasible() && take {
                 best_worst = alt_worst;
-                best = Some((alt_bases, alt_n, alt));
+                best = Some((alt_bases, alt_n, alt_differ, alt));
             }
         }
-        if let Some((alt_bases, alt_n, (f, p, s))) = best {
+        if let Some((alt_bases, alt_n, alt_differ, (f, p, s))) = best {
             for score in &mut scores {
                 if let Some(new) = s.iter().find(|x| x.family == score.family) {
                     *score = new.clone();
@@ -189,15 +196,16 @@ pub fn design(
             }
             bases = alt_bases;
             n = alt_n;
+            differ = alt_differ;
             centring = Centring::Pooled;
             estimate.centring = Some(centring);
             fitted = f;
             prediction = p;
         }
     }
-    let chosen_runs = (bases.len(), centring);
+    let chosen_runs = (bases.len(), centring, differ);
     for o in &mut runs_tried {
-        o.chosen = (o.runs, o.centring.as_str()) == (chosen_runs.0, chosen_runs.1.name());
+        o.chosen = o.key() == Some(chosen_runs);
     }
     let runs_reason = runs_reason(&runs_tried, wanted);
     let runs = fitted.runs(&bases, n, &c);
@@ -211,14 +219,9 @@ pub fn design(
         calibrate(model, setting, options.seed, options.pilot, p);
     }
     let (records, nominal) = nominal_truths(model, &c, &runs, &noise).into_iter().unzip();
-    let validation = fitted.excitations.first().map(|e| Run {
-        x0: bases[0].operating.steady.states.clone(),
-        inputs: Excitation {
-            seed: leeway_scenarios::engine::keyed_seed(options.seed, "validation", 0),
-            ..e.clone()
-        }
-        .generate(n, &c.limits),
-    });
+    let validation = bases
+        .first()
+        .map(|b| held_out_run(&c, b, time_scale, n, options.seed));
     Ok(report::assemble(report::Parts {
         model,
         conditions: &c,
@@ -241,6 +244,30 @@ pub fn design(
     }))
 }
 
+/// The held-out run the verification judges models by: a manoeuvre over
+/// the inputs' whole ranges (random levels across 90 % of each range, held
+/// one to four time constants, smoothed), from the first run's operating
+/// point, as long as a run. Not a run of the design re-realised: those
+/// keep the held signs with small excursions around one steady point,
+/// where a steady offset of a few per cent of θ is most of the variation
+/// and the fit measures the offset rather than the model; a manoeuvre
+/// over the envelope asks what the engineer will ask of the model.
+fn held_out_run(c: &Conditions, base: &Base, time_scale: usize, n: usize, seed: u64) -> Run {
+    let middle = c.limits.iter().map(|l| 0.5 * (l.low + l.high)).collect();
+    let half = c.limits.iter().map(|l| 0.45 * l.span()).collect();
+    Run {
+        x0: base.operating.steady.states.clone(),
+        inputs: Excitation {
+            family: Family::Pulses,
+            offsets: middle,
+            amplitudes: half,
+            time_scale,
+            seed: leeway_scenarios::engine::keyed_seed(seed, "validation", 0),
+        }
+        .generate(n, &c.limits),
+    }
+}
+
 /// θ drawn from the prior whose nominal runs must keep the signs too.
 const PRIOR_DRAWS: usize = 4;
 
@@ -248,10 +275,12 @@ const PRIOR_DRAWS: usize = 4;
 /// `--target` is given (the report's "poorly determined" threshold).
 const POORLY: f64 = 0.10;
 
-/// An alternative's bases, samples per run and fitted design.
+/// An alternative's bases, samples per run, what sets its runs apart and
+/// its fitted design.
 type Alternative = (
     Vec<Base>,
     usize,
+    DifferBy,
     (Fitted, Option<Prediction>, Vec<FamilyScore>),
 );
 
@@ -268,26 +297,32 @@ struct Alternatives<'a> {
 impl Alternatives<'_> {
     /// Designs of several runs with pooled centring, within the budget of
     /// the one-run-per-pattern design: when one pattern suffices, the same
-    /// pattern at two and at three operating points (other speeds), the
-    /// budget shared; else the same runs with pooled centring when the
-    /// design centred per experiment. Under per-experiment centring a
-    /// run's mean is annihilated with the medium's, so a drag level at one
-    /// steady speed is confounded with the medium's mean; pooled centring
-    /// over runs at different speeds keeps the difference between them.
+    /// pattern at two and at three operating points (other speeds), and
+    /// the pattern beside the next one by margin (`partners`: a turn to
+    /// either side), the budget shared; else the same runs with pooled
+    /// centring when the design centred per experiment. Under
+    /// per-experiment centring a run's mean is annihilated with the
+    /// medium's, so a drag level at one steady speed is confounded with
+    /// the medium's mean; pooled centring over runs at different speeds
+    /// keeps the difference between them. One steady turn also leaves its
+    /// states near one point, each term's regressor nearly a multiple of
+    /// the others'; the mirrored turn puts the odd terms (`v`, `v|v|`,
+    /// `r`, the rudder's) on both sides of zero.
     fn candidates(
         &self,
         bases: &[Base],
+        partners: &[Base],
         centring: Centring,
         choose_one: bool,
         n: usize,
-    ) -> Vec<(Vec<Base>, usize)> {
+    ) -> Vec<(Vec<Base>, usize, DifferBy)> {
         if centring != Centring::Experiment {
             return Vec::new();
         }
         let ir = self.model.ir();
         let kind = self.estimate.method.predictor();
         if !choose_one {
-            return vec![(bases.to_vec(), n)];
+            return vec![(bases.to_vec(), n, DifferBy::SignPattern)];
         }
         let Some(first) = bases.first() else {
             return Vec::new();
@@ -298,21 +333,27 @@ impl Alternatives<'_> {
         {
             return Vec::new();
         }
+        let enough = |k: usize| n / k >= crate::bounds::SAMPLES.0;
         let others = other_points(self.model, self.c, &first.held, &first.operating, 2);
-        (1..=others.len())
-            .filter_map(|more| {
-                let k = more + 1;
-                let each = n / k;
-                (each >= crate::bounds::SAMPLES.0).then(|| {
-                    let mut b = vec![first.clone()];
-                    b.extend(others[..more].iter().map(|op| Base {
-                        operating: op.clone(),
-                        ..first.clone()
-                    }));
-                    (b, each)
-                })
+        let mut out: Vec<(Vec<Base>, usize, DifferBy)> = (1..=others.len())
+            .filter(|more| enough(more + 1))
+            .map(|more| {
+                let mut b = vec![first.clone()];
+                b.extend(others[..more].iter().map(|op| Base {
+                    operating: op.clone(),
+                    ..first.clone()
+                }));
+                (b, n / (more + 1), DifferBy::Speed)
             })
-            .collect()
+            .collect();
+        if let Some(partner) = partners.first().filter(|_| enough(2)) {
+            out.push((
+                vec![first.clone(), partner.clone()],
+                n / 2,
+                DifferBy::SignPattern,
+            ));
+        }
+        out
     }
 
     /// The runs of `bases` at `n` samples each, excited by `family`,
@@ -354,51 +395,52 @@ fn runs_reason(tried: &[RunsOption], wanted: f64) -> String {
         return String::new();
     };
     let first = &tried[0];
-    let runs = |k: usize| format!("{k} run{}", if k == 1 { "" } else { "s" });
     if tried.len() == 1 {
+        let runs = first.describe();
         return match first.worst_relative {
             Some(w) if w <= wanted => format!(
-                "{} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
-                runs(first.runs),
+                "{runs} (one per sign pattern needed): every θ within {} at the budget by the estimator's covariance on one realisation",
                 pct(Some(wanted))
             ),
             Some(_) => format!(
-                "{} with {} centring: no other runs tried (they are tried with per-experiment centring, whose means pooled centring would keep)",
-                runs(first.runs),
+                "{runs} with {} centring: no other runs tried (they are tried with per-experiment centring, whose means pooled centring would keep)",
                 first.centring
             ),
-            None => format!("{} (one per sign pattern needed)", runs(first.runs)),
+            None => format!("{runs} (one per sign pattern needed)"),
         };
     }
-    // One pattern suffices when the alternatives add runs; else they are
-    // the same runs with pooled centring.
-    let other_speeds = tried.iter().any(|o| o.runs != first.runs);
-    if chosen.runs == first.runs && chosen.centring == first.centring {
+    if std::ptr::eq(chosen, first) {
+        let others: Vec<String> = tried[1..].iter().map(RunsOption::describe).collect();
         return format!(
             "{} with {} centring: {} with pooled centring did not improve the worst relative error ({}) clearly",
-            runs(first.runs),
+            first.describe(),
             first.centring,
-            if other_speeds {
-                "runs at other speeds"
+            if tried[1..].iter().all(|o| o.runs == first.runs) {
+                "the same runs".to_string()
             } else {
-                "the same runs"
+                others.join(", ")
             },
             pct(first.worst_relative)
         );
     }
     format!(
-        "{} with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} and {} centring falls to {} ({}); per-experiment centring annihilates each run's mean with the medium's, leaving a drag level or constant at one steady speed confounded with the medium's mean",
+        "{} with pooled centring (estimate with `--centring pooled`): the worst relative error {} ({}) with {} and {} centring falls to {} ({}); {}",
         if chosen.runs == first.runs {
-            format!("the same {}", runs(chosen.runs))
+            format!("the same {}", first.describe())
         } else {
-            format!("{} at different speeds", runs(chosen.runs))
+            chosen.describe()
         },
         pct(first.worst_relative),
         first.worst_parameter.as_deref().unwrap_or("-"),
-        runs(first.runs),
+        first.describe(),
         first.centring,
         pct(chosen.worst_relative),
         chosen.worst_parameter.as_deref().unwrap_or("-"),
+        if chosen.differ_by.as_deref() == Some("speed") {
+            "per-experiment centring annihilates each run's mean with the medium's, leaving a drag level or constant at one steady speed confounded with the medium's mean"
+        } else {
+            "one steady operating point leaves each term's regressor near a multiple of the others'; runs of other sign patterns put the odd terms on both sides of zero"
+        }
     )
 }
 
@@ -510,8 +552,9 @@ fn single_candidates(ir: &leeway_structure::ir::Ir, kind: PredictorKind) -> Vec<
         .collect()
 }
 
-/// The operating point of each pattern (of the single-experiment
-/// candidates, the best one).
+/// The operating point of each pattern; of the single-experiment
+/// candidates, the best one, and the others whose margins are positive
+/// (best first: the partners of a run of another sign pattern).
 fn bases(
     model: &dyn Model,
     c: &Conditions,
@@ -519,7 +562,7 @@ fn bases(
     patterns: &[SignPattern],
     pointwise: &[usize],
     choose_one: bool,
-) -> Result<Vec<Base>, DesignError> {
+) -> Result<(Vec<Base>, Vec<Base>), DesignError> {
     let ir = model.ir();
     let mut out = Vec::new();
     for p in patterns {
@@ -537,18 +580,21 @@ fn bases(
         });
     }
     if choose_one {
-        let best = out
+        // Best margin first; on ties the last pattern (as `max_by` took it).
+        out.reverse();
+        out.sort_by(|a, b| {
+            b.operating
+                .min_margin()
+                .total_cmp(&a.operating.min_margin())
+        });
+        let partners = out
+            .split_off(1.min(out.len()))
             .into_iter()
-            .max_by(|a, b| {
-                a.operating
-                    .min_margin()
-                    .total_cmp(&b.operating.min_margin())
-            })
-            .into_iter()
+            .filter(|b| b.operating.min_margin() > 0.0)
             .collect();
-        return Ok(best);
+        return Ok((out, partners));
     }
-    Ok(out)
+    Ok((out, Vec::new()))
 }
 
 fn first_family(c: &Conditions) -> Family {

@@ -144,11 +144,55 @@ impl FamilyScore {
     }
 }
 
+/// What sets a design's runs apart from one another.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DifferBy {
+    /// One run.
+    Nothing,
+    /// The same sign pattern at other operating points (speeds).
+    Speed,
+    /// Different sign patterns (e.g. turns to either side).
+    SignPattern,
+}
+
+impl DifferBy {
+    /// Its name in the report (`None` for one run).
+    pub fn name(self) -> Option<&'static str> {
+        match self {
+            DifferBy::Nothing => None,
+            DifferBy::Speed => Some("speed"),
+            DifferBy::SignPattern => Some("sign pattern"),
+        }
+    }
+
+    /// The variant of a report's name.
+    pub fn of_name(name: Option<&str>) -> Option<DifferBy> {
+        match name {
+            None => Some(DifferBy::Nothing),
+            Some("speed") => Some(DifferBy::Speed),
+            Some("sign pattern") => Some(DifferBy::SignPattern),
+            Some(_) => None,
+        }
+    }
+
+    /// `runs` runs set apart by it, in words.
+    pub fn describe(self, runs: usize) -> String {
+        let plural = if runs == 1 { "" } else { "s" };
+        match self {
+            DifferBy::Nothing => format!("{runs} run{plural}"),
+            DifferBy::Speed => format!("{runs} runs at different speeds"),
+            DifferBy::SignPattern => format!("{runs} runs of different sign patterns"),
+        }
+    }
+}
+
 /// A number of runs and a centring the design tried.
 #[derive(Clone, Debug, Serialize)]
 pub struct RunsOption {
     /// Runs.
     pub runs: usize,
+    /// What sets the runs apart: `speed`, `sign pattern`, or null (one run).
+    pub differ_by: Option<String>,
     /// The estimate's centring: `experiment`, `pooled`, `none`.
     pub centring: String,
     /// Seconds per run.
@@ -165,7 +209,7 @@ pub struct RunsOption {
 impl RunsOption {
     /// The option of `runs` runs with `centring` and its prediction.
     pub fn of(
-        runs: usize,
+        (runs, differ_by): (usize, DifferBy),
         centring: Centring,
         seconds: f64,
         prediction: Option<&Prediction>,
@@ -173,12 +217,36 @@ impl RunsOption {
         let worst = prediction.and_then(Prediction::worst);
         RunsOption {
             runs,
+            differ_by: differ_by.name().map(str::to_string),
             centring: centring.name().to_string(),
             seconds,
             worst_relative: worst.as_ref().map(|w| w.0),
             worst_parameter: worst.map(|w| w.1),
             chosen: false,
         }
+    }
+
+    /// Its runs, centring and what sets the runs apart, as
+    /// `DesignOptions::runs` names them.
+    pub fn key(&self) -> Option<(usize, Centring, DifferBy)> {
+        let centring = match self.centring.as_str() {
+            "experiment" => Centring::Experiment,
+            "pooled" => Centring::Pooled,
+            "none" => Centring::None,
+            _ => return None,
+        };
+        Some((
+            self.runs,
+            centring,
+            DifferBy::of_name(self.differ_by.as_deref())?,
+        ))
+    }
+
+    /// Its runs in words.
+    pub fn describe(&self) -> String {
+        DifferBy::of_name(self.differ_by.as_deref())
+            .unwrap_or(DifferBy::Nothing)
+            .describe(self.runs)
     }
 }
 

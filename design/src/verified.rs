@@ -8,7 +8,7 @@
 use crate::design::{DesignOptions, design};
 use crate::error::DesignError;
 use crate::plan::Conditions;
-use crate::report::Design;
+use crate::report::{Design, DifferBy, RunsOption};
 use crate::verify::{RunsVerified, Verification, verify};
 use leeway_model::model::Model;
 use leeway_structure::identify::Centring;
@@ -50,9 +50,9 @@ pub fn design_verified(
     let mut record = vec![RunsVerified::of(&first, Some(&v))];
     let mut outcome = (first, v);
     if !outcome.1.verdict.passed {
-        for (runs, centring) in untried(&outcome.0) {
+        for runs in untried(&outcome.0) {
             let alt = DesignOptions {
-                runs: Some((runs, centring)),
+                runs: Some(runs),
                 ..options.clone()
             };
             // An option the search tried once designs again; one that no
@@ -74,9 +74,9 @@ pub fn design_verified(
     let (design, mut verification) = outcome;
     let taken = (design.runs_tried.iter())
         .find(|o| o.chosen)
-        .map(|o| (o.runs, o.centring.clone()));
+        .map(|o| (o.runs, o.centring.clone(), o.differ_by.clone()));
     for r in &mut record {
-        r.taken = taken == Some((r.runs, r.centring.clone()));
+        r.taken = taken == Some((r.runs, r.centring.clone(), r.differ_by.clone()));
     }
     // Only the design verified: nothing else to record.
     if record.len() > 1 {
@@ -89,19 +89,11 @@ pub fn design_verified(
 }
 
 /// The runs the design tried and did not take, as `DesignOptions::runs`.
-fn untried(design: &Design) -> Vec<(usize, Centring)> {
+fn untried(design: &Design) -> Vec<(usize, Centring, DifferBy)> {
     design
         .runs_tried
         .iter()
         .filter(|o| !o.chosen && o.worst_relative.is_some())
-        .filter_map(|o| {
-            let centring = match o.centring.as_str() {
-                "experiment" => Centring::Experiment,
-                "pooled" => Centring::Pooled,
-                "none" => Centring::None,
-                _ => return None,
-            };
-            Some((o.runs, centring))
-        })
+        .filter_map(RunsOption::key)
         .collect()
 }

@@ -56,6 +56,8 @@ pub struct Verification {
 pub struct RunsVerified {
     /// Runs.
     pub runs: usize,
+    /// What sets the runs apart: `speed`, `sign pattern`, or null (one run).
+    pub differ_by: Option<String>,
     /// The estimate's centring: `experiment`, `pooled`, `none`.
     pub centring: String,
     /// Seconds per run.
@@ -75,6 +77,7 @@ impl RunsVerified {
         let chosen = design.runs_tried.iter().find(|o| o.chosen);
         RunsVerified {
             runs: chosen.map_or(design.runs.len(), |o| o.runs),
+            differ_by: chosen.and_then(|o| o.differ_by.clone()),
             centring: chosen.map_or_else(
                 || design.centring_used.map_or("-", |c| c.name()).to_string(),
                 |o| o.centring.clone(),
@@ -770,14 +773,7 @@ fn judge(
         let tried: Vec<String> = design
             .runs_tried
             .iter()
-            .map(|o| {
-                format!(
-                    "{} run{} with {} centring",
-                    o.runs,
-                    if o.runs == 1 { "" } else { "s" },
-                    o.centring
-                )
-            })
+            .map(|o| format!("{} with {} centring", o.describe(), o.centring))
             .collect();
         if tried.len() > 1 {
             help.push(format!(

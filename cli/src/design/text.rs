@@ -43,9 +43,12 @@ pub fn render(
             .iter()
             .map(|o| {
                 format!(
-                    "{} × {} s, {} centring: {}{}",
+                    "{} × {} s{}, {} centring: {}{}",
                     o.runs,
                     num(o.seconds),
+                    o.differ_by
+                        .as_ref()
+                        .map_or(String::new(), |d| format!(" (differ by {d})")),
                     o.centring,
                     o.worst_relative
                         .map_or("no prediction".to_string(), |w| format!(

@@ -64,3 +64,49 @@ fn the_survey_boat_is_designed_for_two_speeds_and_pooled_centring() {
         );
     }
 }
+
+#[test]
+fn the_survey_boat_tries_the_mirrored_turn_and_is_judged_over_its_envelope() {
+    let boat = model("design/tests/fixtures/survey_boat.som");
+    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
+        .expect("the survey boat's plan");
+    c.budget = leeway_design::bounds::BudgetRule::Time(900.0);
+    c.prior = 0.0;
+    let options = DesignOptions {
+        pilot: 0,
+        ..Default::default()
+    };
+    let d = design(&boat, &c, &options).expect("a design");
+    // One pattern suffices, so the turn to the other side is tried beside
+    // the first, the budget shared.
+    let mirrored = d
+        .runs_tried
+        .iter()
+        .find(|o| o.differ_by.as_deref() == Some("sign pattern"))
+        .unwrap_or_else(|| panic!("{:?}", d.runs_tried));
+    assert_eq!((mirrored.runs, mirrored.seconds), (2, 450.0), "{mirrored:?}");
+    assert_eq!(mirrored.centring, "pooled");
+    // It designs as an option of its own, its runs on either side of v.
+    let forced = DesignOptions {
+        runs: Some((
+            2,
+            leeway_structure::identify::Centring::Pooled,
+            leeway_design::report::DifferBy::SignPattern,
+        )),
+        ..options.clone()
+    };
+    let m = design(&boat, &c, &forced).expect("the mirrored design");
+    let v: Vec<f64> = m.experiments.iter().map(|e| e.steady["v"]).collect();
+    assert!(v[0] * v[1] < 0.0, "{v:?}");
+    assert_ne!(m.experiments[0].pattern, m.experiments[1].pattern);
+    assert!(m.runs_tried.iter().filter(|o| o.chosen).all(|o| o.key() == forced.runs));
+    // The held-out run is a manoeuvre over the inputs' ranges, not the
+    // designed run's small excursions: the rudder to both sides, beyond
+    // half its range, and the thrust over most of its.
+    let held_out = d.validation.as_ref().expect("a held-out run");
+    let column = |i: usize| held_out.inputs.iter().map(move |x| x[i]);
+    let rudder = |f: fn(f64, f64) -> f64, start| column(1).fold(start, f).to_degrees();
+    assert!(rudder(f64::max, f64::MIN) > 17.5 && rudder(f64::min, f64::MAX) < -17.5);
+    let thrust = column(0).fold(f64::MIN, f64::max) - column(0).fold(f64::MAX, f64::min);
+    assert!(thrust > 200.0, "{thrust}");
+}
