@@ -84,7 +84,11 @@ fn the_survey_boat_tries_the_mirrored_turn_and_is_judged_over_its_envelope() {
         .iter()
         .find(|o| o.differ_by.as_deref() == Some("sign pattern"))
         .unwrap_or_else(|| panic!("{:?}", d.runs_tried));
-    assert_eq!((mirrored.runs, mirrored.seconds), (2, 450.0), "{mirrored:?}");
+    assert_eq!(
+        (mirrored.runs, mirrored.seconds),
+        (2, 450.0),
+        "{mirrored:?}"
+    );
     assert_eq!(mirrored.centring, "pooled");
     // It designs as an option of its own, its runs on either side of v.
     let forced = DesignOptions {
@@ -99,7 +103,12 @@ fn the_survey_boat_tries_the_mirrored_turn_and_is_judged_over_its_envelope() {
     let v: Vec<f64> = m.experiments.iter().map(|e| e.steady["v"]).collect();
     assert!(v[0] * v[1] < 0.0, "{v:?}");
     assert_ne!(m.experiments[0].pattern, m.experiments[1].pattern);
-    assert!(m.runs_tried.iter().filter(|o| o.chosen).all(|o| o.key() == forced.runs));
+    assert!(
+        m.runs_tried
+            .iter()
+            .filter(|o| o.chosen)
+            .all(|o| o.key() == forced.runs)
+    );
     // The held-out run is a manoeuvre over the inputs' ranges, not the
     // designed run's small excursions: the rudder to both sides, beyond
     // half its range, and the thrust over most of its.
