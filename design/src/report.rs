@@ -90,7 +90,8 @@ pub struct Design {
     /// The noise designed for.
     #[serde(skip)]
     pub noise_used: Option<Noise>,
-    /// A validation run: run 1's operating point and family, another seed.
+    /// The held-out run: a manoeuvre over the inputs' ranges from run 1's
+    /// operating point (`design::held_out_run`).
     #[serde(skip)]
     pub validation: Option<Run>,
 }

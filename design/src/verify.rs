@@ -1,7 +1,7 @@
 //! `--verify M`: the Monte Carlo study of a design, for any model. Each run
 //! realises every experiment of the design (the plan's random disturbances
 //! and noise, seeded by the run's index), estimates with every method, and
-//! validates each estimate on a fresh nominal run; the summary sets the
+//! validates each estimate on a held-out manoeuvre; the summary sets the
 //! spread of the estimates against the predicted standard errors (coverage
 //! of ±2σ), the signs actually kept, rank deficiencies and fits. Runs go
 //! through the study engine `leeway_scenarios::engine::campaign`, as
@@ -438,9 +438,9 @@ fn one_run(
     }
 }
 
-/// The held-out run: run 1's operating point and excitation family with
-/// another seed, realised as a trial would log it (the plan's random
-/// disturbances and noise, from its own seed).
+/// The held-out run: the design's manoeuvre over the inputs' ranges,
+/// realised as a trial would log it (the plan's random disturbances and
+/// noise, from its own seed).
 fn validation_experiment(model: &dyn Model, design: &Design, noise: &Noise) -> Option<Experiment> {
     let c = design.conditions.as_ref()?;
     let run: &Run = design.validation.as_ref()?;
@@ -792,8 +792,18 @@ fn judge(
                     .collect::<Vec<_>>()
                     .join("/")
             };
+            let short_early = m
+                .early_fits
+                .iter()
+                .zip(true_early)
+                .any(|((_, f), (_, t))| *f < t - FIT_POINTS);
+            let why = if short_early {
+                "short from the start: the parameters' errors, not the free run's length (a longer budget, wider input ranges, or a narrower prior)"
+            } else {
+                "the errors add up along the free run (a small error in a rate integrates into the heading, and an earth-fixed medium's direction with it): measure the medium, or runs at more operating points"
+            };
             help.push(format!(
-                "a held-out fit far below the true model's: over the held-out run's first {} s the models fit {} % (the true model {} %) — the errors add up along the free run (a small error in a rate integrates into the heading, and an earth-fixed medium's direction with it): measure the medium, or runs at more operating points",
+                "a held-out fit far below the true model's: over the held-out run's first {} s the models fit {} % (the true model {} %) — {why}",
                 leeway_model::number::short_number(early_seconds),
                 pair(&m.early_fits),
                 pair(true_early)
