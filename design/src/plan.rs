@@ -44,6 +44,22 @@ pub struct PlanFile {
 pub struct Area {
     /// Metres from the start a run may go.
     pub radius: Option<f64>,
+    /// A box: metres north of the start, `[low, high]` (south negative).
+    #[serde(default, deserialize_with = "optional_pair")]
+    pub north: Option<[f64; 2]>,
+    /// A box: metres east of the start, `[low, high]` (west negative).
+    #[serde(default, deserialize_with = "optional_pair")]
+    pub east: Option<[f64; 2]>,
+}
+
+/// A box-shaped trial area around the start, m (a side not given is
+/// unbounded: a channel).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AreaBox {
+    /// `[low, high]` north of the start.
+    pub north: [f64; 2],
+    /// `[low, high]` east of the start.
+    pub east: [f64; 2],
 }
 
 /// An actuator's limits.
@@ -179,6 +195,8 @@ pub struct Conditions {
     pub prior: f64,
     /// Metres from the start a run's nominal track may go (`None`: no limit given).
     pub area_radius: Option<f64>,
+    /// The box a run's nominal track must stay in (`None`: none given).
+    pub area_box: Option<AreaBox>,
     /// What the plan did not say and the design assumed, in words.
     pub assumptions: Vec<String>,
 }
@@ -199,6 +217,10 @@ pub use crate::bounds::SAMPLES;
 
 /// `range = [low, high]`: exactly two numbers (a fixed-size array would
 /// drop a third in TOML).
+fn optional_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    pair(d).map(Some)
+}
+
 fn pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
     let values = Vec::<f64>::deserialize(d)?;
     match values[..] {
@@ -420,6 +442,7 @@ impl PlanFile {
             }
             None => None,
         };
+        let area_box = self.area_box()?;
         let family = match self.excitation.as_deref() {
             None | Some("auto") => None,
             Some(name) => Some(
@@ -450,8 +473,41 @@ impl PlanFile {
             family,
             prior,
             area_radius,
+            area_box,
             assumptions,
         })
+    }
+
+    /// `[area] north`, `east`: each `[low, high]` metres with the start
+    /// (0) inside.
+    fn area_box(&self) -> Result<Option<AreaBox>, DesignError> {
+        let Some(area) = self.area.as_ref() else {
+            return Ok(None);
+        };
+        let side = |key: &str, range: Option<[f64; 2]>| -> Result<[f64; 2], DesignError> {
+            let Some([low, high]) = range else {
+                return Ok([f64::NEG_INFINITY, f64::INFINITY]);
+            };
+            if !(low.is_finite() && high.is_finite() && low <= 0.0 && 0.0 <= high && low < high) {
+                return Err(DesignError::plan(
+                    format!("area.{key} = [{low}, {high}] does not hold the start"),
+                    if key == "north" {
+                        "give [low, high] metres north of the start, low ≤ 0 ≤ high (south negative: [-200, 400])"
+                    } else {
+                        "give [low, high] metres east of the start, low ≤ 0 ≤ high (west negative: [-200, 400])"
+                    },
+                )
+                .key(&format!("area.{key}")));
+            }
+            Ok([low, high])
+        };
+        if area.north.is_none() && area.east.is_none() {
+            return Ok(None);
+        }
+        Ok(Some(AreaBox {
+            north: side("north", area.north)?,
+            east: side("east", area.east)?,
+        }))
     }
 
     /// θ's prior uncertainty: 0 to [`MAX_PRIOR`] of each nominal value.

@@ -325,6 +325,51 @@ pub struct Track {
     pub positions: Vec<[f64; 2]>,
 }
 
+/// Where run `e`'s track leaves the plan's area, in words (empty: inside).
+fn beyond_area(c: &Conditions, e: usize, t: &Track) -> Vec<String> {
+    let m = |x: f64| leeway_model::number::short_number(x.round());
+    let mut out = Vec::new();
+    if let Some(radius) = c.area_radius.filter(|r| t.farthest > *r) {
+        out.push(format!(
+            "run {} goes {} m from its start, beyond the area's {} m",
+            e + 1,
+            m(t.farthest),
+            m(radius)
+        ));
+    }
+    let Some(area) = c.area_box else {
+        return out;
+    };
+    let reach = |axis: usize| {
+        t.positions.iter().fold((0.0f64, 0.0f64), |(lo, hi), p| {
+            (lo.min(p[axis]), hi.max(p[axis]))
+        })
+    };
+    for (axis, [low, high], (below, above)) in [
+        (0, area.north, ("south", "north")),
+        (1, area.east, ("west", "east")),
+    ] {
+        let (lo, hi) = reach(axis);
+        if hi > high {
+            out.push(format!(
+                "run {} goes {} m {above} of its start, beyond the area's {} m",
+                e + 1,
+                m(hi),
+                m(high)
+            ));
+        }
+        if lo < low {
+            out.push(format!(
+                "run {} goes {} m {below} of its start, beyond the area's {} m",
+                e + 1,
+                m(-lo),
+                m(-low)
+            ));
+        }
+    }
+    out
+}
+
 /// The nominal track of `truth` (`None` for a craft without a planar heading).
 pub fn track(ir: &Ir, truth: &Truth, h: f64) -> Option<Track> {
     let leeway_structure::ir::Rotation::Planar { axes, .. } = &ir.rotation else {
@@ -542,23 +587,12 @@ pub fn assemble(p: Parts) -> Design {
         .collect();
     let mut proposals = proposals(ir, &shortfalls, p.bases);
     // The trial area: a run whose nominal track leaves it is not a plan.
-    let sea_room: Vec<String> = c.area_radius.map_or(Vec::new(), |radius| {
-        experiments
-            .iter()
-            .enumerate()
-            .filter_map(|(e, r): (usize, &PlannedRun)| {
-                let t = r.track.as_ref()?;
-                (t.farthest > radius).then(|| {
-                    format!(
-                        "run {} goes {} m from its start, beyond the area's {} m",
-                        e + 1,
-                        leeway_model::number::short_number(t.farthest.round()),
-                        leeway_model::number::short_number(radius)
-                    )
-                })
-            })
-            .collect()
-    });
+    let sea_room: Vec<String> = experiments
+        .iter()
+        .enumerate()
+        .filter_map(|(e, r): (usize, &PlannedRun)| Some((e, r.track.as_ref()?)))
+        .flat_map(|(e, t)| beyond_area(c, e, t))
+        .collect();
     if !sea_room.is_empty() {
         proposals.push(format!(
             "the track leaves the trial area ({}): a larger area, a shorter budget per run (more runs), or a calmer current",

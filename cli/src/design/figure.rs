@@ -170,7 +170,21 @@ impl DesignFigure<'_> {
             return Ok(());
         };
         let radius = self.design.conditions.as_ref().and_then(|c| c.area_radius);
-        let reach = radius.unwrap_or(0.0).max(t.farthest).max(1.0) * 1.1;
+        let area_box = self.design.conditions.as_ref().and_then(|c| c.area_box);
+        // The box's finite sides count towards the view, as the circle does.
+        let box_reach = area_box.map_or(0.0, |b| {
+            [b.north, b.east]
+                .iter()
+                .flatten()
+                .filter(|x| x.is_finite())
+                .fold(0.0f64, |r, x| r.max(x.abs()))
+        });
+        let reach = radius
+            .unwrap_or(0.0)
+            .max(box_reach)
+            .max(t.farthest)
+            .max(1.0)
+            * 1.1;
         let (w, h) = area.dim_in_pixel();
         let wide = reach
             * (f64::from(w.saturating_sub(66)) / f64::from(h.saturating_sub(76).max(1))).max(1.0);
@@ -208,6 +222,16 @@ impl DesignFigure<'_> {
                 .collect();
             chart
                 .draw_series(LineSeries::new(circle, BLACK.mix(0.5).stroke_width(2)))
+                .map_err(|e| e.to_string())?;
+        }
+        if let Some(b) = area_box {
+            // A side not given runs off the view: a channel.
+            let clip = |x: f64, limit: f64| x.clamp(-limit, limit);
+            let (s, n) = (clip(b.north[0], reach), clip(b.north[1], reach));
+            let (w, e) = (clip(b.east[0], wide), clip(b.east[1], wide));
+            let outline = vec![(w, s), (w, n), (e, n), (e, s), (w, s)];
+            chart
+                .draw_series(LineSeries::new(outline, BLACK.mix(0.5).stroke_width(2)))
                 .map_err(|e| e.to_string())?;
         }
         chart

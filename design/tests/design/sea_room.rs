@@ -55,3 +55,65 @@ fn a_track_beyond_the_trial_area_is_said_and_not_a_plan() {
     c.area_radius = Some(2.0 * farthest);
     assert!(design(&boat, &c, &options).expect("a design").feasible);
 }
+
+#[test]
+fn a_box_area_bounds_each_side_and_a_box_without_the_start_is_an_error() {
+    let boat = model("design/tests/fixtures/survey_boat.som");
+    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None).expect("plan");
+    c.budget = leeway_design::bounds::BudgetRule::Time(600.0);
+    c.prior = 0.0;
+    let options = DesignOptions {
+        pilot: 0,
+        ..Default::default()
+    };
+    let open = design(&boat, &c, &options).expect("a design");
+    // The tide (0.2, 0.1) m/s carries the boat north and east.
+    let t = open.experiments[0].track.as_ref().expect("track");
+    let north = t.positions.iter().map(|p| p[0]).fold(f64::MIN, f64::max);
+    assert!(north > 50.0, "{north}");
+    // A channel open to the north and south, wide enough: a plan.
+    c.area_box = Some(leeway_design::plan::AreaBox {
+        north: [f64::NEG_INFINITY, f64::INFINITY],
+        east: [-5000.0, 5000.0],
+    });
+    assert!(design(&boat, &c, &options).expect("a design").feasible);
+    // Its northern side short of the track: not a plan, and said so.
+    c.area_box = Some(leeway_design::plan::AreaBox {
+        north: [-5000.0, 0.5 * north],
+        east: [-5000.0, 5000.0],
+    });
+    let boxed = design(&boat, &c, &options).expect("a design");
+    assert!(!boxed.feasible);
+    assert!(
+        boxed
+            .sea_room
+            .iter()
+            .any(|s| s.contains("m north of its start, beyond the area's")),
+        "{:?}",
+        boxed.sea_room
+    );
+    // A box is read from the plan; one that leaves out the start is an
+    // error at its key.
+    let file = format!(
+        "{}/tests/fixtures/survey_boat.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(file).expect("the plan");
+    let plan = |area: &str| {
+        leeway_design::plan::parse(&format!("{text}\n[area]\n{area}\n"), false)
+            .and_then(|p| p.conditions(leeway_model::model::Model::ir(&boat)))
+    };
+    let read = plan("north = [-200, 400]").expect("a box");
+    assert_eq!(
+        read.area_box.map(|b| (b.north, b.east[0].is_infinite())),
+        Some(([-200.0, 400.0], true))
+    );
+    let e = plan("east = [100, 400]").expect_err("the start outside");
+    assert_eq!(e.key.as_deref(), Some("area.east"));
+    assert!(
+        e.message.contains("does not hold the start"),
+        "{}",
+        e.message
+    );
+    assert!(plan("north = [1, 2, 3]").is_err());
+}
