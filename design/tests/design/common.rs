@@ -44,3 +44,18 @@ pub fn designed(model: &Interpreter, plan: &str, samples: usize, pilot: usize) -
     };
     design(model, &c, &options).unwrap_or_else(|e| panic!("{plan}: {e:?}"))
 }
+
+/// The survey boat (`design/tests/fixtures`) with `seconds` at sea, its
+/// nominal θ the truth (`prior` 0), and design options without a pilot.
+pub fn survey_boat(seconds: f64) -> (Interpreter, Conditions, DesignOptions) {
+    let boat = model("design/tests/fixtures/survey_boat.som");
+    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
+        .expect("the survey boat's plan");
+    c.budget = leeway_design::bounds::BudgetRule::Time(seconds);
+    c.prior = 0.0;
+    let options = DesignOptions {
+        pilot: 0,
+        ..Default::default()
+    };
+    (boat, c, options)
+}

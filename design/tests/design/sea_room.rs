@@ -2,19 +2,12 @@
 //! current's drift included; a run that leaves the plan's trial area makes
 //! the design say it cannot keep the track inside.
 
-use crate::common::{conditions, model};
-use leeway_design::design::{DesignOptions, design};
+use crate::common::survey_boat;
+use leeway_design::design::design;
 
 #[test]
 fn a_track_beyond_the_trial_area_is_said_and_not_a_plan() {
-    let boat = model("design/tests/fixtures/survey_boat.som");
-    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None).expect("plan");
-    c.budget = leeway_design::bounds::BudgetRule::Time(600.0);
-    c.prior = 0.0;
-    let options = DesignOptions {
-        pilot: 0,
-        ..Default::default()
-    };
+    let (boat, mut c, options) = survey_boat(600.0);
     let open = design(&boat, &c, &options).expect("a design");
     assert!(open.feasible && open.sea_room.is_empty());
     let farthest = open
@@ -58,14 +51,7 @@ fn a_track_beyond_the_trial_area_is_said_and_not_a_plan() {
 
 #[test]
 fn a_box_area_bounds_each_side_and_a_box_without_the_start_is_an_error() {
-    let boat = model("design/tests/fixtures/survey_boat.som");
-    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None).expect("plan");
-    c.budget = leeway_design::bounds::BudgetRule::Time(600.0);
-    c.prior = 0.0;
-    let options = DesignOptions {
-        pilot: 0,
-        ..Default::default()
-    };
+    let (boat, mut c, options) = survey_boat(600.0);
     let open = design(&boat, &c, &options).expect("a design");
     // The tide (0.2, 0.1) m/s carries the boat north and east.
     let t = open.experiments[0].track.as_ref().expect("track");

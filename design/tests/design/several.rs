@@ -3,21 +3,13 @@
 //! mean; the design tries the same sign pattern at other speeds with pooled
 //! centring within the budget and says why it chose what it chose.
 
-use crate::common::{conditions, model};
+use crate::common::survey_boat;
 use leeway_design::design::{DesignOptions, design};
 
 #[test]
 fn the_survey_boat_is_designed_for_two_speeds_and_pooled_centring() {
-    let boat = model("design/tests/fixtures/survey_boat.som");
-    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
-        .expect("the survey boat's plan");
-    c.budget = leeway_design::bounds::BudgetRule::Time(900.0);
     // The nominal θ as the truth: the runs are the subject here.
-    c.prior = 0.0;
-    let options = DesignOptions {
-        pilot: 0,
-        ..Default::default()
-    };
+    let (boat, c, options) = survey_boat(900.0);
     let d = design(&boat, &c, &options).expect("a design");
     let one = &d.runs_tried[0];
     assert_eq!(
@@ -67,15 +59,8 @@ fn the_survey_boat_is_designed_for_two_speeds_and_pooled_centring() {
 
 #[test]
 fn the_survey_boat_tries_the_mirrored_turn_and_is_judged_over_its_envelope() {
-    let boat = model("design/tests/fixtures/survey_boat.som");
-    let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
-        .expect("the survey boat's plan");
-    c.budget = leeway_design::bounds::BudgetRule::Time(900.0);
-    c.prior = 0.0;
-    let options = DesignOptions {
-        pilot: 0,
-        ..Default::default()
-    };
+    // The nominal θ as the truth: the runs are the subject here.
+    let (boat, c, options) = survey_boat(900.0);
     let d = design(&boat, &c, &options).expect("a design");
     // One pattern suffices, so the turn to the other side is tried beside
     // the first, the budget shared.
