@@ -46,9 +46,7 @@ pub fn render(
                     "{} × {} s{}, {} centring: {}{}",
                     o.runs,
                     num(o.seconds),
-                    o.differ_by
-                        .as_ref()
-                        .map_or(String::new(), |d| format!(" (differ by {d})")),
+                    differ_by(o.differ_by.as_deref()),
                     o.centring,
                     o.worst_relative
                         .map_or("no prediction".to_string(), |w| format!(
@@ -456,7 +454,13 @@ fn verification(s: &mut String, v: &Verification) {
     if v.runs_verified.len() > 1 {
         let _ = writeln!(s, "\nverified the runs the design tried, in turn:");
         for r in &v.runs_verified {
-            let what = format!("{} × {} s, {} centring", r.runs, num(r.seconds), r.centring);
+            let what = format!(
+                "{} × {} s{}, {} centring",
+                r.runs,
+                num(r.seconds),
+                differ_by(r.differ_by.as_deref()),
+                r.centring
+            );
             let outcome = match r.passed {
                 Some(true) => "passes".to_string(),
                 Some(false) => format!("fails ({})", r.failures.first().map_or("", String::as_str)),
@@ -466,6 +470,11 @@ fn verification(s: &mut String, v: &Verification) {
             let _ = writeln!(s, "  {what}: {outcome}{taken}");
         }
     }
+}
+
+/// ` (differ by speed)`: what sets a runs option's runs apart, or nothing.
+fn differ_by(d: Option<&str>) -> String {
+    d.map_or(String::new(), |d| format!(" (differ by {d})"))
 }
 
 /// The design beside the engineer's own input, per sample.
