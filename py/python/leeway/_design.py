@@ -58,7 +58,8 @@ class Verification:
     their sampling error), what fails and what would help — ``leeway
     design`` exits 1 when not. ``document["runs_verified"]``: when the
     design's verdict failed, every runs option the design tried, verified
-    in turn (``passed``, ``failures``, ``taken``): the design is the first
+    in turn (``runs``, ``differ_by``, ``centring``, ``passed``, ``failures``,
+    ``taken``): the design is the first
     that passes, else the search's own."""
 
     runs: int
