@@ -104,3 +104,42 @@ fn the_survey_boat_tries_the_mirrored_turn_and_is_judged_over_its_envelope() {
     let thrust = column(0).fold(f64::MIN, f64::max) - column(0).fold(f64::MAX, f64::min);
     assert!(thrust > 200.0, "{thrust}");
 }
+
+#[test]
+fn with_a_prior_the_operating_points_margin_holds_for_the_drawn_crafts() {
+    // Item 4 of issue 47: the steady margin the design reports is the
+    // smallest over the nominal θ and the prior's draws, so the operating
+    // point is chosen for the craft the plan may turn out to be.
+    let (boat, mut c, options) = survey_boat(900.0);
+    let nominal = design(&boat, &c, &options).expect("a design");
+    c.prior = 0.3;
+    let robust = design(&boat, &c, &options).expect("a design");
+    let margin = |d: &leeway_design::report::Design| {
+        d.experiments[0]
+            .held
+            .iter()
+            .map(|h| h.steady_margin)
+            .fold(f64::INFINITY, f64::min)
+    };
+    assert!(
+        margin(&robust) < margin(&nominal),
+        "{} vs {}",
+        margin(&robust),
+        margin(&nominal)
+    );
+    // Each draw's own steady state at the chosen offsets keeps it.
+    let run = &robust.runs[0];
+    let offsets: Vec<f64> = run.inputs.iter().fold(vec![0.0; 2], |acc, x| {
+        acc.iter()
+            .zip(x)
+            .map(|(a, b)| a + b / run.inputs.len() as f64)
+            .collect()
+    });
+    let draws = leeway_design::trial::prior_draws(&c);
+    assert_eq!(draws.len(), leeway_design::trial::PRIOR_DRAWS);
+    for theta in &draws {
+        let s = leeway_design::steady::steady_state(&boat, theta, c.h, &offsets).expect("settles");
+        // v keeps its side (the pattern holds water.v < 0) at every draw.
+        assert!(s.states[1] < 0.0, "{:?}", s.states);
+    }
+}

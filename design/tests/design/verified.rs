@@ -9,12 +9,12 @@ use leeway_design::verified::design_verified;
 
 #[test]
 fn a_failing_verdict_verifies_the_other_runs_the_design_tried() {
-    // The survey boat on 5 minutes at sea: its models fall short whatever
+    // The survey boat on 150 s at sea: its models fall short whatever
     // its runs (the CLI's exit-1 test), so every option is verified.
     let boat = model("design/tests/fixtures/survey_boat.som");
     let mut c = conditions(&boat, "design/tests/fixtures/survey_boat.toml", None)
         .expect("the survey boat's plan");
-    c.budget = leeway_design::bounds::BudgetRule::Time(300.0);
+    c.budget = leeway_design::bounds::BudgetRule::Time(150.0);
     let options = DesignOptions {
         pilot: 0,
         ..Default::default()

@@ -366,7 +366,9 @@ def _submitted(client: Any, f: Callable[..., Answer], args: tuple[list[Any], ...
     if places is None:
         return list(client.map(f, *args, pure=False, retries=2))
     return [
-        client.submit(f, *task, pure=False, retries=2, workers=None if at is None else [at], allow_other_workers=True)
+        client.submit(f, *task, pure=False, retries=2)
+        if at is None
+        else client.submit(f, *task, pure=False, retries=2, workers=[at], allow_other_workers=True)
         for at, task in zip(places, zip(*args))
     ]
 
@@ -380,7 +382,7 @@ def _places(client: Any, paths: list[str]) -> list[str | None]:
     one byte: the files are then shared out by count."""
     try:
         threads = {w: max(int(k), 1) for w, k in client.nthreads(callback_timeout=30).items()}
-    except (OSError, TimeoutError, asyncio.TimeoutError):  # the pass's own wait reports a lost scheduler
+    except Exception:  # noqa: BLE001 — a hint only: the pass itself reports a closed client or a lost scheduler
         threads = {}
     if not threads:
         return [None] * len(paths)
