@@ -14,9 +14,7 @@ use crate::plan::{Conditions, Family};
 use crate::predict::{Noise, Prediction, Setting, calibrate, predict};
 use crate::report::{self, Design, DifferBy, FamilyScore, RunsOption};
 use crate::signs::{held, pointwise_states};
-use crate::trial::{
-    Base, Fitted, Run, margins, prior_draws, simulate, start_headings, true_system,
-};
+use crate::trial::{Base, Fitted, Run, draw_theta, margins, simulate, start_headings, true_system};
 use leeway_estimate::{EstimateOptions, Method};
 use leeway_model::experiment::Experiment;
 use leeway_model::model::Model;
@@ -269,6 +267,9 @@ fn held_out_run(c: &Conditions, base: &Base, time_scale: usize, n: usize, seed: 
         .generate(n, &c.limits),
     }
 }
+
+/// θ drawn from the prior whose nominal runs must keep the signs too.
+const PRIOR_DRAWS: usize = 4;
 
 /// The worst relative standard error a design is judged by when no
 /// `--target` is given (the report's "poorly determined" threshold).
@@ -676,7 +677,12 @@ fn nominal_margins(
 ) -> Vec<Vec<f64>> {
     // With a prior on θ, the signs must hold for θ drawn from it as well.
     let systems: Vec<_> = std::iter::once(c.theta.clone())
-        .chain(prior_draws(c))
+        .chain((0..if c.prior > 0.0 { PRIOR_DRAWS } else { 0 }).map(|i| {
+            draw_theta(
+                c,
+                leeway_scenarios::engine::keyed_seed(0, "prior-margins", i),
+            )
+        }))
         .map(|theta| TrueSystem {
             theta,
             ..true_system(c, &[], 0.0, false)

@@ -11,7 +11,6 @@
 use crate::plan::{Conditions, Limits};
 use crate::signs::Held;
 use crate::steady::{Steady, steady_state};
-use crate::trial::prior_draws;
 use leeway_model::model::{Model, Signals};
 
 /// A chosen operating point.
@@ -74,8 +73,7 @@ fn search(
         .iter()
         .map(|l: &Limits| (l.low + reserve * l.span(), l.high - reserve * l.span()))
         .collect();
-    let draws = prior_draws(c);
-    let evaluate = |offsets: Vec<f64>| candidate(model, c, held, offsets, &draws);
+    let evaluate = |offsets: Vec<f64>| candidate(model, c, held, offsets);
     let grid: Vec<Candidate> = grid_points(&bounds)
         .into_iter()
         .filter_map(evaluate)
@@ -125,48 +123,29 @@ fn search(
     })
 }
 
-/// The offsets' nominal steady state and, per held argument, its margin:
-/// the smallest over the nominal θ and the prior's `draws` (a draw without
-/// a steady state counts as −∞), so that the point holds its signs for the
-/// craft the plan may turn out to be, not only for the nominal one.
 fn candidate(
     model: &dyn Model,
     c: &Conditions,
     held: &[Held],
     offsets: Vec<f64>,
-    draws: &[Vec<f64>],
 ) -> Option<Candidate> {
     let steady = steady_state(model, &c.theta, c.h, &offsets)?;
-    let mut margins = steady_margins(model, held, &steady.states, &offsets);
-    for theta in draws {
-        let drawn = steady_state(model, theta, c.h, &offsets).map_or_else(
-            || vec![f64::NEG_INFINITY; held.len()],
-            |s| steady_margins(model, held, &s.states, &offsets),
-        );
-        for (m, d) in margins.iter_mut().zip(drawn) {
-            *m = m.min(d);
-        }
-    }
+    let zeros = vec![0.0; model.ir().components.len()];
+    let sig = Signals {
+        states: &steady.states,
+        inputs: &offsets,
+        rotation: &[1.0, 0.0],
+        disturbances: &zeros,
+    };
+    let margins = held
+        .iter()
+        .map(|a| a.value(&sig) - a.worst_mean - a.band)
+        .collect();
     Some(Candidate {
         offsets,
         steady,
         margins,
     })
-}
-
-/// Per held argument at a steady state: its value beyond the worst mean
-/// medium and the band.
-fn steady_margins(model: &dyn Model, held: &[Held], states: &[f64], offsets: &[f64]) -> Vec<f64> {
-    let zeros = vec![0.0; model.ir().components.len()];
-    let sig = Signals {
-        states,
-        inputs: offsets,
-        rotation: &[1.0, 0.0],
-        disturbances: &zeros,
-    };
-    held.iter()
-        .map(|a| a.value(&sig) - a.worst_mean - a.band)
-        .collect()
 }
 
 /// Normalises margins and plain states over the grid so they can be traded.
@@ -299,10 +278,9 @@ pub fn other_points(
         .map(|l: &Limits| (l.low + reserve * l.span(), l.high - reserve * l.span()))
         .collect();
     let floor = 0.5 * first.min_margin();
-    let draws = prior_draws(c);
     let grid: Vec<Candidate> = grid_points(&bounds)
         .into_iter()
-        .filter_map(|o| candidate(model, c, held, o, &draws))
+        .filter_map(|o| candidate(model, c, held, o))
         .filter(|cand| {
             let m = cand.margins.iter().copied().fold(f64::INFINITY, f64::min);
             m > 0.0 && (m >= floor || !floor.is_finite())

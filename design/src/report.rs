@@ -274,8 +274,7 @@ pub struct HeldReport {
     /// The band it must clear.
     pub band: f64,
     /// Its margin at the operating point's steady state (calm), less the
-    /// worst share of the mean disturbance and the band; with a prior on
-    /// θ, the smallest over the nominal θ and the prior's draws.
+    /// worst share of the mean disturbance and the band.
     pub steady_margin: f64,
     /// Its smallest margin along the nominal run, from every starting heading.
     pub min_margin: f64,

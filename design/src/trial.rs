@@ -98,24 +98,6 @@ pub fn true_system(c: &Conditions, noise: &[f64], heading_noise: f64, noisy: boo
     }
 }
 
-/// θ drawn from the prior whose steady states and nominal runs must keep
-/// the signs too.
-pub const PRIOR_DRAWS: usize = 4;
-
-/// The [`PRIOR_DRAWS`] θ drawn from the plan's prior that the operating
-/// point and the excitation are chosen against (none without a prior).
-pub fn prior_draws(c: &Conditions) -> Vec<Vec<f64>> {
-    let count = if c.prior > 0.0 { PRIOR_DRAWS } else { 0 };
-    (0..count)
-        .map(|i| {
-            draw_theta(
-                c,
-                leeway_scenarios::engine::keyed_seed(0, "prior-margins", i),
-            )
-        })
-        .collect()
-}
-
 /// θ drawn from the plan's prior: each parameter times `1 + prior·z`, `z`
 /// standard normal clipped at ±2.5, from `seed`; the nominal θ itself
 /// when the prior is 0 (no draw).
