@@ -53,6 +53,30 @@ fn input(seed: u64) -> String {
     text
 }
 
+/// Run `k` of `model` with θ from `truth` on `inputs` (CSV text), simulated
+/// with the tests' noise and seed `k`: the written file's path.
+fn simulated(dir: &Scratch, (model, truth): (&str, &str), k: u64, inputs: &str) -> String {
+    let inp = dir.write(&format!("in{k}.csv"), inputs);
+    let run = dir.path(&format!("run{k}.csv")).display().to_string();
+    let seed = k.to_string();
+    let o = leeway(&[
+        "simulate",
+        model,
+        "--params",
+        truth,
+        "--input",
+        &inp,
+        "--out",
+        &run,
+        "--noise",
+        "u=0.01,v=0.01,r=0.002",
+        "--seed",
+        &seed,
+    ]);
+    assert_eq!(code(&o), 0, "{}", stderr(&o));
+    run
+}
+
 #[test]
 fn select_keeps_the_true_candidates_and_writes_a_model_estimate_reads() {
     let dir = Scratch::new("select");
@@ -60,25 +84,7 @@ fn select_keeps_the_true_candidates_and_writes_a_model_estimate_reads() {
     let truth = dir.write("truth.json", TRUTH);
     let mut runs = Vec::new();
     for k in 0..3u64 {
-        let inp = dir.write(&format!("in{k}.csv"), &input(k));
-        let run = dir.path(&format!("run{k}.csv")).display().to_string();
-        let seed = k.to_string();
-        let o = leeway(&[
-            "simulate",
-            &model,
-            "--params",
-            &truth,
-            "--input",
-            &inp,
-            "--out",
-            &run,
-            "--noise",
-            "u=0.01,v=0.01,r=0.002",
-            "--seed",
-            &seed,
-        ]);
-        assert_eq!(code(&o), 0, "{}", stderr(&o));
-        runs.push(run);
+        runs.push(simulated(&dir, (&model, &truth), k, &input(k)));
     }
     let chosen = dir.path("chosen.som").display().to_string();
     let figure = dir.path("selection.png");
@@ -204,24 +210,7 @@ fn select_prints_the_chosen_estimates_warnings_and_notes_as_estimate_does() {
             let z = if i == 0 { "tau_z" } else { levels[i].as_str() };
             text.push_str(&format!("{l},{z}\n"));
         }
-        let inp = dir.write(&format!("in{k}.csv"), &text);
-        let run = dir.path(&format!("run{k}.csv")).display().to_string();
-        let seed = k.to_string();
-        let o = leeway(&[
-            "simulate",
-            &model,
-            "--params",
-            &truth,
-            "--input",
-            &inp,
-            "--out",
-            &run,
-            "--noise",
-            "u=0.01,v=0.01,r=0.002",
-            "--seed",
-            &seed,
-        ]);
-        assert_eq!(code(&o), 0, "{}", stderr(&o));
+        let run = simulated(&dir, (&model, &truth), k, &text);
         data.extend(["--data".to_string(), run]);
     }
     let chosen = dir.path("chosen.som").display().to_string();
